@@ -1,0 +1,111 @@
+"""World benchmarks: physics step, eye-camera rendering, the world loop's real-time factor.
+
+Run: ``python benchmarks/bench_world.py [--repeats N] [--json PATH]``. Prints a table of
+median and spread (interquartile range) over repeats, and writes JSON.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import platform
+import statistics
+import time
+from pathlib import Path
+
+import humimic  # noqa: F401  (headless GL before mujoco)
+import mujoco
+import numpy as np
+from rich.console import Console
+from rich.table import Table
+
+from humimic.sensors.cameras import CameraRig, CameraSpec
+from humimic.world.scene import SceneOptions, build_scene
+
+
+def _repeat(fn, repeats: int, inner: int) -> list[float]:
+    """Per-call seconds of ``fn`` over ``repeats`` batches of ``inner`` calls."""
+    out = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        for _ in range(inner):
+            fn()
+        out.append((time.perf_counter() - t0) / inner)
+    return out
+
+
+def bench_physics(repeats: int) -> list[float]:
+    scene = build_scene()
+    m, d = scene.model, scene.data
+    return _repeat(lambda: mujoco.mj_step(m, d), repeats, 840)
+
+
+def bench_render(repeats: int, cameras: list[str], size: tuple[int, int]) -> list[float]:
+    scene = build_scene(SceneOptions(eye_resolution=size))
+    mujoco.mj_forward(scene.model, scene.data)
+    rig = CameraRig(scene, [CameraSpec(c, *size) for c in cameras], np.random.default_rng(0))
+    try:
+        rig.capture(0.0)  # warm up (context creation, texture upload)
+        return _repeat(lambda: rig.capture(0.0), repeats, 50)
+    finally:
+        rig.close()
+
+
+def bench_world_loop(repeats: int, duration: float = 3.0) -> list[float]:
+    """Real-time factor of the world alone (no stages): wide stereo at 60 Hz, 320x240."""
+    from humimic.run import run_one
+    from humimic.scenario import validate_scenario
+
+    scenario = validate_scenario({
+        "name": "bench-world", "duration": duration,
+        "human": {"motion": {"kind": "wave"}},
+        "cameras": {"which": "wide", "resolution": [320, 240], "rate": 60},
+        "output": {"rerun": "off", "plots": False},
+    })
+    out = []
+    for i in range(repeats):
+        metrics = run_one(scenario, out_dir=Path("/tmp") / f"humimic-bench-{i}", rerun="off",
+                          progress=False)
+        out.append(metrics["realtime_factor"])
+    return out
+
+
+def _row(name: str, values: list[float], unit: str, scale: float = 1.0) -> dict:
+    v = sorted(x * scale for x in values)
+    q = statistics.quantiles(v, n=4) if len(v) >= 2 else [v[0], v[0], v[0]]
+    return {"name": name, "unit": unit, "median": statistics.median(v), "q1": q[0],
+            "q3": q[2], "repeats": len(v)}
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--repeats", type=int, default=7)
+    ap.add_argument("--json", type=Path, default=Path("benchmarks/results/world.json"))
+    args = ap.parse_args()
+    r = args.repeats
+    rows = [
+        _row("physics step (robot + avatar, 70 DOF)", bench_physics(r), "us", 1e6),
+        _row("render 1 eye camera 320x240", bench_render(r, ["L_wide"], (320, 240)), "ms", 1e3),
+        _row("render 1 eye camera 640x480", bench_render(r, ["L_wide"], (640, 480)), "ms", 1e3),
+        _row("render stereo pair 320x240", bench_render(r, ["L_wide", "R_wide"], (320, 240)),
+             "ms", 1e3),
+        _row("render all 4 eye cameras 320x240",
+             bench_render(r, ["L_wide", "R_wide", "L_foveal", "R_foveal"], (320, 240)), "ms",
+             1e3),
+        _row("world loop, wide stereo 60 Hz 320x240", bench_world_loop(max(3, r // 2)),
+             "x real time"),
+    ]
+    table = Table(title=f"humimic world benchmarks ({platform.processor() or platform.machine()},"
+                        f" {__import__('os').cpu_count()} cores)")
+    for col in ("benchmark", "median", "IQR", "unit", "repeats"):
+        table.add_column(col)
+    for row in rows:
+        table.add_row(row["name"], f"{row['median']:.3g}", f"{row['q1']:.3g}-{row['q3']:.3g}",
+                      row["unit"], str(row["repeats"]))
+    Console().print(table)
+    args.json.parent.mkdir(parents=True, exist_ok=True)
+    args.json.write_text(json.dumps({"machine": platform.platform(), "rows": rows}, indent=2))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,25 @@
+"""Pick MuJoCo's OpenGL backend before ``mujoco`` is imported.
+
+MuJoCo reads ``MUJOCO_GL`` once, at import. With no display (a server, CI) the default GLFW
+backend cannot open a window, so we choose EGL (Mesa renders on the CPU) and fall back to
+OSMesa. A value the user set is always respected.
+"""
+
+from __future__ import annotations
+
+import ctypes.util
+import os
+
+
+def select_gl_backend() -> str | None:
+    """Set ``MUJOCO_GL`` (and ``PYOPENGL_PLATFORM``) if unset and headless; return the choice."""
+    if os.environ.get("MUJOCO_GL"):
+        return os.environ["MUJOCO_GL"]
+    if os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"):
+        return None  # a display exists: MuJoCo's default (GLFW) works
+    for backend, lib in (("egl", "EGL"), ("osmesa", "OSMesa")):
+        if ctypes.util.find_library(lib):
+            os.environ["MUJOCO_GL"] = backend
+            os.environ.setdefault("PYOPENGL_PLATFORM", backend)
+            return backend
+    return None

@@ -1,0 +1,128 @@
+"""Scores of mimicry against ground truth (pure functions on arrays; SI units).
+
+* :func:`rmse` - root mean square of the Euclidean error.
+* :func:`xcorr_lag` - the delay of a signal behind a reference at the peak of their
+  cross-correlation (summed over axes), refined by a parabola through the peak.
+* :func:`rms_jerk` - RMS of the third time derivative, estimated with a Savitzky-Golay filter
+  (a local polynomial fit; plain third differences would amplify noise by ``1/dt^3``).
+* :func:`error_terms` - the telescoping decomposition of the total error into stage terms.
+* :func:`head_motion` - how far the eyes' base moved and turned.
+* :func:`image_offsets` - where a target appears relative to an image's centre.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.signal import correlate, correlation_lags, savgol_filter
+
+
+def rmse(a: np.ndarray, b: np.ndarray) -> float:
+    """RMS of ``|a - b|`` over rows (``(N, 3)`` or ``(N,)``); NaN rows are skipped."""
+    e = np.asarray(a, float) - np.asarray(b, float)
+    e = e.reshape(len(e), -1)
+    ok = np.all(np.isfinite(e), axis=1)
+    if not np.any(ok):
+        return float("nan")
+    return float(np.sqrt(np.mean(np.sum(e[ok] ** 2, axis=1))))
+
+
+def xcorr_lag(reference: np.ndarray, signal: np.ndarray, dt: float,
+              max_lag: float = 0.3) -> float:
+    """Delay (s) of ``signal`` behind ``reference`` (both ``(N,)`` or ``(N, k)``, sampled every
+    ``dt``): the argmax over ``|lag| <= max_lag`` of sum_axes sum_t ref(t) sig(t + lag), mean
+    removed, with sub-sample parabolic refinement. Positive: the signal comes later."""
+    ref = np.asarray(reference, float).reshape(len(reference), -1)
+    sig = np.asarray(signal, float).reshape(len(signal), -1)
+    ref = ref - ref.mean(axis=0)
+    sig = sig - sig.mean(axis=0)
+    c = sum(correlate(sig[:, i], ref[:, i], mode="full", method="fft")
+            for i in range(ref.shape[1]))
+    lags = correlation_lags(len(sig), len(ref), mode="full")
+    window = np.abs(lags) <= int(np.ceil(max_lag / dt))
+    c, lags = c[window], lags[window]
+    i = int(np.argmax(c))
+    shift = 0.0
+    if 0 < i < len(c) - 1:
+        denom = c[i - 1] - 2.0 * c[i] + c[i + 1]
+        if denom < 0.0:
+            shift = 0.5 * (c[i - 1] - c[i + 1]) / denom
+    return float((lags[i] + shift) * dt)
+
+
+def rms_jerk(p: np.ndarray, dt: float, window_s: float = 0.08) -> float:
+    """RMS of ``|d^3 p / dt^3|`` (m/s^3) of ``p`` ``(N, 3)`` sampled every ``dt`` (Savitzky-Golay,
+    quintic fit over ``window_s``)."""
+    p = np.asarray(p, float)
+    w = max(7, int(round(window_s / dt)) | 1)
+    if len(p) < w:
+        return float("nan")
+    j = savgol_filter(p, w, polyorder=5, deriv=3, delta=dt, axis=0, mode="interp")
+    return float(np.sqrt(np.mean(np.sum(j.reshape(len(j), -1) ** 2, axis=1))))
+
+
+#: Stage terms of :func:`error_terms`, in pipeline order.
+TERMS = ("estimate", "latency", "interpolation", "workspace", "ik", "servo")
+
+
+def error_terms(true_now: np.ndarray, true_photon: np.ndarray, est: np.ndarray,
+                cmd_raw: np.ndarray, cmd: np.ndarray, ik: np.ndarray,
+                robot: np.ndarray) -> dict[str, np.ndarray]:
+    """Split the robot's error ``robot - true_now`` into stage terms that add up to it exactly
+    (all ``(N, 3)`` displacements in the robot's mapped space on one time grid)::
+
+        estimate      = est - true_photon       what control received vs the truth at its
+                                                photon time (perception and filtering)
+        latency       = true_photon - true_now  how old that truth is by now
+        interpolation = cmd_raw - est           the Cartesian PD (extrapolation cancels latency)
+        workspace     = cmd - cmd_raw           clamping into the reachable shell
+        ik            = ik - cmd                the IK's residual (limits, collisions, head task)
+        servo         = robot - ik              joint servo tracking
+
+    ``total`` is ``robot - true_now``.
+    """
+    return {
+        "estimate": est - true_photon,
+        "latency": true_photon - true_now,
+        "interpolation": cmd_raw - est,
+        "workspace": cmd - cmd_raw,
+        "ik": ik - cmd,
+        "servo": robot - ik,
+        "total": robot - true_now,
+    }
+
+
+def rotation_angle(R: np.ndarray) -> np.ndarray:
+    """Angle (rad) of rotation matrices ``(..., 3, 3)``."""
+    tr = np.trace(R, axis1=-2, axis2=-1)
+    return np.arccos(np.clip((tr - 1.0) / 2.0, -1.0, 1.0))
+
+
+def head_motion(p: np.ndarray, R: np.ndarray) -> tuple[float, float]:
+    """Largest displacement (m) and rotation (rad) of a frame from its first sample
+    (``p (N, 3)``, ``R (N, 3, 3)``)."""
+    if len(p) == 0:
+        return 0.0, 0.0
+    dp = np.linalg.norm(p - p[0], axis=1)
+    dR = np.einsum("ji,njk->nik", R[0], R)  # R0^T R
+    return float(dp.max()), float(rotation_angle(dR).max())
+
+
+def image_offsets(p_cam: np.ndarray, fx: float, fy: float, width: int,
+                  height: int) -> np.ndarray:
+    """Distance (fraction of the image width) of camera-frame points ``(N, 3)`` (OpenCV axes)
+    from the principal point; points behind the camera give ``inf``."""
+    p = np.asarray(p_cam, float)
+    z = p[:, 2]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        du = np.where(z > 0, fx * p[:, 0] / z, np.inf)
+        dv = np.where(z > 0, fy * p[:, 1] / z, np.inf)
+    return np.hypot(du, dv) / width
+
+
+def summary_stats(x: np.ndarray) -> dict[str, float]:
+    """mean, 95th percentile and max of finite values (None when there are none)."""
+    x = np.asarray(x, float)
+    x = x[np.isfinite(x)]
+    if len(x) == 0:
+        return {"mean": None, "p95": None, "max": None}
+    return {"mean": float(x.mean()), "p95": float(np.percentile(x, 95)), "max": float(x.max())}

@@ -1,0 +1,304 @@
+"""The mimic stage's ``metrics.json`` sections, plots and rerun series, from its record and the
+ground truth.
+
+``mimicry.<robot_site>``: ``rmse_mm`` between the site's displacement and the human part's true
+displacement after the mapping, ``lag_ms`` (cross-correlation peak), ``jerk`` (RMS third
+derivative, m/s^3; ``jerk_human`` for the mapped truth), ``joint_limit_hits`` (servo ticks at which
+an arm or torso joint target sits on the IK's limit band), ``clamped_fraction``,
+``error_budget_mm`` (see :func:`humimic.metrics.mimicry.error_terms`; ``perception`` and
+``filtering`` are the raw measurement's and the estimate's errors at their photon times),
+``interpolation`` (hold vs extrapolate commands against the truth). ``mimicry.head_still``,
+``mimicry.gaze``, ``mimicry.ik`` and ``latency_ms`` complete it.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from humimic.metrics.mimicry import (
+    TERMS,
+    error_terms,
+    head_motion,
+    image_offsets,
+    rms_jerk,
+    rmse,
+    summary_stats,
+    xcorr_lag,
+)
+from humimic.sensors.camera_model import Intrinsics
+from humimic.world.names import ROBOT_JOINTS, TORSO_JOINTS
+
+#: Joints whose limits matter for a site (its arm and the torso).
+ARM_JOINTS = {
+    "R": ("R_SFE", "R_SAA", "R_HR", "R_EB", "R_WR", "R_WFE", "R_WAA"),
+    "L": ("L_SFE", "L_SAA", "L_HR", "L_EB", "L_WR", "L_WFE", "L_WAA"),
+}
+LIMIT_TOL = 2e-3  # rad
+
+
+def _mm(x: float | None) -> float | None:
+    return None if x is None or not np.isfinite(x) else 1e3 * float(x)
+
+
+def _idx(times: np.ndarray, rate: float, n: int) -> np.ndarray:
+    return np.clip(np.rint(np.asarray(times) * rate).astype(int), 0, n - 1)
+
+
+def _never_started(stage, ch) -> dict:
+    rec, cfg = stage.rec, stage.cfg
+    got = len(rec.estimates.get(ch.target, ()).t) if ch.target in rec.estimates else 0
+    if got == 0:
+        why = (f"no estimate of human target {ch.target!r} arrived during the run; "
+               + ("the oracle never had it inside every eye camera's image"
+                  if cfg.perception == "oracle" else
+                  "perception never reported it (is it among the perception targets and "
+                  "visible?)"))
+        status = "never_detected"
+    else:
+        why = (f"{got} estimates of {ch.target!r} arrived, none with a photon time at or after "
+               f"mimic.start = {cfg.start} s")
+        status = "not_started"
+    return {"status": status, "reason": why, "target": ch.target, "rmse_mm": None,
+            "lag_ms": None, "held_pose": True}
+
+
+def _site_series(stage, i: int, ch):
+    """Aligned displacement series of site ``i`` from the tick after it started: the robot at
+    ``t[k]`` with the command, IK and estimate computed for ``t[k-1] + dt = t[k]``."""
+    rec, world = stage.rec, stage.world
+    n = rec.n
+    k0 = int(np.argmax(rec.active[:n, i]))
+    rate = world.scenario.timing.physics_rate
+    P = world.gt.p_base(ch.target)
+    if ch.ref is not None:
+        P = P - world.gt.p_base(ch.ref)
+    N = len(P)
+    S, p0r = ch.S, ch.p0_robot
+    origin = P[_idx(ch.t0, rate, N)]
+    t = rec.t[k0 + 1:n]
+    true_now = (P[_idx(t, rate, N)] - origin) @ S.T
+    t_ph = rec.t_est[k0:n - 1, i]
+    true_ph = (P[_idx(t_ph, rate, N)] - origin) @ S.T
+    s = {
+        "t": t,
+        "true_now": true_now,
+        "true_photon": true_ph,
+        "est": rec.p_est[k0:n - 1, i] - p0r,
+        "cmd_raw": rec.p_cmd_raw[k0:n - 1, i] - p0r,
+        "cmd": rec.p_cmd[k0:n - 1, i] - p0r,
+        "cmd_alt": rec.p_cmd_alt[k0:n - 1, i] - p0r,
+        "ik": rec.p_ik[k0:n - 1, i] - p0r,
+        "robot": rec.p_robot[k0 + 1:n, i] - p0r,
+    }
+    return k0, s
+
+
+def _event_error(arrivals, P: np.ndarray, S: np.ndarray, rate: float) -> float | None:
+    """RMS (mm, mapped space) of values that arrived on a topic against the truth at their
+    photon times."""
+    if arrivals is None or not arrivals.t:
+        return None
+    t, _, p = arrivals.arrays()
+    return _mm(rmse(p @ S.T, P[_idx(t, rate, len(P))] @ S.T))
+
+
+def _limit_hits(stage, site: str, k0: int) -> int:
+    """Servo ticks at which a joint of the site's arm or the torso sits on the IK's limit band."""
+    rec = stage.rec
+    j = np.array([ROBOT_JOINTS.index(x) for x in ARM_JOINTS[site[0]] + TORSO_JOINTS])
+    band = stage.cfg.ik.limit_margin + LIMIT_TOL
+    rng = stage.ik_model.jnt_range[j]
+    q = rec.q_ik[k0:rec.n, j]
+    hit = (q <= rng[:, 0] + band) | (q >= rng[:, 1] - band)
+    return int(np.any(hit, axis=1).sum())
+
+
+def site_metrics(stage, i: int, ch) -> tuple[dict, dict]:
+    """``(cumulative lags per stage (ms), the site's scores)``."""
+    if not ch.started or stage.rec.n < 3:
+        return {}, _never_started(stage, ch)
+    rec, world, cfg = stage.rec, stage.world, stage.cfg
+    k0, s = _site_series(stage, i, ch)
+    dt = rec.dt
+    terms = error_terms(s["true_now"], s["true_photon"], s["est"], s["cmd_raw"], s["cmd"],
+                        s["ik"], s["robot"])
+    rate = world.scenario.timing.physics_rate
+    P = world.gt.p_base(ch.target)
+    budget = {"perception": _event_error(rec.measurements.get(ch.target), P, ch.S, rate),
+              "filtering": _event_error(rec.estimates.get(ch.target), P, ch.S, rate)}
+    if budget["perception"] is None and cfg.perception == "oracle":
+        budget["perception"] = budget["filtering"]  # the oracle's noise is its perception
+    for name in (*TERMS, "total"):
+        budget[name] = _mm(rmse(terms[name], 0.0 * terms[name]))
+    primary, other = cfg.interpolation.mode, ("extrapolate" if cfg.interpolation.mode == "hold"
+                                              else "hold")
+    interp = {}
+    for mode, key in ((primary, "cmd"), (other, "cmd_alt")):
+        interp[mode] = {"rmse_mm": _mm(rmse(s[key], s["true_now"])),
+                        "lag_ms": _mm(xcorr_lag(s["true_now"], s[key], dt))}
+    n_active = rec.n - k0
+    stage_lags = {"interpolation": interp[primary]["lag_ms"],
+                  "ik": _mm(xcorr_lag(s["true_now"], s["ik"], dt))}
+    return stage_lags, {
+        "status": "ok",
+        "target": ch.target,
+        "rmse_mm": budget["total"],
+        "lag_ms": _mm(xcorr_lag(s["true_now"], s["robot"], dt)),
+        "max_error_mm": _mm(float(np.max(np.linalg.norm(terms["total"], axis=1)))),
+        "jerk": rms_jerk(s["robot"], dt),
+        "jerk_human": rms_jerk(s["true_now"], dt),
+        "joint_limit_hits": _limit_hits(stage, ch.site, k0),
+        "clamped_fraction": float(rec.clamped[k0:rec.n, i].mean()),
+        "lost_fraction": float(rec.lost[k0:rec.n, i].mean()),
+        "started_s": float(rec.t[k0]),
+        "ticks": int(n_active),
+        "error_budget_mm": budget,
+        "interpolation": interp,
+    }
+
+
+def gaze_metrics(stage) -> dict | None:
+    cfg = stage.cfg.gaze
+    if not cfg.enabled:
+        return None
+    rec, world = stage.rec, stage.world
+    n = rec.n
+    if cfg.target not in rec.estimates:
+        return {"target": cfg.target, "status": "never_detected"}
+    t_first = rec.estimates[cfg.target].t[0]
+    k0 = int(np.searchsorted(rec.t[:n], t_first))
+    m, scene = world.scene.model, world.scene
+    w, h = world.scenario.cameras.resolution
+    rate = world.scenario.timing.physics_rate
+    Pw = world.gt.p_world(cfg.target)
+    p = Pw[_idx(rec.t[k0:n], rate, len(Pw))]
+    out = {"target": cfg.target, "camera": cfg.camera, "status": "ok",
+           "eye_saturated_ticks": int(stage.gaze.saturated)}
+    worst = np.zeros(n - k0)
+    for e, eye in enumerate(("L", "R")):
+        cid = scene.camera(f"{eye}_{cfg.camera}")
+        intr = Intrinsics.from_fovy(np.radians(m.cam_fovy[cid]), w, h)
+        R = rec.cam_mat[k0:n, e].reshape(-1, 3, 3)
+        p_cam = np.einsum("nji,nj->ni", R, p - rec.cam_pos[k0:n, e]) * np.array([1, -1, -1])
+        off = image_offsets(p_cam, intr.fx, intr.fy, w, h)
+        out[f"{eye}_offset_frac"] = summary_stats(off)
+        worst = np.maximum(worst, off)
+    out["within_10pct_fraction"] = float(np.mean(worst <= 0.1)) if len(worst) else None
+    out["max_offset_frac"] = float(worst.max()) if len(worst) and np.isfinite(worst.max()) \
+        else None
+    return out
+
+
+def latency_metrics(stage, sites: dict, lags: dict) -> dict:
+    """Photon-to-stage latencies (ms): message ages for perception and the estimates, the wait
+    for the next servo tick, and cross-correlation lags behind the truth of the command, the IK
+    and the robot (``end_to_end``), averaged over the driven sites."""
+    rec = stage.rec
+    meas = [np.array(a.t_ready) - np.array(a.t) for a in rec.measurements.values() if a.t]
+    est = [np.array(a.t_ready) - np.array(a.t) for a in rec.estimates.values() if a.t]
+    use = [np.array([u - r for r, u in v]) for v in rec.first_use.values() if v]
+
+    def mean_ms(chunks):
+        return _mm(float(np.mean(np.concatenate(chunks)))) if chunks else None
+
+    def mean_of(values):
+        values = [v for v in values if v is not None]
+        return float(np.mean(values)) if values else None
+
+    out = {"perception": mean_ms(meas), "estimate": mean_ms(est), "servo_pickup": mean_ms(use)}
+    out["filter"] = (out["estimate"] - out["perception"]
+                     if out["estimate"] is not None and out["perception"] is not None else None)
+    out["interpolation"] = mean_of([v.get("interpolation") for v in lags.values()])
+    out["ik"] = mean_of([v.get("ik") for v in lags.values()])
+    out["end_to_end"] = mean_of([v.get("lag_ms") for v in sites.values()])
+    return out
+
+
+def mimic_metrics(stage) -> dict:
+    rec, cfg = stage.rec, stage.cfg
+    n = rec.n
+    sites, lags = {}, {}
+    for i, ch in enumerate(stage.channels):
+        lags[ch.site], sites[ch.site] = site_metrics(stage, i, ch)
+    latency = latency_metrics(stage, sites, lags)
+    p_head, R_head = rec.p_head[:n], rec.R_head[:n].reshape(-1, 3, 3)
+    dp, dr = head_motion(p_head, R_head)
+    rng = stage.scene.robot_range
+    q = rec.q_robot[:n]
+    excess = np.maximum(rng[:, 0] - q, q - rng[:, 1]) if n else np.zeros((0, len(rng)))
+    ik_ms = 1e3 * rec.ik_s[:n]
+    out = {
+        **sites,
+        "mode": cfg.mode, "scale": cfg.scale, "perception": cfg.perception,
+        "interpolation_mode": cfg.interpolation.mode,
+        "head_still": {"max_displacement_mm": 1e3 * dp, "max_rotation_deg": float(np.degrees(dr))},
+        "joints": {"limit_violations": int(np.sum(excess > 0.0)),
+                   "max_limit_excess_rad": float(max(excess.max(), 0.0)) if n else 0.0,
+                   "finite": bool(np.all(np.isfinite(q)) and np.all(np.isfinite(rec.ctrl[:n])))},
+        "ik": {"solve_ms_mean": float(ik_ms.mean()) if n else None,
+               "solve_ms_p99": float(np.percentile(ik_ms, 99)) if n else None,
+               "failures": int(stage.ik.failures), "ticks": int(n)},
+    }
+    gaze = gaze_metrics(stage)
+    if gaze is not None:
+        out["gaze"] = gaze
+    log_rerun(stage)
+    return {"mimicry": out, "latency_ms": latency}
+
+
+def mimic_plots(stage, out_dir) -> list:
+    from humimic.viz.plots import plot_stacked_bar, plot_trajectories
+
+    paths, budgets, names = [], {}, []
+    for i, ch in enumerate(stage.channels):
+        if not ch.started or stage.rec.n < 3:
+            continue
+        _, s = _site_series(stage, i, ch)
+        paths.append(plot_trajectories(
+            f"{out_dir}/mimic_{ch.site}.png", s["t"],
+            {f"{ch.target} true (mapped)": s["true_now"], f"{ch.target} estimate": s["est"],
+             f"{ch.site} commanded": s["cmd"], f"{ch.site} robot": s["robot"]},
+            title=f"{ch.target} -> {ch.site}: displacement, robot base frame", ylabel="m"))
+        terms = error_terms(s["true_now"], s["true_photon"], s["est"], s["cmd_raw"], s["cmd"],
+                            s["ik"], s["robot"])
+        total = 1e3 * rmse(terms["total"], 0 * terms["total"])
+        names.append(f"{ch.site}\n(total {total:.3g} mm)")
+        for term in TERMS:
+            budgets.setdefault(term, []).append(1e3 * rmse(terms[term], 0 * terms[term]))
+    if names:
+        paths.append(plot_stacked_bar(
+            f"{out_dir}/mimic_error_budget.png", names, budgets,
+            title="Error budget: RMS of each stage's term\n(terms add as vectors: the stack "
+                  "bounds the total from above)",
+            ylabel="mm"))
+    return paths
+
+
+def log_rerun(stage) -> None:
+    """Joint targets vs actual, commanded vs reached sites and the gaze, as rerun series."""
+    rlog = stage.rlog
+    if rlog is None or not getattr(rlog, "enabled", False):
+        return
+    rec = stage.rec
+    n = rec.n
+    t = rec.t[:n]
+    for j, name in enumerate(ROBOT_JOINTS):
+        rlog.log_series(f"series/mimic/joints/{name}", t,
+                        np.stack([rec.q_ik[:n, j], rec.q_robot[:n, j]], axis=1),
+                        names=["target", "actual"])
+    for i, site in enumerate(stage.sites):
+        for a, axis in enumerate("xyz"):
+            rlog.log_series(f"series/mimic/{site}/{axis}", t,
+                            np.stack([rec.p_cmd[:n, i, a], rec.p_ik[:n, i, a],
+                                      rec.p_robot[:n, i, a]], axis=1),
+                            names=["commanded", "IK", "robot"])
+    step = max(1, int(round(1.0 / (30.0 * rec.dt))))
+    for k in range(0, n, step):
+        cmd = stage.to_world(rec.p_cmd[k])
+        rlog.log_points(t[k], "world/mimic/commanded", cmd, colors=[255, 160, 0], radii=0.015)
+        rlog.log_points(t[k], "world/mimic/reached", stage.to_world(rec.p_robot[k]),
+                        colors=[0, 200, 255], radii=0.012)
+        if stage.gaze is not None:
+            axes = rec.cam_mat[k].reshape(2, 3, 3)[:, :, 2] * -1.5  # camera -z, 1.5 m
+            rlog.log_arrow(t[k], "world/mimic/gaze", rec.cam_pos[k], axes,
+                           colors=[[255, 0, 255], [255, 0, 255]])

@@ -1,0 +1,47 @@
+"""The summary table printed at the end of a run (rich)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from rich.console import Console
+from rich.table import Table
+
+
+def _fmt(value) -> str:
+    if isinstance(value, float):
+        return f"{value:.4g}"
+    if value is None:
+        return "-"
+    return str(value)
+
+
+def summary_rows(metrics: dict) -> list[tuple[str, str]]:
+    """(key, value) rows: run facts, then stage costs, then each score section."""
+    rows = [(k, _fmt(metrics[k])) for k in ("scenario", "seed", "sim_time_s", "wall_time_s",
+                                            "realtime_factor", "interrupted") if k in metrics]
+    for name, st in metrics.get("stages", {}).items():
+        rows.append((f"stages.{name}", f"{st['mean_ms']:.3f} ms x {st['calls']}"))
+    for section in ("tracking", "mimicry", "latency_ms"):
+        for target, scores in metrics.get(section, {}).items():
+            if isinstance(scores, dict):
+                for key, value in scores.items():
+                    if not isinstance(value, (dict, list)):
+                        rows.append((f"{section}.{target}.{key}", _fmt(value)))
+            else:
+                rows.append((f"{section}.{target}", _fmt(scores)))
+    if metrics.get("mujoco_warnings"):
+        rows.append(("mujoco_warnings", _fmt(metrics["mujoco_warnings"])))
+    return rows
+
+
+def print_summary(metrics: dict, out_dir: str | Path, console: Console | None = None) -> None:
+    console = console or Console()
+    table = Table(title=f"humimic run: {metrics.get('scenario')}", show_header=True)
+    table.add_column("metric", style="cyan")
+    table.add_column("value", justify="right")
+    for key, value in summary_rows(metrics):
+        table.add_row(key, value)
+    console.print(table)
+    console.print(f"outputs in [bold]{out_dir}[/bold]  (open the recording: rerun "
+                  f"{Path(out_dir) / 'run.rrd'})")

@@ -1,0 +1,180 @@
+"""Ground truth of the person's motion at every physics step: site kinematics and true sensors.
+
+For each time the avatar's ``qpos/qvel/qacc`` (from :class:`JointTrajectory`, analytic) are set
+in a private ``MjData`` of the scene's model, ``mj_inverse`` computes positions, velocities and
+the noise-free sensors (MuJoCo's accelerometer is the specific force ``R^T (a - g)``), and
+``mj_rnePostConstraint`` the bodies' spatial accelerations ``cacc``. Site velocity and
+acceleration are then what ``mj_objectVelocity`` / ``mj_objectAcceleration`` (``flg_local=0``)
+return, evaluated in one vectorised pass: with ``c`` the subtree COM of the body's root,
+``v = v_c + w x (p - c)``, ``a = a_c + dw x (p - c) + w x v``. ``cacc`` contains ``-g`` (the
+world body accelerates upwards), so ``a + g`` is the true kinematic acceleration.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+from humimic.motion.context import HumanMotion
+from humimic.motion.trajectory import JointTrajectory
+from humimic.world.names import HUMAN_PREFIX, HUMAN_TARGETS
+from humimic.world.scene import Scene
+
+#: Targets whose orientation is recorded (the worn IMUs).
+ORIENTED_TARGETS = ("head_imu", "wiimote")
+SENSORS = ("head_acc", "head_gyro", "head_quat", "wiimote_acc", "wiimote_gyro")
+
+
+@dataclass(frozen=True)
+class GroundTruth:
+    """True avatar motion, indexed by time sample (world frame unless ``_base``)."""
+
+    t: np.ndarray
+    """(N,) sample times (s)."""
+    qpos: np.ndarray
+    """(N, 51) avatar configuration (write into ``scene.data.qpos[scene.human_qpos]``)."""
+    qvel: np.ndarray
+    """(N, 40)"""
+    targets: tuple[str, ...]
+    """Target names (keys of :data:`humimic.world.names.HUMAN_TARGETS`), axis 1 below."""
+    pos: np.ndarray
+    """(N, K, 3) site positions, world (m)."""
+    vel: np.ndarray
+    """(N, K, 3) site linear velocities, world (m/s)."""
+    acc: np.ndarray
+    """(N, K, 3) site linear accelerations, world, gravity excluded (m/s^2)."""
+    R_imu: np.ndarray
+    """(N, len(ORIENTED_TARGETS), 3, 3) world <- site rotations of the worn IMU sites."""
+    sensors: dict[str, np.ndarray]
+    """Noise-free sensor readings by name (``head_acc`` ... ), (N, dim), site frames."""
+    T_world_base: np.ndarray
+    """4x4 robot-base pose (constant: the robot is fixed at its pelvis)."""
+
+    def _k(self, name: str) -> int:
+        try:
+            return self.targets.index(name)
+        except ValueError:
+            raise KeyError(f"unknown target {name!r}; targets are {self.targets}") from None
+
+    def index_of(self, t: float | np.ndarray) -> int | np.ndarray:
+        """Index of the sample nearest ``t`` (raises if ``t`` is outside the samples)."""
+        ta = np.asarray(t, float)
+        if np.any(ta < self.t[0] - 1e-9) or np.any(ta > self.t[-1] + 1e-9):
+            raise ValueError(f"time {t} outside [{self.t[0]}, {self.t[-1]}]")
+        i = np.clip(np.searchsorted(self.t, ta), 1, len(self.t) - 1)
+        i = np.where(np.abs(self.t[i - 1] - ta) <= np.abs(self.t[i] - ta), i - 1, i)
+        return int(i) if np.ndim(i) == 0 else i
+
+    # ---- world frame ----
+    def p_world(self, name: str) -> np.ndarray:
+        return self.pos[:, self._k(name)]
+
+    def v_world(self, name: str) -> np.ndarray:
+        return self.vel[:, self._k(name)]
+
+    def a_world(self, name: str) -> np.ndarray:
+        return self.acc[:, self._k(name)]
+
+    def R_world(self, name: str) -> np.ndarray:
+        """(N, 3, 3) orientation of a worn IMU site (``head_imu`` or ``wiimote``)."""
+        return self.R_imu[:, ORIENTED_TARGETS.index(name)]
+
+    # ---- robot base frame (T_world_base is constant) ----
+    def p_base(self, name: str) -> np.ndarray:
+        R, p = self.T_world_base[:3, :3], self.T_world_base[:3, 3]
+        return (self.p_world(name) - p) @ R
+
+    def v_base(self, name: str) -> np.ndarray:
+        return self.v_world(name) @ self.T_world_base[:3, :3]
+
+    def a_base(self, name: str) -> np.ndarray:
+        return self.a_world(name) @ self.T_world_base[:3, :3]
+
+    def R_base(self, name: str) -> np.ndarray:
+        return self.T_world_base[:3, :3].T @ self.R_world(name)
+
+    def sensor(self, name: str) -> np.ndarray:
+        return self.sensors[name]
+
+    def inertial(self, which: str) -> tuple[np.ndarray, np.ndarray]:
+        """True ``(specific force (N, 3) m/s^2, angular velocity (N, 3) rad/s)`` in the site
+        frame of ``head_imu`` or ``wiimote`` (what a noise-free IMU there reads)."""
+        prefix = {"head_imu": "head", "wiimote": "wiimote"}[which]
+        return self.sensors[f"{prefix}_acc"], self.sensors[f"{prefix}_gyro"]
+
+
+#: Samples processed per chunk (bounds the temporaries; the result is ~1.1 kB per sample).
+CHUNK = 4096
+
+
+def _chunk(m: mujoco.MjModel, d: mujoco.MjData, sq: slice, sv: slice, sites: np.ndarray,
+           oriented: np.ndarray, qpos: np.ndarray, qvel: np.ndarray, qacc: np.ndarray):
+    """Site positions, velocities, accelerations (world, gravity removed), IMU-site rotations
+    and sensor data for one chunk of samples."""
+    n = len(qpos)
+    bodies = m.site_bodyid[sites]
+    roots = m.body_rootid[bodies]
+    p = np.empty((n, len(sites), 3))
+    xmat = np.empty((n, len(oriented), 9))
+    cvel = np.empty((n, len(sites), 6))
+    cacc = np.empty((n, len(sites), 6))
+    com = np.empty((n, len(sites), 3))
+    sensordata = np.empty((n, m.nsensordata))
+    take = np.take
+    for i in range(n):
+        d.qpos[sq] = qpos[i]
+        d.qvel[sv] = qvel[i]
+        d.qacc[sv] = qacc[i]
+        mujoco.mj_inverse(m, d)
+        mujoco.mj_rnePostConstraint(m, d)
+        take(d.site_xpos, sites, axis=0, out=p[i])
+        take(d.site_xmat, oriented, axis=0, out=xmat[i])
+        take(d.cvel, bodies, axis=0, out=cvel[i])
+        take(d.cacc, bodies, axis=0, out=cacc[i])
+        take(d.subtree_com, roots, axis=0, out=com[i])
+        sensordata[i] = d.sensordata
+    # mj_objectVelocity / mj_objectAcceleration (flg_local = 0), vectorised
+    r = p - com
+    v = cvel[..., 3:] + np.cross(cvel[..., :3], r)
+    a = cacc[..., 3:] + np.cross(cacc[..., :3], r) + np.cross(cvel[..., :3], v) + m.opt.gravity
+    return p, v, a, xmat.reshape(n, len(oriented), 3, 3), sensordata
+
+
+def compute_ground_truth(scene: Scene, trajectory: JointTrajectory | HumanMotion,
+                         times: np.ndarray) -> GroundTruth:
+    """Ground truth at ``times`` (s) for the avatar following ``trajectory`` in ``scene``.
+
+    A :class:`HumanMotion` is first fitted with :meth:`JointTrajectory.from_motion` over
+    ``[0, max(times)]``. Uses its own ``MjData``; ``scene.data`` is not touched.
+    """
+    times = np.asarray(times, float)
+    if not isinstance(trajectory, JointTrajectory):
+        trajectory = JointTrajectory.from_motion(trajectory, float(np.max(times)))
+    m = scene.model
+    d = mujoco.MjData(m)
+    d.qpos[:] = scene.data.qpos  # the robot's pose does not affect the avatar's readings
+    n = len(times)
+    targets = tuple(HUMAN_TARGETS)
+    sites = np.array([scene.human_site(k) for k in targets])
+    oriented = sites[[targets.index(k) for k in ORIENTED_TARGETS]]
+
+    qpos, qvel = np.empty((n, trajectory.nq)), np.empty((n, trajectory.nv))
+    pos, vel, acc = (np.empty((n, len(sites), 3)) for _ in range(3))
+    R_imu = np.empty((n, len(oriented), 3, 3))
+    sensordata = np.empty((n, m.nsensordata))
+    for start in range(0, n, CHUNK):
+        c = slice(start, min(n, start + CHUNK))
+        qpos[c], qvel[c], qacc = trajectory.evaluate(times[c])
+        pos[c], vel[c], acc[c], R_imu[c], sensordata[c] = _chunk(
+            m, d, scene.human_qpos, scene.human_dof, sites, oriented, qpos[c], qvel[c], qacc)
+
+    sensors = {}
+    for name in SENSORS:
+        sid = m.sensor(HUMAN_PREFIX + name).id
+        adr, dim = m.sensor_adr[sid], m.sensor_dim[sid]
+        sensors[name] = sensordata[:, adr:adr + dim].copy()
+    return GroundTruth(t=times.copy(), qpos=qpos, qvel=qvel, targets=targets, pos=pos,
+                       vel=vel, acc=acc, R_imu=R_imu, sensors=sensors,
+                       T_world_base=scene.T_world_base.copy())

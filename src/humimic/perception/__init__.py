@@ -1,0 +1,1 @@
+"""Vision: colour models, EM blob tracking, detection, ZNCC stereo matching (Ude & Atkeson)."""

@@ -1,0 +1,359 @@
+"""Stereo 3-D blob positions (Ude eq. 10) and their covariances, cameras in arbitrary poses.
+
+The eyes pan and tilt, so the images are never assumed rectified. For each target:
+
+1. The left blob centre is undistorted to the ideal (distortion-free) left image; its ray's image
+   in the ideal right image is a straight line (the epipolar line): from the vanishing point of
+   the ray, direction ``a_xy b_z - a_z b_xy`` (``a`` the left camera centre and ``b`` the ray
+   direction in right-camera coordinates), parameterised by ideal-pixel arc length ``s``.
+2. The search interval of ``s`` is where that line crosses the right blob's box (centre +-
+   ``box_sigma`` sigma, in ideal pixels) and the depth range ``[z_min, z_max]``.
+3. Local rectification: a strip along the line (rows along its normal) and a box template around
+   the left point (columns along the left epipolar direction) are sampled on ideal-pixel grids,
+   distorted to raw pixels and read with ``cv2.remap`` (bilinear). Both grids are oriented by the
+   image of the baseline direction and share a spacing scaled to the left blob's size (so the
+   template holds the blob's outline), so the search is 1-D: ZNCC (eq. 10, colour) at every
+   sample of ``s``, the best refined by a parabola fit: the match, exactly on the epipolar line.
+4. Homogeneous linear triangulation (DLT, as ``cv2.triangulatePoints``) of the undistorted
+   normalised points with ``P = T_cam_base[:3]``: the base-frame point.
+5. ``R = J diag(C_left, C_right) J^T``, ``J`` the analytic Jacobian of step 4 (first-order
+   perturbation of the DLT null vector) chained with the Jacobians of undistortion.
+
+All targets of a frame go through one batch (:meth:`StereoRig.match_many`): the array work does
+not grow with the number of targets, only the small per-target scalar set-up does.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from humimic.perception.zncc import zncc_strips
+from humimic.sensors.camera_model import CameraModel, Intrinsics, invert_transform
+
+
+@dataclass(frozen=True)
+class StereoParams:
+    template_half: int = 6
+    """The template has (2 half + 1)^2 samples."""
+    template_sigma: float = 1.5
+    """The template spans +- this many of the left blob's largest standard deviation (so that it
+    holds the blob's outline: a template inside a uniformly coloured blob is flat), sampled at
+    a spacing of max(1 px, that span / half); the strip is sampled at the same spacing."""
+    max_spacing_px: float = 4.0
+    box_sigma: float = 2.5
+    """Right search box: right blob centre +- box_sigma * sqrt(diag(blob_cov_right))."""
+    z_min: float = 0.1
+    z_max: float = 20.0
+    """Depth range (m, along the left ray) of the epipolar search."""
+    min_score: float = 0.5
+    """ZNCC below this fails with reason 'low_zncc'."""
+
+
+@dataclass(frozen=True)
+class StereoMeasurement:
+    ok: bool
+    reason: str
+    """'' when ok, else why not. Never NaN: failures carry zeros."""
+    p_base: np.ndarray
+    """Triangulated point (m), base frame."""
+    R_base: np.ndarray
+    """3x3 covariance of p_base (m^2), base frame."""
+    uv_left: np.ndarray
+    uv_right: np.ndarray
+    """The match in raw right-image pixels."""
+    score: float
+
+
+def _fail(reason: str, uv_left, score: float = 0.0) -> StereoMeasurement:
+    return StereoMeasurement(False, reason, np.zeros(3), np.zeros((3, 3)),
+                             np.nan_to_num(np.asarray(uv_left, float)), np.zeros(2), score)
+
+
+def triangulate_dlt(P1: np.ndarray, P2: np.ndarray, x1: np.ndarray, x2: np.ndarray):
+    """Homogeneous DLT of N points ``x1, x2 (N, 2)`` from two 3x4 cameras.
+
+    Returns the unit null vectors ``X_h (N, 4)`` and the SVD ``(A, s, Vt)`` of the systems.
+    """
+    A = np.empty((len(x1), 4, 4))
+    A[:, 0:2] = x1[:, :, None] * P1[2] - P1[0:2]
+    A[:, 2:4] = x2[:, :, None] * P2[2] - P2[0:2]
+    _, s, Vt = np.linalg.svd(A)
+    return Vt[:, 3], (A, s, Vt)
+
+
+def dlt_jacobian(P1: np.ndarray, P2: np.ndarray, X_h: np.ndarray, svd) -> np.ndarray:
+    """d(Euclidean point)/d(x1, y1, x2, y2) ``(N, 3, 4)`` by perturbing the DLT null vector.
+
+    ``X_h`` is the eigenvector of ``M = A^T A`` of smallest eigenvalue ``s4^2``; to first order
+    ``dX_h = -(M - s4^2 I)^+ dM X_h``, ``dM = dA^T A + A^T dA``, and ``dA`` for coordinate ``i``
+    has row ``i`` = the third row of its camera's ``P``.
+    """
+    A, s, Vt = svd
+    V3 = Vt[:, :3]  # (N, 3, 4)
+    pinv = np.swapaxes(V3, 1, 2) / (s[:, :3] ** 2 - s[:, 3:] ** 2)[:, None, :] @ V3
+    rows = np.stack([P1[2], P1[2], P2[2], P2[2]])  # (4, 4)
+    AX = np.einsum("nij,nj->ni", A, X_h)
+    dMX = rows * AX[:, :, None] + A * (X_h @ rows.T)[:, :, None]  # [n, i]: dM_i X_h
+    dX = -dMX @ pinv  # (N, 4 coords, 4)
+    Xe = X_h[:, :3] / X_h[:, 3:]
+    J = (dX[:, :, :3] - dX[:, :, 3:] * Xe[:, None, :]) / X_h[:, 3, None, None]
+    return np.swapaxes(J, 1, 2)
+
+
+def undistort_point(intr: Intrinsics, u: float, v: float, iterations: int = 8
+                    ) -> tuple[float, float]:
+    """One pixel to undistorted normalised coordinates (scalar fixed point, as Intrinsics)."""
+    xd, yd = (u - intr.cx) / intr.fx, (v - intr.cy) / intr.fy
+    x, y = xd, yd
+    if intr.k1 != 0.0 or intr.k2 != 0.0:
+        for _ in range(iterations):
+            r2 = x * x + y * y
+            s = 1.0 + intr.k1 * r2 + intr.k2 * r2 * r2
+            x, y = xd / s, yd / s
+    return x, y
+
+
+def undistort_jacobian(intr: Intrinsics, x: float, y: float) -> list[list[float]]:
+    """d(undistorted normalised point)/d(pixel) (2x2) at the undistorted point ``(x, y)``."""
+    r2 = x * x + y * y
+    s = 1.0 + intr.k1 * r2 + intr.k2 * r2 * r2
+    ds = 2.0 * (intr.k1 + 2.0 * intr.k2 * r2)
+    a, b, d = s + ds * x * x, ds * x * y, s + ds * y * y  # d(distorted)/d(undistorted)
+    det = a * d - b * b
+    return [[d / (det * intr.fx), -b / (det * intr.fy)],
+            [-b / (det * intr.fx), a / (det * intr.fy)]]
+
+
+def _distort_to_pixels(intr: Intrinsics, x: np.ndarray, y: np.ndarray):
+    r2 = x * x + y * y
+    s = 1.0 + r2 * (intr.k1 + intr.k2 * r2)
+    return intr.fx * x * s + intr.cx, intr.fy * y * s + intr.cy
+
+
+class StereoRig:
+    """A left/right camera pair at one instant (the eyes' current pose) and the matcher."""
+
+    def __init__(self, cam_left: CameraModel, cam_right: CameraModel,
+                 params: StereoParams = StereoParams()) -> None:
+        self.intr_l, self.intr_r = cam_left.intrinsics, cam_right.intrinsics
+        self.T_base_left, self.T_base_right = cam_left.T_base_cam, cam_right.T_base_cam
+        self.P_left = invert_transform(cam_left.T_base_cam)[:3]
+        self.P_right = invert_transform(cam_right.T_base_cam)[:3]
+        self.params = params
+        b_base = cam_right.T_base_cam[:3, 3] - cam_left.T_base_cam[:3, 3]
+        self._b_left = cam_left.T_base_cam[:3, :3].T @ b_base  # baseline, left-camera axes
+        self._R_rl = self.P_right[:, :3] @ cam_left.T_base_cam[:3, :3]  # left -> right axes
+        self._a = self.P_right @ np.append(cam_left.T_base_cam[:3, 3], 1.0)  # c_left, right axes
+        self._b_right = self.P_right[:, :3] @ b_base
+        self._k = np.arange(-params.template_half, params.template_half + 1, dtype=float)
+
+    def triangulate(self, uv_left: np.ndarray, uv_right: np.ndarray,
+                    cov_left: np.ndarray | None = None, cov_right: np.ndarray | None = None
+                    ) -> tuple[np.ndarray, np.ndarray]:
+        """Base-frame points ``(N, 3)`` (m) and covariances ``(N, 3, 3)`` from raw pixels.
+
+        ``uv_*`` are ``(N, 2)`` (or ``(2,)`` for one point: results are then unbatched); pixel
+        covariances (2x2, or ``(N, 2, 2)``) default to zero.
+        """
+        single = np.ndim(uv_left) == 1
+        uvl, uvr = np.atleast_2d(uv_left), np.atleast_2d(uv_right)
+        xl = np.array([undistort_point(self.intr_l, u, v) for u, v in uvl.tolist()])
+        xr = np.array([undistort_point(self.intr_r, u, v) for u, v in uvr.tolist()])
+        p, R = self._triangulate_normalised(xl, xr, cov_left, cov_right)
+        return (p[0], R[0]) if single else (p, R)
+
+    def _triangulate_normalised(self, xl, xr, cov_left, cov_right):
+        X_h, svd = triangulate_dlt(self.P_left, self.P_right, xl, xr)
+        p_base = X_h[:, :3] / X_h[:, 3:]
+        J = dlt_jacobian(self.P_left, self.P_right, X_h, svd)  # (N, 3, 4)
+        Ju = np.zeros((len(xl), 4, 4))
+        Ju[:, 0:2, 0:2] = [undistort_jacobian(self.intr_l, x, y) for x, y in xl.tolist()]
+        Ju[:, 2:4, 2:4] = [undistort_jacobian(self.intr_r, x, y) for x, y in xr.tolist()]
+        C = np.zeros((len(xl), 4, 4))
+        if cov_left is not None:
+            C[:, 0:2, 0:2] = cov_left
+        if cov_right is not None:
+            C[:, 2:4, 2:4] = cov_right
+        Jt = J @ Ju
+        return p_base, Jt @ C @ np.swapaxes(Jt, 1, 2)
+
+    def _epipolar_interval(self, xl, yl, cu, cv, hu, hv):
+        """Ideal-right-pixel line ``q(s) = q0 + s t`` for a left point, its search interval and
+        the in-plane 'baseline' direction at the left point; None if the interval is empty."""
+        p, ir = self.params, self.intr_r
+        bx, by, bz = (self._R_rl @ np.array([xl, yl, 1.0])).tolist()  # ray direction, right
+        ax, ay, az = self._a.tolist()
+        if bz <= 1e-9:
+            return None
+        dx, dy = ax * bz - az * bx, ay * bz - az * by  # normalised: x(z) = v + dlt/(bz(az+z bz))
+        tx, ty = ir.fx * dx, ir.fy * dy  # the same in ideal pixels
+        norm = math.hypot(tx, ty)
+        if norm < 1e-12:
+            return None
+        q0 = (ir.fx * bx / bz + ir.cx, ir.fy * by / bz + ir.cy)  # vanishing point (z -> inf)
+        # s(z) = norm / (bz (az + z bz)): decreasing in z; points in front need az + z bz > 0
+        s_lo = norm / (bz * (az + p.z_max * bz)) if az + p.z_max * bz > 0 else math.inf
+        s_hi = norm / (bz * (az + p.z_min * bz)) if az + p.z_min * bz > 0 else math.inf
+        tx, ty = tx / norm, ty / norm
+        for q, t, c, h in ((q0[0], tx, cu, hu), (q0[1], ty, cv, hv)):  # slab clipping
+            if abs(t) < 1e-12:
+                if abs(q - c) > h:
+                    return None
+                continue
+            s1, s2 = sorted(((c - h - q) / t, (c + h - q) / t))
+            s_lo, s_hi = max(s_lo, s1), min(s_hi, s2)
+        if not s_hi - s_lo >= 2.0:
+            return None
+        # orientation: the image of moving along the baseline (as for the left template)
+        xm = (q0[0] + 0.5 * (s_lo + s_hi) * tx - ir.cx) / ir.fx
+        ym = (q0[1] + 0.5 * (s_lo + s_hi) * ty - ir.cy) / ir.fy
+        brx, bry, brz = self._b_right.tolist()
+        sign = 1.0 if tx * ir.fx * (brx - xm * brz) + ty * ir.fy * (bry - ym * brz) >= 0 else -1.0
+        blx, bly, blz = self._b_left.tolist()
+        il = self.intr_l
+        lx, ly = il.fx * (blx - xl * blz), il.fy * (bly - yl * blz)
+        ln = math.hypot(lx, ly)
+        if ln < 1e-12:
+            return None
+        return q0, (sign * tx, sign * ty), (s_lo, s_hi) if sign > 0 else (-s_hi, -s_lo), \
+            (lx / ln, ly / ln)
+
+    def match_many(self, image_left: np.ndarray, image_right: np.ndarray, uv_left,
+                   blob_cov_left, uv_right_blob, blob_cov_right, cov_uv_left, cov_uv_right
+                   ) -> list[StereoMeasurement]:
+        """Ude eq. 10 correspondences of N left blob centres inside their right blobs, in 3-D.
+
+        ``uv_left``, ``uv_right_blob``: ``(N, 2)`` px; ``blob_cov_*`` ``(N, 2, 2)``: the blobs'
+        shape covariances (px^2; the left one sizes the template, the right one the search box);
+        ``cov_uv_*`` (2x2 or ``(N, 2, 2)``): covariances of the measured centres (px^2,
+        calibrated in advance as in Ude's Table 2), propagated to ``R_base``.
+        """
+        p = self.params
+        hh = int(p.template_half)
+        uv_left = np.atleast_2d(np.asarray(uv_left, float))
+        uv_rb = np.atleast_2d(np.asarray(uv_right_blob, float))
+        bl = np.asarray(blob_cov_left, float).reshape(-1, 2, 2)
+        bc = np.asarray(blob_cov_right, float).reshape(-1, 2, 2)
+        H, W = image_left.shape[:2]
+        out: list[StereoMeasurement | None] = [None] * len(uv_left)
+        jobs = []
+        for i, ((u, v), (ru, rv), (vu, vv), (a, b, c)) in enumerate(zip(
+                uv_left.tolist(), uv_rb.tolist(), bc[:, [0, 1], [0, 1]].tolist(),
+                bl[:, [0, 0, 1], [0, 1, 1]].tolist(), strict=True)):
+            if not all(math.isfinite(z) for z in (u, v, ru, rv, vu, vv, a, b, c)):
+                out[i] = _fail("non_finite_input", uv_left[i])
+                continue
+            lam = 0.5 * (a + c) + math.sqrt(max(0.25 * (a - c) ** 2 + b * b, 0.0))
+            step = min(max(1.0, p.template_sigma * math.sqrt(max(lam, 0.0)) / max(hh, 1)),
+                       p.max_spacing_px)
+            r = hh * step
+            if not (r <= u <= W - 1 - r and r <= v <= H - 1 - r):
+                out[i] = _fail("template_out_of_image", uv_left[i])
+                continue
+            xl, yl = undistort_point(self.intr_l, u, v)
+            xr, yr = undistort_point(self.intr_r, ru, rv)
+            line = self._epipolar_interval(
+                xl, yl, self.intr_r.fx * xr + self.intr_r.cx, self.intr_r.fy * yr + self.intr_r.cy,
+                p.box_sigma * math.sqrt(max(vu, 0.25)), p.box_sigma * math.sqrt(max(vv, 0.25)))
+            if line is None:
+                out[i] = _fail("epipolar_line_misses_right_blob", uv_left[i])
+                continue
+            jobs.append((i, xl, yl, line, step))
+        if jobs:
+            self._match_jobs(image_left, image_right, uv_left, jobs, cov_uv_left, cov_uv_right,
+                             out)
+        return out  # type: ignore[return-value]
+
+    def _match_jobs(self, img_l, img_r, uv_left, jobs, cov_l, cov_r, out) -> None:
+        p, k, hh = self.params, self._k, int(self.params.template_half)
+        il, ir = self.intr_l, self.intr_r
+        n = len(jobs)
+        n_s = [math.floor((ln[2][1] - ln[2][0]) / st) + 1 for _, _, _, ln, st in jobs]
+        L = max(n_s) + 2 * (hh + 1)  # strip columns: the interval plus template + parabola pad
+        j = np.arange(L, dtype=float) - (hh + 1)
+        d = np.array([st for *_, st in jobs])  # sample spacing (ideal px) per job
+        kd = k[None, :] * d[:, None]  # (n, 2 hh + 1): row / template offsets
+        # strips: ideal right pixels q0 + (s_lo + j d) t + r d nrm, for every job
+        s0 = np.array([ln[2][0] for _, _, _, ln, _ in jobs])
+        q0 = np.array([ln[0] for _, _, _, ln, _ in jobs])
+        t = np.array([ln[1] for _, _, _, ln, _ in jobs])
+        s = s0[:, None] + j[None, :] * d[:, None]  # (n, L)
+        qx = q0[:, 0, None, None] + s[:, None, :] * t[:, 0, None, None] \
+            - kd[:, :, None] * t[:, 1, None, None]
+        qy = q0[:, 1, None, None] + s[:, None, :] * t[:, 1, None, None] \
+            + kd[:, :, None] * t[:, 0, None, None]
+        mx, my = _distort_to_pixels(ir, (qx - ir.cx) / ir.fx, (qy - ir.cy) / ir.fy)
+        strips = cv2.remap(img_r, mx.reshape(n * len(k), L).astype(np.float32),
+                           my.reshape(n * len(k), L).astype(np.float32), cv2.INTER_LINEAR,
+                           borderMode=cv2.BORDER_REPLICATE).reshape(n, len(k), L, -1)
+        # templates: ideal left pixels around each left point, columns along its epipolar dir.
+        ql = np.array([(il.fx * xl + il.cx, il.fy * yl + il.cy) for _, xl, yl, _, _ in jobs])
+        tl = np.array([ln[3] for _, _, _, ln, _ in jobs])
+        lx = ql[:, 0, None, None] + kd[:, None, :] * tl[:, 0, None, None] \
+            - kd[:, :, None] * tl[:, 1, None, None]
+        ly = ql[:, 1, None, None] + kd[:, None, :] * tl[:, 1, None, None] \
+            + kd[:, :, None] * tl[:, 0, None, None]
+        mx, my = _distort_to_pixels(il, (lx - il.cx) / il.fx, (ly - il.cy) / il.fy)
+        tpls = cv2.remap(img_l, mx.reshape(n * len(k), len(k)).astype(np.float32),
+                         my.reshape(n * len(k), len(k)).astype(np.float32), cv2.INTER_LINEAR,
+                         borderMode=cv2.BORDER_REPLICATE).reshape(n, len(k), len(k), -1)
+        sc = zncc_strips(strips, tpls)  # sc[r, m] <-> template centred on s_lo + (m - 1) d
+        valid = (np.arange(sc.shape[1]) >= 1) & (np.arange(sc.shape[1])[None, :]
+                                                  <= np.array(n_s)[:, None])
+        m = np.argmax(np.where(valid, sc, -np.inf), axis=1)
+        ar = np.arange(n)
+        best, f_m, f_p = sc[ar, m], sc[ar, m - 1], sc[ar, m + 1]
+        curv = f_m - 2.0 * best + f_p
+        with np.errstate(invalid="ignore", divide="ignore"):
+            off = np.where(curv < 0, np.clip(0.5 * (f_m - f_p) / curv, -0.5, 0.5), 0.0)
+        s_star = s0 + (m - 1 + off) * d
+        qr = q0 + s_star[:, None] * t
+        good = best >= p.min_score
+        for r in np.flatnonzero(~good).tolist():
+            i = jobs[r][0]
+            out[i] = _fail("low_zncc", uv_left[i], float(best[r]))
+        if not good.any():
+            return
+        rows = [jobs[r][0] for r in np.flatnonzero(good).tolist()]
+        scores = best[good].tolist()
+        xl_a = np.array([(xl, yl) for _, xl, yl, _, _ in jobs])[good]
+        xr_a = np.stack([(qr[good, 0] - ir.cx) / ir.fx, (qr[good, 1] - ir.cy) / ir.fy], 1)
+        cl = np.asarray(cov_l, float) if cov_l is not None else None
+        cr = np.asarray(cov_r, float) if cov_r is not None else None
+        if cl is not None and cl.ndim == 3:
+            cl = cl[rows]
+        if cr is not None and cr.ndim == 3:
+            cr = cr[rows]
+        P, R = self._triangulate_normalised(xl_a, xr_a, cl, cr)
+        ur, vr = _distort_to_pixels(ir, xr_a[:, 0], xr_a[:, 1])
+        depth_l = P @ self.P_left[2, :3] + self.P_left[2, 3]
+        depth_r = P @ self.P_right[2, :3] + self.P_right[2, 3]
+        finite = np.isfinite(P).all(1) & np.isfinite(R).all((1, 2))
+        for r, i in enumerate(rows):
+            if not finite[r]:
+                out[i] = _fail("degenerate_triangulation", uv_left[i], scores[r])
+            elif depth_l[r] <= 0.0 or depth_r[r] <= 0.0:
+                out[i] = _fail("behind_camera", uv_left[i], scores[r])
+            else:
+                out[i] = StereoMeasurement(True, "", P[r], R[r], uv_left[i].copy(),
+                                           np.array([ur[r], vr[r]]), scores[r])
+
+    def match(self, image_left, image_right, uv_left, blob_cov_left, uv_right_blob,
+              blob_cov_right, cov_uv_left, cov_uv_right) -> StereoMeasurement:
+        """:meth:`match_many` for one target."""
+        return self.match_many(image_left, image_right, [uv_left], [blob_cov_left],
+                               [uv_right_blob], [blob_cov_right], cov_uv_left, cov_uv_right)[0]
+
+
+def match_and_triangulate(image_left, image_right, cam_left: CameraModel,
+                          cam_right: CameraModel, uv_left, blob_cov_left, uv_right_blob,
+                          blob_cov_right, cov_uv_left, cov_uv_right,
+                          params: StereoParams = StereoParams()) -> StereoMeasurement:
+    """One-shot :meth:`StereoRig.match` (builds the rig; build one rig per frame instead)."""
+    return StereoRig(cam_left, cam_right, params).match(
+        image_left, image_right, uv_left, blob_cov_left, uv_right_blob, blob_cov_right,
+        cov_uv_left, cov_uv_right)

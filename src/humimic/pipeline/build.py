@@ -1,0 +1,15 @@
+"""Build the stages a scenario asks for, in pipeline order."""
+
+from __future__ import annotations
+
+from humimic.pipeline.stage import Stage
+
+
+def build_stages(scenario, world, rngs, rlog) -> list[Stage]:
+    """One stage per optional scenario section that is present (perception, filter, mimic)."""
+    stages: list[Stage] = []
+    if getattr(scenario, "mimic", None) is not None:
+        from humimic.control.build import mimic_stages
+
+        stages.extend(mimic_stages(scenario, world, rngs, rlog))
+    return stages

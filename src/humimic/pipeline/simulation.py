@@ -1,0 +1,128 @@
+"""The simulation loop: physics at 840 Hz, sensors and stages at their own rates.
+
+Per physics tick ``k`` (time ``t = k / physics_rate``):
+
+1. write the person's state at ``t`` into the scene, ``mj_step1`` (kinematics at ``t``);
+2. sample the sensors that are due (eye cameras, IMU, Wii remote) and publish them;
+3. deliver every bus value that is ready at ``t`` (stages run here, in causal order);
+4. at servo ticks, let control stages write actuator targets;
+5. log poses to rerun at ``output.pose_rate``; ``mj_step2`` integrates to ``t + dt``.
+
+A Ctrl-C stops the loop cleanly: the caller still gets the metrics so far.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import mujoco
+import numpy as np
+from tqdm import tqdm
+
+from humimic.pipeline.bus import Bus
+from humimic.pipeline.stage import Stage, StageTimer
+from humimic.sensors.clock import Schedule
+from humimic.stamped import Stamped
+
+
+@dataclass
+class SimResult:
+    ticks_done: int
+    sim_time_s: float
+    wall_time_s: float
+    interrupted: bool
+    timer: StageTimer
+    frames_published: int
+    robot_qpos: np.ndarray = field(repr=False)
+    """(n_servo, 30) robot joint positions sampled at the servo rate."""
+    servo_t: np.ndarray = field(repr=False)
+
+
+def simulate(world, stages: list[Stage], rlog, bus: Bus | None = None,
+             progress: bool = True) -> SimResult:
+    scenario = world.scenario
+    m, d = world.scene.model, world.scene.data
+    phys_rate = scenario.timing.physics_rate
+    servo_every = int(round(phys_rate / scenario.timing.servo_rate))
+    bus = bus or Bus()
+    timer = StageTimer()
+    for stage in stages:
+        stage.attach(bus, timer)
+
+    cam_sched = Schedule(scenario.cameras.rate, phys_rate)
+    head_sched = (Schedule(scenario.sensors.head_camera.rate, phys_rate)
+                  if world.head_rig is not None else None)
+    pose_sched = Schedule(min(scenario.output.pose_rate, phys_rate), phys_rate)
+    inertial = []
+    for topic, samples in (("imu", world.imu), ("wiimote", world.wiimote)):
+        if samples is not None:
+            data, ticks = samples
+            inertial.append((topic, data, {int(k): i for i, k in enumerate(ticks)}))
+    latency = scenario.cameras.latency
+    image_every = scenario.output.image_every
+    quality = scenario.output.jpeg_quality
+
+    n_servo = (world.n_ticks + servo_every - 1) // servo_every
+    robot_qpos = np.zeros((n_servo, len(world.scene.robot_qpos)))
+    servo_t = np.zeros(n_servo)
+    frames = 0
+    tick = 0
+    interrupted = False
+    bar = tqdm(total=round(scenario.duration, 3), unit="sim s", disable=not progress,
+               bar_format="{l_bar}{bar}| {n:.2f}/{total:.2f} sim s [{elapsed}<{remaining}]")
+    update_every = max(1, int(phys_rate // 10))
+    wall0 = time.perf_counter()
+    try:
+        for tick in range(world.n_ticks):
+            t = tick / phys_rate
+            t0 = time.perf_counter()
+            world.apply_human(tick)
+            mujoco.mj_step1(m, d)
+            t_phys = time.perf_counter() - t0
+
+            if cam_sched.due(tick):
+                with timer.time("render"):
+                    images = world.eye_rig.capture(t)
+                bus.publish("frames", Stamped(t, images, t + latency))
+                if image_every and frames % image_every == 0:
+                    for name, img in images.items():
+                        rlog.log_camera_image(t, f"world/cameras/{name}", img, quality)
+                frames += 1
+            if head_sched is not None and head_sched.due(tick):
+                with timer.time("render_headcam"):
+                    images = world.head_rig.capture(t)
+                bus.publish("headcam", Stamped(t, images["headcam"]))
+            for topic, data, index in inertial:
+                i = index.get(tick)
+                if i is not None:
+                    bus.publish(topic, Stamped(t, (data.accel[i], data.gyro[i])))
+
+            bus.deliver(t)
+            if tick % servo_every == 0:
+                k = tick // servo_every
+                robot_qpos[k] = d.qpos[world.scene.robot_qpos]
+                servo_t[k] = t
+                for stage in stages:
+                    stage.servo(t, bus)
+            if pose_sched.due(tick):
+                with timer.time("viz"):
+                    rlog.log_poses(t)
+
+            t0 = time.perf_counter()
+            mujoco.mj_step2(m, d)
+            timer.add("physics", t_phys + time.perf_counter() - t0)
+            if tick % update_every == 0:
+                bar.n = round(t, 3)
+                bar.refresh()
+        else:
+            tick = world.n_ticks
+    except KeyboardInterrupt:
+        interrupted = True
+    finally:
+        bar.n = round(tick / phys_rate, 3)
+        bar.close()
+    wall = time.perf_counter() - wall0
+    n_done = (tick + servo_every - 1) // servo_every
+    return SimResult(tick, tick / phys_rate, wall, interrupted, timer, frames,
+                     robot_qpos[:n_done], servo_t[:n_done])

@@ -1,0 +1,35 @@
+"""The scenario file's schema: one pydantic model per section, unknown keys rejected.
+
+Stages plug in by adding an optional section here (``perception``, ``filter``, ``mimic``...),
+defined next to the stage in its own package. A scenario that omits a section does not run
+that stage.
+"""
+
+from __future__ import annotations
+
+from pydantic import Field
+
+from humimic.control.config import MimicConfig
+from humimic.scenario.base import Section
+from humimic.sensors.config import Cameras, Sensors, Timing
+from humimic.viz.config import Output
+from humimic.world.config import Human, Lighting, Robot
+
+
+class Scenario(Section):
+    """A whole run: world, sensors, stages and outputs. Units: m, s, rad unless a key says."""
+
+    name: str = Field(pattern=r"^[A-Za-z0-9_.\-]+$", max_length=80)
+    description: str = ""
+    duration: float = Field(8.0, gt=0.0, le=600.0)
+    """Simulated seconds."""
+    seed: int = Field(0, ge=0)
+    human: Human = Field(default_factory=Human)
+    robot: Robot = Field(default_factory=Robot)
+    cameras: Cameras = Field(default_factory=Cameras)
+    lighting: Lighting = Field(default_factory=Lighting)
+    sensors: Sensors = Field(default_factory=Sensors)
+    timing: Timing = Field(default_factory=Timing)
+    output: Output = Field(default_factory=Output)
+    mimic: MimicConfig | None = None
+    """Imitation by the robot (see :mod:`humimic.control.config`); absent: the robot holds."""

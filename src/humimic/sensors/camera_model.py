@@ -1,0 +1,150 @@
+"""Pinhole camera model shared by the renderer and every vision stage.
+
+Conventions (used everywhere in humimic):
+
+* Pixel coordinates ``(u, v)`` are OpenCV's: ``u`` to the right, ``v`` down, the *centre* of
+  pixel ``(i, j)`` (column ``i``, row ``j``) at integer coordinates. The principal point of an
+  undistorted MuJoCo camera is therefore ``((W-1)/2, (H-1)/2)``.
+* Camera frames are OpenCV's: x right, y down, z forward (along the optical axis). MuJoCo
+  cameras look along their -z with +y up; :func:`R_mjcam_to_cv` converts.
+* Distortion is radial, OpenCV's first two coefficients: ``x_d = x (1 + k1 r^2 + k2 r^4)`` on
+  normalised coordinates, so ``cv2.projectPoints`` with ``dist=[k1, k2, 0, 0]`` agrees.
+* Units: metres and radians; pixels for image coordinates.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+#: Rotation from a MuJoCo camera frame (x right, y up, z back) to OpenCV's (x right, y down, z fwd).
+R_MJCAM_CV = np.diag([1.0, -1.0, -1.0])
+
+
+def fovy_from_hfov(hfov_rad: float, width: int, height: int) -> float:
+    """MuJoCo's vertical ``fovy`` (rad) for a horizontal field of view at ``width x height``."""
+    return 2.0 * math.atan(math.tan(hfov_rad / 2.0) * height / width)
+
+
+@dataclass(frozen=True)
+class Intrinsics:
+    """Pinhole intrinsics plus radial distortion, in pixels (OpenCV conventions)."""
+
+    width: int
+    height: int
+    fx: float
+    fy: float
+    cx: float
+    cy: float
+    k1: float = 0.0
+    k2: float = 0.0
+
+    @classmethod
+    def from_fovy(cls, fovy_rad: float, width: int, height: int, k1: float = 0.0,
+                  k2: float = 0.0) -> Intrinsics:
+        """Intrinsics of a MuJoCo camera with vertical field of view ``fovy_rad`` (square px)."""
+        f = (height / 2.0) / math.tan(fovy_rad / 2.0)
+        return cls(width, height, f, f, (width - 1) / 2.0, (height - 1) / 2.0, k1, k2)
+
+    @property
+    def K(self) -> np.ndarray:
+        return np.array([[self.fx, 0.0, self.cx], [0.0, self.fy, self.cy], [0.0, 0.0, 1.0]])
+
+    @property
+    def dist(self) -> np.ndarray:
+        """OpenCV distortion vector ``[k1, k2, p1, p2]``."""
+        return np.array([self.k1, self.k2, 0.0, 0.0])
+
+    @property
+    def hfov(self) -> float:
+        return 2.0 * math.atan((self.width / 2.0) / self.fx)
+
+    def project(self, p_cam: np.ndarray) -> np.ndarray:
+        """Project camera-frame points ``(..., 3)`` (OpenCV axes, z forward) to pixels ``(..., 2)``.
+
+        Points behind the camera (z <= 0) give NaN.
+        """
+        p = np.asarray(p_cam, dtype=float)
+        z = p[..., 2]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            x = np.where(z > 0, p[..., 0] / z, np.nan)
+            y = np.where(z > 0, p[..., 1] / z, np.nan)
+        r2 = x * x + y * y
+        s = 1.0 + self.k1 * r2 + self.k2 * r2 * r2
+        return np.stack([self.fx * x * s + self.cx, self.fy * y * s + self.cy], axis=-1)
+
+    def undistort_normalized(self, uv: np.ndarray, iterations: int = 8) -> np.ndarray:
+        """Pixels ``(..., 2)`` to undistorted normalised coordinates ``(..., 2)`` (fixed point)."""
+        uv = np.asarray(uv, dtype=float)
+        xd = (uv[..., 0] - self.cx) / self.fx
+        yd = (uv[..., 1] - self.cy) / self.fy
+        x, y = xd.copy(), yd.copy()
+        if self.k1 == 0.0 and self.k2 == 0.0:
+            return np.stack([x, y], axis=-1)
+        for _ in range(iterations):
+            r2 = x * x + y * y
+            s = 1.0 + self.k1 * r2 + self.k2 * r2 * r2
+            x, y = xd / s, yd / s
+        return np.stack([x, y], axis=-1)
+
+
+@dataclass(frozen=True)
+class CameraModel:
+    """A calibrated camera at one instant: intrinsics and its pose.
+
+    ``T_base_cam`` maps camera-frame (OpenCV axes) points into the robot base frame;
+    ``T_world_cam`` into the world frame. Both are 4x4 homogeneous transforms.
+    """
+
+    name: str
+    intrinsics: Intrinsics
+    T_base_cam: np.ndarray
+    T_world_cam: np.ndarray = field(default_factory=lambda: np.eye(4))
+
+    @property
+    def P_base(self) -> np.ndarray:
+        """3x4 projection matrix from homogeneous base-frame points to pixels (no distortion)."""
+        T_cam_base = invert_transform(self.T_base_cam)
+        return self.intrinsics.K @ T_cam_base[:3, :]
+
+    def project_base(self, p_base: np.ndarray) -> np.ndarray:
+        """Project base-frame points ``(..., 3)`` to pixels ``(..., 2)`` (with distortion)."""
+        T_cam_base = invert_transform(self.T_base_cam)
+        p = np.asarray(p_base, dtype=float)
+        p_cam = p @ T_cam_base[:3, :3].T + T_cam_base[:3, 3]
+        return self.intrinsics.project(p_cam)
+
+    def project_world(self, p_world: np.ndarray) -> np.ndarray:
+        """Project world-frame points ``(..., 3)`` to pixels ``(..., 2)`` (with distortion)."""
+        T_cam_world = invert_transform(self.T_world_cam)
+        p = np.asarray(p_world, dtype=float)
+        p_cam = p @ T_cam_world[:3, :3].T + T_cam_world[:3, 3]
+        return self.intrinsics.project(p_cam)
+
+
+def invert_transform(T: np.ndarray) -> np.ndarray:
+    """Inverse of a 4x4 rigid transform."""
+    R, p = T[:3, :3], T[:3, 3]
+    out = np.eye(4)
+    out[:3, :3] = R.T
+    out[:3, 3] = -R.T @ p
+    return out
+
+
+def make_transform(R: np.ndarray, p: np.ndarray) -> np.ndarray:
+    T = np.eye(4)
+    T[:3, :3] = R
+    T[:3, 3] = p
+    return T
+
+
+@dataclass(frozen=True)
+class CameraImage:
+    """One rendered frame of one camera, sampled at simulated time ``t`` (s)."""
+
+    t: float
+    camera: CameraModel
+    image: np.ndarray
+    """H x W x 3, uint8, RGB, row 0 at the top."""

@@ -1,0 +1,154 @@
+"""Render the scene's cameras as a sensor: images with pixel noise and radial distortion, and
+the exact intrinsics/extrinsics a calibrated vision system would know.
+
+MuJoCo renders an ideal pinhole image. Distortion is applied afterwards with a precomputed
+``cv2.remap``; when the lens is barrel-distorted (k1 < 0) the ideal image is rendered larger
+(same focal length) so the distorted frame has no black corners. Pixel noise is Gaussian,
+drawn by OpenCV's generator seeded from the run's ``numpy.random.Generator`` for each frame
+(4x faster than numpy's normal at 320x240 and still reproducible).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import cv2
+import mujoco
+import numpy as np
+
+from humimic.sensors.camera_model import (
+    R_MJCAM_CV,
+    CameraImage,
+    CameraModel,
+    Intrinsics,
+    invert_transform,
+    make_transform,
+)
+
+
+@dataclass(frozen=True)
+class CameraSpec:
+    """One camera as a sensor. ``name`` is the scene camera without prefix (``L_wide``)."""
+
+    name: str
+    width: int
+    height: int
+    noise_std: float = 0.0
+    k1: float = 0.0
+    k2: float = 0.0
+
+
+def distortion_maps(intr: Intrinsics, src: Intrinsics) -> tuple[np.ndarray, np.ndarray]:
+    """For each pixel of the distorted image ``intr``, where to sample the ideal image ``src``."""
+    u, v = np.meshgrid(np.arange(intr.width, dtype=np.float64),
+                       np.arange(intr.height, dtype=np.float64))
+    xy = intr.undistort_normalized(np.stack([u, v], axis=-1))
+    map_x = (src.fx * xy[..., 0] + src.cx).astype(np.float32)
+    map_y = (src.fy * xy[..., 1] + src.cy).astype(np.float32)
+    return map_x, map_y
+
+
+def ideal_canvas(intr: Intrinsics) -> Intrinsics:
+    """Pinhole intrinsics (same focal length) large enough to cover a distorted image."""
+    if intr.k1 == 0.0 and intr.k2 == 0.0:
+        return Intrinsics(intr.width, intr.height, intr.fx, intr.fy, intr.cx, intr.cy)
+    corners = np.array([[0, 0], [intr.width - 1, 0], [0, intr.height - 1],
+                        [intr.width - 1, intr.height - 1], [0, intr.cy], [intr.cx, 0]])
+    xy = np.abs(intr.undistort_normalized(corners))
+    half_w = max(intr.cx, float(xy[:, 0].max()) * intr.fx) + 2
+    half_h = max(intr.cy, float(xy[:, 1].max()) * intr.fy) + 2
+    w, h = 2 * math.ceil(half_w) + 1, 2 * math.ceil(half_h) + 1
+    return Intrinsics(w, h, intr.fx, intr.fy, (w - 1) / 2.0, (h - 1) / 2.0)
+
+
+class CameraRig:
+    """Renders a set of cameras of a :class:`humimic.world.Scene` at the current state.
+
+    Call :meth:`capture` after the scene's kinematics are up to date (``mj_step1`` or
+    ``mj_forward``). Renderers are created lazily, one per image size.
+    """
+
+    def __init__(self, scene, specs: list[CameraSpec], rng: np.random.Generator,
+                 show_wiimote: bool = False):
+        self.scene, self.specs, self.rng = scene, list(specs), rng
+        self._renderers: dict[tuple[int, int], mujoco.Renderer] = {}
+        self._option = mujoco.MjvOption()
+        self._option.geomgroup[3] = 1 if show_wiimote else 0
+        self._cam_ids = {s.name: scene.camera(s.name) for s in self.specs}
+        self._intrinsics: dict[str, Intrinsics] = {}
+        self._canvas: dict[str, Intrinsics] = {}
+        self._maps: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+        m = scene.model
+        for s in self.specs:
+            fovy = math.radians(m.cam_fovy[self._cam_ids[s.name]])
+            intr = Intrinsics.from_fovy(fovy, s.width, s.height, s.k1, s.k2)
+            self._intrinsics[s.name] = intr
+            canvas = ideal_canvas(intr)
+            self._canvas[s.name] = canvas
+            if (s.k1, s.k2) != (0.0, 0.0):
+                self._maps[s.name] = distortion_maps(intr, canvas)
+
+    def intrinsics(self, name: str) -> Intrinsics:
+        return self._intrinsics[name]
+
+    def camera_model(self, name: str) -> CameraModel:
+        """The camera's intrinsics and current pose (OpenCV axes) in world and base frames."""
+        d, cid = self.scene.data, self._cam_ids[name]
+        R_world_cam = d.cam_xmat[cid].reshape(3, 3) @ R_MJCAM_CV
+        T_world_cam = make_transform(R_world_cam, d.cam_xpos[cid].copy())
+        T_base_cam = invert_transform(self.scene.T_world_base) @ T_world_cam
+        return CameraModel(name, self._intrinsics[name], T_base_cam, T_world_cam)
+
+    def _renderer(self, w: int, h: int) -> mujoco.Renderer:
+        key = (w, h)
+        if key not in self._renderers:
+            self._renderers[key] = mujoco.Renderer(self.scene.model, height=h, width=w)
+        return self._renderers[key]
+
+    def render_ideal(self, name: str, segmentation: bool = False) -> np.ndarray:
+        """The noise-free pinhole image (or segmentation ``(H, W, 2)`` [id, type]) of a camera."""
+        canvas = self._canvas[name]
+        cid = self._cam_ids[name]
+        m = self.scene.model
+        fovy0 = m.cam_fovy[cid]
+        if canvas.height != self._intrinsics[name].height:
+            m.cam_fovy[cid] = math.degrees(2 * math.atan((canvas.height / 2) / canvas.fy))
+        r = self._renderer(canvas.width, canvas.height)
+        try:
+            if segmentation:
+                r.enable_segmentation_rendering()
+            r.update_scene(self.scene.data, cid, self._option)
+            return r.render()
+        finally:
+            if segmentation:
+                r.disable_segmentation_rendering()
+            m.cam_fovy[cid] = fovy0
+
+    def capture_one(self, name: str, t: float) -> CameraImage:
+        spec = next(s for s in self.specs if s.name == name)
+        image = self.render_ideal(name)
+        if name in self._maps:
+            map_x, map_y = self._maps[name]
+            image = cv2.remap(image, map_x, map_y, cv2.INTER_LINEAR,
+                              borderMode=cv2.BORDER_REPLICATE)
+        if spec.noise_std > 0.0:
+            image = add_pixel_noise(image, spec.noise_std, self.rng)
+        return CameraImage(t, self.camera_model(name), image)
+
+    def capture(self, t: float, names: list[str] | None = None) -> dict[str, CameraImage]:
+        """Render ``names`` (default: every camera of the rig) at simulated time ``t``."""
+        return {n: self.capture_one(n, t) for n in (names or [s.name for s in self.specs])}
+
+    def close(self) -> None:
+        for r in self._renderers.values():
+            r.close()
+        self._renderers.clear()
+
+
+def add_pixel_noise(image: np.ndarray, std: float, rng: np.random.Generator) -> np.ndarray:
+    """``image`` plus Gaussian noise (std in grey levels), saturated to uint8."""
+    cv2.setRNGSeed(int(rng.integers(0, 2**31 - 1)))
+    noise = np.empty(image.shape, np.int16)
+    cv2.randn(noise, 0.0, float(std))
+    return cv2.add(image, noise, dtype=cv2.CV_8U)

@@ -1,0 +1,89 @@
+"""Scenario sections for the sensors and the clock."""
+
+from __future__ import annotations
+
+from typing import Literal
+
+from pydantic import Field, model_validator
+
+from humimic.scenario.base import Section
+
+
+class Cameras(Section):
+    """The robot's eye cameras (both eyes: stereo)."""
+
+    which: Literal["wide", "foveal"] = "wide"
+    """Wide: 100 deg horizontal field of view; foveal: 24 deg."""
+    eyes: Literal["stereo", "left", "right"] = "stereo"
+    resolution: tuple[int, int] = (320, 240)
+    """Width, height in pixels."""
+    rate: float = Field(60.0, gt=0.0, le=240.0)
+    """Frames per second (Hz)."""
+    noise_std: float = Field(0.0, ge=0.0, le=50.0)
+    """Gaussian pixel noise, standard deviation in 8-bit grey levels."""
+    distortion: tuple[float, float] = (0.0, 0.0)
+    """Radial distortion k1, k2 (OpenCV convention)."""
+    latency: float = Field(0.0, ge=0.0, le=0.5)
+    """Transfer latency (s) before a frame reaches perception."""
+
+    @model_validator(mode="after")
+    def _check_resolution(self) -> Cameras:
+        w, h = self.resolution
+        if not (16 <= w <= 1920 and 16 <= h <= 1440):
+            raise ValueError(f"resolution must be within 16x16 .. 1920x1440, got {w}x{h}")
+        return self
+
+
+class HeadCamera(Section):
+    """The camera worn on the person's forehead."""
+
+    enabled: bool = False
+    resolution: tuple[int, int] = (320, 240)
+    rate: float = Field(30.0, gt=0.0, le=240.0)
+    hfov_deg: float = Field(60.0, gt=5.0, lt=170.0)
+    noise_std: float = Field(0.0, ge=0.0, le=50.0)
+
+
+class Inertial(Section):
+    """An accelerometer + gyroscope. Noise as densities (Kalibr/IEEE convention):
+    white noise sigma in unit/sqrt(Hz), bias random walk in unit/s/sqrt(Hz)."""
+
+    enabled: bool = True
+    rate: float = Field(180.0, gt=0.0, le=840.0)
+    accel_noise_density: float = Field(2.0e-3, ge=0.0)
+    """m/s^2/sqrt(Hz)."""
+    accel_bias_walk: float = Field(3.0e-3, ge=0.0)
+    """m/s^3/sqrt(Hz)."""
+    gyro_noise_density: float = Field(1.7e-4, ge=0.0)
+    """rad/s/sqrt(Hz)."""
+    gyro_bias_walk: float = Field(2.0e-5, ge=0.0)
+    """rad/s^2/sqrt(Hz)."""
+
+
+def _wiimote_default() -> Inertial:
+    return Inertial(rate=100.0, accel_noise_density=2.7e-3, accel_bias_walk=5e-3,
+                    gyro_noise_density=5e-4, gyro_bias_walk=5e-5)
+
+
+class Sensors(Section):
+    imu: Inertial = Field(default_factory=Inertial)
+    """The IMU on the person's forehead."""
+    wiimote: Inertial = Field(default_factory=_wiimote_default)
+    """The Wii remote in the person's right hand."""
+    head_camera: HeadCamera = Field(default_factory=HeadCamera)
+
+
+class Timing(Section):
+    physics_rate: float = Field(840.0, ge=100.0, le=5000.0)
+    """Physics steps per second (Hz)."""
+    servo_rate: float = Field(420.0, gt=0.0, le=5000.0)
+    """Joint servo (control) rate (Hz); must divide the physics rate."""
+
+    @model_validator(mode="after")
+    def _check_ratio(self) -> Timing:
+        ratio = self.physics_rate / self.servo_rate
+        if abs(ratio - round(ratio)) > 1e-9 or ratio < 1:
+            raise ValueError(
+                f"servo_rate must divide physics_rate ({self.physics_rate:g} Hz), got "
+                f"{self.servo_rate:g} Hz; e.g. {self.physics_rate / 2:g}")
+        return self

@@ -1,0 +1,45 @@
+"""Scenario sections that shape the world: the person, the robot and the lighting."""
+
+from __future__ import annotations
+
+from typing import Literal
+
+from pydantic import Field
+
+from humimic.motion.config import MotionConfig, StaticMotion
+from humimic.scenario.base import RGB, Section, Vec3
+from humimic.world.names import HUMAN_TARGETS, ROBOT_JOINTS
+
+
+class Human(Section):
+    """The person: where they stand, what they look like and how they move."""
+
+    distance: float = Field(1.2, gt=0.3, le=4.5)
+    """Horizontal distance (m) from the robot's eye midpoint to the person's head centre."""
+    lateral: float = Field(0.0, ge=-2.0, le=2.0)
+    """Sideways offset (m) along the robot's y axis (left positive)."""
+    skin: RGB = (0.87, 0.67, 0.55)
+    shirt: RGB = (0.2, 0.3, 0.8)
+    trousers: RGB = (0.25, 0.25, 0.3)
+    wiimote: bool = False
+    """Show the Wii remote in the right hand (it is always simulated; this makes it visible)."""
+    motion: MotionConfig = Field(default_factory=lambda: StaticMotion(kind="static"))
+
+
+class Robot(Section):
+    """The humanoid's fixed parameters and initial posture."""
+
+    interocular: float = Field(0.07, gt=0.02, le=0.2)
+    """Distance between the eyes (m)."""
+    pose: Literal["ready", "zero"] | dict[Literal[ROBOT_JOINTS], float] = "ready"
+    """Initial joint configuration: a named pose or ``{joint: angle_rad}`` over the ready pose."""
+    look_at: Literal[tuple(HUMAN_TARGETS)] | Vec3 | None = None
+    """Point the eyes (then the head) at a human target or a world point (m) at t = 0."""
+
+
+class Lighting(Section):
+    ambient: float = Field(0.3, ge=0.0, le=1.0)
+    diffuse: float = Field(0.55, ge=0.0, le=1.0)
+    shadows: bool = False
+    """Shadows cost 10-40x render time on a CPU."""
+    msaa: bool = False

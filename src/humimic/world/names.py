@@ -1,0 +1,55 @@
+"""Names of the robot's and the avatar's joints, sites and cameras (without scene prefixes)."""
+
+from __future__ import annotations
+
+ROBOT_PREFIX = "db/"
+HUMAN_PREFIX = "human/"
+
+#: The robot's 30 joints, in qpos / actuator order.
+ROBOT_JOINTS: tuple[str, ...] = (
+    "B_TR", "B_TAA", "B_TFE",
+    "B_HR", "B_HN", "B_HT",
+    "L_EP", "L_ET", "R_EP", "R_ET",
+    "R_SFE", "R_SAA", "R_HR", "R_EB", "R_WR", "R_WFE", "R_WAA",
+    "L_SFE", "L_SAA", "L_HR", "L_EB", "L_WR", "L_WFE", "L_WAA",
+    "R_HFE", "R_HAA", "R_KFE",
+    "L_HFE", "L_HAA", "L_KFE",
+)
+EYE_JOINTS = ("L_EP", "L_ET", "R_EP", "R_ET")
+HEAD_JOINTS = ("B_HR", "B_HN", "B_HT")
+TORSO_JOINTS = ("B_TR", "B_TAA", "B_TFE")
+ROBOT_SITES = ("base", "head", "eye_center", "L_eye", "R_eye", "R_palm", "L_palm",
+               "R_elbow", "L_elbow")
+#: Eye cameras: (eye, kind) -> camera name.
+EYE_CAMERAS = {
+    ("left", "wide"): "L_wide",
+    ("right", "wide"): "R_wide",
+    ("left", "foveal"): "L_foveal",
+    ("right", "foveal"): "R_foveal",
+}
+
+#: The avatar's joints in qpos order and their types.
+HUMAN_JOINTS: tuple[tuple[str, str], ...] = (
+    ("root_x", "slide"), ("root_y", "slide"), ("root_z", "slide"), ("root_rot", "ball"),
+    ("spine", "ball"), ("neck", "ball"),
+    ("r_shoulder", "ball"), ("r_elbow", "hinge"), ("r_wrist", "ball"),
+    ("l_shoulder", "ball"), ("l_elbow", "hinge"), ("l_wrist", "ball"),
+    ("r_hip", "ball"), ("r_knee", "hinge"), ("r_ankle", "ball"),
+    ("l_hip", "ball"), ("l_knee", "hinge"), ("l_ankle", "ball"),
+)
+#: Ground-truth sites on the avatar: user-facing target name -> site name.
+HUMAN_TARGETS = {
+    "head": "head",
+    "right_hand": "r_hand",
+    "left_hand": "l_hand",
+    "right_wrist": "r_wrist",
+    "left_wrist": "l_wrist",
+    "right_elbow": "r_elbow",
+    "left_elbow": "l_elbow",
+    "right_shoulder": "r_shoulder",
+    "left_shoulder": "l_shoulder",
+    "pelvis": "pelvis",
+    "head_imu": "head_imu",
+    "wiimote": "wiimote_imu",
+    "wiimote_marker": "wiimote_marker",
+}

@@ -1,0 +1,131 @@
+"""The world at run time: the scene, the person's precomputed motion and ground truth, the
+robot's initial posture, and the sensors that sample it.
+
+Everything about the person is known before the loop starts (the avatar is kinematic), so the
+ground truth of every site at every physics step and the true inertial readings are computed
+once, vectorised; the loop only writes the avatar's state into the scene each step.
+"""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+
+from humimic.motion import MotionContext, compute_ground_truth, make_motion
+from humimic.sensors.cameras import CameraRig, CameraSpec
+from humimic.sensors.clock import Clock, Schedule
+from humimic.sensors.inertial import simulate_inertial
+from humimic.world.gaze import pan_tilt_to
+from humimic.world.names import EYE_CAMERAS, ROBOT_JOINTS, ROBOT_PREFIX
+from humimic.world.scene import SceneOptions, build_scene
+
+
+def scene_options(scenario) -> SceneOptions:
+    """The :class:`SceneOptions` a scenario asks for."""
+    h, c, light = scenario.human, scenario.cameras, scenario.lighting
+    return SceneOptions(
+        distance=h.distance, lateral=h.lateral, skin=h.skin, shirt=h.shirt,
+        trousers=h.trousers, interocular=scenario.robot.interocular,
+        eye_resolution=c.resolution,
+        headcam_resolution=scenario.sensors.head_camera.resolution,
+        headcam_hfov_deg=scenario.sensors.head_camera.hfov_deg,
+        ambient=light.ambient, diffuse=light.diffuse, shadows=light.shadows, msaa=light.msaa,
+        show_wiimote=h.wiimote,
+    )
+
+
+def eye_camera_names(cameras) -> list[str]:
+    """Scene camera names for the scenario's ``cameras`` section (left first)."""
+    eyes = {"stereo": ("left", "right"), "left": ("left",), "right": ("right",)}[cameras.eyes]
+    return [EYE_CAMERAS[(eye, cameras.which)] for eye in eyes]
+
+
+class World:
+    """Scene + clock + ground truth + sensors for one scenario and seed."""
+
+    def __init__(self, scenario, rngs: dict[str, np.random.Generator]):
+        self.scenario = scenario
+        self.scene = build_scene(scene_options(scenario))
+        m = self.scene.model
+        m.opt.timestep = 1.0 / scenario.timing.physics_rate
+        self.clock = Clock(scenario.timing.physics_rate)
+        self.n_ticks = self.clock.ticks_for(scenario.duration)
+        self.times = np.arange(self.n_ticks) / self.clock.physics_rate
+
+        ctx = MotionContext.from_scene(self.scene, scenario.duration, rngs["motion"])
+        self.motion = make_motion(scenario.human.motion, ctx)
+        self.gt = compute_ground_truth(self.scene, self.motion, self.times)
+        self.set_robot_pose()
+
+        c = scenario.cameras
+        self.eye_cameras = eye_camera_names(c)
+        self.eye_rig = CameraRig(
+            self.scene,
+            [CameraSpec(n, *c.resolution, c.noise_std, *c.distortion) for n in self.eye_cameras],
+            rngs["cameras"], show_wiimote=scenario.human.wiimote)
+        hc = scenario.sensors.head_camera
+        self.head_rig = (CameraRig(self.scene, [CameraSpec("headcam", *hc.resolution,
+                                                           hc.noise_std)],
+                                   rngs["headcam"], show_wiimote=scenario.human.wiimote)
+                         if hc.enabled else None)
+        self.imu = self._inertial("head_imu", scenario.sensors.imu, rngs["imu"])
+        self.wiimote = self._inertial("wiimote", scenario.sensors.wiimote, rngs["wiimote"])
+
+    # ---- the person ------------------------------------------------------------------------
+    def apply_human(self, tick: int) -> None:
+        """Write the avatar's configuration and velocity at ``tick`` into the scene."""
+        d, s = self.scene.data, self.scene
+        d.qpos[s.human_qpos] = self.gt.qpos[tick]
+        d.qvel[s.human_dof] = self.gt.qvel[tick]
+
+    def _inertial(self, which: str, cfg, rng):
+        if not cfg.enabled:
+            return None
+        ticks = np.array(Schedule(cfg.rate, self.clock.physics_rate).ticks(self.n_ticks))
+        acc, gyro = self.gt.inertial(which)
+        return simulate_inertial(self.times[ticks], acc[ticks], gyro[ticks], cfg, rng), ticks
+
+    # ---- the robot -------------------------------------------------------------------------
+    def set_robot_pose(self) -> None:
+        """Initial posture from the scenario: named pose, joint overrides, eyes on a target."""
+        s, m, d = self.scene, self.scene.model, self.scene.data
+        cfg = self.scenario.robot
+        if cfg.pose == "zero" or not m.nkey:
+            q = np.zeros(len(ROBOT_JOINTS))
+        else:
+            q = m.key(ROBOT_PREFIX + "ready").qpos[s.robot_qpos].copy()
+        if isinstance(cfg.pose, dict):
+            for name, angle in cfg.pose.items():
+                q[ROBOT_JOINTS.index(name)] = angle
+        q = np.clip(q, s.robot_range[:, 0], s.robot_range[:, 1])
+        d.qpos[s.robot_qpos] = q
+        d.qvel[:] = 0.0
+        self.apply_human(0)
+        mujoco.mj_forward(m, d)
+        if cfg.look_at is not None:
+            self._look_at(cfg.look_at)
+        d.ctrl[s.robot_actuators] = d.qpos[s.robot_qpos]
+        mujoco.mj_forward(m, d)
+
+    def _look_at(self, target) -> None:
+        s, m, d = self.scene, self.scene.model, self.scene.data
+        if isinstance(target, str):
+            p_world = self.gt.p_world(target)[0]
+        else:
+            p_world = np.asarray(target, dtype=float)
+        for eye in ("L", "R"):
+            body = m.body(f"{ROBOT_PREFIX}{eye}_eye")
+            parent = body.parentid[0]
+            R_world_parent = d.xmat[parent].reshape(3, 3)
+            p_parent = R_world_parent.T @ (p_world - d.xpos[body.id])
+            pan, tilt = pan_tilt_to(p_parent)
+            for joint, angle in ((f"{eye}_EP", pan), (f"{eye}_ET", tilt)):
+                j = ROBOT_JOINTS.index(joint)
+                lo, hi = s.robot_range[j]
+                d.qpos[s.robot_qpos[j]] = np.clip(angle, lo, hi)
+        mujoco.mj_forward(m, d)
+
+    def close(self) -> None:
+        self.eye_rig.close()
+        if self.head_rig is not None:
+            self.head_rig.close()
