@@ -13,7 +13,7 @@
 from __future__ import annotations
 
 import numpy as np
-from scipy.signal import correlate, correlation_lags, savgol_filter
+from scipy.signal import correlate, savgol_filter
 
 
 def rmse(a: np.ndarray, b: np.ndarray) -> float:
@@ -29,23 +29,35 @@ def rmse(a: np.ndarray, b: np.ndarray) -> float:
 def xcorr_lag(reference: np.ndarray, signal: np.ndarray, dt: float,
               max_lag: float = 0.3) -> float:
     """Delay (s) of ``signal`` behind ``reference`` (both ``(N,)`` or ``(N, k)``, sampled every
-    ``dt``): the argmax over ``|lag| <= max_lag`` of sum_axes sum_t ref(t) sig(t + lag), mean
-    removed, with sub-sample parabolic refinement. Positive: the signal comes later."""
+    ``dt``) at the peak of their normalised cross-correlation: with ``W`` the reference's
+    samples at least ``max_lag`` from either end (so every shift overlaps fully),
+
+        rho(l) = sum_axes sum_{t in W} ref(t) sig(t + l) / sqrt(sum_axes sum_{t in W} sig(t + l)^2)
+
+    (means removed) over ``|l| <= max_lag``, refined by a parabola through the peak. By
+    Cauchy-Schwarz ``rho`` peaks exactly at the delay of a delayed copy. Positive: the signal
+    comes later."""
     ref = np.asarray(reference, float).reshape(len(reference), -1)
     sig = np.asarray(signal, float).reshape(len(signal), -1)
     ref = ref - ref.mean(axis=0)
     sig = sig - sig.mean(axis=0)
-    c = sum(correlate(sig[:, i], ref[:, i], mode="full", method="fft")
-            for i in range(ref.shape[1]))
-    lags = correlation_lags(len(sig), len(ref), mode="full")
-    window = np.abs(lags) <= int(np.ceil(max_lag / dt))
-    c, lags = c[window], lags[window]
-    i = int(np.argmax(c))
+    n = len(ref)
+    L = min(int(np.ceil(max_lag / dt)), (n - 3) // 2)
+    if L < 1:
+        return float("nan")
+    window = ref[L:n - L]
+    num = sum(correlate(sig[:, i], window[:, i], mode="valid", method="fft")
+              for i in range(ref.shape[1]))
+    energy = np.concatenate([[0.0], np.cumsum(np.sum(sig * sig, axis=1))])
+    den = np.sqrt(np.maximum(energy[len(window):] - energy[:-len(window)], 1e-300))
+    rho = num / den[:len(num)]
+    lags = np.arange(-L, L + 1)
+    i = int(np.argmax(rho))
     shift = 0.0
-    if 0 < i < len(c) - 1:
-        denom = c[i - 1] - 2.0 * c[i] + c[i + 1]
+    if 0 < i < len(rho) - 1:
+        denom = rho[i - 1] - 2.0 * rho[i] + rho[i + 1]
         if denom < 0.0:
-            shift = 0.5 * (c[i - 1] - c[i + 1]) / denom
+            shift = 0.5 * (rho[i - 1] - rho[i + 1]) / denom
     return float((lags[i] + shift) * dt)
 
 

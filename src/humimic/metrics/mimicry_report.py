@@ -34,10 +34,22 @@ ARM_JOINTS = {
     "L": ("L_SFE", "L_SAA", "L_HR", "L_EB", "L_WR", "L_WFE", "L_WAA"),
 }
 LIMIT_TOL = 2e-3  # rad
+#: Fewest servo ticks of mimicry worth scoring.
+MIN_TICKS = 30
+
+
+def _num(x: float | None) -> float | None:
+    """A JSON-safe float (NaN and inf become None)."""
+    return None if x is None or not np.isfinite(x) else float(x)
 
 
 def _mm(x: float | None) -> float | None:
-    return None if x is None or not np.isfinite(x) else 1e3 * float(x)
+    x = _num(x)
+    return None if x is None else 1e3 * x
+
+
+def _rms(x: np.ndarray) -> float:
+    return rmse(x, np.zeros_like(x))
 
 
 def _idx(times: np.ndarray, rate: float, n: int) -> np.ndarray:
@@ -58,8 +70,11 @@ def _never_started(stage, ch) -> dict:
         why = (f"{got} estimates of {ch.target!r} arrived, none with a photon time at or after "
                f"mimic.start = {cfg.start} s")
         status = "not_started"
+    i = stage.sites.index(ch.site)
+    p = rec.p_robot[:rec.n, i]
+    moved = float(np.max(np.linalg.norm(p - ch.p0_robot, axis=1))) if rec.n else 0.0
     return {"status": status, "reason": why, "target": ch.target, "rmse_mm": None,
-            "lag_ms": None, "held_pose": True}
+            "lag_ms": None, "held_pose": True, "robot_max_displacement_mm": 1e3 * moved}
 
 
 def _site_series(stage, i: int, ch):
@@ -93,13 +108,17 @@ def _site_series(stage, i: int, ch):
     return k0, s
 
 
-def _event_error(arrivals, P: np.ndarray, S: np.ndarray, rate: float) -> float | None:
-    """RMS (mm, mapped space) of values that arrived on a topic against the truth at their
-    photon times."""
+def _event_error(arrivals, P: np.ndarray, S: np.ndarray, rate: float,
+                 t_start: float) -> float | None:
+    """RMS (mm, mapped space) of the values that arrived on a topic, photon times from
+    ``t_start`` on, against the truth at their photon times (None if there are none)."""
     if arrivals is None or not arrivals.t:
         return None
     t, _, p = arrivals.arrays()
-    return _mm(rmse(p @ S.T, P[_idx(t, rate, len(P))] @ S.T))
+    keep = t >= t_start - 1e-9
+    if not np.any(keep):
+        return None
+    return _mm(rmse(p[keep] @ S.T, P[_idx(t[keep], rate, len(P))] @ S.T))
 
 
 def _limit_hits(stage, site: str, k0: int) -> int:
@@ -115,21 +134,25 @@ def _limit_hits(stage, site: str, k0: int) -> int:
 
 def site_metrics(stage, i: int, ch) -> tuple[dict, dict]:
     """``(cumulative lags per stage (ms), the site's scores)``."""
-    if not ch.started or stage.rec.n < 3:
+    if not ch.started:
         return {}, _never_started(stage, ch)
     rec, world, cfg = stage.rec, stage.world, stage.cfg
     k0, s = _site_series(stage, i, ch)
+    if len(s["t"]) < MIN_TICKS:
+        return {}, {"status": "too_short", "target": ch.target, "rmse_mm": None,
+                    "lag_ms": None, "reason": f"mimicry ran {len(s['t'])} servo ticks; scores "
+                                              f"need at least {MIN_TICKS}"}
     dt = rec.dt
     terms = error_terms(s["true_now"], s["true_photon"], s["est"], s["cmd_raw"], s["cmd"],
                         s["ik"], s["robot"])
     rate = world.scenario.timing.physics_rate
     P = world.gt.p_base(ch.target)
-    budget = {"perception": _event_error(rec.measurements.get(ch.target), P, ch.S, rate),
-              "filtering": _event_error(rec.estimates.get(ch.target), P, ch.S, rate)}
+    budget = {"perception": _event_error(rec.measurements.get(ch.target), P, ch.S, rate, ch.t0),
+              "filtering": _event_error(rec.estimates.get(ch.target), P, ch.S, rate, ch.t0)}
     if budget["perception"] is None and cfg.perception == "oracle":
         budget["perception"] = budget["filtering"]  # the oracle's noise is its perception
     for name in (*TERMS, "total"):
-        budget[name] = _mm(rmse(terms[name], 0.0 * terms[name]))
+        budget[name] = _mm(_rms(terms[name]))
     primary, other = cfg.interpolation.mode, ("extrapolate" if cfg.interpolation.mode == "hold"
                                               else "hold")
     interp = {}
@@ -145,8 +168,8 @@ def site_metrics(stage, i: int, ch) -> tuple[dict, dict]:
         "rmse_mm": budget["total"],
         "lag_ms": _mm(xcorr_lag(s["true_now"], s["robot"], dt)),
         "max_error_mm": _mm(float(np.max(np.linalg.norm(terms["total"], axis=1)))),
-        "jerk": rms_jerk(s["robot"], dt),
-        "jerk_human": rms_jerk(s["true_now"], dt),
+        "jerk": _num(rms_jerk(s["robot"], dt)),
+        "jerk_human": _num(rms_jerk(s["true_now"], dt)),
         "joint_limit_hits": _limit_hits(stage, ch.site, k0),
         "clamped_fraction": float(rec.clamped[k0:rec.n, i].mean()),
         "lost_fraction": float(rec.lost[k0:rec.n, i].mean()),
@@ -251,9 +274,11 @@ def mimic_plots(stage, out_dir) -> list:
 
     paths, budgets, names = [], {}, []
     for i, ch in enumerate(stage.channels):
-        if not ch.started or stage.rec.n < 3:
+        if not ch.started:
             continue
         _, s = _site_series(stage, i, ch)
+        if len(s["t"]) < MIN_TICKS:
+            continue
         paths.append(plot_trajectories(
             f"{out_dir}/mimic_{ch.site}.png", s["t"],
             {f"{ch.target} true (mapped)": s["true_now"], f"{ch.target} estimate": s["est"],
@@ -261,10 +286,10 @@ def mimic_plots(stage, out_dir) -> list:
             title=f"{ch.target} -> {ch.site}: displacement, robot base frame", ylabel="m"))
         terms = error_terms(s["true_now"], s["true_photon"], s["est"], s["cmd_raw"], s["cmd"],
                             s["ik"], s["robot"])
-        total = 1e3 * rmse(terms["total"], 0 * terms["total"])
+        total = 1e3 * _rms(terms["total"])
         names.append(f"{ch.site}\n(total {total:.3g} mm)")
         for term in TERMS:
-            budgets.setdefault(term, []).append(1e3 * rmse(terms[term], 0 * terms[term]))
+            budgets.setdefault(term, []).append(1e3 * _rms(terms[term]))
     if names:
         paths.append(plot_stacked_bar(
             f"{out_dir}/mimic_error_budget.png", names, budgets,

@@ -1,0 +1,35 @@
+"""Build the mimic stage (and the oracle perception it may use) for a scenario."""
+
+from __future__ import annotations
+
+from humimic.control.oracle import OracleStage
+from humimic.control.stage import MimicStage
+from humimic.pipeline.stage import Stage
+from humimic.scenario.errors import ScenarioError
+
+
+def check_mimic(scenario) -> None:
+    """Cross-section checks of ``mimic`` (raise :class:`ScenarioError`, exit status 2)."""
+    cfg, where = scenario.mimic, f"scenario {scenario.name!r}"
+    base = scenario.timing.servo_rate
+    if cfg.servo_rate is not None:
+        ratio = base / cfg.servo_rate
+        if abs(ratio - round(ratio)) > 1e-9 or ratio < 1:
+            raise ScenarioError(where, "mimic.servo_rate", "must divide timing.servo_rate",
+                                cfg.servo_rate, f"{base:g} Hz divided by a whole number")
+    if cfg.perception == "tracked" and getattr(scenario, "filter", None) is None:
+        raise ScenarioError(where, "mimic.perception",
+                            "tracked perception needs the scenario's perception and filter "
+                            "sections (they publish the estimates)", "tracked",
+                            "oracle, or add perception and filter sections")
+
+
+def mimic_stages(scenario, world, rngs, rlog) -> list[Stage]:
+    """The oracle (when ``mimic.perception`` is ``oracle``) and the mimic stage."""
+    check_mimic(scenario)
+    cfg = scenario.mimic
+    stages: list[Stage] = []
+    if cfg.perception == "oracle":
+        stages.append(OracleStage(world, cfg.targets, cfg.oracle, rngs["oracle"]))
+    stages.append(MimicStage(world, cfg, rlog))
+    return stages

@@ -1,0 +1,110 @@
+"""Human-to-robot mapping by relative motion, and clamping into a site's reachable shell.
+
+Ude & Atkeson, "Generation of humanoid motion from human motion": "At the beginning of the
+mimicking task we save the initial position of a tracked human body part and the initial
+position of the corresponding robot body part [...] we move the robot hand in such a way that
+the position of the robot hand with respect to the initial robot hand position is the same as
+the position of the human hand with respect to the initial human hand position." Both are in
+the robot base frame (the eyes are kept still, so the base frame stays aligned with the
+cameras). Here with a scale ``s`` and a reflection ``M`` (identity for the paper's mode)::
+
+    p_robot(t) = p_robot(t0) + s M (p_human(t) - p_human(t0))
+
+``mirrored`` makes the robot the person's mirror image: the mirror plane lies between them,
+perpendicular to the robot's x axis (forward), so depth is reversed and the lateral and
+vertical motion kept (the person's right hand then naturally drives the robot's *left* hand).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+#: Reflection per mapping mode (robot base frame: x forward, y left, z up).
+REFLECTIONS = {
+    "relative": np.eye(3),
+    "follow": np.eye(3),
+    "mirrored": np.diag([-1.0, 1.0, 1.0]),
+}
+
+#: For each drivable site: (shoulder body, elbow joint) of its arm, in the robot model.
+ARM_OF_SITE = {
+    "R_palm": ("R_upper_arm", "R_EB"),
+    "L_palm": ("L_upper_arm", "L_EB"),
+    "R_elbow": ("R_upper_arm", "R_EB"),
+    "L_elbow": ("L_upper_arm", "L_EB"),
+}
+
+
+def mapping_matrix(mode: str, scale: float) -> np.ndarray:
+    """``S = s M``: the 3x3 map from a human displacement to a robot displacement."""
+    return scale * REFLECTIONS[mode]
+
+
+def map_displacement(p_base_human: np.ndarray, p0_base_human: np.ndarray,
+                     p0_base_robot: np.ndarray, S: np.ndarray) -> np.ndarray:
+    """Commanded robot-site position for human position(s) ``(..., 3)`` (Ude, relative motion):
+    ``p0_robot + S (p_human - p0_human)``."""
+    return p0_base_robot + (np.asarray(p_base_human) - p0_base_human) @ S.T
+
+
+def clamp_to_shell(p: np.ndarray, center: np.ndarray, r_min: float,
+                   r_max: float) -> tuple[np.ndarray, bool]:
+    """Move ``p`` radially (about ``center``) into the shell ``r_min <= |p - c| <= r_max``.
+
+    Returns the clamped point and whether it moved. A point at the centre (direction undefined)
+    goes straight down from it, where arms hang.
+    """
+    d = p - center
+    r = float(np.sqrt(d @ d))
+    if r_min <= r <= r_max:
+        return p, False
+    if r < 1e-12:
+        return center + np.array([0.0, 0.0, -max(r_min, 0.0)]), True
+    return center + d * (min(max(r, r_min), r_max) / r), True
+
+
+@dataclass(frozen=True)
+class ReachShell:
+    """Where a site can be: a spherical shell about its shoulder (robot base frame, m)."""
+
+    center: np.ndarray
+    r_min: float
+    r_max: float
+
+    def clamp(self, p: np.ndarray) -> tuple[np.ndarray, bool]:
+        return clamp_to_shell(p, self.center, self.r_min, self.r_max)
+
+
+def reach_shell(model: mujoco.MjModel, q: np.ndarray, site: str, T_world_base: np.ndarray,
+                margin: float = 0.01) -> ReachShell:
+    """The reachable shell of ``site`` about its shoulder, from the robot model's kinematics.
+
+    The radius range is swept over the elbow joint's range with the other joints at ``q``
+    (every other arm joint only rotates the arm about the shoulder, and the wrist joints barely
+    move the palm centre). ``margin`` keeps the commands off the straight-arm singularity and the
+    elbow stop; an elbow site has a single radius (its shell is a sphere). The torso is assumed
+    at ``q`` (the head-still task keeps it nearly so).
+    """
+    shoulder_body, elbow_joint = ARM_OF_SITE[site]
+    d = mujoco.MjData(model)
+    jid = model.joint(elbow_joint).id
+    adr = model.jnt_qposadr[jid]
+    lo, hi = model.jnt_range[jid]
+    radii = []
+    for angle in np.linspace(lo, hi, 49):
+        d.qpos[:] = q
+        d.qpos[adr] = angle
+        mujoco.mj_kinematics(model, d)
+        radii.append(np.linalg.norm(d.site(site).xpos - d.body(shoulder_body).xpos))
+    d.qpos[:] = q
+    mujoco.mj_kinematics(model, d)
+    R, t = T_world_base[:3, :3], T_world_base[:3, 3]
+    center = R.T @ (d.body(shoulder_body).xpos - t)
+    r_min, r_max = float(min(radii)), float(max(radii))
+    m = min(margin, (r_max - r_min) / 4.0)
+    # The start position is always allowed (a straight arm starts outside the margin).
+    r0 = float(np.linalg.norm(d.site(site).xpos - d.body(shoulder_body).xpos))
+    return ReachShell(center, min(r_min + m, r0), max(r_max - m, r0))

@@ -1,0 +1,256 @@
+"""The mimic stage: latest estimates -> mapping -> Cartesian PD -> IK -> servos, and gaze.
+
+Per servo tick (Ude & Atkeson, "Generation of humanoid motion from human motion"):
+
+1. each mapped human target's latest estimate (``estimates`` topic) is interpolated to the servo
+   rate by a Cartesian PD (:mod:`~humimic.control.interpolation`);
+2. mapped to its robot site by relative motion and clamped into the site's reachable shell
+   (:mod:`~humimic.control.mapping`);
+3. the redundant IK moves the driven sites there while holding the eyes' base still
+   (:mod:`~humimic.control.ik`);
+4. gaze points the eyes at the gaze target (:mod:`~humimic.control.gaze`);
+5. the position servos get the joint targets with feed-forward (:mod:`~humimic.control.servo`).
+
+A site whose target has no estimate yet holds its start position. Scores are computed after the
+run from :class:`~humimic.control.record.MimicRecord` (:mod:`humimic.metrics.mimicry_report`).
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from humimic.control.gaze import Gaze
+from humimic.control.ik import MimicIK, build_robot_model
+from humimic.control.interpolation import CartesianInterpolator
+from humimic.control.mapping import map_displacement, mapping_matrix, reach_shell
+from humimic.control.record import MimicRecord
+from humimic.control.servo import Servo
+from humimic.pipeline.stage import Stage
+from humimic.world.names import ROBOT_JOINTS
+
+#: An estimate older than this (s) counts as lost: the command stops where it was.
+MAX_AGE = 0.25
+EYES = np.array([ROBOT_JOINTS.index(j) for j in ("L_EP", "L_ET", "R_EP", "R_ET")])
+
+
+class Channel:
+    """One human target (optionally relative to another) driving one robot site."""
+
+    def __init__(self, target: str, ref: str | None, site: str, p0_base_robot: np.ndarray,
+                 S: np.ndarray, shell):
+        self.target, self.ref, self.site, self.S, self.shell = target, ref, site, S, shell
+        self.p0_robot = p0_base_robot.copy()
+        self.p0_human: np.ndarray | None = None
+        self.t0: float | None = None
+        """Time at which the true human position is the mapping's origin."""
+        self.last_used = None
+
+    @property
+    def started(self) -> bool:
+        return self.p0_human is not None
+
+    def to_robot(self, p_base_human: np.ndarray) -> np.ndarray:
+        return map_displacement(p_base_human, self.p0_human, self.p0_robot, self.S)
+
+
+class MimicStage(Stage):
+    """Drives the robot from ``estimates`` (see the module docstring)."""
+
+    name = "mimic"
+
+    def __init__(self, world, cfg, rlog=None):
+        sc, scene = world.scenario, world.scene
+        self.world, self.cfg, self.rlog, self.scene = world, cfg, rlog, scene
+        base_rate = sc.timing.servo_rate
+        rate = cfg.servo_rate or base_rate
+        self.every = int(round(base_rate / rate))
+        self.dt = 1.0 / rate
+        self.R_wb = scene.T_world_base[:3, :3].copy()
+        self.p_wb = scene.T_world_base[:3, 3].copy()
+
+        q0 = scene.data.qpos[scene.robot_qpos].copy()
+        self.ik_model = build_robot_model(scene.opts.interocular)
+        self.sites = list(cfg.map.values())
+        self.ik = MimicIK(self.ik_model, q0, self.sites, cfg.ik, self.dt)
+        p0_base = self.to_base(self.ik.site_positions())
+        S = mapping_matrix(cfg.mode, cfg.scale)
+        ic = cfg.interpolation
+        other = "extrapolate" if ic.mode == "hold" else "hold"
+        self.channels = [
+            Channel(target, cfg.relative_to, site, p0_base[i], S,
+                    reach_shell(self.ik_model, self.ik.q, site, scene.T_world_base)
+                    if cfg.clamp_workspace else None)
+            for i, (target, site) in enumerate(cfg.map.items())]
+        #: target -> (PD in the configured mode, PD in the other mode, for comparison)
+        self.interps = {
+            k: (CartesianInterpolator(ic.omega, ic.zeta, self.dt, ic.mode, MAX_AGE,
+                                      ic.feedforward),
+                CartesianInterpolator(ic.omega, ic.zeta, self.dt, other, MAX_AGE,
+                                      ic.feedforward))
+            for k in [*cfg.map, *([cfg.relative_to] if cfg.relative_to else [])]}
+        self.wanted = set(cfg.targets)
+
+        self.servo_out = Servo(scene.model, scene.data, scene.robot_actuators, scene.robot_dof,
+                               cfg.servo.feedforward)
+        g = cfg.gaze
+        self.gaze = Gaze(scene, g.max_speed, self.dt) if g.enabled else None
+        self.gaze_interp = CartesianInterpolator(ic.omega, ic.zeta, self.dt,
+                                                 "extrapolate" if g.lead else "hold", MAX_AGE)
+        self.scene_sites = np.array([scene.robot_site(s) for s in self.sites])
+        self.head_site = scene.robot_site("eye_center")
+        self.cams = np.array([scene.camera("L_wide"), scene.camera("R_wide")])
+
+        phys_every = int(round(sc.timing.physics_rate / base_rate))
+        n = world.n_ticks // (phys_every * self.every) + 2
+        self.rec = MimicRecord(n, self.sites, len(ROBOT_JOINTS), self.dt)
+        self.latest: dict[str, tuple] = {}
+        self.v_prev = np.zeros(len(ROBOT_JOINTS))
+        self._calls = 0
+        self._timer = None
+
+    # ---- frames ---------------------------------------------------------------------------
+    def to_base(self, p_world: np.ndarray) -> np.ndarray:
+        return (p_world - self.p_wb) @ self.R_wb
+
+    def to_world(self, p_base: np.ndarray) -> np.ndarray:
+        return p_base @ self.R_wb.T + self.p_wb
+
+    # ---- bus ------------------------------------------------------------------------------
+    def attach(self, bus, timer) -> None:
+        self._timer = timer
+        bus.subscribe("estimates", self._on_estimates)
+        bus.subscribe("measurements", self._on_measurements)
+
+    def _on_estimates(self, topic: str, msg) -> None:
+        for target, est in msg.value.targets.items():
+            if target in self.wanted:
+                self.latest[target] = (msg.t, est, msg.t_ready)
+                a = self.rec.estimates[target]
+                a.t.append(msg.t)
+                a.t_ready.append(msg.t_ready)
+                a.p.append(np.asarray(est.p_base, float).copy())
+
+    def _on_measurements(self, topic: str, msg) -> None:
+        for target, meas in msg.value.targets.items():
+            if target in self.wanted:
+                a = self.rec.measurements[target]
+                a.t.append(msg.t)
+                a.t_ready.append(msg.t_ready)
+                a.p.append(np.asarray(meas.p_base, float).copy())
+
+    # ---- servo ----------------------------------------------------------------------------
+    def servo(self, t: float, bus) -> None:
+        call = self._calls
+        self._calls += 1
+        if call % self.every:
+            return
+        t0 = time.perf_counter()
+        self._tick(t)
+        self._timer.add(self.name, time.perf_counter() - t0)
+
+    def _interpolate(self, t: float) -> dict:
+        """Step each target's PDs to ``t + dt``: ``{target: (p, p_alt, t_est, est, t_ready)}``
+        for the targets that have started (the first estimate at or after ``mimic.start``)."""
+        out = {}
+        for target, (pd, alt) in self.interps.items():
+            latest = self.latest.get(target)
+            if latest is None or (not pd.started and latest[0] < self.cfg.start - 1e-9):
+                continue
+            t_est, est, t_ready = latest
+            age = t - t_est  # the PD's state is at t; it steps to t + dt
+            if not pd.started:
+                pd.start(est.p_base, est.v_base, est.a_base, age)
+                alt.start(est.p_base, est.v_base, est.a_base, age)
+            p = pd.step(est.p_base, est.v_base, est.a_base, age)
+            p_alt = alt.step(est.p_base, est.v_base, est.a_base, age)
+            out[target] = (p, p_alt, t_est, est, t_ready)
+        return out
+
+    def _commands(self, t: float, k: int) -> np.ndarray:
+        rec = self.rec
+        state = self._interpolate(t)
+        p_base = np.empty((len(self.channels), 3))
+        for i, ch in enumerate(self.channels):
+            s = state.get(ch.target)
+            r = state.get(ch.ref) if ch.ref else None
+            if s is None or (ch.ref and r is None):
+                p_base[i] = ch.p0_robot
+                continue
+            p_h, p_alt, t_est, est, t_ready = s
+            p_est = est.p_base
+            if r is not None:
+                p_h, p_alt, p_est = p_h - r[0], p_alt - r[1], p_est - r[3].p_base
+            if not ch.started:  # the paper's "initial position of a tracked human body part"
+                ch.p0_human = np.array(p_est, float)
+                ch.t0 = t_est
+            p_cmd, p_cmd_alt = ch.to_robot(p_h), ch.to_robot(p_alt)
+            rec.p_cmd_raw[k, i] = p_cmd
+            if ch.shell is not None:
+                p_cmd, rec.clamped[k, i] = ch.shell.clamp(p_cmd)
+                p_cmd_alt, _ = ch.shell.clamp(p_cmd_alt)
+            p_base[i] = p_cmd
+            rec.p_cmd_alt[k, i] = p_cmd_alt
+            rec.p_est[k, i] = ch.to_robot(p_est)
+            rec.t_est[k, i] = t_est
+            rec.lost[k, i] = t - t_est > MAX_AGE
+            rec.active[k, i] = True
+            if ch.last_used is not est:
+                ch.last_used = est
+                rec.first_use[ch.target].append((t_ready, t))
+        rec.p_cmd[k] = p_base
+        return p_base
+
+    def _gaze(self, t: float, q_d: np.ndarray, v_d: np.ndarray, a_d: np.ndarray) -> None:
+        """Overwrite the eyes' entries of the joint targets with the gaze law's."""
+        latest = self.latest.get(self.cfg.gaze.target)
+        gi = self.gaze_interp
+        if latest is None:
+            q_eyes, qdot_eyes = self.gaze.q, np.zeros(4)
+        else:
+            t_est, est, _ = latest
+            age = t - t_est
+            if not gi.started:
+                gi.start(est.p_base, est.v_base, est.a_base, age)
+            p = gi.step(est.p_base, est.v_base, est.a_base, age)
+            q_eyes, qdot_eyes = self.gaze.step(self.to_world(p))
+        q_d[EYES], v_d[EYES], a_d[EYES] = q_eyes, qdot_eyes, 0.0
+
+    def _tick(self, t: float) -> None:
+        rec, scene = self.rec, self.scene
+        d = scene.data
+        k = rec.n
+        rec.t[k] = t
+        p_base = self._commands(t, k)
+        t0 = time.perf_counter()
+        q, v = self.ik.step(self.to_world(p_base))
+        rec.ik_s[k] = time.perf_counter() - t0
+        a = (v - self.v_prev) / self.dt
+        self.v_prev = v
+        # The servo holds ctrl over [t, t + dt] while the IK's reference moves from q(t) to
+        # q(t + dt): aim at the interval's middle so the servo neither lags nor leads.
+        q_d, v_d = q - 0.5 * self.dt * v, v.copy()
+        if self.gaze is not None:
+            self._gaze(t, q_d, v_d, a)
+        rec.ctrl[k] = self.servo_out.command(q_d, v_d, a)
+        rec.q_ik[k], rec.qdot_ik[k] = q_d, v_d
+        rec.p_ik[k] = self.to_base(self.ik.site_positions())
+        rec.p_robot[k] = self.to_base(d.site_xpos[self.scene_sites])
+        rec.q_robot[k] = d.qpos[scene.robot_qpos]
+        rec.p_head[k] = d.site_xpos[self.head_site]
+        rec.R_head[k] = d.site_xmat[self.head_site]
+        rec.cam_pos[k] = d.cam_xpos[self.cams]
+        rec.cam_mat[k] = d.cam_xmat[self.cams]
+        rec.n = k + 1
+
+    # ---- results --------------------------------------------------------------------------
+    def metrics(self) -> dict:
+        from humimic.metrics.mimicry_report import mimic_metrics
+
+        return mimic_metrics(self)
+
+    def plots(self, out_dir) -> list:
+        from humimic.metrics.mimicry_report import mimic_plots
+
+        return mimic_plots(self, out_dir)
