@@ -86,8 +86,18 @@ def _metrics(scenario, world, stages, result, setup_s, wall0) -> dict:
         "stages": timer.summary(),
     }
     for stage in stages:
-        metrics.update(stage.metrics())
+        deep_merge(metrics, stage.metrics())
     return metrics
+
+
+def deep_merge(into: dict, new: dict) -> dict:
+    """Merge ``new`` into ``into`` recursively (stages may share sections like latency_ms)."""
+    for key, value in new.items():
+        if isinstance(value, dict) and isinstance(into.get(key), dict):
+            deep_merge(into[key], value)
+        else:
+            into[key] = value
+    return into
 
 
 def _warnings(world) -> dict[str, int]:
