@@ -105,3 +105,31 @@ def test_distortion_moves_points_as_opencv_predicts():
     assert np.allclose(cam.project_world(p_world), uv_cv.ravel(), atol=1e-6)
     centroid = _skin_centroid(frame.image, scene.opts.skin, uv_cv.ravel(), 25)
     assert np.linalg.norm(centroid - uv_cv.ravel()) < 2.0
+
+
+def test_pixel_noise_has_the_configured_std_on_every_channel_and_is_seeded():
+    from humimic.sensors.cameras import add_pixel_noise
+
+    flat = np.full((240, 320, 3), 128, np.uint8)
+    a = add_pixel_noise(flat, 4.0, np.random.default_rng(3)).astype(float) - 128
+    b = add_pixel_noise(flat, 4.0, np.random.default_rng(3)).astype(float) - 128
+    assert np.array_equal(a, b)
+    # std of N(0, 4) rounded to integers: sqrt(16 + 1/12)
+    assert a.reshape(-1, 3).std(axis=0) == pytest.approx(np.full(3, 4.01), rel=0.02)
+    assert abs(a.mean()) < 0.05
+
+
+@pytest.mark.parametrize("camera", ["L_wide", "R_foveal"])
+def test_frustum_culling_does_not_change_the_image(camera):
+    scene = build_scene(SceneOptions(eye_resolution=(320, 240)))
+    _raise_right_hand(scene)
+    rig = CameraRig(scene, [CameraSpec(camera, 320, 240)], np.random.default_rng(0))
+    plain = mujoco.Renderer(scene.model, 240, 320)
+    try:
+        culled = rig.render_ideal(camera)
+        plain.update_scene(scene.data, scene.camera(camera))
+        assert np.array_equal(culled, plain.render())
+        assert scene.model.geom_group.max() < 5  # groups restored
+    finally:
+        plain.close()
+        rig.close()

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import cv2
 import numpy as np
 import pytest
 from _synth_vision import SKIN_RGB, add_noise, clutter_background, draw_ellipse
@@ -145,3 +146,59 @@ def test_three_skin_targets_found_on_distinct_blobs(skin_lut):
         d = np.linalg.norm(np.array([r.centre for r in reports])[:, None] - truth(t)[None], axis=2)
         assert sorted(d.argmin(axis=1).tolist()) == [0, 1, 2]  # one blob each (any naming)
         assert d.min(axis=1).max() < 1.0  # measured 0.3 px
+
+
+def test_fitted_hypotheses_take_the_blob_shape():
+    """The colour-drawn hypotheses take the moments of the colour map around them: compared with
+    the moments of the drawn ellipse's pixels computed directly."""
+    from humimic.perception.detection import fitted_hypotheses
+
+    img = np.zeros((240, 320), np.uint8)
+    cv2.ellipse(img, (150, 100), (18, 8), 30, 0, 360, 255, -1)
+    v, u = np.nonzero(img)
+    mean, cov = np.array([u.mean(), v.mean()]), np.cov(np.stack([u, v]), bias=True)
+    grid = 2
+    post = (img[grid // 2::grid, grid // 2::grid] > 0).astype(float)
+    mu, C = fitted_hypotheses(post, np.array([[152.0, 101.0], [140.0, 95.0]]), grid, 15,
+                              1.0, 40.0)
+    for k in range(2):
+        np.testing.assert_allclose(mu[k], mean, atol=0.6)
+        np.testing.assert_allclose(C[k], cov, rtol=0.12, atol=2.0)
+    _, C = fitted_hypotheses(np.zeros_like(post), np.array([[50.0, 50.0]]), grid, 4, 3.0, 30.0)
+    assert np.all(np.linalg.eigvalsh(C[0]) >= 9.0 - 1e-9)  # clamped, never degenerate
+
+
+def test_posterior_score_counts_target_pixels(skin_lut):
+    img = np.zeros((240, 320, 3), np.uint8)
+    img[100:140, 100:160] = SKIN_RGB
+    centres = np.array([[130.0, 120.0], [20.0, 20.0]])
+    covs = np.repeat((8.0 * np.eye(2))[None], 2, 0)
+    f, _ = color_sums(img, skin_lut, centres, covs, 16, 2.0, score="posterior")
+    p = float(skin_lut.lookup(np.array([SKIN_RGB], np.uint8))[0])
+    assert f[0] == pytest.approx(256 * p / (p + 1.0)) and f[1] == 0.0
+    with pytest.raises(ValueError):
+        color_sums(img, skin_lut, centres, covs, 16, 2.0, score="max")
+
+
+def test_group_searches_once_per_frame_and_backs_off(skin_lut, monkeypatch):
+    """Three same-coloured targets share one search per frame; after backoff_s of finding
+    nothing it runs only every backoff_every frames."""
+    import humimic.perception.detection as D
+
+    calls = []
+    real = D.color_sums
+    monkeypatch.setattr(D, "color_sums", lambda *a, **k: calls.append(1) or real(*a, **k))
+    bg = clutter_background(np.random.default_rng(10))
+    params = DetectionParams(phase_one_s=0.2, backoff_s=0.5, backoff_every=3)
+    det = DetectingTracker(["a", "b", "c"], [skin_lut] * 3, np.random.default_rng(0), params)
+    counts = []
+    for i in range(90):
+        calls.clear()
+        det.process(i * DT, bg)
+        counts.append(len(calls))
+    counts = np.array(counts)
+    assert counts.max() == 1  # one search for the three missing targets
+    t = np.arange(90) * DT
+    assert counts[(t > 0.25) & (t < 0.65)].all()  # phase two, not yet backing off
+    late = counts[t > 0.8]
+    assert 0.25 <= late.mean() <= 0.4  # every third frame

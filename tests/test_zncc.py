@@ -89,3 +89,53 @@ def test_batched_strips_match_opencv():
         ref = cv2.matchTemplate(strips[i], tpls[i], cv2.TM_CCOEFF_NORMED)[0]
         np.testing.assert_allclose(out[i], ref, atol=2e-5)
         assert int(np.argmax(out[i])) == 10
+
+
+def test_windows_match_opencv_per_window():
+    """zncc_windows (the fine sub-sample search) against cv2.matchTemplate on each window."""
+    from humimic.perception.zncc import zncc_windows
+
+    rng = np.random.default_rng(7)
+    n, m, h, w = 3, 5, 9, 11
+    img = cv2.GaussianBlur(rng.integers(0, 256, (n * m * h, w, 3)).astype(np.uint8), (5, 5), 1)
+    windows = img.reshape(n, m, h, w, 3)
+    templates = cv2.GaussianBlur(rng.integers(0, 256, (n * h, w, 3)).astype(np.uint8), (5, 5),
+                                 1).reshape(n, h, w, 3)
+    templates[1] = windows[1, 3]  # a perfect match
+    ours = zncc_windows(windows, templates)
+    for i in range(n):
+        for j in range(m):
+            ref = cv2.matchTemplate(windows[i, j], templates[i], cv2.TM_CCOEFF_NORMED)[0, 0]
+            assert ours[i, j] == pytest.approx(ref, abs=2e-5)
+    assert ours[1, 3] == pytest.approx(1.0, abs=1e-6)
+    flat = np.full((1, 2, h, w, 3), 50, np.uint8)
+    assert np.all(zncc_windows(flat, templates[:1]) == 0.0)  # no variance: 0, not NaN
+
+
+def test_prefiltered_reads_equal_blur_then_remap():
+    """Prefiltered blurs only the crop the samples need: same values as blurring the whole
+    image (away from its border), and masking multiplies by p / (p + 1) first."""
+    from humimic.perception.zncc import Prefiltered
+
+    rng = np.random.default_rng(8)
+    img = rng.integers(0, 256, (120, 160, 3)).astype(np.uint8)
+    mx = rng.uniform(40, 110, (6, 20)).astype(np.float32)
+    my = rng.uniform(30, 80, (6, 20)).astype(np.float32)
+    plain = Prefiltered(img, 0.0).remap(mx, my)
+    np.testing.assert_array_equal(plain, cv2.remap(img, mx, my, cv2.INTER_LINEAR,
+                                                   borderMode=cv2.BORDER_REPLICATE))
+    ours = Prefiltered(img, 0.8).remap(mx, my).astype(float)
+    ref = cv2.remap(cv2.GaussianBlur(img, (3, 3), 0.8), mx, my, cv2.INTER_LINEAR).astype(float)
+    assert np.abs(ours - ref).max() <= 1.0  # uint8 rounding of bilinear reads
+    big = Prefiltered(img, 0.8, spacing=6.0)  # coarse samples: area-reduced by 4, then blurred
+    assert big.k == 4 and big.blur == pytest.approx(0.8)
+    assert np.abs(big.remap(mx, my).astype(float).mean() - img.mean()) < 3.0
+
+    class Half:  # a colour model giving p = 1 everywhere: the mask halves every pixel
+        def lookup(self, rgb):
+            return np.ones(rgb.shape[:-1], np.float32)
+
+    masked = Prefiltered(img, 0.8, lut=Half()).remap(mx, my).astype(float)
+    half = cv2.remap(cv2.GaussianBlur((img * 0.5).round().astype(np.uint8), (3, 3), 0.8), mx, my,
+                     cv2.INTER_LINEAR).astype(float)
+    assert np.abs(masked - half).max() <= 1.0

@@ -243,11 +243,11 @@ class ColorLUT:
         centres = (np.arange(n) * step + 0.5 * (step - 1)) / 255.0
         grid = np.stack(np.meshgrid(centres, centres, centres, indexing="ij"), -1).reshape(-1, 3)
         self.table = model.likelihood(grid).astype(np.float32)
-        self._mult = np.array([1 << (2 * bits), 1 << bits, 1], dtype=np.intp)
 
     def index(self, rgb_u8: np.ndarray) -> np.ndarray:
         """Table index of uint8 pixels ``(..., 3)``."""
-        return (np.asarray(rgb_u8, dtype=np.uint8) >> self.shift) @ self._mult
+        q = (np.asarray(rgb_u8, dtype=np.uint8) >> self.shift).astype(np.intp)
+        return (q[..., 0] << (2 * self.bits)) | (q[..., 1] << self.bits) | q[..., 2]
 
     def lookup(self, rgb_u8: np.ndarray) -> np.ndarray:
         """Colour density for uint8 pixels ``(..., 3)``: float32 ``(...)``.  # Ude eq. 6"""

@@ -11,14 +11,18 @@ image, or that merges with another blob, is lost; detection restarts from phase 
 Deviations, all switchable: hypothesis centres are drawn by default from a mixture of the
 paper's uniform distribution and the colour probability on a coarse grid (``proposal='color'``,
 importance sampling: uniform search alone finds a 10-pixel hand in a 320x240 image in seconds,
-not the 0.5 s we need); ``E f`` is averaged over the uniform draws only (the paper's random
-hypotheses), ``max f`` over all; a hypothesis must also have at least ``min_inlier_fraction``
+not the 0.5 s we need), and those colour-drawn hypotheses take the shape of the colour blob
+around them (``fit_shapes``); ``E f`` is averaged over the uniform draws only (the paper's random
+hypotheses), ``max f`` over all; eq. 8 sums ``p / (p + 1)`` by default (``score``); a
+hypothesis must also have at least ``min_inlier_fraction``
 of its window more likely target-coloured than uniform, so a target absent during phase one
 (threshold learnt from background only) does not make clutter pass; hypotheses are not drawn
 on tracked blobs (``gate_mahalanobis``), a new blob settles for ``settle_frames`` before another
 target of its colour may be acquired, and two blobs on one object (``merge_mahalanobis``) lose
-the weaker. Several targets of one colour (head and hands: skin) are thus found one by one;
-which blob is which target is not decided here (first found, first named).
+the weaker. Several targets of one colour (head and hands: skin) form a group that searches for
+one missing member per frame with one threshold; they are found one by one and which blob is
+which target is not decided here (the first missing member is named;
+:mod:`humimic.perception.identity` names them).
 
 All randomness comes from the ``numpy.random.Generator`` passed in.
 """
@@ -26,13 +30,21 @@ All randomness comes from the ``numpy.random.Generator`` passed in.
 from __future__ import annotations
 
 import enum
-import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from humimic.perception.color_models import ColorLUT
 from humimic.perception.em_blobs import BlobTracker, EMParams
+from humimic.perception.hypotheses import (  # noqa: F401  (re-exported)
+    _grid_points,
+    color_sums,
+    detection_threshold,
+    fitted_hypotheses,
+    propose_centres,
+    random_hypotheses,
+    window_points,
+)
 
 
 class TargetState(enum.Enum):
@@ -57,7 +69,22 @@ class DetectionParams:
     """The window spans +- this many standard deviations along the hypothesis' axes."""
     proposal: str = "color"
     """'uniform' (the paper) or 'color' (half uniform, half from a coarse colour map)."""
+    score: str = "posterior"
+    """What eq. 8 sums per window pixel: 'density' (the colour density p, as written; it spans
+    orders of magnitude between a colour model's mode and its shaded variants, so one target's
+    best window sets a threshold its same-coloured, differently lit siblings never reach) or
+    'posterior' (p / (p + 1), the probability of target colour against the uniform outlier)."""
+    fit_shapes: bool = True
+    """With the 'color' proposal, the colour-drawn hypotheses take the shape of the colour
+    map's blob around their centre (local weighted moments) instead of a random one, so a
+    target that appears is usually found in its first frame (the uniform half stays random)."""
+    fit_radius_cells: int = 6
+    """Half-size (coarse cells) of the neighbourhood the shape is fitted on."""
     proposal_grid_px: int = 4
+    """Smallest spacing (px) of the coarse colour map the 'color' proposal draws from."""
+    proposal_cells: int = 80
+    """The coarse map has at most this many cells across the image (its spacing grows with the
+    image width, so its cost does not)."""
     restart_phase: int = 2
     """After a loss, restart detection from phase 1 or 2."""
     min_inlier_fraction: float = 0.1
@@ -73,84 +100,39 @@ class DetectionParams:
     blob has been tracked this many frames (so that its gate covers the whole object)."""
     gate_mahalanobis: float = 2.5
     """Hypotheses centred this close to a tracked blob are not drawn."""
-
-
-def random_hypotheses(rng: np.random.Generator, centres: np.ndarray, sigma_min: float,
-                      sigma_max: float) -> np.ndarray:
-    """Covariances ``(n, 2, 2)`` for hypothesis ``centres (n, 2)``: axes log-uniform in
-    ``[sigma_min, sigma_max]``, orientation uniform."""
-    n = len(centres)
-    sig = np.exp(rng.uniform(math.log(sigma_min), math.log(sigma_max), size=(n, 2)))
-    th = rng.uniform(0.0, math.pi, size=n)
-    c, s = np.cos(th), np.sin(th)
-    R = np.stack([np.stack([c, -s], -1), np.stack([s, c], -1)], -2)
-    return (R * (sig**2)[:, None, :]) @ np.swapaxes(R, 1, 2)
-
-
-def window_points(centres: np.ndarray, covs: np.ndarray, side: int, k_sigma: float
-                  ) -> np.ndarray:
-    """Fixed ``side x side`` grid over ``[-k, k]^2`` warped by each hypothesis: ``(n, side^2, 2)``.
-
-    ``u = x_l + L_l g`` with ``L_l L_l^T = Sigma_l`` (the paper's affine ROI warping).
-    """
-    g1 = np.linspace(-k_sigma, k_sigma, side)
-    g = np.stack(np.meshgrid(g1, g1, indexing="xy"), -1).reshape(-1, 2)
-    L = np.linalg.cholesky(covs)
-    return centres[:, None, :] + g[None] @ np.swapaxes(L, 1, 2)
-
-
-def color_sums(image: np.ndarray, lut: ColorLUT, centres: np.ndarray, covs: np.ndarray,
-               side: int, k_sigma: float) -> tuple[np.ndarray, np.ndarray]:
-    """``f(Theta_l) = sum_u p(I_u | Theta_l)`` over each warped window (nearest pixel; points off
-    the image count 0), and the fraction of window points with ``p > 1`` (uniform).  # Ude eq. 8
-    """
-    H, W = image.shape[:2]
-    pts = np.rint(window_points(centres, covs, side, k_sigma)).astype(np.intp)
-    inside = (pts[..., 0] >= 0) & (pts[..., 0] < W) & (pts[..., 1] >= 0) & (pts[..., 1] < H)
-    u = np.clip(pts[..., 0], 0, W - 1)
-    v = np.clip(pts[..., 1], 0, H - 1)
-    p = lut.lookup(image[v, u]) * inside
-    return p.sum(axis=1, dtype=np.float64), (p > 1.0).mean(axis=1)
-
-
-def detection_threshold(mean_f: float, max_f: float, lam: float) -> float:
-    """``r_l = (1 - lambda) E f + lambda max f``.  # Ude eq. 9"""
-    return (1.0 - lam) * mean_f + lam * max_f
-
-
-def propose_centres(rng: np.random.Generator, n: int, image_shape: tuple[int, int],
-                    coarse_lik: np.ndarray | None, grid: int) -> tuple[np.ndarray, np.ndarray]:
-    """``n`` centres (px): uniform, or half uniform and half from ``coarse_lik`` (a colour
-    probability map sampled every ``grid`` px), jittered within the grid cell. Also returns
-    which centres are uniform draws (the paper's random hypotheses)."""
-    H, W = image_shape
-    out = rng.uniform((0.0, 0.0), (W - 1.0, H - 1.0), size=(n, 2))
-    uniform = np.ones(n, bool)
-    if coarse_lik is None or n < 2:
-        return out, uniform
-    c = np.cumsum(coarse_lik.ravel(), dtype=np.float64)
-    if not c[-1] > 0.0:
-        return out, uniform
-    m = n // 2
-    uniform[:m] = False
-    idx = np.minimum(np.searchsorted(c, rng.uniform(0.0, c[-1], size=m), side="right"),
-                     c.size - 1)
-    iy, ix = np.divmod(idx, coarse_lik.shape[1])
-    jitter = rng.uniform(-0.5 * grid, 0.5 * grid, size=(m, 2))
-    out[:m] = np.clip(np.stack([ix, iy], -1) * grid + jitter, 0.0, (W - 1.0, H - 1.0))
-    return out, uniform
+    backoff_s: float = 2.0
+    backoff_every: int = 3
+    """A group whose phase-two search has found nothing for ``backoff_s`` searches only every
+    ``backoff_every`` frames (a target that is not there costs a third), until it finds one or
+    loses another target. Occlusions shorter than ``backoff_s`` are searched at full rate."""
 
 
 @dataclass
-class _Target:
-    name: str
-    state: TargetState = TargetState.SEARCHING
+class _Group:
+    """Targets sharing one colour model: one search and one threshold (eq. 9) for all."""
+
+    lut: ColorLUT
+    members: list[int]
     phase: int = 1
     t_phase_start: float | None = None
     f_sum: float = 0.0
     f_count: int = 0
     f_max: float = 0.0
     threshold: float | None = None
+    t_fail_since: float | None = None
+    """Since when phase two has searched without finding anything (for the back-off)."""
+    frame: int = 0
+
+    def restart_phase_one(self) -> None:
+        self.phase, self.t_phase_start = 1, None
+        self.f_sum, self.f_count, self.f_max = 0.0, 0, 0.0
+
+
+@dataclass
+class _Target:
+    name: str
+    group: int
+    state: TargetState = TargetState.SEARCHING
     low_fill_frames: int = 0
     acquisitions: int = 0
 
@@ -168,7 +150,12 @@ class TargetReport:
 
 
 class DetectingTracker:
-    """Detection (eqs. 8-9) + EM tracking (eqs. 1-7) of named targets in one image stream."""
+    """Detection (eqs. 8-9) + EM tracking (eqs. 1-7) of named targets in one image stream.
+
+    Targets given the same :class:`ColorLUT` object form a colour group: per frame the group
+    searches for one of its missing members (they are interchangeable until named by the
+    caller), and phase one learns one threshold for the group.
+    """
 
     def __init__(self, names: list[str], luts: list[ColorLUT], rng: np.random.Generator,
                  params: DetectionParams | None = None,
@@ -180,18 +167,27 @@ class DetectingTracker:
             raise ValueError("restart_phase must be 1 or 2")
         if params.proposal not in ("uniform", "color"):
             raise ValueError("proposal must be 'uniform' or 'color'")
+        if params.score not in ("density", "posterior"):
+            raise ValueError("score must be 'density' or 'posterior'")
         self.rng = rng
         self.params = params
         self.tracker = BlobTracker(luts, em_params or EMParams())
-        self.targets = [_Target(n) for n in names]
+        self.groups: list[_Group] = []
+        self.targets: list[_Target] = []
+        for k, (name, lut) in enumerate(zip(names, luts, strict=True)):
+            g = next((i for i, gr in enumerate(self.groups) if gr.lut is lut), None)
+            if g is None:
+                g = len(self.groups)
+                self.groups.append(_Group(lut, []))
+            self.groups[g].members.append(k)
+            self.targets.append(_Target(name, g))
 
     def process(self, t: float, image: np.ndarray) -> list[TargetReport]:
         """Track, check for losses, then search for the targets not tracked. Returns reports."""
         frame = self.tracker.update(image)
         self._check_losses(frame, image.shape[:2])
-        searching = [k for k, tg in enumerate(self.targets) if tg.state != TargetState.TRACKING]
-        if searching:
-            self._search(t, image, searching)
+        if any(tg.state != TargetState.TRACKING for tg in self.targets):
+            self._search(t, image)
         return self.reports(frame.fill)
 
     def reports(self, fill: np.ndarray | None = None) -> list[TargetReport]:
@@ -199,10 +195,11 @@ class DetectingTracker:
         out = []
         for k, tg in enumerate(self.targets):
             on = tg.state == TargetState.TRACKING
-            out.append(TargetReport(tg.name, tg.state, 0 if on else tg.phase,
+            g = self.groups[tg.group]
+            out.append(TargetReport(tg.name, tg.state, 0 if on else g.phase,
                                     tr.centres[k].copy(), tr.covs[k].copy(),
                                     float(fill[k]) if (fill is not None and on) else 0.0,
-                                    tg.threshold))
+                                    g.threshold))
         return out
 
     def _lose(self, k: int) -> None:
@@ -210,11 +207,12 @@ class DetectingTracker:
         self.tracker.stop(k)
         tg.state = TargetState.LOST
         tg.low_fill_frames = 0
-        if self.params.restart_phase == 1 or tg.threshold is None:
-            tg.phase, tg.t_phase_start = 1, None
-            tg.f_sum, tg.f_count, tg.f_max = 0.0, 0, 0.0
+        g = self.groups[tg.group]
+        g.t_fail_since = None  # search every frame again
+        if self.params.restart_phase == 1 or g.threshold is None:
+            g.restart_phase_one()
         else:
-            tg.phase = 2
+            g.phase = 2
 
     def _check_losses(self, frame, image_shape) -> None:
         p, tr = self.params, self.tracker
@@ -244,51 +242,61 @@ class DetectingTracker:
         keep = np.ones(len(centres), bool)
         tr, g2 = self.tracker, self.params.gate_mahalanobis ** 2
         for k in np.flatnonzero(tr.active).tolist():
-            d = centres - tr.centres[k]
-            keep &= np.einsum("ni,ij,nj->n", d, np.linalg.inv(tr.covs[k]), d) > g2
+            (a, b), (_, c) = tr.covs[k].tolist()
+            det = a * c - b * b
+            du, dv = centres[:, 0] - tr.centres[k, 0], centres[:, 1] - tr.centres[k, 1]
+            keep &= (c * du * du - 2.0 * b * du * dv + a * dv * dv) > g2 * det
         return keep
 
-    def _search(self, t: float, image: np.ndarray, searching: list[int]) -> None:
+    def _search(self, t: float, image: np.ndarray) -> None:
         p, tr = self.params, self.tracker
         H, W = image.shape[:2]
-        coarse: dict[int, np.ndarray] = {}
-        settling = {id(tr.luts[k]) for k in np.flatnonzero(tr.active).tolist()
+        settling = {self.targets[k].group for k in np.flatnonzero(tr.active).tolist()
                     if tr.age[k] < p.settle_frames}
-        for k in searching:
-            tg, lut = self.targets[k], tr.luts[k]
-            if tg.t_phase_start is None:
-                tg.t_phase_start = t
+        for gi, g in enumerate(self.groups):
+            missing = [k for k in g.members if self.targets[k].state != TargetState.TRACKING]
+            if not missing or (g.phase == 2 and gi in settling):
+                continue
+            g.frame += 1
+            if (g.phase == 2 and g.t_fail_since is not None and t - g.t_fail_since > p.backoff_s
+                    and g.frame % max(p.backoff_every, 1)):
+                continue
+            if g.t_phase_start is None:
+                g.t_phase_start = t
             lik = None
+            step = max(p.proposal_grid_px, -(-W // p.proposal_cells))
             if p.proposal == "color":
-                if id(lut) not in coarse:
-                    g = p.proposal_grid_px
-                    sub = image[g // 2::g, g // 2::g]
-                    lik_map = lut.lookup(sub).astype(np.float64)
-                    vv, uu = np.mgrid[g // 2:H:g, g // 2:W:g]
-                    pts = np.stack([uu.ravel(), vv.ravel()], -1).astype(float)
-                    lik_map.ravel()[~self._gate(pts)] = 0.0
-                    coarse[id(lut)] = lik_map
-                lik = coarse[id(lut)]
-            centres, uniform = propose_centres(self.rng, p.n_hypotheses, (H, W), lik,
-                                               p.proposal_grid_px)
+                lik = g.lut.lookup(image[step // 2::step, step // 2::step]).astype(np.float64)
+                lik.ravel()[~self._gate(_grid_points(H, W, step))] = 0.0
+            centres, uniform = propose_centres(self.rng, p.n_hypotheses, (H, W), lik, step)
             keep = self._gate(centres)
             centres, uniform = centres[keep], uniform[keep]
             covs = random_hypotheses(self.rng, centres, p.sigma_min_px, p.sigma_max_px)
-            f, inlier = color_sums(image, lut, centres, covs, p.window_side, p.window_k_sigma)
-            if tg.phase == 1:  # Ude phase one: sample E f (random hypotheses) and max f
-                tg.f_sum += float(f[uniform].sum())
-                tg.f_count += int(uniform.sum())
-                tg.f_max = max(tg.f_max, float(f.max(initial=0.0)))
-                if t - tg.t_phase_start >= p.phase_one_s:
-                    tg.threshold = detection_threshold(tg.f_sum / max(tg.f_count, 1), tg.f_max,
-                                                       p.lam)
-                    tg.phase = 2
+            if p.fit_shapes and lik is not None and (~uniform).any():
+                fit = ~uniform  # colour-drawn centres: hypotheses shaped like the blob there
+                centres[fit], covs[fit] = fitted_hypotheses(
+                    lik / (lik + 1.0), centres[fit], step, p.fit_radius_cells, p.sigma_min_px,
+                    p.sigma_max_px)
+            f, inlier = color_sums(image, g.lut, centres, covs, p.window_side, p.window_k_sigma,
+                                   p.score)
+            if g.phase == 1:  # Ude phase one: sample E f (random hypotheses) and max f
+                g.f_sum += float(f[uniform].sum())
+                g.f_count += int(uniform.sum())
+                g.f_max = max(g.f_max, float(f.max(initial=0.0)))
+                if t - g.t_phase_start >= p.phase_one_s:
+                    g.threshold = detection_threshold(g.f_sum / max(g.f_count, 1), g.f_max,
+                                                      p.lam)
+                    g.phase = 2
                 continue
-            ok = (f > tg.threshold) & (inlier >= p.min_inlier_fraction)  # Ude eq. 8
-            if ok.any() and id(lut) not in settling:
-                settling.add(id(lut))
+            ok = (f > g.threshold) & (inlier >= p.min_inlier_fraction)  # Ude eq. 8
+            if not ok.any():
+                g.t_fail_since = t if g.t_fail_since is None else g.t_fail_since
+            else:
+                g.t_fail_since = None
+                k = missing[0]
                 best = int(np.argmax(np.where(ok, f, -np.inf)))
                 tr.start(k, centres[best], covs[best])
+                tg = self.targets[k]
                 tg.state = TargetState.TRACKING
                 tg.low_fill_frames = 0
                 tg.acquisitions += 1

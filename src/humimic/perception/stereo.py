@@ -10,14 +10,23 @@ The eyes pan and tilt, so the images are never assumed rectified. For each targe
    ``box_sigma`` sigma, in ideal pixels) and the depth range ``[z_min, z_max]``.
 3. Local rectification: a strip along the line (rows along its normal) and a box template around
    the left point (columns along the left epipolar direction) are sampled on ideal-pixel grids,
-   distorted to raw pixels and read with ``cv2.remap`` (bilinear). Both grids are oriented by the
-   image of the baseline direction and share a spacing scaled to the left blob's size (so the
-   template holds the blob's outline), so the search is 1-D: ZNCC (eq. 10, colour) at every
-   sample of ``s``, the best refined by a parabola fit: the match, exactly on the epipolar line.
-4. Homogeneous linear triangulation (DLT, as ``cv2.triangulatePoints``) of the undistorted
-   normalised points with ``P = T_cam_base[:3]``: the base-frame point.
-5. ``R = J diag(C_left, C_right) J^T``, ``J`` the analytic Jacobian of step 4 (first-order
-   perturbation of the DLT null vector) chained with the Jacobians of undistortion.
+   distorted to raw pixels and read with ``cv2.remap`` (bilinear) from images blurred by
+   ``prefilter_sigma`` (anti-aliasing: the rendered edges are hard steps). Both grids are
+   oriented by the image of the baseline direction and share a spacing ``d`` scaled to the left
+   blob's size (so the template holds the blob's outline), so the search is 1-D: ZNCC (eq. 10,
+   colour) at every sample of ``s``. Optionally (``template_luts``) both images are first
+   colour-masked (each pixel times its probability of having the target's colour), so the
+   background around the blob, at another depth and shifted differently, turns black and only
+   the blob (its outline and shading) is matched.
+4. Sub-pixel: the template is correlated again at ``d / fine_steps`` offsets within +-d of the
+   best sample; a parabola through the best three gives the match, exactly on the line.
+5. Homogeneous linear triangulation (DLT, as ``cv2.triangulatePoints``) of the undistorted
+   normalised points with ``P = T_cam_base[:3]``: the base-frame point
+   (:mod:`humimic.perception.triangulation`).
+6. ``R = J C J^T``, ``J`` the analytic Jacobian of step 5 (first-order perturbation of the DLT
+   null vector) chained with the Jacobians of undistortion; ``C`` the 4x4 pixel covariance of
+   the correspondence: ``diag(C_left, C_right)`` (Ude's Table 2) or, since the right match
+   follows the template cut at the left centre, :func:`following_covariance`.
 
 All targets of a frame go through one batch (:meth:`StereoRig.match_many`): the array work does
 not grow with the number of targets, only the small per-target scalar set-up does.
@@ -28,29 +37,51 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-import cv2
 import numpy as np
 
-from humimic.perception.zncc import zncc_strips
-from humimic.sensors.camera_model import CameraModel, Intrinsics, invert_transform
+from humimic.perception.triangulation import (  # noqa: F401  (re-exported)
+    distort_to_pixels,
+    dlt_jacobian,
+    following_covariance,
+    joint_covariance,
+    triangulate_dlt,
+    undistort_jacobian,
+    undistort_point,
+)
+from humimic.perception.zncc import Prefiltered, zncc_strips, zncc_windows
+from humimic.sensors.camera_model import CameraModel, invert_transform
 
 
 @dataclass(frozen=True)
 class StereoParams:
-    template_half: int = 6
+    template_half: int = 8
     """The template has (2 half + 1)^2 samples."""
     template_sigma: float = 1.5
     """The template spans +- this many of the left blob's largest standard deviation (so that it
     holds the blob's outline: a template inside a uniformly coloured blob is flat), sampled at
     a spacing of max(1 px, that span / half); the strip is sampled at the same spacing."""
-    max_spacing_px: float = 4.0
-    box_sigma: float = 2.5
+    max_spacing_px: float = 12.0
+    box_sigma: float = 1.5
     """Right search box: right blob centre +- box_sigma * sqrt(diag(blob_cov_right))."""
     z_min: float = 0.1
     z_max: float = 20.0
     """Depth range (m, along the left ray) of the epipolar search."""
     min_score: float = 0.5
     """ZNCC below this fails with reason 'low_zncc'."""
+    prefilter_sigma: float = 0.8
+    """Least Gaussian blur (px) of the images before they are sampled, growing to half the
+    sample spacing for big blobs (:class:`~humimic.perception.zncc.Prefiltered`, on the crops
+    the samples need): anti-aliasing, so a template shifted by a fraction of a pixel still
+    matches at the shifted place (rendered edges are hard steps; bilinear reads of them are not
+    shift-invariant). 0: no prefilter."""
+    fine_steps: int = 4
+    """After the search at the template's sample spacing d, the template is correlated at
+    offsets of d / fine_steps within +-d of the best sample and a parabola through the best
+    three gives the sub-pixel match (a parabola on the coarse samples alone is biased towards
+    them: 'pixel locking')."""
+    min_target_fraction: float = 0.1
+    """With colour masks (``template_luts``), a template less target-coloured than this (mean
+    probability) fails with reason 'few_target_pixels'."""
 
 
 @dataclass(frozen=True)
@@ -73,65 +104,21 @@ def _fail(reason: str, uv_left, score: float = 0.0) -> StereoMeasurement:
                              np.nan_to_num(np.asarray(uv_left, float)), np.zeros(2), score)
 
 
-def triangulate_dlt(P1: np.ndarray, P2: np.ndarray, x1: np.ndarray, x2: np.ndarray):
-    """Homogeneous DLT of N points ``x1, x2 (N, 2)`` from two 3x4 cameras.
-
-    Returns the unit null vectors ``X_h (N, 4)`` and the SVD ``(A, s, Vt)`` of the systems.
-    """
-    A = np.empty((len(x1), 4, 4))
-    A[:, 0:2] = x1[:, :, None] * P1[2] - P1[0:2]
-    A[:, 2:4] = x2[:, :, None] * P2[2] - P2[0:2]
-    _, s, Vt = np.linalg.svd(A)
-    return Vt[:, 3], (A, s, Vt)
+def _read(sources: list[Prefiltered], mx: np.ndarray, my: np.ndarray) -> np.ndarray:
+    """Job ``r``'s samples ``(mx[r], my[r])`` (raw pixels) from ``sources[r]``, stacked."""
+    return np.stack([src.remap(mx[r], my[r]) for r, src in enumerate(sources)])
 
 
-def dlt_jacobian(P1: np.ndarray, P2: np.ndarray, X_h: np.ndarray, svd) -> np.ndarray:
-    """d(Euclidean point)/d(x1, y1, x2, y2) ``(N, 3, 4)`` by perturbing the DLT null vector.
-
-    ``X_h`` is the eigenvector of ``M = A^T A`` of smallest eigenvalue ``s4^2``; to first order
-    ``dX_h = -(M - s4^2 I)^+ dM X_h``, ``dM = dA^T A + A^T dA``, and ``dA`` for coordinate ``i``
-    has row ``i`` = the third row of its camera's ``P``.
-    """
-    A, s, Vt = svd
-    V3 = Vt[:, :3]  # (N, 3, 4)
-    pinv = np.swapaxes(V3, 1, 2) / (s[:, :3] ** 2 - s[:, 3:] ** 2)[:, None, :] @ V3
-    rows = np.stack([P1[2], P1[2], P2[2], P2[2]])  # (4, 4)
-    AX = np.einsum("nij,nj->ni", A, X_h)
-    dMX = rows * AX[:, :, None] + A * (X_h @ rows.T)[:, :, None]  # [n, i]: dM_i X_h
-    dX = -dMX @ pinv  # (N, 4 coords, 4)
-    Xe = X_h[:, :3] / X_h[:, 3:]
-    J = (dX[:, :, :3] - dX[:, :, 3:] * Xe[:, None, :]) / X_h[:, 3, None, None]
-    return np.swapaxes(J, 1, 2)
-
-
-def undistort_point(intr: Intrinsics, u: float, v: float, iterations: int = 8
-                    ) -> tuple[float, float]:
-    """One pixel to undistorted normalised coordinates (scalar fixed point, as Intrinsics)."""
-    xd, yd = (u - intr.cx) / intr.fx, (v - intr.cy) / intr.fy
-    x, y = xd, yd
-    if intr.k1 != 0.0 or intr.k2 != 0.0:
-        for _ in range(iterations):
-            r2 = x * x + y * y
-            s = 1.0 + intr.k1 * r2 + intr.k2 * r2 * r2
-            x, y = xd / s, yd / s
-    return x, y
-
-
-def undistort_jacobian(intr: Intrinsics, x: float, y: float) -> list[list[float]]:
-    """d(undistorted normalised point)/d(pixel) (2x2) at the undistorted point ``(x, y)``."""
-    r2 = x * x + y * y
-    s = 1.0 + intr.k1 * r2 + intr.k2 * r2 * r2
-    ds = 2.0 * (intr.k1 + 2.0 * intr.k2 * r2)
-    a, b, d = s + ds * x * x, ds * x * y, s + ds * y * y  # d(distorted)/d(undistorted)
-    det = a * d - b * b
-    return [[d / (det * intr.fx), -b / (det * intr.fy)],
-            [-b / (det * intr.fx), a / (det * intr.fy)]]
-
-
-def _distort_to_pixels(intr: Intrinsics, x: np.ndarray, y: np.ndarray):
-    r2 = x * x + y * y
-    s = 1.0 + r2 * (intr.k1 + intr.k2 * r2)
-    return intr.fx * x * s + intr.cx, intr.fy * y * s + intr.cy
+def _target_fraction(luts, targets: list[int], templates: np.ndarray) -> np.ndarray:
+    """Mean of ``p / (p + 1)`` over each (masked) template ``(n, h, w, C)``: how much of it is
+    target-coloured (one table lookup per distinct colour model)."""
+    out = np.zeros(len(targets))
+    px = np.clip(templates, 0, 255).astype(np.uint8)
+    for lut in {id(luts[i]): luts[i] for i in targets}.values():
+        rows = [r for r, i in enumerate(targets) if luts[i] is lut]
+        p = lut.lookup(px[rows]).astype(np.float64)
+        out[rows] = (p / (p + 1.0)).mean(axis=(1, 2))
+    return out
 
 
 class StereoRig:
@@ -152,32 +139,31 @@ class StereoRig:
         self._k = np.arange(-params.template_half, params.template_half + 1, dtype=float)
 
     def triangulate(self, uv_left: np.ndarray, uv_right: np.ndarray,
-                    cov_left: np.ndarray | None = None, cov_right: np.ndarray | None = None
-                    ) -> tuple[np.ndarray, np.ndarray]:
+                    cov_left: np.ndarray | None = None, cov_right: np.ndarray | None = None,
+                    cov_joint: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
         """Base-frame points ``(N, 3)`` (m) and covariances ``(N, 3, 3)`` from raw pixels.
 
         ``uv_*`` are ``(N, 2)`` (or ``(2,)`` for one point: results are then unbatched); pixel
-        covariances (2x2, or ``(N, 2, 2)``) default to zero.
+        covariances (2x2, or ``(N, 2, 2)``) default to zero and are independent, unless the
+        joint covariance of ``(u_l, v_l, u_r, v_r)`` is given (``cov_joint``, 4x4 or
+        ``(N, 4, 4)``, e.g. :func:`following_covariance`).
         """
         single = np.ndim(uv_left) == 1
         uvl, uvr = np.atleast_2d(uv_left), np.atleast_2d(uv_right)
         xl = np.array([undistort_point(self.intr_l, u, v) for u, v in uvl.tolist()])
         xr = np.array([undistort_point(self.intr_r, u, v) for u, v in uvr.tolist()])
-        p, R = self._triangulate_normalised(xl, xr, cov_left, cov_right)
+        p, R = self._triangulate_normalised(xl, xr, joint_covariance(len(xl), cov_left, cov_right,
+                                                           cov_joint))
         return (p[0], R[0]) if single else (p, R)
 
-    def _triangulate_normalised(self, xl, xr, cov_left, cov_right):
+    def _triangulate_normalised(self, xl, xr, C):
+        """Points and covariances from normalised points and the (N, 4, 4) pixel covariance."""
         X_h, svd = triangulate_dlt(self.P_left, self.P_right, xl, xr)
         p_base = X_h[:, :3] / X_h[:, 3:]
         J = dlt_jacobian(self.P_left, self.P_right, X_h, svd)  # (N, 3, 4)
         Ju = np.zeros((len(xl), 4, 4))
         Ju[:, 0:2, 0:2] = [undistort_jacobian(self.intr_l, x, y) for x, y in xl.tolist()]
         Ju[:, 2:4, 2:4] = [undistort_jacobian(self.intr_r, x, y) for x, y in xr.tolist()]
-        C = np.zeros((len(xl), 4, 4))
-        if cov_left is not None:
-            C[:, 0:2, 0:2] = cov_left
-        if cov_right is not None:
-            C[:, 2:4, 2:4] = cov_right
         Jt = J @ Ju
         return p_base, Jt @ C @ np.swapaxes(Jt, 1, 2)
 
@@ -223,7 +209,8 @@ class StereoRig:
             (lx / ln, ly / ln)
 
     def match_many(self, image_left: np.ndarray, image_right: np.ndarray, uv_left,
-                   blob_cov_left, uv_right_blob, blob_cov_right, cov_uv_left, cov_uv_right
+                   blob_cov_left, uv_right_blob, blob_cov_right, cov_uv_left, cov_uv_right,
+                   template_luts=None, match_std: float | None = None
                    ) -> list[StereoMeasurement]:
         """Ude eq. 10 correspondences of N left blob centres inside their right blobs, in 3-D.
 
@@ -231,6 +218,13 @@ class StereoRig:
         shape covariances (px^2; the left one sizes the template, the right one the search box);
         ``cov_uv_*`` (2x2 or ``(N, 2, 2)``): covariances of the measured centres (px^2,
         calibrated in advance as in Ude's Table 2), propagated to ``R_base``.
+        ``template_luts``: optional colour look-up table per target; both images are then
+        matched *colour-masked*: every pixel times its probability of having the target's
+        colour, ``p / (p + 1)`` against the uniform outlier density 1, so the background
+        around the blob turns black (clutter at other depths cannot pull the match) while the
+        blob's outline, its strongest cue, stays sharp. ``match_std`` (px): use the
+        template-following error model (:func:`following_covariance`, with ``cov_uv_left``)
+        instead of independent left and right covariances.
         """
         p = self.params
         hh = int(p.template_half)
@@ -265,10 +259,11 @@ class StereoRig:
             jobs.append((i, xl, yl, line, step))
         if jobs:
             self._match_jobs(image_left, image_right, uv_left, jobs, cov_uv_left, cov_uv_right,
-                             out)
+                             out, template_luts, match_std)
         return out  # type: ignore[return-value]
 
-    def _match_jobs(self, img_l, img_r, uv_left, jobs, cov_l, cov_r, out) -> None:
+    def _match_jobs(self, img_l, img_r, uv_left, jobs, cov_l, cov_r, out, luts=None,
+                    match_std=None) -> None:
         p, k, hh = self.params, self._k, int(self.params.template_half)
         il, ir = self.intr_l, self.intr_r
         n = len(jobs)
@@ -286,10 +281,13 @@ class StereoRig:
             - kd[:, :, None] * t[:, 1, None, None]
         qy = q0[:, 1, None, None] + s[:, None, :] * t[:, 1, None, None] \
             + kd[:, :, None] * t[:, 0, None, None]
-        mx, my = _distort_to_pixels(ir, (qx - ir.cx) / ir.fx, (qy - ir.cy) / ir.fy)
-        strips = cv2.remap(img_r, mx.reshape(n * len(k), L).astype(np.float32),
-                           my.reshape(n * len(k), L).astype(np.float32), cv2.INTER_LINEAR,
-                           borderMode=cv2.BORDER_REPLICATE).reshape(n, len(k), L, -1)
+        mx, my = distort_to_pixels(ir, (qx - ir.cx) / ir.fx, (qy - ir.cy) / ir.fy)
+        masks = [None if luts is None else luts[i] for i, *_ in jobs]
+        src_l = [Prefiltered(img_l, p.prefilter_sigma, dr, lut)
+                 for dr, lut in zip(d.tolist(), masks, strict=True)]
+        src_r = [Prefiltered(img_r, p.prefilter_sigma, dr, lut)
+                 for dr, lut in zip(d.tolist(), masks, strict=True)]
+        strips = _read(src_r, mx, my)
         # templates: ideal left pixels around each left point, columns along its epipolar dir.
         ql = np.array([(il.fx * xl + il.cx, il.fy * yl + il.cy) for _, xl, yl, _, _ in jobs])
         tl = np.array([ln[3] for _, _, _, ln, _ in jobs])
@@ -297,25 +295,43 @@ class StereoRig:
             - kd[:, :, None] * tl[:, 1, None, None]
         ly = ql[:, 1, None, None] + kd[:, None, :] * tl[:, 1, None, None] \
             + kd[:, :, None] * tl[:, 0, None, None]
-        mx, my = _distort_to_pixels(il, (lx - il.cx) / il.fx, (ly - il.cy) / il.fy)
-        tpls = cv2.remap(img_l, mx.reshape(n * len(k), len(k)).astype(np.float32),
-                         my.reshape(n * len(k), len(k)).astype(np.float32), cv2.INTER_LINEAR,
-                         borderMode=cv2.BORDER_REPLICATE).reshape(n, len(k), len(k), -1)
+        mx, my = distort_to_pixels(il, (lx - il.cx) / il.fx, (ly - il.cy) / il.fy)
+        tpls = _read(src_l, mx, my)
+        few = np.zeros(n, bool)
+        if luts is not None:  # templates with too little of the target's colour
+            few = _target_fraction(luts, [i for i, *_ in jobs], tpls) < p.min_target_fraction
         sc = zncc_strips(strips, tpls)  # sc[r, m] <-> template centred on s_lo + (m - 1) d
+        sc[few] = -1.0  # reported below
         valid = (np.arange(sc.shape[1]) >= 1) & (np.arange(sc.shape[1])[None, :]
                                                   <= np.array(n_s)[:, None])
         m = np.argmax(np.where(valid, sc, -np.inf), axis=1)
+        # fine search: the template at sub-sample offsets around the best sample, then a parabola
+        F = max(int(p.fine_steps), 1)
+        s_c = s0 + (m - 1) * d
+        s_f = s_c[:, None] + (np.arange(-F, F + 1) / F)[None, :] * d[:, None]  # (n, 2F + 1)
+        wx = q0[:, 0, None, None, None] + (s_f[:, :, None, None] + kd[:, None, None, :]) \
+            * t[:, 0, None, None, None] - kd[:, None, :, None] * t[:, 1, None, None, None]
+        wy = q0[:, 1, None, None, None] + (s_f[:, :, None, None] + kd[:, None, None, :]) \
+            * t[:, 1, None, None, None] + kd[:, None, :, None] * t[:, 0, None, None, None]
+        mx, my = distort_to_pixels(ir, (wx - ir.cx) / ir.fx, (wy - ir.cy) / ir.fy)
+        win = _read(src_r, mx.reshape(n, -1, len(k)), my.reshape(n, -1, len(k))
+                    ).reshape(n, 2 * F + 1, len(k), len(k), -1)
+        fs = zncc_windows(win, tpls)
+        fs[few] = -1.0
+        b = np.clip(np.argmax(fs, axis=1), 1, 2 * F - 1)
         ar = np.arange(n)
-        best, f_m, f_p = sc[ar, m], sc[ar, m - 1], sc[ar, m + 1]
-        curv = f_m - 2.0 * best + f_p
+        best = np.maximum(fs[ar, b], sc[ar, m])
+        f_m, f_0, f_p = fs[ar, b - 1], fs[ar, b], fs[ar, b + 1]
+        curv = f_m - 2.0 * f_0 + f_p
         with np.errstate(invalid="ignore", divide="ignore"):
-            off = np.where(curv < 0, np.clip(0.5 * (f_m - f_p) / curv, -0.5, 0.5), 0.0)
-        s_star = s0 + (m - 1 + off) * d
+            off = np.where(curv < 0, np.clip(0.5 * (f_m - f_p) / curv, -1.0, 1.0), 0.0)
+        s_star = s_f[ar, b] + off * d / F
         qr = q0 + s_star[:, None] * t
         good = best >= p.min_score
         for r in np.flatnonzero(~good).tolist():
             i = jobs[r][0]
-            out[i] = _fail("low_zncc", uv_left[i], float(best[r]))
+            why = "few_target_pixels" if few[r] else "low_zncc"
+            out[i] = _fail(why, uv_left[i], max(float(best[r]), 0.0))
         if not good.any():
             return
         rows = [jobs[r][0] for r in np.flatnonzero(good).tolist()]
@@ -328,8 +344,15 @@ class StereoRig:
             cl = cl[rows]
         if cr is not None and cr.ndim == 3:
             cr = cr[rows]
-        P, R = self._triangulate_normalised(xl_a, xr_a, cl, cr)
-        ur, vr = _distort_to_pixels(ir, xr_a[:, 0], xr_a[:, 1])
+        ur, vr = distort_to_pixels(ir, xr_a[:, 0], xr_a[:, 1])
+        if match_std is None:
+            C = joint_covariance(len(rows), cl, cr, None)
+        else:  # the raw-pixel direction of the epipolar line at each match
+            q1 = qr[good] + t[good]
+            u1, v1 = distort_to_pixels(ir, (q1[:, 0] - ir.cx) / ir.fx, (q1[:, 1] - ir.cy) / ir.fy)
+            C = following_covariance(np.zeros((2, 2)) if cl is None else cl, match_std,
+                                     np.stack([u1 - ur, v1 - vr], 1))
+        P, R = self._triangulate_normalised(xl_a, xr_a, C)
         depth_l = P @ self.P_left[2, :3] + self.P_left[2, 3]
         depth_r = P @ self.P_right[2, :3] + self.P_right[2, 3]
         finite = np.isfinite(P).all(1) & np.isfinite(R).all((1, 2))
@@ -343,10 +366,12 @@ class StereoRig:
                                            np.array([ur[r], vr[r]]), scores[r])
 
     def match(self, image_left, image_right, uv_left, blob_cov_left, uv_right_blob,
-              blob_cov_right, cov_uv_left, cov_uv_right) -> StereoMeasurement:
+              blob_cov_right, cov_uv_left, cov_uv_right, template_lut=None
+              ) -> StereoMeasurement:
         """:meth:`match_many` for one target."""
         return self.match_many(image_left, image_right, [uv_left], [blob_cov_left],
-                               [uv_right_blob], [blob_cov_right], cov_uv_left, cov_uv_right)[0]
+                               [uv_right_blob], [blob_cov_right], cov_uv_left, cov_uv_right,
+                               None if template_lut is None else [template_lut])[0]
 
 
 def match_and_triangulate(image_left, image_right, cam_left: CameraModel,

@@ -8,6 +8,11 @@ from humimic.pipeline.stage import Stage
 def build_stages(scenario, world, rngs, rlog) -> list[Stage]:
     """One stage per optional scenario section that is present (perception, filter, mimic)."""
     stages: list[Stage] = []
+    if (getattr(scenario, "perception", None) is not None
+            or getattr(scenario, "filter", None) is not None):
+        from humimic.perception.build import perception_stages
+
+        stages.extend(perception_stages(scenario, world, rngs, rlog))
     if getattr(scenario, "mimic", None) is not None:
         from humimic.control.build import mimic_stages
 

@@ -10,6 +10,8 @@ from __future__ import annotations
 from pydantic import Field
 
 from humimic.control.config import MimicConfig
+from humimic.estimation.config import FilterConfig
+from humimic.perception.config import PerceptionConfig
 from humimic.scenario.base import Section
 from humimic.sensors.config import Cameras, Sensors, Timing
 from humimic.viz.config import Output
@@ -31,5 +33,10 @@ class Scenario(Section):
     sensors: Sensors = Field(default_factory=Sensors)
     timing: Timing = Field(default_factory=Timing)
     output: Output = Field(default_factory=Output)
+    perception: PerceptionConfig | None = None
+    """Colour-blob stereo tracking (see :mod:`humimic.perception.config`); absent: none."""
+    filter: FilterConfig | None = None
+    """Random-jerk Kalman filter of perception's measurements (see
+    :mod:`humimic.estimation.config`); needs ``perception``."""
     mimic: MimicConfig | None = None
     """Imitation by the robot (see :mod:`humimic.control.config`); absent: the robot holds."""

@@ -1,0 +1,137 @@
+"""The filter stage: ``measurements`` -> ``estimates``, one random-jerk Kalman filter per target.
+
+For every measurement message (one per stereo frame, photon time ``t``) each target's filter
+advances to ``t`` (variable dt from the time stamps, Ude eq. 15) and fuses the measurement with
+its propagated covariance R when there is one; a missed frame is a prediction only. A target's
+first measurement initialises its filter (Ude: p and its covariance from the measurement, v = a
+= 0 with very large variances). A target unmeasured for more than ``max_gap`` is dropped (its
+filter reset) until it is measured again: extrapolating a hand for seconds is no estimate.
+``estimates`` (every initialised target) is published for every frame, time-stamped with the
+photon time and ready ``latency`` after the measurements were.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from humimic.estimation.random_jerk import RandomJerkFilter
+from humimic.messages import Estimates, TargetEstimate
+from humimic.pipeline.stage import Stage
+from humimic.viz.rerun_log import BASE, EVENTS
+
+TARGET_COLORS = {"head": (255, 210, 0), "right_hand": (230, 40, 40),
+                 "left_hand": (40, 200, 60)}
+
+
+@dataclass
+class FilterArrays:
+    targets: list[str]
+    t: np.ndarray
+    """(F,) photon times (s) of the frames."""
+    valid: np.ndarray
+    """(F, T) bool: an estimate was published."""
+    measured: np.ndarray
+    """(F, T) bool: the estimate fused a measurement of that frame."""
+    x: np.ndarray
+    """(F, T, 9) state [p, v, a] (base frame, m, m/s, m/s^2), zeros where not valid."""
+    P: np.ndarray
+    """(F, T, 9, 9) state covariance."""
+    since_init: np.ndarray
+    """(F, T) seconds since the filter was (re)initialised (inf where not valid)."""
+
+
+@dataclass
+class FilterRecord:
+    targets: list[str]
+    rows: list[tuple] = field(default_factory=list)
+
+    def arrays(self) -> FilterArrays:
+        n = len(self.targets)
+        if not self.rows:
+            z = np.zeros
+            return FilterArrays(list(self.targets), z(0), z((0, n), bool), z((0, n), bool),
+                                z((0, n, 9)), z((0, n, 9, 9)), z((0, n)))
+        cols = list(zip(*self.rows, strict=True))
+        return FilterArrays(list(self.targets), np.array(cols[0], float),
+                            *(np.stack(c) for c in cols[1:]))
+
+
+class FilterStage(Stage):
+    name = "filter"
+
+    def __init__(self, cfg, targets: list[str], record: FilterRecord, rlog=None, gt=None):
+        self.cfg, self.targets, self.record, self.rlog = cfg, list(targets), record, rlog
+        self.gt = gt
+        """Ground truth, only to draw the true positions beside the estimates in rerun."""
+        self._gt_p = ({n: gt.p_base(n) for n in self.targets}
+                      if gt is not None and rlog is not None and rlog.enabled else {})
+        self.filters = {t: RandomJerkFilter(cfg.b, cfg.init_vel_std**2, cfg.init_acc_std**2)
+                        for t in self.targets}
+        self._t_meas = dict.fromkeys(self.targets, -np.inf)
+        self._t_init = dict.fromkeys(self.targets, np.inf)
+        self.resets = dict.fromkeys(self.targets, 0)
+        self._bus = self._timer = None
+
+    def attach(self, bus, timer) -> None:
+        self._bus, self._timer = bus, timer
+        bus.subscribe("measurements", self._on_measurements)
+
+    def _on_measurements(self, topic: str, msg) -> None:
+        with self._timer.time(self.name):
+            out = self.step(msg.t, msg.value)
+        self._bus.publish("estimates", msg.then(out, self.cfg.latency))
+        if self.rlog is not None and self.rlog.enabled:
+            with self._timer.time("filter_viz"):
+                self._log(msg.t, out)
+
+    def step(self, t: float, meas) -> Estimates:
+        """Advance every filter to ``t`` with ``meas`` (:class:`~humimic.messages.Measurements`)."""
+        n = len(self.targets)
+        valid, measured = np.zeros(n, bool), np.zeros(n, bool)
+        X, P, since = np.zeros((n, 9)), np.zeros((n, 9, 9)), np.full(n, np.inf)
+        out: dict[str, TargetEstimate] = {}
+        for i, name in enumerate(self.targets):
+            kf = self.filters[name]
+            m = meas.targets.get(name)
+            if m is None and kf.initialised and t - self._t_meas[name] > self.cfg.max_gap:
+                kf.reset()
+                self.resets[name] += 1
+                if self.rlog is not None:
+                    self.rlog.log_text(t, f"{EVENTS}/filter/{name}",
+                                       f"no measurement for {self.cfg.max_gap:g} s: reset",
+                                       "WARN")
+            if m is not None:
+                if not kf.initialised:
+                    self._t_init[name] = t
+                kf.step(t, m.p_base, m.R_base)
+                self._t_meas[name] = t
+                measured[i] = True
+            elif kf.initialised:
+                kf.step(t)
+            if kf.initialised:
+                x, Pi = kf.x, kf.P
+                valid[i], X[i], P[i], since[i] = True, x, Pi, t - self._t_init[name]
+                out[name] = TargetEstimate(name, x[0:3], x[3:6], x[6:9], Pi)
+        self.record.rows.append((t, valid, measured, X, P, since))
+        return Estimates(out)
+
+    def _log(self, t: float, est: Estimates) -> None:
+        names = list(est.targets)
+        if not names:
+            return
+        colors = [TARGET_COLORS.get(n, (200, 200, 200)) for n in names]
+        self.rlog.log_ellipsoids_3d(
+            t, f"{BASE}/tracking/estimates", np.array([est.targets[n].p_base for n in names]),
+            np.array([est.targets[n].P[:3, :3] for n in names]), colors=colors, labels=names)
+        if self._gt_p:
+            k = self.gt.index_of(t)
+            self.rlog.log_points(t, f"{BASE}/tracking/truth",
+                                 np.array([self._gt_p[n][k] for n in names]),
+                                 colors=colors, radii=0.006, labels=names)
+
+    def metrics(self) -> dict:
+        return {"filter": {"kind": self.cfg.kind, "b": self.cfg.b,
+                           "b_paper_mm_units": self.cfg.b * 1e3, "max_gap_s": self.cfg.max_gap,
+                           "resets": dict(self.resets), "latency_ms": 1e3 * self.cfg.latency}}

@@ -1,0 +1,76 @@
+"""A run's tracking records as one ``.npz`` file (``tracking.npz`` next to ``metrics.json``).
+
+What perception measured and the filter estimated per frame, plus the ground truth at the
+frames' photon times, so scores and the paper's reproductions can be recomputed off-line
+(``python -m humimic.perception.reproduce``) without re-running the simulation.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, fields
+from pathlib import Path
+
+import numpy as np
+
+from humimic.estimation.stage import FilterArrays
+from humimic.perception.record import PerceptionArrays
+from humimic.sensors.camera_model import Intrinsics
+
+_INTR = ("width", "height", "fx", "fy", "cx", "cy", "k1", "k2")
+
+
+@dataclass
+class TrackingArchive:
+    perception: PerceptionArrays
+    filter: FilterArrays | None
+    truth: dict[str, tuple[np.ndarray, np.ndarray, np.ndarray]]
+    """Published target -> true (p, v, a) at the perception frames, base frame, (F, 3) each."""
+    filter_truth: dict[str, tuple[np.ndarray, np.ndarray, np.ndarray]]
+    """The same at the filter's frames (a pipelined perception's last frame may be missing)."""
+
+
+def save_archive(path: str | Path, pa: PerceptionArrays, fa: FilterArrays | None,
+                 truth: dict[str, tuple[np.ndarray, np.ndarray, np.ndarray]],
+                 filter_truth: dict[str, tuple[np.ndarray, np.ndarray, np.ndarray]]) -> Path:
+    path = Path(path)
+    data: dict[str, np.ndarray] = {
+        "targets": np.array(pa.targets), "cameras": np.array(pa.cameras),
+        "truth_targets": np.array(list(truth)),
+        "intrinsics": np.array([[getattr(i, k) for k in _INTR] for i in pa.intrinsics]
+                               if pa.intrinsics is not None else np.zeros((0, 8)), float),
+    }
+    for f in fields(PerceptionArrays):
+        if f.name not in ("targets", "cameras", "intrinsics"):
+            value = getattr(pa, f.name)
+            data[f"p_{f.name}"] = value.astype(str) if f.name == "reason" else value
+    if fa is not None:
+        data["f_targets"] = np.array(fa.targets)
+        for f in fields(FilterArrays):
+            if f.name != "targets":
+                data[f"f_{f.name}"] = getattr(fa, f.name)
+    for target, (p, v, a) in truth.items():
+        data[f"truth_{target}"] = np.stack([p, v, a])
+    for target, (p, v, a) in filter_truth.items():
+        data[f"ftruth_{target}"] = np.stack([p, v, a])
+    np.savez_compressed(path, **data)
+    return path
+
+
+def load_archive(path: str | Path) -> TrackingArchive:
+    with np.load(path, allow_pickle=False) as z:
+        intr = tuple(Intrinsics(int(r[0]), int(r[1]), *map(float, r[2:]))
+                     for r in z["intrinsics"]) or None
+        kw = {f.name: z[f"p_{f.name}"] for f in fields(PerceptionArrays)
+              if f.name not in ("targets", "cameras", "intrinsics")}
+        kw["reason"] = kw["reason"].astype(object)
+        pa = PerceptionArrays(targets=[str(x) for x in z["targets"]],
+                              cameras=tuple(str(x) for x in z["cameras"]), intrinsics=intr, **kw)
+        fa = None
+        if "f_targets" in z.files:
+            fa = FilterArrays(targets=[str(x) for x in z["f_targets"]],
+                              **{f.name: z[f"f_{f.name}"] for f in fields(FilterArrays)
+                                 if f.name != "targets"})
+        truth = {str(t): tuple(z[f"truth_{t}"]) for t in z["truth_targets"]}
+        ftruth = {str(t): tuple(z[f"ftruth_{t}"]) for t in z["truth_targets"]
+                  if f"ftruth_{t}" in z.files}
+    return TrackingArchive(pa, fa, truth, ftruth)

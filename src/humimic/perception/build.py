@@ -1,0 +1,95 @@
+"""Build the perception, filter and tracking-report stages from a scenario.
+
+Cross-section checks raise :class:`~humimic.scenario.errors.ScenarioError` (one line, exit
+status 2): perception needs both eyes, named cameras must be rendered, colour-model files must
+be readable, a filter needs perception.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from humimic.estimation.stage import FilterRecord, FilterStage
+from humimic.perception.color_models import ColorLUT, load_color_model
+from humimic.perception.config import DEFAULT_COLOR_MODEL, TRACKABLE_TARGETS
+from humimic.perception.record import PerceptionRecord
+from humimic.perception.report import TrackingReport
+from humimic.perception.stage import PerceptionStage
+from humimic.pipeline.stage import Stage
+from humimic.scenario.errors import ScenarioError
+
+
+def _where(scenario) -> str:
+    return f"scenario {scenario.name!r}"
+
+
+def check_perception(scenario, world) -> tuple[str, str]:
+    """Cross-section checks; returns the (left, right) camera names perception uses."""
+    cfg, where = scenario.perception, _where(scenario)
+    if cfg is None:
+        raise ScenarioError(where, "filter", "the filter needs a perception section (it "
+                            "filters perception's measurements)", None, "add perception: {}")
+    if scenario.cameras.eyes != "stereo":
+        raise ScenarioError(where, "cameras.eyes", "perception triangulates: it needs both "
+                            "eyes", scenario.cameras.eyes, "stereo")
+    cams = tuple(cfg.cameras) if cfg.cameras is not None else tuple(world.eye_cameras[:2])
+    for key, cam in zip(("perception.cameras.0", "perception.cameras.1"), cams, strict=True):
+        if cam not in world.eye_cameras:
+            raise ScenarioError(where, key, f"camera {cam!r} is not rendered by this scenario",
+                                cam, f"{', '.join(world.eye_cameras)} (set cameras.which)")
+    return cams
+
+
+def _color_key(cfg, target: str) -> str:
+    for i, c in enumerate(cfg.colors):
+        if c.target == target:
+            return f"perception.colors.{i}.file"
+    return "perception.color_model"
+
+
+def load_luts(scenario) -> dict[str, ColorLUT]:
+    """One :class:`ColorLUT` per tracked target (published first, then distractors); targets
+    whose colour-model files are the same share one LUT object."""
+    cfg, where = scenario.perception, _where(scenario)
+    targets = list(cfg.targets)
+    if cfg.identify_all:
+        files = {Path(cfg.color_file(t)).resolve() for t in targets}
+        targets += [t for t in TRACKABLE_TARGETS
+                    if t not in targets and Path(cfg.color_file(t)).resolve() in files]
+    by_file: dict[Path, ColorLUT] = {}
+    out = {}
+    for target in targets:
+        path = Path(cfg.color_file(target)).resolve()
+        if path not in by_file:
+            key = _color_key(cfg, target)
+            if not path.is_file():
+                hint = ("learn one: python -m humimic.perception.learn_colors --out "
+                        f"{DEFAULT_COLOR_MODEL}") if path == DEFAULT_COLOR_MODEL.resolve() \
+                    else "an existing colour-model file"
+                raise ScenarioError(where, key, "colour-model file not found", str(path), hint)
+            try:
+                model = load_color_model(path)
+            except ValueError as err:
+                raise ScenarioError(where, key, str(err), str(path),
+                                    "a file written by humimic.perception.learn_colors") from None
+            by_file[path] = ColorLUT(model, cfg.lut_bits)
+        out[target] = by_file[path]
+    return out
+
+
+def perception_stages(scenario, world, rngs, rlog) -> list[Stage]:
+    """Perception, filter (when configured) and the tracking report, in pipeline order."""
+    cams = check_perception(scenario, world)
+    cfg = scenario.perception
+    luts = load_luts(scenario)
+    prec = PerceptionRecord(list(luts), cams)
+    period = 1.0 / scenario.cameras.rate
+    latency = period if cfg.latency is None else cfg.latency
+    stages: list[Stage] = [PerceptionStage(cfg, cams, luts, rngs["perception"], prec, rlog,
+                                           latency, period)]
+    frec = None
+    if scenario.filter is not None:
+        frec = FilterRecord(list(cfg.targets))
+        stages.append(FilterStage(scenario.filter, cfg.targets, frec, rlog, world.gt))
+    stages.append(TrackingReport(cfg.targets, prec, frec, world.gt, rlog))
+    return stages

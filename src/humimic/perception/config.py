@@ -1,0 +1,177 @@
+"""The scenario's ``perception`` section: Ude & Atkeson's colour-blob stereo tracker.
+
+Example (every key optional)::
+
+    perception:
+      tracker: em_blobs
+      targets: [head, right_hand, left_hand]
+      color_model: ../models/colors/skin.json   # default: models/colors/skin.json
+      roi_side: 20              # EM samples per ROI side (the fixed window the ROI maps onto)
+      em_iterations: 6
+      detection: {period: 5.0, lam: 0.67, restart_phase: 2}
+      pixel_std: 0.3            # blob-centre noise (px) } propagated through triangulation
+      match_std: 0.1            # stereo-match noise (px) } into each measurement's R
+      latency: null             # s added to each measurement's t_ready (null: one frame)
+
+Units: s, px, m. Target names are the avatar's visible coloured parts.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Literal
+
+from pydantic import Field, field_validator, model_validator
+
+from humimic.paths import MODELS_DIR
+from humimic.scenario.base import Section
+from humimic.world.names import EYE_CAMERAS
+
+#: Targets the blob tracker can follow: the skin-coloured parts of the avatar.
+TRACKABLE_TARGETS = ("head", "right_hand", "left_hand")
+TrackableTarget = Literal["head", "right_hand", "left_hand"]
+EyeCamera = Literal[tuple(EYE_CAMERAS.values())]
+#: The colour model used when a scenario names none (learnt by ``learn_colors``).
+DEFAULT_COLOR_MODEL = MODELS_DIR / "colors" / "skin.json"
+
+
+class DetectionConfig(Section):
+    """Automatic detection and recovery (Ude eqs. 8-9)."""
+
+    period: float = Field(5.0, ge=0.0, le=60.0)
+    """Phase one (s): random hypotheses sample the colour sums before the threshold is set
+    (the paper: 5 s). 0 sets the threshold from the first frame."""
+    lam: float = Field(0.67, gt=0.0, lt=1.0)
+    """lambda of eq. 9 (the paper: 0.67)."""
+    restart_phase: Literal[1, 2] = 2
+    """After a loss, restart detection from phase 1 (re-learn the threshold) or 2."""
+    hypotheses: int = Field(16, ge=1, le=1000)
+    """Random blob hypotheses per target per frame."""
+    score: Literal["density", "posterior"] = "posterior"
+    """What eq. 8 sums over a hypothesis window: the colour density p (as written) or
+    p / (p + 1), the pixel's probability of having the target's colour (robust to shading)."""
+    proposal: Literal["uniform", "color"] = "color"
+    """uniform: the paper's; color: half the centres drawn from a coarse colour map."""
+    sigma_min_px: float = Field(3.0, gt=0.0)
+    sigma_max_px: float = Field(30.0, gt=0.0)
+    """Limits of the hypotheses' standard deviations (px)."""
+    min_fill: float = Field(0.3, ge=0.0, le=1.0)
+    """A blob assigned fewer pixels than this fraction of its ellipse is losing its target."""
+    lost_frames: int = Field(3, ge=1, le=100)
+    """Consecutive low-fill frames before a target is declared lost."""
+    backoff_s: float = Field(2.0, ge=0.0)
+    backoff_every: int = Field(3, ge=1, le=60)
+    """After ``backoff_s`` of fruitless searching, search only every ``backoff_every`` frames
+    (a target that is absent costs less); any loss restores searching every frame."""
+
+    @model_validator(mode="after")
+    def _sizes(self) -> DetectionConfig:
+        if not self.sigma_min_px < self.sigma_max_px:
+            raise ValueError(f"sigma_min_px ({self.sigma_min_px}) must be below sigma_max_px "
+                             f"({self.sigma_max_px})")
+        return self
+
+
+class StereoConfig(Section):
+    """Stereo correspondence (Ude eq. 10) and triangulation."""
+
+    template_half: int = Field(8, ge=2, le=20)
+    """The ZNCC box template has (2 half + 1)^2 samples."""
+    prefilter_sigma: float = Field(0.8, ge=0.0, le=3.0)
+    """Gaussian blur (px) of the images before templates and strips are sampled (anti-aliasing;
+    0.8 uses OpenCV's fast 3x3 kernel)."""
+    fine_steps: int = Field(4, ge=1, le=16)
+    """Sub-sample search: the template is correlated at 1/fine_steps of its sample spacing
+    around the best sample before the parabola fit (1: parabola on the samples only)."""
+    template_sigma: float = Field(1.5, gt=0.0, le=5.0)
+    """The template spans +- this many of the left blob's largest standard deviations."""
+    min_zncc: float = Field(0.5, ge=-1.0, le=1.0)
+    """Matches scoring below this are rejected."""
+    box_sigma: float = Field(1.5, gt=0.0, le=10.0)
+    """The search runs along the epipolar line within the right blob's +- box_sigma box."""
+    color_mask: bool = True
+    """Match colour-masked images: each pixel times its probability of having the target's
+    colour, so the background around a blob (at another depth, so shifted differently between
+    the eyes) turns black and only the blob, its outline and shading, is matched. False: the
+    paper's plain box template (background clutter can pull the match)."""
+
+
+class TargetColor(Section):
+    """A colour model for one target (overrides ``color_model``)."""
+
+    target: TrackableTarget
+    file: Path
+
+
+class PerceptionConfig(Section):
+    """Colour-blob tracking in both eyes, stereo 3-D measurements in the robot base frame."""
+
+    tracker: Literal["em_blobs"] = "em_blobs"
+    """em_blobs: EM colour blobs (Ude eqs. 1-7) + detection (eqs. 8-9) + stereo (eq. 10)."""
+    targets: list[TrackableTarget] = Field(
+        default_factory=lambda: list(TRACKABLE_TARGETS), min_length=1)
+    """Targets measured and published."""
+    cameras: tuple[EyeCamera, EyeCamera] | None = None
+    """(left, right) eye cameras; default: the ones the scenario renders (``cameras.which``)."""
+    color_model: Path | None = None
+    """Colour-model file for every target (default ``models/colors/skin.json``)."""
+    colors: list[TargetColor] = Field(default_factory=list)
+    """Per-target colour models, overriding ``color_model``."""
+    identify_all: bool = True
+    """Also track the other trackable parts that share a target's colour model (reported as
+    distractors, not published), so that e.g. a hand is never taken for the head."""
+    identity_margin: float = Field(1.0, ge=0.0, le=10.0)
+    """A target is measured only when the evidence for its identity beats the next best
+    assignment by this much (rule units, see :mod:`humimic.perception.identity`); 0 also
+    publishes guesses (e.g. a lone blob seen by one eye first)."""
+    roi_side: int = Field(20, ge=4, le=200)
+    """EM samples per side of each blob's region of interest (cost is bounded by it)."""
+    roi_k_sigma: float = Field(3.0, gt=0.0, le=10.0)
+    """The ROI spans +- this many blob standard deviations (plus a 4 px margin)."""
+    em_iterations: int = Field(6, ge=1, le=100)
+    """Largest number of EM iterations per frame."""
+    em_tol_px: float = Field(1.0, gt=0.0)
+    """EM stops when no blob centre moved more than this (px)."""
+    lut_bits: int = Field(6, ge=3, le=8)
+    """Bits per channel of the colour look-up table."""
+    detection: DetectionConfig = Field(default_factory=DetectionConfig)
+    stereo: StereoConfig = Field(default_factory=StereoConfig)
+    pixel_std: float = Field(0.3, gt=0.0, le=20.0)
+    """Standard deviation (px, per image axis) of a measured blob centre, calibrated in advance
+    as in Ude's Table 2 (``python -m humimic.perception.reproduce table2``)."""
+    match_std: float = Field(0.1, gt=0.0, le=20.0)
+    """Standard deviation (px) of the stereo match along the epipolar line, on top of the left
+    centre's error that the template carries over (calibrated with ``table2`` too)."""
+    covariance: Literal["following", "independent"] = "following"
+    """How pixel errors are propagated into each measurement's covariance R: ``following``
+    (the right match follows the template cut at the left centre: ``pixel_std`` moves the point
+    sideways, ``match_std`` in depth) or ``independent`` (the paper: both image points have
+    ``pixel_std``, independently)."""
+    latency: float | None = Field(None, ge=0.0, le=0.5)
+    """Declared processing latency (s): measurements are ready at the frame's ready time plus
+    this. Default: one camera frame (each frame is processed while the next is captured)."""
+    pipelined: bool = True
+    """With a latency of at least one frame, process each frame in a worker thread while the
+    simulation renders the next (same results and simulated timing, less wall time)."""
+
+    @field_validator("targets")
+    @classmethod
+    def _unique(cls, value: list[str]) -> list[str]:
+        if len(set(value)) != len(value):
+            raise ValueError(f"targets are listed twice: {value}")
+        return value
+
+    @field_validator("colors")
+    @classmethod
+    def _unique_colors(cls, value: list[TargetColor]) -> list[TargetColor]:
+        names = [c.target for c in value]
+        if len(set(names)) != len(names):
+            raise ValueError(f"a target has two colour models: {names}")
+        return value
+
+    def color_file(self, target: str) -> Path:
+        """The colour-model file of ``target``."""
+        for c in self.colors:
+            if c.target == target:
+                return c.file
+        return self.color_model if self.color_model is not None else DEFAULT_COLOR_MODEL

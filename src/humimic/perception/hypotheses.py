@@ -1,0 +1,147 @@
+"""Random blob hypotheses and their colour scores for detection (Ude & Atkeson eqs. 8-9).
+
+Pure functions: hypothesis shapes (random within size limits, or fitted to the colour map),
+the fixed-size window warped onto each hypothesis, the colour sum f over it (eq. 8), the
+phase-one threshold (eq. 9) and the proposal of centres. Used by
+:class:`humimic.perception.detection.DetectingTracker`.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+
+import numpy as np
+
+from humimic.perception.color_models import ColorLUT
+
+
+def random_hypotheses(rng: np.random.Generator, centres: np.ndarray, sigma_min: float,
+                      sigma_max: float) -> np.ndarray:
+    """Covariances ``(n, 2, 2)`` for hypothesis ``centres (n, 2)``: axes log-uniform in
+    ``[sigma_min, sigma_max]``, orientation uniform."""
+    n = len(centres)
+    sig = np.exp(rng.uniform(math.log(sigma_min), math.log(sigma_max), size=(n, 2)))
+    th = rng.uniform(0.0, math.pi, size=n)
+    c, s = np.cos(th), np.sin(th)
+    R = np.stack([np.stack([c, -s], -1), np.stack([s, c], -1)], -2)
+    return (R * (sig**2)[:, None, :]) @ np.swapaxes(R, 1, 2)
+
+
+def window_points(centres: np.ndarray, covs: np.ndarray, side: int, k_sigma: float
+                  ) -> np.ndarray:
+    """Fixed ``side x side`` grid over ``[-k, k]^2`` warped by each hypothesis: ``(n, side^2, 2)``.
+
+    ``u = x_l + L_l g`` with ``L_l L_l^T = Sigma_l`` (the paper's affine ROI warping).
+    """
+    g = _unit_grid(int(side), float(k_sigma))
+    a, b, c = covs[:, 0, 0], covs[:, 0, 1], covs[:, 1, 1]
+    l11 = np.sqrt(a)
+    l21 = b / l11
+    l22 = np.sqrt(np.maximum(c - l21 * l21, 0.0))  # L = [[l11, 0], [l21, l22]]
+    out = np.empty((len(centres), len(g), 2))
+    out[..., 0] = centres[:, 0, None] + l11[:, None] * g[None, :, 0]
+    out[..., 1] = centres[:, 1, None] + l21[:, None] * g[None, :, 0] + l22[:, None] * g[None, :, 1]
+    return out
+
+
+@functools.lru_cache(maxsize=8)
+def _grid_points(H: int, W: int, step: int) -> np.ndarray:
+    """Centres ``(n, 2)`` (u, v) of the coarse colour map's cells, row-major."""
+    vv, uu = np.mgrid[step // 2:H:step, step // 2:W:step]
+    pts = np.stack([uu.ravel(), vv.ravel()], -1).astype(float)
+    pts.flags.writeable = False
+    return pts
+
+
+@functools.lru_cache(maxsize=8)
+def _unit_grid(side: int, k_sigma: float) -> np.ndarray:
+    g1 = np.linspace(-k_sigma, k_sigma, side)
+    g = np.stack(np.meshgrid(g1, g1, indexing="xy"), -1).reshape(-1, 2)
+    g.flags.writeable = False
+    return g
+
+
+def color_sums(image: np.ndarray, lut: ColorLUT, centres: np.ndarray, covs: np.ndarray,
+               side: int, k_sigma: float, score: str = "density"
+               ) -> tuple[np.ndarray, np.ndarray]:
+    """``f(Theta_l) = sum_u p(I_u | Theta_l)`` over each warped window (nearest pixel; points off
+    the image count 0), and the fraction of window points with ``p > 1`` (uniform).  # Ude eq. 8
+
+    ``score='posterior'`` sums ``p / (p + 1)`` instead: each pixel's probability of having the
+    target's colour rather than the uniform outlier's, in [0, 1), so f counts target-coloured
+    pixels however peaked the colour density is.
+    """
+    H, W = image.shape[:2]
+    pts = np.rint(window_points(centres, covs, side, k_sigma)).astype(np.intp)
+    inside = (pts[..., 0] >= 0) & (pts[..., 0] < W) & (pts[..., 1] >= 0) & (pts[..., 1] < H)
+    u = np.clip(pts[..., 0], 0, W - 1)
+    v = np.clip(pts[..., 1], 0, H - 1)
+    p = lut.lookup(image[v, u]).astype(np.float64) * inside
+    inlier = (p > 1.0).mean(axis=1)
+    if score == "posterior":
+        p = p / (p + 1.0)
+    elif score != "density":
+        raise ValueError(f"score must be 'density' or 'posterior', not {score!r}")
+    return p.sum(axis=1), inlier
+
+
+def detection_threshold(mean_f: float, max_f: float, lam: float) -> float:
+    """``r_l = (1 - lambda) E f + lambda max f``.  # Ude eq. 9"""
+    return (1.0 - lam) * mean_f + lam * max_f
+
+
+def propose_centres(rng: np.random.Generator, n: int, image_shape: tuple[int, int],
+                    coarse_lik: np.ndarray | None, grid: int) -> tuple[np.ndarray, np.ndarray]:
+    """``n`` centres (px): uniform, or half uniform and half from ``coarse_lik`` (a colour
+    probability map sampled every ``grid`` px), jittered within the grid cell. Also returns
+    which centres are uniform draws (the paper's random hypotheses)."""
+    H, W = image_shape
+    out = rng.uniform((0.0, 0.0), (W - 1.0, H - 1.0), size=(n, 2))
+    uniform = np.ones(n, bool)
+    if coarse_lik is None or n < 2:
+        return out, uniform
+    c = np.cumsum(coarse_lik.ravel(), dtype=np.float64)
+    if not c[-1] > 0.0:
+        return out, uniform
+    m = n // 2
+    uniform[:m] = False
+    idx = np.minimum(np.searchsorted(c, rng.uniform(0.0, c[-1], size=m), side="right"),
+                     c.size - 1)
+    iy, ix = np.divmod(idx, coarse_lik.shape[1])
+    jitter = rng.uniform(-0.5 * grid, 0.5 * grid, size=(m, 2))
+    out[:m] = np.clip(np.stack([ix, iy], -1) * grid + jitter, 0.0, (W - 1.0, H - 1.0))
+    return out, uniform
+
+
+def fitted_hypotheses(coarse_post: np.ndarray, centres: np.ndarray, grid: int, radius_cells: int,
+                      sigma_min: float, sigma_max: float) -> tuple[np.ndarray, np.ndarray]:
+    """Centres and covariances fitted to the colour map around proposed centres (px).
+
+    ``coarse_post`` is the target-colour probability (in [0, 1]) on a grid of spacing ``grid``
+    px (cell ``(i, j)`` centred at ``(j grid + grid // 2, i grid + grid // 2)``); around each
+    centre's cell, the probability-weighted mean and covariance of the cell centres within
+    ``radius_cells`` (plus a cell's own spread, grid^2 / 12) give a hypothesis shaped like the
+    blob there, its axes clamped into ``[sigma_min, sigma_max]``.
+    """
+    h, w = coarse_post.shape
+    off = np.arange(-radius_cells, radius_cells + 1)
+    ci = np.clip(np.floor(centres[:, 1] / grid).astype(int), 0, h - 1)
+    cj = np.clip(np.floor(centres[:, 0] / grid).astype(int), 0, w - 1)
+    ii, jj = np.broadcast_arrays(ci[:, None, None] + off[None, :, None],
+                                 cj[:, None, None] + off[None, None, :])
+    inside = (ii >= 0) & (ii < h) & (jj >= 0) & (jj < w)
+    wgt = np.where(inside, coarse_post[np.clip(ii, 0, h - 1), np.clip(jj, 0, w - 1)], 0.0)
+    wgt = wgt.reshape(len(centres), -1)
+    u = (jj * grid + grid // 2).reshape(len(centres), -1).astype(float)
+    v = (ii * grid + grid // 2).reshape(len(centres), -1).astype(float)
+    W = np.maximum(wgt.sum(1), 1e-12)
+    mu = np.stack([(wgt * u).sum(1), (wgt * v).sum(1)], 1) / W[:, None]
+    du, dv = u - mu[:, 0, None], v - mu[:, 1, None]
+    cov = np.empty((len(centres), 2, 2))
+    cov[:, 0, 0] = (wgt * du * du).sum(1) / W + grid * grid / 12.0
+    cov[:, 0, 1] = cov[:, 1, 0] = (wgt * du * dv).sum(1) / W
+    cov[:, 1, 1] = (wgt * dv * dv).sum(1) / W + grid * grid / 12.0
+    lam, vec = np.linalg.eigh(cov)
+    lam = np.clip(lam, sigma_min**2, sigma_max**2)
+    return mu, (vec * lam[:, None, :]) @ np.swapaxes(vec, 1, 2)

@@ -1,0 +1,201 @@
+"""Which blob is which target: identities of same-coloured blobs (head and hands are skin).
+
+The detector (:mod:`humimic.perception.detection`) finds blobs of one colour one by one and
+cannot tell which body part each is. Identities are decided jointly for both eyes, whenever the
+set of tracked blobs changes or a new blob has settled, as the cheapest assignment of blobs to
+targets under:
+
+* image rules, per eye. The person faces the robot, so *their* right hand appears on the
+  image's left (it is at +y in the robot base frame):
+
+  - the head is the largest skin blob: ``+1`` per hand blob larger than the head blob;
+  - the right hand is left of the left hand: ``+1`` when not;
+  - the right hand is left of the head and the left hand right of it: ``+0.5`` each when not;
+
+* stereo, per target named in both eyes. Its two blob centres must be roughly corresponding
+  points: ``+2`` when their triangulation reprojects further than ``gate`` blob standard
+  deviations from either centre (Mahalanobis, blob shape covariance) or lies outside the depth
+  range, ``-1`` when consistent (so one object gets one name in both eyes). A consistent pair
+  also gives the blob's metric size, its "sigma radius" ``det(Sigma)^(1/4) z / f`` (m): the
+  avatar's head (ellipsoid half-axes 78 x 115 mm seen from the front) measures ~47 mm, a hand
+  (45 x 80 mm palm-on, 22 x 80 mm edge-on) 20-35 mm: ``+1`` for a head smaller than
+  :data:`HEAD_MIN_RADIUS_M` or a hand larger than :data:`HAND_MAX_RADIUS_M`. This names a lone
+  blob, which the image rules cannot;
+* continuity: ``-keep`` per blob that keeps its current identity, so tracked blobs keep their
+  names (one rule against is not enough to swap; two are).
+
+Between events identities follow the tracker's blobs (continuity alone), so hands may cross.
+Each target also gets a *margin*: how much more evidence cost (without continuity) the cheapest
+assignment that names it differently has. A margin of 0 means the evidence cannot tell (e.g. a
+lone blob seen by one eye), a negative one that it disagrees with the names kept; the perception
+stage publishes a target only when its margin is large enough.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from humimic.perception.stereo import StereoRig
+
+AREA_RULE = 1.0
+ORDER_RULE = 1.0
+SIDE_RULE = 0.5
+STEREO_RULE = 2.0
+PAIR_BONUS = 1.0
+SIZE_RULE = 1.0
+KEEP = 0.75
+#: Metric sigma radius (m) below which a blob is too small to be the head (head ~0.047 m).
+HEAD_MIN_RADIUS_M = 0.038
+#: Metric sigma radius (m) above which a blob is too large to be a hand (hands <~0.035 m).
+HAND_MAX_RADIUS_M = 0.042
+HANDS = ("right_hand", "left_hand")
+
+
+@dataclass(frozen=True)
+class Blob:
+    """A tracked blob in one eye: tracker slot, centre (px) and shape covariance (px^2)."""
+
+    slot: int
+    centre: np.ndarray
+    cov: np.ndarray
+
+    @property
+    def area(self) -> float:
+        """Proportional to the ellipse's area: sqrt(det Sigma) (px^2)."""
+        return float(np.sqrt(max(np.linalg.det(self.cov), 0.0)))
+
+
+@dataclass(frozen=True)
+class PairEvidence:
+    """Stereo evidence for every (left blob, right blob) pair."""
+
+    inconsistent: np.ndarray
+    """(n_left, n_right) bool: the two centres cannot be one object."""
+    radius_m: np.ndarray
+    """(n_left, n_right) metric sigma radius (m) of consistent pairs, NaN otherwise."""
+
+
+def image_rule_cost(assigned: dict[str, Blob]) -> float:
+    """Rule violations of one eye's assignment ``{target: blob}`` (see the module docstring)."""
+    cost = 0.0
+    head = assigned.get("head")
+    right, left = assigned.get("right_hand"), assigned.get("left_hand")
+    for hand in (right, left):
+        if head is not None and hand is not None and hand.area > head.area:
+            cost += AREA_RULE
+    if right is not None and left is not None and right.centre[0] > left.centre[0]:
+        cost += ORDER_RULE
+    if head is not None:
+        if right is not None and right.centre[0] > head.centre[0]:
+            cost += SIDE_RULE
+        if left is not None and left.centre[0] < head.centre[0]:
+            cost += SIDE_RULE
+    return cost
+
+
+def size_rule_cost(name: str, radius_m: float) -> float:
+    """``+1`` when a consistent pair's metric size contradicts the name (NaN: no evidence)."""
+    if not math.isfinite(radius_m):
+        return 0.0
+    if name == "head" and radius_m < HEAD_MIN_RADIUS_M:
+        return SIZE_RULE
+    if name in HANDS and radius_m > HAND_MAX_RADIUS_M:
+        return SIZE_RULE
+    return 0.0
+
+
+def stereo_evidence(rig: StereoRig, cam_left, cam_right, left: list[Blob], right: list[Blob],
+                    gate: float = 2.0, z_range=(0.1, 20.0)) -> PairEvidence:
+    """Triangulate every pair of centres (DLT), reproject into both eyes and judge it.
+
+    A pair is inconsistent when a reprojection is further than ``gate`` from its blob centre in
+    the blob's Mahalanobis metric, or the point's depth in either eye is outside ``z_range``
+    (m). A consistent pair's metric sigma radius is ``det(Sigma)^(1/4) z / f``, averaged over
+    the eyes.
+    """
+    incons = np.ones((len(left), len(right)), bool)
+    radius = np.full((len(left), len(right)), np.nan)
+    if not left or not right:
+        return PairEvidence(incons, radius)
+    pairs = list(itertools.product(range(len(left)), range(len(right))))
+    uvl = np.array([left[i].centre for i, _ in pairs], float)
+    uvr = np.array([right[j].centre for _, j in pairs], float)
+    p, _ = rig.triangulate(uvl, uvr)
+    for (i, j), p_base, a, b in zip(pairs, p, uvl, uvr, strict=True):
+        if not np.all(np.isfinite(p_base)):
+            continue
+        sizes = []
+        for cam, uv, blob in ((cam_left, a, left[i]), (cam_right, b, right[j])):
+            T = np.linalg.inv(cam.T_base_cam)
+            z = T[2, :3] @ p_base + T[2, 3]
+            e = cam.project_base(p_base) - uv
+            if not (z_range[0] <= z <= z_range[1] and e @ np.linalg.solve(blob.cov, e)
+                    <= gate * gate):
+                break
+            sizes.append(math.sqrt(blob.area) * z / cam.intrinsics.fx)
+        else:
+            incons[i, j] = False
+            radius[i, j] = 0.5 * (sizes[0] + sizes[1])
+    return PairEvidence(incons, radius)
+
+
+def _maps(blobs: list[Blob], targets: list[str]):
+    """Every injective assignment of ``blobs`` to ``targets``: tuples of target names."""
+    if len(blobs) > len(targets):
+        raise ValueError(f"{len(blobs)} blobs for {len(targets)} targets")
+    return itertools.permutations(targets, len(blobs))
+
+
+def assign(targets: list[str], left: list[Blob], right: list[Blob],
+           previous_left: dict[int, str], previous_right: dict[int, str],
+           evidence: PairEvidence | None = None, keep: float = KEEP
+           ) -> tuple[dict[int, str], dict[int, str], dict[str, float]]:
+    """The cheapest joint identity assignment and per-target margins.
+
+    Returns ``({slot: target} left, {slot: target} right, {target: margin})``. ``targets`` are
+    the same-coloured targets the blobs can be; ``previous_*`` the current identities;
+    ``evidence`` from :func:`stereo_evidence` (None: no stereo terms). Ties go to the first
+    candidate in ``targets`` order. A target's margin is how much more *evidence* cost (rules
+    and stereo, without the continuity bonus) the cheapest assignment that gives it other
+    blobs has (inf if none exists): continuity chooses between equals, but never vouches.
+    """
+    options: list[tuple[float, float, tuple[str, ...], tuple[str, ...]]] = []
+    for names_l in _maps(left, targets):
+        cost_l = image_rule_cost(dict(zip(names_l, left, strict=True)))
+        kept_l = keep * sum(previous_left.get(b.slot) == n
+                            for b, n in zip(left, names_l, strict=True))
+        where_l = {n: i for i, n in enumerate(names_l)}
+        for names_r in _maps(right, targets):
+            cost = cost_l + image_rule_cost(dict(zip(names_r, right, strict=True)))
+            kept = kept_l + keep * sum(previous_right.get(b.slot) == n
+                                       for b, n in zip(right, names_r, strict=True))
+            if evidence is not None:
+                for j, name in enumerate(names_r):
+                    i = where_l.get(name)
+                    if i is None:
+                        continue
+                    if evidence.inconsistent[i, j]:
+                        cost += STEREO_RULE
+                    else:
+                        cost += size_rule_cost(name, float(evidence.radius_m[i, j]))
+                        cost -= PAIR_BONUS
+            options.append((cost - kept, cost, names_l, names_r))
+    best = min(range(len(options)), key=lambda k: (options[k][0], k))
+    _, evidence0, best_l, best_r = options[best]
+
+    def slots(names_l, names_r, target):
+        sl = next((b.slot for b, n in zip(left, names_l, strict=True) if n == target), None)
+        sr = next((b.slot for b, n in zip(right, names_r, strict=True) if n == target), None)
+        return sl, sr
+
+    margins = {}
+    for target in targets:
+        mine = slots(best_l, best_r, target)
+        alt = [c for _, c, nl, nr in options if slots(nl, nr, target) != mine]
+        margins[target] = (min(alt) - evidence0) if alt else math.inf
+    return ({b.slot: n for b, n in zip(left, best_l, strict=True)},
+            {b.slot: n for b, n in zip(right, best_r, strict=True)}, margins)

@@ -1,0 +1,165 @@
+"""Learn a colour model off-line from rendered frames, MuJoCo segmentation as the labels.
+
+``python -m humimic.perception.learn_colors --out models/colors/skin.json [options]``
+
+The person of a scenario (default ``scenarios/wave.yaml``) is rendered by the robot's eye
+cameras at ``--frames`` instants spread over its motion, for each camera kind in ``--which``
+(wide and foveal by default, so the model has seen both scales). The pixels whose segmentation
+label is a geom of the avatar material ``--material`` (``skin``: head and hands) are the
+training set, with the scenario's pixel noise added as in a real capture; a Gaussian mixture
+(Ude eqs. 6-7) is fitted in ``--space`` (``rgb`` for skin, ``hs`` for coloured objects).
+
+It prints how well the model separates the material from the rest of the view: the fraction of
+material pixels and of all other pixels whose colour density exceeds the uniform outlier's (1).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+
+import mujoco
+import numpy as np
+
+import humimic  # noqa: F401  (OpenGL backend before mujoco renders)
+from humimic.errors import InputError
+from humimic.paths import SCENARIOS_DIR
+from humimic.perception.color_models import ColorModel, fit_color_model, save_color_model
+from humimic.rngs import Rngs
+from humimic.scenario import load_scenario
+from humimic.sensors.cameras import add_pixel_noise
+from humimic.world.names import HUMAN_PREFIX
+from humimic.world.world import World
+
+
+@dataclass
+class Samples:
+    """Labelled pixels of the rendered frames."""
+
+    positive: np.ndarray
+    """(N, 3) uint8 pixels of the material."""
+    negative: np.ndarray
+    """(M, 3) uint8 pixels of everything else (a subsample)."""
+    frames: int
+
+
+def material_geoms(model: mujoco.MjModel, material: str) -> np.ndarray:
+    """Ids of the avatar's geoms that use ``material`` (e.g. ``skin``)."""
+    try:
+        mat = model.material(HUMAN_PREFIX + material).id
+    except KeyError:
+        names = [model.material(i).name.removeprefix(HUMAN_PREFIX) for i in range(model.nmat)
+                 if model.material(i).name.startswith(HUMAN_PREFIX)]
+        raise InputError(f"--material: the avatar has no material {material!r}; "
+                         f"its materials: {', '.join(names)}") from None
+    return np.flatnonzero(model.geom_matid == mat)
+
+
+def label_mask(seg: np.ndarray, geoms: np.ndarray) -> np.ndarray:
+    """Pixels of a segmentation render ``(H, W, 2)`` [object id, object type] on ``geoms``."""
+    is_geom = seg[..., 1] == int(mujoco.mjtObj.mjOBJ_GEOM)
+    return is_geom & np.isin(seg[..., 0], geoms)
+
+
+def collect(scenario, which: list[str], n_frames: int, rng: np.random.Generator,
+            material: str = "skin", negatives_per_frame: int = 2000) -> Samples:
+    """Render ``n_frames`` instants of ``scenario`` with each camera kind and label pixels."""
+    pos, neg, frames = [], [], 0
+    for kind in which:
+        sc = scenario.model_copy(deep=True)
+        sc.cameras.which = kind
+        world = World(sc, Rngs(scenario.seed))
+        try:
+            m, d = world.scene.model, world.scene.data
+            geoms = material_geoms(m, material)
+            ticks = np.linspace(0, world.n_ticks - 1, n_frames).round().astype(int)
+            for tick in ticks.tolist():
+                world.apply_human(tick)
+                mujoco.mj_forward(m, d)
+                for cam in world.eye_cameras:
+                    image = world.eye_rig.render_ideal(cam)
+                    if sc.cameras.noise_std > 0.0:
+                        image = add_pixel_noise(image, sc.cameras.noise_std, rng)
+                    mask = label_mask(world.eye_rig.render_ideal(cam, segmentation=True), geoms)
+                    pos.append(image[mask])
+                    rest = image[~mask]
+                    pick = rng.choice(len(rest), min(negatives_per_frame, len(rest)),
+                                      replace=False)
+                    neg.append(rest[pick])
+                    frames += 1
+        finally:
+            world.close()
+    return Samples(np.concatenate(pos), np.concatenate(neg), frames)
+
+
+def separation(model: ColorModel, samples: Samples) -> tuple[float, float]:
+    """Fractions of material / other pixels more likely under ``model`` than uniform (p > 1)."""
+    return (float((model.likelihood(samples.positive) > 1.0).mean()),
+            float((model.likelihood(samples.negative) > 1.0).mean()))
+
+
+def learn(scenario, which: list[str], n_frames: int, space: str, n_components: int,
+          rng: np.random.Generator, material: str = "skin", max_pixels: int = 30000
+          ) -> tuple[ColorModel, Samples]:
+    samples = collect(scenario, which, n_frames, rng, material)
+    if len(samples.positive) < 50 * n_components:
+        raise InputError(f"only {len(samples.positive)} pixels of material {material!r} are "
+                         "visible in the rendered frames; choose a scenario that shows it")
+    train = samples.positive
+    if len(train) > max_pixels:
+        train = train[rng.choice(len(train), max_pixels, replace=False)]
+    model = fit_color_model(train, space, n_components, rng, name=material)
+    return model, samples
+
+
+def _parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="python -m humimic.perception.learn_colors",
+                                description=__doc__.split("\n")[0])
+    p.add_argument("--out", type=Path, required=True, help="output file (.json or .npz)")
+    p.add_argument("--scenario", type=Path, default=SCENARIOS_DIR / "wave.yaml",
+                   help="scenario whose person is rendered (default: scenarios/wave.yaml)")
+    p.add_argument("--skin", type=float, nargs=3, metavar=("R", "G", "B"), default=None,
+                   help="override human.skin (RGB in [0, 1])")
+    p.add_argument("--material", default="skin", help="avatar material to learn (skin)")
+    p.add_argument("--space", choices=["rgb", "hs"], default="rgb")
+    p.add_argument("--components", type=int, default=3, help="Gaussians in the mixture")
+    p.add_argument("--which", nargs="+", choices=["wide", "foveal"], default=["wide", "foveal"],
+                   help="eye camera kinds to render")
+    p.add_argument("--frames", type=int, default=12, help="instants per camera kind")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                   help="override a scenario key, e.g. lighting.ambient=0.4")
+    return p
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = _parser().parse_args(argv)
+    overrides = list(args.overrides)
+    if args.skin is not None:
+        overrides.append(f"human.skin=[{', '.join(str(c) for c in args.skin)}]")
+    try:
+        if args.out.suffix not in (".json", ".npz"):
+            raise InputError(f"--out must end in .json or .npz, got {args.out}")
+        if not (1 <= args.components <= 10 and 1 <= args.frames <= 500):
+            raise InputError("--components must be in 1..10 and --frames in 1..500")
+        scenario = load_scenario(args.scenario, overrides)
+        rng = np.random.default_rng(args.seed)
+        model, samples = learn(scenario, args.which, args.frames, args.space, args.components,
+                               rng, args.material)
+    except InputError as err:
+        print(f"error: {err}", file=sys.stderr)
+        return 2
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    save_color_model(model, args.out)
+    hit, false = separation(model, samples)
+    print(f"{args.out}: {args.space} model of {args.material!r}, {len(model.weights)} "
+          f"components, from {len(samples.positive)} pixels in {samples.frames} frames; "
+          f"p > 1 on {100 * hit:.1f} % of {args.material} pixels and {100 * false:.2f} % of "
+          "the others")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

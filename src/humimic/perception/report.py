@@ -1,0 +1,107 @@
+"""The ``tracking`` report: scores, plots, rerun error series and the record archive of
+perception + filter.
+
+A stage with no inputs: it reads the perception and filter records after the run and the
+ground truth at the frames' photon times (see :mod:`humimic.metrics.tracking` for the scores).
+``plots(out_dir)`` writes ``tracking_<target>_error.png``, ``tracking_<target>_pva.png`` and
+``tracking.npz`` (:mod:`humimic.perception.archive`).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from humimic.metrics.tracking import FILTER_SETTLE_S, stereo_failures, target_scores
+from humimic.perception.archive import save_archive
+from humimic.perception.plots import plot_pva, plot_tracking_errors
+from humimic.pipeline.stage import Stage
+from humimic.viz.rerun_log import SERIES
+
+
+class TrackingReport(Stage):
+    name = "tracking"
+
+    def __init__(self, targets: list[str], perception_record, filter_record, gt, rlog=None,
+                 settle_s: float = FILTER_SETTLE_S):
+        self.targets = list(targets)
+        self.perception_record, self.filter_record = perception_record, filter_record
+        self.gt, self.rlog, self.settle_s = gt, rlog, settle_s
+
+    def arrays(self):
+        """``(PerceptionArrays, FilterArrays | None)`` of the run so far."""
+        pa = self.perception_record.arrays()
+        fa = self.filter_record.arrays() if self.filter_record is not None else None
+        return pa, fa
+
+    def truth(self, t: np.ndarray, target: str):
+        """True (p, v, a) of ``target`` in the base frame at photon times ``t``: (F, 3) each."""
+        if len(t) == 0:
+            z = np.zeros((0, 3))
+            return z, z, z
+        k = np.atleast_1d(self.gt.index_of(t))
+        return (self.gt.p_base(target)[k], self.gt.v_base(target)[k],
+                self.gt.a_base(target)[k])
+
+    def metrics(self) -> dict:
+        """``tracking.<target>`` scores; also logs the error series to rerun."""
+        pa, fa = self.arrays()
+        out = {}
+        for target in self.targets:
+            p, _, _ = self.truth(pa.t, target)
+            scores = target_scores(target, pa, fa, p,
+                                   self.truth(fa.t, target) if fa is not None else None,
+                                   self.settle_s)
+            scores["stereo_failures"] = stereo_failures(pa, pa.index(target))
+            out[target] = scores
+            if self.rlog is not None and self.rlog.enabled:
+                self._log_series(target, pa, fa, p)
+        return {"tracking": out}
+
+    def _log_series(self, target, pa, fa, p) -> None:
+        i = pa.index(target)
+        ok = pa.ok[:, i]
+        root = f"{SERIES}/tracking/{target}"
+        if ok.any():
+            self.rlog.log_series(f"{root}/raw_error_mm", pa.t[ok],
+                                 1e3 * (pa.p_base[ok, i] - p[ok]), names=["x", "y", "z"])
+        if fa is not None:
+            j = fa.targets.index(target)
+            use = fa.valid[:, j]
+            pf, _, _ = self.truth(fa.t, target)
+            if use.any():
+                self.rlog.log_series(f"{root}/filtered_error_mm", fa.t[use],
+                                     1e3 * (fa.x[use, j, :3] - pf[use]), names=["x", "y", "z"])
+                sig = 1e3 * np.sqrt(np.diagonal(fa.P[use, j, :3, :3], axis1=-2, axis2=-1))
+                self.rlog.log_series(f"{root}/filter_2sigma_mm", fa.t[use], 2.0 * sig,
+                                     names=["x", "y", "z"])
+
+    def plots(self, out_dir) -> list:
+        pa, fa = self.arrays()
+        out = Path(out_dir)
+        paths = [save_archive(
+            out / "tracking.npz", pa, fa, {t: self.truth(pa.t, t) for t in self.targets},
+            {t: self.truth(fa.t, t) for t in self.targets} if fa is not None else {})]
+        for target in self.targets:
+            i = pa.index(target)
+            p, _, _ = self.truth(pa.t, target)
+            ok = pa.ok[:, i]
+            t_est = np.zeros(0)
+            est_err = sig = x = np.zeros((0, 3))
+            if fa is not None:
+                j = fa.targets.index(target)
+                use = fa.valid[:, j]
+                t_est, x = fa.t[use], fa.x[use, j]
+                est_err = 1e3 * (x[:, :3] - self.truth(fa.t, target)[0][use])
+                sig = 1e3 * np.sqrt(np.diagonal(fa.P[use, j, :3, :3], axis1=-2, axis2=-1))
+            paths.append(plot_tracking_errors(
+                out / f"tracking_{target}_error.png", target, pa.t[ok],
+                1e3 * (pa.p_base[ok, i] - p[ok]), t_est, est_err, sig))
+            if fa is not None and len(pa.t):
+                k = np.arange(self.gt.index_of(pa.t[0]), self.gt.index_of(pa.t[-1]) + 1)
+                gt_t = self.gt.t[k]
+                paths.append(plot_pva(out / f"tracking_{target}_pva.png", target, t_est, x,
+                                      gt_t, self.gt.p_base(target)[k],
+                                      self.gt.v_base(target)[k], self.gt.a_base(target)[k]))
+        return paths

@@ -1,0 +1,121 @@
+"""Blob identities (head / right hand / left hand share the skin colour) from image rules,
+stereo consistency, metric size and continuity. Scenes are built from 3-D truth with a synthetic
+stereo head; the expected names are the ones the truth gives."""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import pytest
+from _synth_vision import stereo_head
+
+from humimic.perception.identity import (
+    HAND_MAX_RADIUS_M,
+    HEAD_MIN_RADIUS_M,
+    Blob,
+    assign,
+    image_rule_cost,
+    stereo_evidence,
+)
+from humimic.perception.stereo import StereoRig
+
+TARGETS = ["head", "right_hand", "left_hand"]
+#: Person ~1.2 m in front (base x forward, y left, z up): their right hand is at +y.
+TRUTH = {"head": ((1.25, 0.0, 1.55), 0.047), "right_hand": ((1.05, 0.30, 1.25), 0.028),
+         "left_hand": ((1.15, -0.25, 1.0), 0.022)}
+
+
+def blobs_seen(cam, names, slots, radii=None):
+    """Blobs of ``names`` in ``cam`` placed in tracker ``slots``: the projected centre and an
+    isotropic shape whose sigma radius is the part's metric radius at its depth."""
+    out = []
+    for name, slot in zip(names, slots, strict=True):
+        p, r = TRUTH[name]
+        r = radii.get(name, r) if radii else r
+        z = (np.linalg.inv(cam.T_base_cam) @ np.append(p, 1.0))[2]
+        sigma_px = r * cam.intrinsics.fx / z
+        out.append(Blob(slot, cam.project_base(np.array(p)), sigma_px**2 * np.eye(2)))
+    return out
+
+
+@pytest.fixture(scope="module")
+def head():
+    cam_l, cam_r = stereo_head(k1=0.0, k2=0.0, hfov_deg=90.0)
+    return cam_l, cam_r, StereoRig(cam_l, cam_r)
+
+
+def test_truth_is_named_from_any_slot_order(head):
+    cam_l, cam_r, rig = head
+    for perm_l, perm_r in itertools.product(itertools.permutations(range(3)), repeat=2):
+        left = blobs_seen(cam_l, TARGETS, perm_l)
+        right = blobs_seen(cam_r, TARGETS, perm_r)
+        ev = stereo_evidence(rig, cam_l, cam_r, left, right)
+        names_l, names_r, margins = assign(TARGETS, left, right, {}, {}, ev)
+        assert names_l == dict(zip(perm_l, TARGETS, strict=True))
+        assert names_r == dict(zip(perm_r, TARGETS, strict=True))
+        assert min(margins.values()) >= 2.0
+
+
+def test_stereo_evidence_pairs_only_corresponding_blobs(head):
+    cam_l, cam_r, rig = head
+    left, right = blobs_seen(cam_l, TARGETS, range(3)), blobs_seen(cam_r, TARGETS, range(3))
+    ev = stereo_evidence(rig, cam_l, cam_r, left, right)
+    np.testing.assert_array_equal(ev.inconsistent, ~np.eye(3, dtype=bool))
+    for i, name in enumerate(TARGETS):  # the metric size of each part is recovered
+        assert ev.radius_m[i, i] == pytest.approx(TRUTH[name][1], rel=0.02)
+    assert np.isnan(ev.radius_m[0, 1])
+
+
+def test_a_lone_blob_is_named_by_its_size(head):
+    cam_l, cam_r, rig = head
+    for name in ("head", "right_hand"):
+        left, right = blobs_seen(cam_l, [name], [2]), blobs_seen(cam_r, [name], [0])
+        ev = stereo_evidence(rig, cam_l, cam_r, left, right)
+        names_l, names_r, margins = assign(TARGETS, left, right, {}, {}, ev)
+        if name == "head":  # a head-sized blob alone: surely the head
+            assert names_l == {2: "head"} and names_r == {0: "head"}
+            assert margins["head"] >= 1.0
+        else:  # a hand-sized blob alone: not the head, but which hand cannot be told
+            assert names_l[2] in ("right_hand", "left_hand") and names_r[0] == names_l[2]
+            assert margins[names_l[2]] < 1.0
+
+
+def test_one_eye_only_is_never_sure(head):
+    cam_l, _, _ = head
+    left = blobs_seen(cam_l, ["right_hand"], [1])
+    _, names_r, margins = assign(TARGETS, left, [], {}, {}, None)
+    assert names_r == {} and max(margins.values()) < 1.0
+
+
+def test_continuity_survives_one_contrary_rule(head):
+    """A hand that looks bigger than the head in both eyes (one rule) keeps its name; the
+    evidence margin then says the names are doubtful."""
+    cam_l, cam_r, rig = head
+    radii = {"right_hand": 0.06}  # e.g. the hand brought close to the camera
+    left = blobs_seen(cam_l, TARGETS, range(3), radii)
+    right = blobs_seen(cam_r, TARGETS, range(3), radii)
+    assert image_rule_cost({n: b for n, b in zip(TARGETS, left, strict=True)}) == 1.0
+    prev = dict(enumerate(TARGETS))
+    ev = stereo_evidence(rig, cam_l, cam_r, left, right)
+    names_l, names_r, margins = assign(TARGETS, left, right, prev, prev, ev)
+    assert names_l == prev and names_r == prev
+    assert margins["right_hand"] < 1.0  # too big for a hand: measured but flagged unsure
+
+
+def test_image_rules_count_each_violation():
+    def b(u, area):
+        return Blob(0, np.array([u, 100.0]), area * np.eye(2))
+
+    head, small, big = (lambda u: b(u, 100.0)), (lambda u: b(u, 10.0)), (lambda u: b(u, 400.0))
+    assert image_rule_cost({"head": head(160), "right_hand": small(100),
+                            "left_hand": small(220)}) == 0.0
+    assert image_rule_cost({"head": head(160), "right_hand": small(220),
+                            "left_hand": small(100)}) == 1.0 + 0.5 + 0.5  # crossed over
+    assert image_rule_cost({"head": head(160), "right_hand": big(100)}) == 1.0  # bigger
+    assert image_rule_cost({"right_hand": small(100)}) == 0.0
+
+
+def test_size_thresholds_separate_the_avatars_parts():
+    assert TRUTH["right_hand"][1] < HAND_MAX_RADIUS_M < TRUTH["head"][1]
+    assert TRUTH["left_hand"][1] < HEAD_MIN_RADIUS_M < TRUTH["head"][1]

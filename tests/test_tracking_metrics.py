@@ -1,0 +1,155 @@
+"""Tracking scores, the Table 2/3 computations and the record archive, against direct
+computations on hand-made records."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from _synth_vision import stereo_head
+
+from humimic.estimation.random_jerk import RandomJerkFilter
+from humimic.estimation.stage import FilterArrays
+from humimic.metrics.tracking import (
+    axis_stats,
+    detection_stats,
+    filtered_scores,
+    mean_nees,
+    num,
+    raw_scores,
+    rmse,
+)
+from humimic.metrics.ude_tables import refilter, table2, table3
+from humimic.perception.archive import load_archive, save_archive
+from humimic.perception.record import STATE_CODE, PerceptionRecord
+from humimic.perception.stereo import StereoRig
+
+S, T, L = (STATE_CODE[k] for k in ("searching", "tracking", "lost"))
+
+
+def test_basic_statistics_match_numpy():
+    rng = np.random.default_rng(0)
+    e = rng.normal(size=(50, 3))
+    assert rmse(e) == pytest.approx(math.sqrt(np.mean(np.sum(e**2, 1))))
+    bias, std = axis_stats(e, 1e3)
+    np.testing.assert_allclose(bias, 1e3 * e.mean(0))
+    np.testing.assert_allclose(std, 1e3 * e.std(0))
+    C = np.array([[2.0, 0.3, 0.0], [0.3, 1.0, 0.1], [0.0, 0.1, 0.5]])
+    expect = np.mean([x @ np.linalg.inv(C) @ x for x in e])
+    assert mean_nees(e, np.broadcast_to(C, (50, 3, 3))) == pytest.approx(expect)
+    assert rmse(np.zeros((0, 3))) is None and mean_nees(np.zeros((0, 3)), None) is None
+    assert axis_stats(np.zeros((0, 3))) == ([None] * 3, [None] * 3)
+    assert num(float("nan")) is None and num(math.inf) is None and num(2) == 2.0
+
+
+def test_detection_statistics_by_hand():
+    t = np.arange(12) / 60.0
+    ok = np.array([0, 0, 0, 1, 1, 0, 1, 0, 0, 0, 1, 1], bool)
+    state = np.array([S, S, S, T, T, T, T, L, L, L, T, T])
+    d = detection_stats(t, ok, state)
+    assert d["detection_rate"] == pytest.approx(5 / 9)  # from the first measured frame on
+    assert d["detection_rate_all"] == pytest.approx(5 / 12)
+    assert d["time_to_first_detection_s"] == pytest.approx(3 / 60)
+    assert (d["losses"], d["reacquisitions"], d["measured_frames"]) == (1, 1, 5)
+    never = detection_stats(t, np.zeros(12, bool), np.full(12, S))
+    assert never["detection_rate"] == 0.0 and never["time_to_first_detection_s"] is None
+
+
+def _record(n=40, offset_px=(0.3, -0.4), seed=0):
+    """A static point seen by a synthetic stereo head; left centres offset by ``offset_px``."""
+    rng = np.random.default_rng(seed)
+    cam_l, cam_r = stereo_head(k1=0.0, k2=0.0)
+    p = np.array([1.0, 0.1, 1.3])
+    rec = PerceptionRecord(["hand"], ("L", "R"), (cam_l.intrinsics, cam_r.intrinsics))
+    rig = StereoRig(cam_l, cam_r)
+    for k in range(n):
+        ul = cam_l.project_base(p) + offset_px
+        ub = cam_r.project_base(p) + offset_px  # the right blob's centre
+        ur = ub + [rng.normal(0, 0.05), 0.0]  # the stereo match (noisy along the line)
+        q, R = rig.triangulate(ul, ur, 0.09 * np.eye(2), 0.09 * np.eye(2))
+        rec.append(k / 60.0, np.stack([cam_l.T_base_cam, cam_r.T_base_cam]), np.array([T]),
+                   np.ones((1, 2), bool), np.ones(1, bool), np.array([[ul, ub]]),
+                   np.ones((1, 2, 2, 2)) * np.eye(2) * 9.0, np.ones(1, bool), [""], q[None],
+                   R[None], np.array([[ul, ur]]), np.ones(1))
+    return rec.arrays(), p
+
+
+def test_raw_scores_and_pixel_error():
+    pa, p = _record()
+    truth = np.repeat(p[None], len(pa.t), 0)
+    r = raw_scores(pa, 0, truth)
+    assert r["pixel_rmse"] == pytest.approx(0.5, rel=1e-6)  # |(0.3, -0.4)| in both eyes
+    err = pa.p_base[:, 0] - truth
+    assert r["raw_rmse_mm"] == pytest.approx(1e3 * math.sqrt(np.mean(np.sum(err**2, 1))))
+    np.testing.assert_allclose(r["raw_std_mm"], 1e3 * err.std(0))
+
+
+def test_filtered_scores_skip_start_up_and_split_predictions():
+    n = 30
+    t = np.arange(n) / 60.0
+    x = np.zeros((n, 1, 9))
+    x[:, 0, 0] = 0.002  # 2 mm off in x, v and a exact
+    valid = np.ones((n, 1), bool)
+    measured = valid.copy()
+    measured[20:25] = False  # prediction only
+    x[20:25, 0, 1] = 0.05  # predicted frames 50 mm off in y
+    since = t[:, None].copy()
+    fa = FilterArrays(["hand"], t, valid, measured, x, np.broadcast_to(np.eye(9) * 1e-6,
+                      (n, 1, 9, 9)).copy(), since)
+    z = np.zeros((n, 3))
+    s = filtered_scores(fa, 0, z, z, z, settle_s=10 / 60 - 1e-9)
+    assert s["scored_estimates"] == 15  # frames 10..29 measured, minus 20..24
+    assert s["filtered_rmse_mm"] == pytest.approx(2.0)
+    assert s["vel_rmse_mm_s"] == 0.0 and s["acc_rmse_mm_s2"] == 0.0
+    assert s["predicted_frames"] == 5
+    assert s["predicted_rmse_mm"] == pytest.approx(math.hypot(2.0, 50.0))
+    assert s["filtered_nees"] == pytest.approx((0.002**2) / 1e-6)
+
+
+def test_refilter_equals_the_filter_stepped_by_hand():
+    rng = np.random.default_rng(3)
+    t = np.arange(40) / 60.0
+    ok = rng.random(40) > 0.2
+    z = rng.normal(0, 0.01, (40, 3))
+    R = np.broadcast_to(1e-4 * np.eye(3), (40, 3, 3))
+    x, since = refilter(t, ok, z, R, b=5.0, max_gap=1.0)
+    kf = RandomJerkFilter(5.0)
+    for k in range(40):
+        out = kf.step(t[k], z[k] if ok[k] else None, R[k] if ok[k] else None)
+        if out is None:
+            assert np.isnan(x[k]).all()
+        else:
+            np.testing.assert_allclose(x[k], out, atol=1e-12)
+
+
+def test_table3_in_the_camera_frame_and_table2_shapes():
+    pa, p = _record(n=60, seed=1)
+    x = np.zeros((len(pa.t), 9))
+    x[:, :3] = pa.p_base[:, 0]
+    r = table3(pa, "hand", x, np.full(len(pa.t), 10.0), skip_s=0.0)
+    T_cb = np.linalg.inv(pa.T_base_cam[0, 0])
+    cam = pa.p_base[:, 0] @ T_cb[:3, :3].T + T_cb[:3, 3]
+    np.testing.assert_allclose(r["raw_mean"], 1e3 * cam.mean(0))
+    np.testing.assert_allclose(r["raw_std"], 1e3 * cam.std(0))
+    np.testing.assert_allclose(r["filtered_std"], r["raw_std"])
+    assert r["raw_std"][2] > 5 * r["raw_std"][0]  # depth noise (match noise) dominates
+    t2 = table2(pa, "hand", skip_s=0.0)
+    assert t2.n == 60 and t2.empirical.shape == (3, 3)
+    assert t2.propagated_following[2, 2] == pytest.approx(t2.empirical[2, 2], rel=0.35)
+
+
+def test_archive_round_trip(tmp_path):
+    pa, p = _record(n=5)
+    fa = FilterArrays(["hand"], pa.t, np.ones((5, 1), bool), np.ones((5, 1), bool),
+                      np.arange(45.0).reshape(5, 1, 9), np.zeros((5, 1, 9, 9)), np.ones((5, 1)))
+    truth = {"hand": (np.ones((5, 3)), np.zeros((5, 3)), np.zeros((5, 3)))}
+    save_archive(tmp_path / "a.npz", pa, fa, truth, truth)
+    back = load_archive(tmp_path / "a.npz")
+    np.testing.assert_array_equal(back.perception.p_base, pa.p_base)
+    np.testing.assert_array_equal(back.perception.uv_match, pa.uv_match)
+    assert back.perception.reason.tolist() == pa.reason.tolist()
+    assert back.perception.intrinsics == pa.intrinsics and back.perception.cameras == ("L", "R")
+    np.testing.assert_array_equal(back.filter.x, fa.x)
+    np.testing.assert_array_equal(back.filter_truth["hand"][0], truth["hand"][0])
+    assert back.perception.camera(2, 1).T_base_cam.shape == (4, 4)
