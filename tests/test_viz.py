@@ -264,7 +264,7 @@ def test_plots_write_readable_pngs(tmp_path):
     p3 = plot_stacked_bar(tmp_path / "budget.png", ["R_palm", "L_palm"],
                           {"perception": [8.0, 9.0], "filter": [3.0, 2.5], "servo": [1.0, 1.2]},
                           title="Error budget")
-    for path, size in ((p1, (880, 715)), (p2, (880, 440)), (p3, (594, 495))):
+    for path, size in ((p1, (880, 715)), (p2, (880, 440)), (p3, (715, 495))):
         got_size, n_colours, ink = _png_stats(path)
         assert got_size == size, path.name
         assert n_colours > 50 and 0.02 < ink < 0.6, path.name

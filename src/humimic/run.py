@@ -18,6 +18,7 @@ from humimic.errors import InputError
 from humimic.metrics.summary import print_summary
 from humimic.pipeline.build import build_stages
 from humimic.pipeline.simulation import simulate
+from humimic.report import write_report
 from humimic.rngs import Rngs
 from humimic.scenario import Scenario, dump_scenario, load_scenario
 from humimic.viz.blueprint import default_blueprint
@@ -121,6 +122,7 @@ def _plots(out: Path, world, stages, ticks: int) -> None:
                       title="Ground truth, robot base frame", ylabel="position (m)")
     for stage in stages:
         stage.plots(out)
+    write_report(out)
 
 
 def _parser() -> argparse.ArgumentParser:

@@ -106,7 +106,7 @@ def plot_stacked_bar(path: Path | str, categories: Sequence[str],
     Made for the error budget (perception, filtering, IK, servo per robot site); the total
     is printed above each bar.
     """
-    fig = _figure(max(5.0, 1.2 * len(categories) + 3.0), 4.5)
+    fig = _figure(max(6.5, 1.2 * len(categories) + 4.0), 4.5)
     ax = fig.add_subplot()
     x = np.arange(len(categories))
     bottom = np.zeros(len(categories))
@@ -119,9 +119,9 @@ def plot_stacked_bar(path: Path | str, categories: Sequence[str],
                     ha="center", fontsize="small")
     ax.set_xticks(x, list(categories))
     ax.set_ylabel(_label(quantity, ylabel))
-    ax.set_title(title)
+    fig.suptitle(title, fontsize="medium")
     ax.margins(y=0.12)
     ax.grid(True, axis="y", alpha=0.3)
     handles, labels = ax.get_legend_handles_labels()  # top part first, beside the bars
-    fig.legend(handles[::-1], labels[::-1], loc="outside right upper", fontsize="small")
+    fig.legend(handles[::-1], labels[::-1], loc="outside right center", fontsize="small")
     return _save(fig, path)

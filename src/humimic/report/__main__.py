@@ -1,0 +1,28 @@
+"""``python -m humimic.report RUN_DIR``: write the run's one-page report (PNG + HTML)."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+import humimic  # noqa: F401  (headless GL before mujoco)
+from humimic.errors import InputError
+from humimic.report.page import write_report
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(prog="python -m humimic.report",
+                                 description="Write report.png and report.html for a run.")
+    ap.add_argument("run_dir", help="a run directory (it holds metrics.json)")
+    args = ap.parse_args(argv)
+    try:
+        png, page = write_report(args.run_dir)
+    except InputError as err:
+        print(f"error: {err}", file=sys.stderr)
+        return 2
+    print(f"wrote {png} and {page}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
