@@ -11,7 +11,6 @@ import argparse
 import json
 import platform
 import statistics
-import time
 from pathlib import Path
 
 import humimic  # noqa: F401  (headless GL before mujoco)
@@ -20,25 +19,15 @@ import numpy as np
 from rich.console import Console
 from rich.table import Table
 
+from _harness import per_call
 from humimic.sensors.cameras import CameraRig, CameraSpec
 from humimic.world.scene import SceneOptions, build_scene
-
-
-def _repeat(fn, repeats: int, inner: int) -> list[float]:
-    """Per-call seconds of ``fn`` over ``repeats`` batches of ``inner`` calls."""
-    out = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        for _ in range(inner):
-            fn()
-        out.append((time.perf_counter() - t0) / inner)
-    return out
 
 
 def bench_physics(repeats: int) -> list[float]:
     scene = build_scene()
     m, d = scene.model, scene.data
-    return _repeat(lambda: mujoco.mj_step(m, d), repeats, 840)
+    return per_call(lambda: mujoco.mj_step(m, d), repeats, 840)
 
 
 def bench_render(repeats: int, cameras: list[str], size: tuple[int, int]) -> list[float]:
@@ -46,8 +35,8 @@ def bench_render(repeats: int, cameras: list[str], size: tuple[int, int]) -> lis
     mujoco.mj_forward(scene.model, scene.data)
     rig = CameraRig(scene, [CameraSpec(c, *size) for c in cameras], np.random.default_rng(0))
     try:
-        rig.capture(0.0)  # warm up (context creation, texture upload)
-        return _repeat(lambda: rig.capture(0.0), repeats, 50)
+        # the warm-up call creates the GL context and uploads textures
+        return per_call(lambda: rig.capture(0.0), repeats, 50)
     finally:
         rig.close()
 

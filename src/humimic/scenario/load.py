@@ -49,20 +49,25 @@ def load_scenario(path: str | Path, overrides: list[str] | None = None,
     Raises :class:`ScenarioError` (one line) for anything wrong with the input.
     """
     path = Path(path)
+    text, data = read_yaml_mapping(path, "scenario", "a YAML file (see scenarios/)")
+    return validate_scenario(data, path, text, overrides, **replace)
+
+
+def read_yaml_mapping(path: Path, what: str, hint: str) -> tuple[str, dict]:
+    """The text of a YAML file and its top-level mapping; :class:`ScenarioError` (one line,
+    with the line number for a syntax error) if it is missing, not YAML or not a mapping."""
     if not path.is_file():
-        raise ScenarioError(path, "", "scenario file not found", str(path),
-                            "a YAML file (see scenarios/)")
+        raise ScenarioError(path, "", f"{what} file not found", str(path), hint)
     text = path.read_text()
     try:
         data = yaml.safe_load(text)
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
-        line = mark.line + 1 if mark else None
         raise ScenarioError(path, "", f"not valid YAML: {getattr(exc, 'problem', exc)}",
-                            line=line) from None
+                            line=mark.line + 1 if mark else None) from None
     if not isinstance(data, dict):
-        raise ScenarioError(path, "", "a scenario must be a mapping of keys", data)
-    return validate_scenario(data, path, text, overrides, **replace)
+        raise ScenarioError(path, "", f"a {what} must be a mapping of keys", data, hint)
+    return text, data
 
 
 def validate_scenario(data: dict, path: str | Path = "<scenario>", text: str = "",

@@ -25,10 +25,10 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Annotated, Any
 
-import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
 from humimic.scenario.errors import ScenarioError, from_validation_error, yaml_line
+from humimic.scenario.load import read_yaml_mapping
 
 #: A scenario key as ``--set`` takes it: ``human.distance``, ``human.motion.frames.0.t``.
 DOTTED_KEY = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*(\.[A-Za-z0-9_]+)*$")
@@ -138,19 +138,8 @@ class Sweep:
 def load_sweep(path: str | Path) -> Sweep:
     """Read and validate a sweep file (raises :class:`ScenarioError`, exit status 2)."""
     path = Path(path)
-    if not path.is_file():
-        raise ScenarioError(path, "", "sweep file not found", str(path),
-                            "a YAML file (see sweeps/)")
-    text = path.read_text()
-    try:
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        raise ScenarioError(path, "", f"not valid YAML: {getattr(exc, 'problem', exc)}",
-                            line=mark.line + 1 if mark else None) from None
-    if not isinstance(data, dict):
-        raise ScenarioError(path, "", "a sweep must be a mapping of keys", data,
-                            "scenario, grid, list, seeds, set, metrics, ...")
+    text, data = read_yaml_mapping(path, "sweep",
+                                   "a YAML mapping with scenario, grid, list, seeds, set, ...")
     try:
         config = SweepConfig.model_validate(data)
     except ValidationError as err:
