@@ -140,3 +140,16 @@ def test_lut_close_to_exact_density():
     assert np.median(rel) < 0.2 and np.quantile(rel, 0.95) < 0.5
     lut7 = ColorLUT(SKIN, bits=7).lookup(rgb)
     assert np.median(np.abs(lut7 - exact) / exact) < 0.1
+
+
+def test_lut_posterior_table_equals_per_pixel_formula():
+    """The tabulated p / (p + 1) is what computing it on looked-up densities gives."""
+    rng = np.random.default_rng(4)
+    pix = rng.integers(0, 256, (500, 3)).astype(np.uint8)
+    model = fit_color_model(pix.astype(float), "rgb", 2, np.random.default_rng(0))
+    lut = ColorLUT(model, 6)
+    p = lut.lookup(pix)
+    assert np.array_equal(lut.posterior(pix), p / (p + 1.0))
+    img = rng.integers(0, 256, (7, 9, 3)).astype(np.uint8)
+    q = img.astype(np.intp) >> 2
+    assert np.array_equal(lut.index(img), q[..., 0] * 4096 + q[..., 1] * 64 + q[..., 2])

@@ -119,3 +119,29 @@ def test_hand_stays_out_of_the_torso(model):
             dist = mujoco.mj_geomDistance(model, d, model.geom(arm).id, model.geom(body).id,
                                           1.0, fromto)
             assert dist > 0.015, (arm, body, dist)
+
+
+def test_task_stack_and_collision_rows_equal_the_mink_assembly(model):
+    """The IK's buffered QP assembly gives qp_objective's (H, c) (mink's tasks) and the finite
+    rows of the collision limit's compute_qp_inequalities, bit for bit, also with arm-body
+    pairs inside the detection distance."""
+    from humimic.control.ik import qp_objective
+    from humimic.control.ik_objective import CollisionRows, TaskStack
+
+    ik = _ik(model, ("R_palm", "L_palm"), collision_margin=0.05)
+    stack, rows = TaskStack(ik.configuration, ik.tasks, ik.damping), CollisionRows(
+        ik.collision_limit)
+    target = ik.configuration.data.geom("thorax").xpos.copy()
+    rng = np.random.default_rng(8)
+    n_rows = []
+    for _ in range(60):  # pull both hands into the chest: collision rows appear
+        ik.step(np.stack([target, target]) + rng.normal(0, 0.02, (2, 3)))
+        H, c = stack(ik.configuration)
+        H_ref, c_ref = qp_objective(ik.configuration, ik.tasks, ik.damping)
+        assert np.array_equal(H, H_ref) and np.array_equal(c, c_ref)
+        G, h = rows(ik.configuration)
+        G_all, h_all = ik.collision_limit.compute_qp_inequalities(ik.configuration, DT)
+        keep = np.isfinite(h_all)
+        assert np.array_equal(G, G_all[keep]) and np.array_equal(h, h_all[keep])
+        n_rows.append(len(h))
+    assert max(n_rows) >= 2

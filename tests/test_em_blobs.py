@@ -181,3 +181,13 @@ def test_black_frame_and_hs_model():
     fr = tr.update(np.zeros((240, 320, 3), np.uint8))  # all black: nothing, no NaN
     assert np.all(np.isfinite(fr.centres)) and np.all(np.isfinite(fr.covs))
     assert fr.support_px[0] < 1.0 and np.isfinite(fr.fill).all()
+
+
+def test_quad_features_rows():
+    rng = np.random.default_rng(6)
+    uv = rng.uniform(0, 100, size=(50, 2))
+    cell = rng.choice([0.0, 0.25, 0.6667], size=50)
+    u, v = uv[:, 0], uv[:, 1]
+    ref = np.stack([u * u, u * v, v * v, u, v, np.ones(50), cell])
+    assert np.array_equal(quad_features(uv, cell), ref)
+    assert np.array_equal(quad_features(uv)[6], np.zeros(50))

@@ -1,15 +1,17 @@
 """Perception and filter sections: bad input gives one line and exit 2; absent targets and black
 frames give clear scores, never NaN; the published messages keep their time stamps; pipelined
-and synchronous processing give the same results."""
+(worker thread or process) and synchronous processing give the same results."""
 
 from __future__ import annotations
 
 import json
 import textwrap
+import time
 
 import numpy as np
 import pytest
 
+from humimic.errors import InputError
 from humimic.messages import Estimates, Measurements
 from humimic.paths import SCENARIOS_DIR
 from humimic.pipeline.build import build_stages
@@ -192,12 +194,87 @@ def test_messages_are_stamped_with_photon_time_and_latency():
     assert any(msg.value.targets for msg, _ in est)
 
 
-def test_pipelined_and_synchronous_give_identical_results():
-    a, got_a = _run_with_listener([])  # latency one frame: pipelined
-    b, got_b = _run_with_listener(["perception.pipelined=false"])
+def _values(got):
+    """Every message: topic, photon time, ready time, arrival, and its numbers per target."""
+    out = []
+    for topic, msg, arrived in got:
+        per_target = {name: tuple(np.asarray(v).tolist() for v in (
+            (m.p_base, m.R_base, *m.uv.values()) if topic == "measurements"
+            else (m.p_base, m.v_base, m.a_base, m.P))) for name, m in msg.value.targets.items()}
+        out.append((topic, msg.t, msg.t_ready, arrived, per_target))
+    return out
+
+
+@pytest.fixture(scope="module")
+def synchronous_run():
+    return _run_with_listener(["perception.pipelined=off"])
+
+
+@pytest.mark.parametrize("mode", ["thread", "process", "process_from_frame_40", "true"])
+def test_pipelined_and_synchronous_give_identical_results(mode, synchronous_run, monkeypatch):
+    """A worker thread, a worker process (taking over from the thread whenever it has started,
+    here also forced to take over mid-run, after detection and identities have settled) and
+    the legacy ``true``: the same messages, numbers and times as synchronous processing."""
+    if mode == "process_from_frame_40":
+        from humimic.perception.worker import ProcessWorker
+
+        real, calls = ProcessWorker.ready, []
+
+        def ready(self):
+            calls.append(1)
+            while len(calls) > 40 and not real(self):
+                time.sleep(0.001)
+            return len(calls) > 40
+
+        monkeypatch.setattr(ProcessWorker, "ready", ready)
+    a, got_a = _run_with_listener([f"perception.pipelined={mode.split('_')[0]}"])
+    b, got_b = synchronous_run
     assert a["perception"]["pipelined"] and not b["perception"]["pipelined"]
-    assert a["tracking"] == b["tracking"]
-    assert [(x[1].t, x[2]) for x in got_a] == [(x[1].t, x[2]) for x in got_b]
+    assert a["perception"]["worker"] == {"true": "thread"}.get(mode, mode.split("_")[0])
+    assert b["perception"]["worker"] == "none"
+    assert a["tracking"] == b["tracking"] and a["filter"] == b["filter"]
+    assert _values(got_a) == _values(got_b)
+
+
+def test_pipelined_mode_choice():
+    from humimic.perception.stage import PROCESS_MIN_S, worker_kind
+
+    def mode(value):
+        return load_scenario(SCENARIOS_DIR / "ude_wave_tracking.yaml",
+                             [f"perception.pipelined={value}"]).perception.pipelined
+
+    assert (mode("true"), mode("false"), mode("process"), mode("thread")) == (
+        "auto", "off", "process", "thread")
+    with pytest.raises(InputError):
+        mode("sometimes")
+    assert worker_kind("auto", PROCESS_MIN_S - 0.1) == "thread"
+    assert worker_kind("auto", PROCESS_MIN_S) in ("process", "thread")  # thread on one core
+    assert (worker_kind("off", 10), worker_kind("thread", 10)) == ("none", "thread")
+
+
+def test_worker_process_errors_are_raised_here():
+    """An exception in the perception worker process is raised in the simulation, with the
+    child's traceback."""
+    from humimic.sensors.camera_model import CameraImage
+
+    scenario = load_scenario(SCENARIOS_DIR / "ude_wave_tracking.yaml",
+                             ["perception.pipelined=process"], duration=3.0)
+    rngs = Rngs(0)
+    world = World(scenario, rngs)
+    stages = build_stages(scenario, world, rngs, RerunLog(world.scene, "off", None, "t"))
+    try:
+        perception = stages[0]
+        assert perception.worker == "process"
+        perception._proc.adopt(perception.core)
+        perception.core = None
+        cam = world.eye_rig.camera_model(world.eye_cameras[0])
+        frame = {world.eye_cameras[0]: CameraImage(0.0, cam, np.zeros((24, 32, 3), np.uint8))}
+        with pytest.raises(RuntimeError, match="KeyError"):
+            perception.process(0.0, frame)  # the right eye's image is missing
+    finally:
+        for s in stages:
+            s.close()
+        world.close()
 
 
 def test_rerun_recording_and_plots_show_tracking(tmp_path):

@@ -238,3 +238,16 @@ def test_nees_matches_explicit_formula():
     P = _random_spd(rng, 9, 2.0)
     x, xt = rng.normal(size=9), rng.normal(size=9)
     assert nees(x, P, xt) == pytest.approx((xt - x) @ np.linalg.inv(P) @ (xt - x), rel=1e-10)
+
+
+def test_single_update_equals_batched_update():
+    """update() has a one-filter path; it gives what the batched path gives, bit for bit."""
+    rng = np.random.default_rng(9)
+    x = rng.normal(size=(4, 9))
+    P = np.stack([_random_spd(rng, 9, 1.0) for _ in range(4)])
+    z = rng.normal(size=(4, 3))
+    R = np.stack([_random_spd(rng, 3, 1e-4) for _ in range(4)])
+    xb, Pb = update(x, P, z, R)
+    for i in range(4):
+        xi, Pi = update(x[i], P[i], z[i], R[i])
+        assert np.array_equal(xi, xb[i]) and np.array_equal(Pi, Pb[i])

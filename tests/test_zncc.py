@@ -139,3 +139,38 @@ def test_prefiltered_reads_equal_blur_then_remap():
     half = cv2.remap(cv2.GaussianBlur((img * 0.5).round().astype(np.uint8), (3, 3), 0.8), mx, my,
                      cv2.INTER_LINEAR).astype(float)
     assert np.abs(masked - half).max() <= 1.0
+
+
+def test_fast_paths_equal_numpys_bit_for_bit():
+    """uint8 windows and templates take exact integer-sum shortcuts (channel means by one
+    matrix product, per-channel centring): the same numbers as the generic float path."""
+    from humimic.perception.zncc import _center_channels, zncc_windows
+
+    rng = np.random.default_rng(11)
+    windows = rng.integers(0, 256, (3, 9, 17, 17, 3)).astype(np.uint8)
+    templates = rng.integers(0, 256, (3, 17, 17, 3)).astype(np.uint8)
+    strips = rng.integers(0, 256, (3, 17, 40, 3)).astype(np.uint8)
+    assert np.array_equal(zncc_windows(windows, templates),
+                          zncc_windows(windows.astype(np.float32), templates.astype(np.float32)))
+    assert np.array_equal(zncc_strips(strips, templates),
+                          zncc_strips(strips.astype(np.float32), templates.astype(np.float32)))
+    for dtype in (np.float32, np.float64):
+        X = windows.reshape(3, 9, 289, 3).astype(dtype)
+        ref = X - X.mean(axis=2, keepdims=True)
+        _center_channels(X, integers=True)
+        assert np.array_equal(X, ref)
+
+
+def test_batched_reads_equal_single_reads():
+    """read_batch (one float32 conversion and bound computation for all jobs) reads what each
+    source's own remap reads."""
+    from humimic.perception.zncc import Prefiltered, read_batch
+
+    rng = np.random.default_rng(12)
+    img = rng.integers(0, 256, (120, 160, 3)).astype(np.uint8)
+    mx = rng.uniform(20, 140, (3, 17, 30))
+    my = rng.uniform(20, 100, (3, 17, 30))
+    spacing = [1.0, 3.2, 7.0]
+    batch = read_batch([Prefiltered(img, 0.8, s) for s in spacing], mx, my)
+    for r, s in enumerate(spacing):
+        assert np.array_equal(batch[r], Prefiltered(img, 0.8, s).remap(mx[r], my[r]))

@@ -7,7 +7,8 @@ OSMesa. A value the user set is always respected.
 With EGL on Mesa's llvmpipe (a CPU rasterizer) we also set ``LP_NUM_THREADS=0`` unless the
 user chose: rasterizing in the calling thread avoids waking llvmpipe's thread pool for every
 small frame (measured: same speed for the world loop, 10-20 % faster and steadier for the closed
-loop, whose perception worker thread then has the second core to itself).
+loop, whose perception worker then has the second core to itself; re-measured with the worker
+in a process: 3.25x real time against 2.9x with 1 and 3.1x with 2 rasterizer threads).
 """
 
 from __future__ import annotations

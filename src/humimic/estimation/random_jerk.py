@@ -32,6 +32,7 @@ INIT_ACC_VAR = 1.0e4
 
 DIM = 9
 _I3 = np.eye(3)
+_I9 = np.eye(DIM)
 #: Ude eq. 18: H = [I 0 0].
 H = np.hstack([_I3, np.zeros((3, 6))])
 
@@ -63,7 +64,7 @@ def process_noise(dt: float, b: float) -> np.ndarray:
 
 
 def _sym(P: np.ndarray) -> np.ndarray:
-    return 0.5 * (P + np.swapaxes(P, -1, -2))
+    return 0.5 * (P + (P.T if P.ndim == 2 else np.swapaxes(P, -1, -2)))
 
 
 @functools.lru_cache(maxsize=64)
@@ -95,10 +96,16 @@ def update(
     R = np.asarray(R, dtype=float)
     PHt = P[..., :, 0:3]  # P H^T
     S = P[..., 0:3, 0:3] + R  # H P H^T + R
+    if P.ndim == 2:  # one filter (the same operations, without the batch machinery)
+        K = np.linalg.solve(S, PHt.T).T  # S symmetric
+        x_new = x + (K @ (z - x[0:3])[:, None])[:, 0]
+        IKH = _I9.copy()
+        IKH[:, 0:3] -= K
+        return x_new, _sym(IKH @ P @ IKH.T + K @ R @ K.T)
     K = np.swapaxes(np.linalg.solve(S, np.swapaxes(PHt, -1, -2)), -1, -2)  # S symmetric
     y = z - x[..., 0:3]
     x_new = x + (K @ y[..., None])[..., 0]
-    IKH = np.broadcast_to(np.eye(DIM), P.shape).copy()
+    IKH = np.broadcast_to(_I9, P.shape).copy()
     IKH[..., :, 0:3] -= K
     P_new = IKH @ P @ np.swapaxes(IKH, -1, -2) + K @ R @ np.swapaxes(K, -1, -2)
     return x_new, _sym(P_new)
@@ -204,7 +211,7 @@ class RandomJerkFilter:
         if z is not None:
             z = np.asarray(z, dtype=float).reshape(3)
             R = np.asarray(R, dtype=float).reshape(3, 3)
-            if not (np.all(np.isfinite(z)) and np.all(np.isfinite(R))):
+            if not (np.isfinite(z).all() and np.isfinite(R).all()):
                 raise ValueError("measurement z and covariance R must be finite")
         if self._x is None:
             if z is None:

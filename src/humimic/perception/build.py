@@ -86,7 +86,7 @@ def perception_stages(scenario, world, rngs, rlog) -> list[Stage]:
     period = 1.0 / scenario.cameras.rate
     latency = period if cfg.latency is None else cfg.latency
     stages: list[Stage] = [PerceptionStage(cfg, cams, luts, rngs["perception"], prec, rlog,
-                                           latency, period)]
+                                           latency, period, scenario.duration)]
     frec = None
     if scenario.filter is not None:
         frec = FilterRecord(list(cfg.targets))

@@ -243,12 +243,20 @@ class ColorLUT:
         centres = (np.arange(n) * step + 0.5 * (step - 1)) / 255.0
         grid = np.stack(np.meshgrid(centres, centres, centres, indexing="ij"), -1).reshape(-1, 3)
         self.table = model.likelihood(grid).astype(np.float32)
+        self.post_table = self.table / (self.table + 1.0)
+        """``p / (p + 1)`` per bin (float32, as computed on looked-up densities)."""
 
     def index(self, rgb_u8: np.ndarray) -> np.ndarray:
         """Table index of uint8 pixels ``(..., 3)``."""
-        q = (np.asarray(rgb_u8, dtype=np.uint8) >> self.shift).astype(np.intp)
-        return (q[..., 0] << (2 * self.bits)) | (q[..., 1] << self.bits) | q[..., 2]
+        q = np.asarray(rgb_u8, dtype=np.uint8) >> self.shift
+        return ((q[..., 0].astype(np.intp) << (2 * self.bits))
+                | (q[..., 1].astype(np.intp) << self.bits) | q[..., 2])
 
     def lookup(self, rgb_u8: np.ndarray) -> np.ndarray:
         """Colour density for uint8 pixels ``(..., 3)``: float32 ``(...)``.  # Ude eq. 6"""
         return self.table[self.index(rgb_u8)]
+
+    def posterior(self, rgb_u8: np.ndarray) -> np.ndarray:
+        """``p / (p + 1)`` of :meth:`lookup` (the probability of the colour against the uniform
+        outlier density 1), float32, from a table."""
+        return self.post_table[self.index(rgb_u8)]

@@ -150,9 +150,18 @@ class PerceptionConfig(Section):
     latency: float | None = Field(None, ge=0.0, le=0.5)
     """Declared processing latency (s): measurements are ready at the frame's ready time plus
     this. Default: one camera frame (each frame is processed while the next is captured)."""
-    pipelined: bool = True
-    """With a latency of at least one frame, process each frame in a worker thread while the
-    simulation renders the next (same results and simulated timing, less wall time)."""
+    pipelined: Literal["auto", "process", "thread", "off"] = "auto"
+    """With a latency of at least one frame, process each frame in a worker while the
+    simulation renders the next (same results and simulated timing, less wall time):
+    ``process`` (a child process), ``thread``, ``auto`` (a process for runs of 2 s or more on
+    two or more cores, else a thread) or ``off``. ``true``/``false`` mean ``auto``/``off``."""
+
+    @field_validator("pipelined", mode="before")
+    @classmethod
+    def _pipelined_bool(cls, value):
+        if isinstance(value, bool):  # the older spelling
+            return "auto" if value else "off"
+        return value
 
     @field_validator("targets")
     @classmethod

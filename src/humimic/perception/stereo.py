@@ -49,6 +49,7 @@ from humimic.perception.triangulation import (  # noqa: F401  (re-exported)
     undistort_point,
 )
 from humimic.perception.zncc import Prefiltered, zncc_strips, zncc_windows
+from humimic.perception.zncc import read_batch as _read
 from humimic.sensors.camera_model import CameraModel, invert_transform
 
 
@@ -104,16 +105,12 @@ def _fail(reason: str, uv_left, score: float = 0.0) -> StereoMeasurement:
                              np.nan_to_num(np.asarray(uv_left, float)), np.zeros(2), score)
 
 
-def _read(sources: list[Prefiltered], mx: np.ndarray, my: np.ndarray) -> np.ndarray:
-    """Job ``r``'s samples ``(mx[r], my[r])`` (raw pixels) from ``sources[r]``, stacked."""
-    return np.stack([src.remap(mx[r], my[r]) for r, src in enumerate(sources)])
-
-
 def _target_fraction(luts, targets: list[int], templates: np.ndarray) -> np.ndarray:
     """Mean of ``p / (p + 1)`` over each (masked) template ``(n, h, w, C)``: how much of it is
     target-coloured (one table lookup per distinct colour model)."""
     out = np.zeros(len(targets))
-    px = np.clip(templates, 0, 255).astype(np.uint8)
+    px = templates if templates.dtype == np.uint8 else \
+        np.clip(templates, 0, 255).astype(np.uint8)
     for lut in {id(luts[i]): luts[i] for i in targets}.values():
         rows = [r for r, i in enumerate(targets) if luts[i] is lut]
         p = lut.lookup(px[rows]).astype(np.float64)

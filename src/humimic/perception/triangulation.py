@@ -71,6 +71,8 @@ def undistort_jacobian(intr: Intrinsics, x: float, y: float) -> list[list[float]
 
 def distort_to_pixels(intr: Intrinsics, x: np.ndarray, y: np.ndarray):
     """Undistorted normalised coordinates to raw (distorted) pixels (arrays)."""
+    if intr.k1 == 0.0 and intr.k2 == 0.0:  # s == 1 exactly (finite inputs)
+        return intr.fx * x + intr.cx, intr.fy * y + intr.cy
     r2 = x * x + y * y
     s = 1.0 + r2 * (intr.k1 + intr.k2 * r2)
     return intr.fx * x * s + intr.cx, intr.fy * y * s + intr.cy

@@ -59,6 +59,10 @@ def simulate(world, stages: list[Stage], rlog, bus: Bus | None = None,
         if samples is not None:
             data, ticks = samples
             inertial.append((topic, data, {int(k): i for i, k in enumerate(ticks)}))
+    with timer.time("render_setup"):  # GL contexts before the clock starts
+        for rig in (world.eye_rig, world.head_rig):
+            if rig is not None:
+                rig.prepare()
     latency = scenario.cameras.latency
     image_every = scenario.output.image_every
     quality = scenario.output.jpeg_quality

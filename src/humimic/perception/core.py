@@ -1,0 +1,214 @@
+"""The perception stage's per-frame work and state: both eye images -> named 3-D measurements.
+
+:class:`PerceptionCore` owns everything that changes from frame to frame (both eyes' trackers
+with their random generators, the blob identities and margins, the target states) and nothing
+else: no bus, no recorder, no rerun. One call of :meth:`PerceptionCore.process` per stereo frame
+returns a :class:`FrameResult` (the measurements and what the stage records and logs), so the
+same object runs in the simulation's thread, in a worker thread or, pickled, in a worker process
+(:mod:`humimic.perception.worker`) with identical results.
+
+Per stereo frame (photon time ``t``):
+
+1. each eye's :class:`~humimic.perception.detection.DetectingTracker` runs EM on its tracked
+   blobs (Ude eqs. 1-7) and searches for the others (eqs. 8-9);
+2. when the set of tracked blobs changed, blob identities are re-decided for both eyes jointly
+   (:mod:`humimic.perception.identity`); otherwise every blob keeps its name;
+3. every published target with a blob in both eyes is matched by ZNCC along the epipolar line
+   and triangulated (eq. 10) with the cameras' poses *at the photon time* (from the eyes'
+   current kinematics), so the measurement is in the base frame however head and eyes moved,
+   and its covariance R is the configured pixel noise propagated through triangulation.
+
+A target's state is ``tracking`` while it has a blob in both eyes and its identity is sure
+(``identity_margin``), ``lost`` after that ended, ``searching`` before it ever started; every
+change is reported as an event. Only tracked targets are measured.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from humimic.messages import Measurement, Measurements
+from humimic.perception.detection import DetectingTracker, DetectionParams, TargetState
+from humimic.perception.em_blobs import EMParams
+from humimic.perception.identity import Blob, assign, stereo_evidence
+from humimic.perception.record import STATE_CODE
+from humimic.perception.stereo import StereoParams, StereoRig
+
+#: Identities are re-decided, and a target may be measured, once its blobs have been tracked
+#: this many frames (a new blob starts from a random hypothesis; its centre and shape, which the
+#: identity rules use, settle in a few frames).
+SETTLE_FRAMES = 6
+
+
+def detection_params(cfg) -> DetectionParams:
+    d = cfg.detection
+    return DetectionParams(phase_one_s=d.period, lam=d.lam, n_hypotheses=d.hypotheses,
+                           sigma_min_px=d.sigma_min_px, sigma_max_px=d.sigma_max_px,
+                           proposal=d.proposal, score=d.score, restart_phase=d.restart_phase,
+                           min_fill=d.min_fill, lost_frames=d.lost_frames,
+                           backoff_s=d.backoff_s, backoff_every=d.backoff_every)
+
+
+def em_params(cfg) -> EMParams:
+    return EMParams(k_sigma=cfg.roi_k_sigma, n_side=cfg.roi_side, max_iter=cfg.em_iterations,
+                    tol_px=cfg.em_tol_px)
+
+
+def stereo_params(cfg) -> StereoParams:
+    s = cfg.stereo
+    return StereoParams(template_half=s.template_half, template_sigma=s.template_sigma,
+                        min_score=s.min_zncc, box_sigma=s.box_sigma,
+                        prefilter_sigma=s.prefilter_sigma, fine_steps=s.fine_steps)
+
+
+@dataclass(frozen=True)
+class FrameResult:
+    """What one stereo frame produced."""
+
+    measurements: Measurements
+    record_row: tuple
+    """Arguments of :meth:`~humimic.perception.record.PerceptionRecord.append`."""
+    intrinsics: tuple
+    """(left, right) :class:`~humimic.sensors.camera_model.Intrinsics` of the frame."""
+    events: list[tuple[float, str, str, str]]
+    """Target state changes: ``(t, target, "old -> new", level)``."""
+    viz: tuple
+    """``(t, seen, centre, cov)`` for the blob ellipses in rerun."""
+    identity_solves: int
+    """Identity decisions so far (running count)."""
+
+
+class PerceptionCore:
+    """See the module docstring. ``luts`` maps every tracked target (published targets first,
+    then distractors) to its :class:`~humimic.perception.color_models.ColorLUT`; targets
+    sharing one LUT object are told apart by :mod:`~humimic.perception.identity`."""
+
+    def __init__(self, cfg, cameras: tuple[str, str], luts: dict, rng: np.random.Generator):
+        self.cameras = tuple(cameras)
+        self.published = list(cfg.targets)
+        self.targets = list(luts)
+        if self.targets[:len(self.published)] != self.published:
+            raise ValueError("luts must list the published targets first")
+        lut_list = [luts[t] for t in self.targets]
+        self.luts = lut_list
+        self.groups: list[list[int]] = []  # slots sharing a colour model
+        for k, lut in enumerate(lut_list):
+            for g in self.groups:
+                if lut_list[g[0]] is lut:
+                    g.append(k)
+                    break
+            else:
+                self.groups.append([k])
+        self.trackers = [DetectingTracker(self.targets, lut_list, r, detection_params(cfg),
+                                          em_params(cfg)) for r in rng.spawn(2)]
+        self.stereo = stereo_params(cfg)
+        self.identity_margin = cfg.identity_margin
+        self.color_mask = cfg.stereo.color_mask
+        self.match_std = cfg.match_std if cfg.covariance == "following" else None
+        self.C_px = np.eye(2) * cfg.pixel_std**2
+        self.ident: list[dict[int, str]] = [{}, {}]
+        self.margin: dict[str, float] = dict.fromkeys(self.targets, 0.0)
+        """Identity margin of each target at the last decision (see identity.assign)."""
+        self._tracked: list[frozenset] = [frozenset(), frozenset()]
+        self.state = dict.fromkeys(self.targets, "searching")
+        self.identity_solves = 0
+
+    def process(self, t: float, images: dict) -> FrameResult:
+        """Track, identify, match and triangulate one stereo frame (``{camera: CameraImage}``)."""
+        il, ir = images[self.cameras[0]], images[self.cameras[1]]
+        reports = [self.trackers[0].process(t, il.image), self.trackers[1].process(t, ir.image)]
+        tracked = [{k: Blob(k, r.centre, r.cov) for k, r in enumerate(reps)
+                    if r.state == TargetState.TRACKING} for reps in reports]
+        rig = StereoRig(il.camera, ir.camera, self.stereo)
+        keys = [frozenset(tr) for tr in tracked]
+        settled = any(int(t.tracker.age[k]) == SETTLE_FRAMES
+                      for t, tr in zip(self.trackers, tracked, strict=True) for k in tr)
+        if keys != self._tracked or settled:
+            self._identify(tracked, rig, il.camera, ir.camera)
+            self._tracked = keys
+        slot_of = [{name: k for k, name in ident.items()} for ident in self.ident]
+
+        n = len(self.targets)
+        seen = np.zeros((n, 2), bool)
+        centre, cov = np.zeros((n, 2, 2)), np.zeros((n, 2, 2, 2))
+        for i, name in enumerate(self.targets):
+            for eye in (0, 1):
+                k = slot_of[eye].get(name)
+                if k is not None:
+                    seen[i, eye] = True
+                    centre[i, eye], cov[i, eye] = tracked[eye][k].centre, tracked[eye][k].cov
+        ok = np.zeros(n, bool)
+        reason = ["not_seen"] * n
+        # sure of the name, and both blobs past their start-up (a new blob begins as a random
+        # hypothesis; its first frames' centres and shapes are still converging)
+        age = [t.tracker.age for t in self.trackers]
+        confirmed = np.array([
+            self.margin[x] >= self.identity_margin
+            and all(x in slot_of[e] and age[e][slot_of[e][x]] >= SETTLE_FRAMES for e in (0, 1))
+            for x in self.targets])
+        pub = []
+        for i in range(len(self.published)):
+            if seen[i].all():
+                if confirmed[i]:
+                    pub.append(i)
+                else:
+                    reason[i] = "identity_unsure"
+        p_base, R_base = np.zeros((n, 3)), np.zeros((n, 3, 3))
+        uv_match, score = np.zeros((n, 2, 2)), np.zeros(n)
+        measured: dict[str, Measurement] = {}
+        if pub:
+            ms = rig.match_many(il.image, ir.image, centre[pub, 0], cov[pub, 0], centre[pub, 1],
+                                cov[pub, 1], self.C_px, self.C_px,
+                                [self.luts[i] for i in pub] if self.color_mask else None,
+                                self.match_std)
+            for i, m in zip(pub, ms, strict=True):
+                reason[i], score[i] = m.reason, m.score
+                if m.ok:
+                    ok[i], p_base[i], R_base[i] = True, m.p_base, m.R_base
+                    uv_match[i] = m.uv_left, m.uv_right
+                    name = self.targets[i]
+                    measured[name] = Measurement(name, m.p_base, m.R_base,
+                                                 {self.cameras[0]: m.uv_left,
+                                                  self.cameras[1]: m.uv_right})
+        events = self._update_states(t, seen.all(1) & confirmed)
+        row = (t, np.stack([il.camera.T_base_cam, ir.camera.T_base_cam]),
+               np.array([STATE_CODE[self.state[x]] for x in self.targets]), seen, confirmed,
+               centre, cov, ok, reason, p_base, R_base, uv_match, score)
+        return FrameResult(Measurements(measured, {x: self.state[x] for x in self.published}),
+                           row, (il.camera.intrinsics, ir.camera.intrinsics), events,
+                           (t, seen, centre, cov), self.identity_solves)
+
+    def _identify(self, tracked, rig, cam_l, cam_r) -> None:
+        """Re-decide the identities of every colour group's tracked blobs (both eyes)."""
+        self.identity_solves += 1
+        new: list[dict[int, str]] = [{}, {}]
+        for group in self.groups:
+            names = [self.targets[k] for k in group]
+            blobs = [[tr[k] for k in group if k in tr] for tr in tracked]
+            if len(group) == 1:  # a colour of its own: the slot is the target
+                for eye in (0, 1):
+                    if blobs[eye]:
+                        new[eye][group[0]] = names[0]
+                self.margin[names[0]] = np.inf
+                continue
+            ev = stereo_evidence(rig, cam_l, cam_r, blobs[0], blobs[1],
+                                 z_range=(self.stereo.z_min, self.stereo.z_max))
+            prev = [{k: v for k, v in self.ident[eye].items() if k in group} for eye in (0, 1)]
+            left, right, margins = assign(names, blobs[0], blobs[1], prev[0], prev[1], ev)
+            new[0].update(left)
+            new[1].update(right)
+            self.margin.update(margins)
+        self.ident = new
+
+    def _update_states(self, t: float, tracking: np.ndarray) -> list[tuple]:
+        events = []
+        for i, name in enumerate(self.targets):
+            old = self.state[name]
+            new = "tracking" if tracking[i] else ("searching" if old == "searching" else "lost")
+            if new != old:
+                self.state[name] = new
+                events.append((t, name, f"{old} -> {new}",
+                               "INFO" if new == "tracking" else "WARN"))
+        return events
