@@ -52,6 +52,17 @@ def test_no_limit_no_nan_and_the_head_stays_still(wave):
     assert m["ik"]["failures"] == 0
 
 
+def test_joint_limit_hits_name_the_joints(wave):
+    """The wave raises the arm: the shoulder abduction touches its band (ticks counted per joint;
+    a tick where two joints touch counts once in the total)."""
+    palm = wave["mimicry"]["R_palm"]
+    by_joint = palm["joint_limit_hits_by_joint"]
+    assert set(by_joint) <= {"R_SFE", "R_SAA", "R_HR", "R_EB", "R_WR", "R_WFE", "R_WAA",
+                             "B_TR", "B_TAA", "B_TFE"}
+    assert palm["joint_limit_hits"] > 0 and "R_SAA" in by_joint
+    assert max(by_joint.values()) <= palm["joint_limit_hits"] <= sum(by_joint.values())
+
+
 def test_error_budget_and_latencies_are_reported(wave):
     b = wave["mimicry"]["R_palm"]["error_budget_mm"]
     for key in ("perception", "filtering", "estimate", "latency", "interpolation", "workspace",

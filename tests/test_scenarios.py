@@ -51,6 +51,28 @@ def test_cli_run_writes_outputs(tmp_path):
     assert (out / "ground_truth.png").stat().st_size > 5_000
     resolved = (out / "scenario.resolved.yaml").read_text()
     assert "distance: 1.4" in resolved
+    _check_truth_sites_in_rrd(out)
+
+
+def _check_truth_sites_in_rrd(out):
+    """The 3-D view's ground-truth sites are the World's, at the pose rate (30 Hz)."""
+    import numpy as np
+    from rerun.chunk import RrdReader
+
+    from humimic.rngs import Rngs
+    from humimic.world.world import World
+
+    scenario = load_scenario(out / "scenario.resolved.yaml")
+    world = World(scenario, Rngs(scenario.seed))
+    rows = [chunk.to_record_batch() for chunk in RrdReader(out / "run.rrd").stream()
+            if chunk.entity_path == "/world/truth/sites"]
+    times = np.concatenate([rb.column("sim_time").cast("int64").to_numpy() for rb in rows])
+    points = [np.array(p) for rb in rows for p in rb.column("Points3D:positions").to_pylist()]
+    assert len(times) == 12  # 0.4 s at 30 Hz
+    for t_ns, p in zip(times, points, strict=True):
+        k = int(round(t_ns * 1e-9 * scenario.timing.physics_rate))
+        np.testing.assert_allclose(p, world.gt.pos[k], atol=1e-6)  # float32 in the .rrd
+    world.close()
 
 
 def _strip_wall(value):

@@ -23,7 +23,7 @@ from humimic.rngs import Rngs
 from humimic.scenario import Scenario, dump_scenario, load_scenario
 from humimic.viz.blueprint import default_blueprint
 from humimic.viz.plots import plot_trajectories
-from humimic.viz.rerun_log import SERIES, RerunLog, camera_entity
+from humimic.viz.rerun_log import SERIES, TRUTH, RerunLog, camera_entity
 from humimic.world.world import World
 
 #: Targets whose ground truth is always plotted and logged.
@@ -113,6 +113,12 @@ def _log_ground_truth(rlog, world, ticks: int) -> None:
     for target in GT_TARGETS:
         rlog.log_series(f"{SERIES}/ground_truth/{target}", t, world.gt.p_base(target)[:ticks],
                         names=["x", "y", "z"])
+    # Every ground-truth site as labelled points in the 3-D view, at the pose rate.
+    gt = world.gt
+    step = max(1, round(world.scenario.timing.physics_rate / world.scenario.output.pose_rate))
+    for k in range(0, ticks, step):
+        rlog.log_points(float(gt.t[k]), f"{TRUTH}/sites", gt.pos[k], colors=[40, 200, 40],
+                        radii=0.01, labels=list(gt.targets))
 
 
 def _plots(out: Path, world, stages, ticks: int) -> None:

@@ -4,7 +4,8 @@ ground truth.
 ``mimicry.<robot_site>``: ``rmse_mm`` between the site's displacement and the human part's true
 displacement after the mapping, ``lag_ms`` (cross-correlation peak), ``jerk`` (RMS third
 derivative, m/s^3; ``jerk_human`` for the mapped truth), ``joint_limit_hits`` (servo ticks at which
-an arm or torso joint target sits on the IK's limit band), ``clamped_fraction``,
+an arm or torso joint target sits on the IK's limit band; ``joint_limit_hits_by_joint`` counts
+them per joint), ``clamped_fraction``,
 ``error_budget_mm`` (see :func:`humimic.metrics.mimicry.error_terms`; ``perception`` and
 ``filtering`` are the raw measurement's and the estimate's errors at their photon times),
 ``interpolation`` (hold vs extrapolate commands against the truth). ``mimicry.head_still``,
@@ -121,15 +122,18 @@ def _event_error(arrivals, P: np.ndarray, S: np.ndarray, rate: float,
     return _mm(rmse(p[keep] @ S.T, P[_idx(t[keep], rate, len(P))] @ S.T))
 
 
-def _limit_hits(stage, site: str, k0: int) -> int:
-    """Servo ticks at which a joint of the site's arm or the torso sits on the IK's limit band."""
+def _limit_hits(stage, site: str, k0: int) -> tuple[int, dict[str, int]]:
+    """Servo ticks at which a joint of the site's arm or the torso sits on the IK's limit band,
+    and the ticks per joint (joints that never touch theirs are left out)."""
     rec = stage.rec
-    j = np.array([ROBOT_JOINTS.index(x) for x in ARM_JOINTS[site[0]] + TORSO_JOINTS])
+    names = ARM_JOINTS[site[0]] + TORSO_JOINTS
+    j = np.array([ROBOT_JOINTS.index(x) for x in names])
     band = stage.cfg.ik.limit_margin + LIMIT_TOL
     rng = stage.ik_model.jnt_range[j]
     q = rec.q_ik[k0:rec.n, j]
     hit = (q <= rng[:, 0] + band) | (q >= rng[:, 1] - band)
-    return int(np.any(hit, axis=1).sum())
+    per_joint = {name: int(n) for name, n in zip(names, hit.sum(axis=0), strict=True) if n}
+    return int(np.any(hit, axis=1).sum()), per_joint
 
 
 def site_metrics(stage, i: int, ch) -> tuple[dict, dict]:
@@ -160,6 +164,7 @@ def site_metrics(stage, i: int, ch) -> tuple[dict, dict]:
         interp[mode] = {"rmse_mm": _mm(rmse(s[key], s["true_now"])),
                         "lag_ms": _mm(xcorr_lag(s["true_now"], s[key], dt))}
     n_active = rec.n - k0
+    hits, hits_by_joint = _limit_hits(stage, ch.site, k0)
     stage_lags = {"interpolation": interp[primary]["lag_ms"],
                   "ik": _mm(xcorr_lag(s["true_now"], s["ik"], dt))}
     return stage_lags, {
@@ -170,7 +175,8 @@ def site_metrics(stage, i: int, ch) -> tuple[dict, dict]:
         "max_error_mm": _mm(float(np.max(np.linalg.norm(terms["total"], axis=1)))),
         "jerk": _num(rms_jerk(s["robot"], dt)),
         "jerk_human": _num(rms_jerk(s["true_now"], dt)),
-        "joint_limit_hits": _limit_hits(stage, ch.site, k0),
+        "joint_limit_hits": hits,
+        "joint_limit_hits_by_joint": hits_by_joint,
         "clamped_fraction": float(rec.clamped[k0:rec.n, i].mean()),
         "lost_fraction": float(rec.lost[k0:rec.n, i].mean()),
         "started_s": float(rec.t[k0]),
