@@ -5,6 +5,7 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 import pytest
+from _kinematics import site_positions
 
 from humimic.motion import quat
 from humimic.motion.arm_ik import reach_limits, solve_arm
@@ -22,16 +23,6 @@ from humimic.motion.avatar import (
 def avatar():
     m = load_avatar_model()
     return m, mujoco.MjData(m), AvatarGeometry.from_model(m)
-
-
-def _fk_sites(m, d, qpos, names):
-    out = {n: [] for n in names}
-    for q in qpos:
-        d.qpos[:] = q
-        mujoco.mj_kinematics(m, d)
-        for n in names:
-            out[n].append(d.site(n).xpos.copy())
-    return {n: np.array(v) for n, v in out.items()}
 
 
 def _random_torso(rng, n):
@@ -62,7 +53,7 @@ def test_reachable_targets_are_reached(avatar, side):
     res = solve_arm(side, target, R_c, p_c, g)
     assert res.reachable.all() and np.all(res.clamp_distance < 1e-12)
     _apply(q, side, res)
-    palm = _fk_sites(m, d, q, [f"{side}_hand"])[f"{side}_hand"]
+    palm = site_positions(m, q, [f"{side}_hand"])[f"{side}_hand"]
     assert np.max(np.linalg.norm(palm - target, axis=1)) < 1e-3
     # joints inside the model's ranges
     lo, hi = g.ranges[f"{side}_elbow"]
@@ -85,7 +76,7 @@ def test_unreachable_targets_are_clamped_and_reported(avatar):
     res = solve_arm("r", target, R_c, p_c, g)
     assert not res.reachable.any()
     _apply(q, "r", res)
-    palm = _fk_sites(m, d, q, ["r_hand"])["r_hand"]
+    palm = site_positions(m, q, ["r_hand"])["r_hand"]
     np.testing.assert_allclose(palm, res.p_reached, atol=1e-6)
     shell = np.where(dist > d_max, d_max, d_min)
     np.testing.assert_allclose(np.linalg.norm(palm - p_sh, axis=1), shell, atol=1e-6)
@@ -105,7 +96,7 @@ def test_waving_hand_faces_robot_with_elbow_low_and_out(avatar):
     R_c, p_c = chest_pose(q, g)
     res = solve_arm("r", target, R_c, p_c, g, palm_dir_avatar=np.array([1.0, 0.0, 0.0]))
     _apply(q, "r", res)
-    sites = _fk_sites(m, d, q, ["r_shoulder", "r_elbow", "r_hand"])
+    sites = site_positions(m, q, ["r_shoulder", "r_elbow", "r_hand"])
     palm_normal = []
     for qq in q:
         d.qpos[:] = qq

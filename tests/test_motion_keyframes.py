@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
-import mujoco
 import numpy as np
 import pytest
+from _kinematics import site_positions
 from pydantic import TypeAdapter, ValidationError
 from scipy.spatial.transform import Rotation
 
@@ -24,15 +24,7 @@ KEYS = [
 
 
 def _sites(qpos, names):
-    m = load_avatar_model()
-    d = mujoco.MjData(m)
-    out = {n: [] for n in names}
-    for q in qpos:
-        d.qpos[:] = q
-        mujoco.mj_kinematics(m, d)
-        for n in names:
-            out[n].append(d.site(n).xpos.copy())
-    return {n: np.array(v) for n, v in out.items()}
+    return site_positions(load_avatar_model(), qpos, names)
 
 
 def _motion(frames, **kw):
