@@ -32,7 +32,6 @@ import mujoco
 import numpy as np
 from mink.limits.collision_avoidance_limit import compute_contact_normal_jacobian
 
-from humimic.control.ik_objective import CollisionRows, TaskStack
 from humimic.paths import MODELS_DIR
 from humimic.world.names import EYE_JOINTS, ROBOT_JOINTS, TORSO_JOINTS
 
@@ -202,21 +201,20 @@ class MimicIK:
         self._gain = conf_limit.gain
         self._vmax = np.zeros(model.nv)
         self._vmax[vel_limit.indices] = vel_limit.limit
-        self._objective = TaskStack(self.configuration, self.tasks, self.damping)
-        self._collision_rows = CollisionRows(self.collision_limit)
+        self._empty_G = np.zeros((0, model.nv))
 
     def solve(self) -> np.ndarray:
         """Joint velocity of the IK step at the current configuration (zero if the QP fails).
 
         The same QP as ``mink.solve_ik(configuration, tasks, dt, "daqp", damping, limits)``
         with the joint and speed limits passed to daqp as simple bounds and the collision rows
-        that are out of range dropped, assembled without mink's per-call layers
-        (:mod:`~humimic.control.ik_objective`: the same numbers, several times faster; the
-        tests compare both with mink)."""
+        that are out of range dropped (3-4x faster; the test compares the two)."""
         cfg = self.configuration
-        H, c = self._objective(cfg)
+        H, c = qp_objective(cfg, self.tasks, self.damping)
         lb, ub = box_bounds(cfg.q, self._lower, self._upper, self._gain, self._vmax, self.dt)
-        G, h = self._collision_rows(cfg)
+        G, h = self.collision_limit.compute_qp_inequalities(cfg, self.dt)
+        keep = np.isfinite(h)
+        G, h = (G[keep], h[keep]) if keep.any() else (self._empty_G, h[:0])
         dq = solve_qp(H, c, lb, ub, G, h)
         if dq is None:
             self.failures += 1
