@@ -131,9 +131,9 @@ def test_prefiltered_reads_equal_blur_then_remap():
     assert big.k == 4 and big.blur == pytest.approx(0.8)
     assert np.abs(big.remap(mx, my).astype(float).mean() - img.mean()) < 3.0
 
-    class Half:  # a colour model giving p = 1 everywhere: the mask halves every pixel
-        def lookup(self, rgb):
-            return np.ones(rgb.shape[:-1], np.float32)
+    class Half:  # a colour model giving p = 1 everywhere: the mask p / (p + 1) halves pixels
+        def posterior(self, rgb):
+            return np.full(rgb.shape[:-1], 0.5, np.float32)
 
     masked = Prefiltered(img, 0.8, lut=Half()).remap(mx, my).astype(float)
     half = cv2.remap(cv2.GaussianBlur((img * 0.5).round().astype(np.uint8), (3, 3), 0.8), mx, my,

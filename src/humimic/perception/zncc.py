@@ -257,7 +257,7 @@ class Prefiltered:
             h = max((box[3] - y0 + 1) // k, 1) * k
             crop = self.image[y0:y0 + h, x0:x0 + w]
             if self.lut is not None:  # colour mask, at full resolution, back to uint8
-                crop = cv2.multiply(crop, cv2.merge([_posterior(self.lut, crop)] * 3),
+                crop = cv2.multiply(crop, cv2.merge([self.lut.posterior(crop)] * 3),
                                     dtype=cv2.CV_8U)
             if k > 1:
                 crop = cv2.resize(crop, (crop.shape[1] // k, crop.shape[0] // k),
@@ -273,14 +273,6 @@ class Prefiltered:
         return cv2.remap(self._crop, (mx - np.float32(x0) - off) / np.float32(k),
                          (my - np.float32(y0) - off) / np.float32(k), cv2.INTER_LINEAR,
                          borderMode=cv2.BORDER_REPLICATE)
-
-
-def _posterior(lut, rgb: np.ndarray) -> np.ndarray:
-    """``p / (p + 1)`` of a colour table's densities (tabulated when it has the table)."""
-    if hasattr(lut, "posterior"):
-        return lut.posterior(rgb)
-    p = lut.lookup(rgb)
-    return p / (p + 1.0)
 
 
 def read_batch(sources: list[Prefiltered], mx: np.ndarray, my: np.ndarray) -> np.ndarray:
