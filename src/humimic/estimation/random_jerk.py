@@ -64,7 +64,7 @@ def process_noise(dt: float, b: float) -> np.ndarray:
 
 
 def _sym(P: np.ndarray) -> np.ndarray:
-    return 0.5 * (P + (P.T if P.ndim == 2 else np.swapaxes(P, -1, -2)))
+    return 0.5 * (P + np.swapaxes(P, -1, -2))
 
 
 @functools.lru_cache(maxsize=64)
@@ -96,12 +96,6 @@ def update(
     R = np.asarray(R, dtype=float)
     PHt = P[..., :, 0:3]  # P H^T
     S = P[..., 0:3, 0:3] + R  # H P H^T + R
-    if P.ndim == 2:  # one filter (the same operations, without the batch machinery)
-        K = np.linalg.solve(S, PHt.T).T  # S symmetric
-        x_new = x + (K @ (z - x[0:3])[:, None])[:, 0]
-        IKH = _I9.copy()
-        IKH[:, 0:3] -= K
-        return x_new, _sym(IKH @ P @ IKH.T + K @ R @ K.T)
     K = np.swapaxes(np.linalg.solve(S, np.swapaxes(PHt, -1, -2)), -1, -2)  # S symmetric
     y = z - x[..., 0:3]
     x_new = x + (K @ y[..., None])[..., 0]
