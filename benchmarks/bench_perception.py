@@ -40,9 +40,9 @@ from _synth_vision import (  # noqa: E402
 
 import humimic  # noqa: E402,F401  (OpenGL backend before mujoco)
 from humimic.estimation.random_jerk import RandomJerkFilter  # noqa: E402
-from humimic.perception.color_models import ColorLUT, fit_color_model  # noqa: E402
-from humimic.perception.em_blobs import BlobTracker  # noqa: E402
-from humimic.perception.stereo import StereoRig  # noqa: E402
+from humimic.perception.blobs.em_blobs import BlobTracker  # noqa: E402
+from humimic.perception.blobs.stereo import StereoRig  # noqa: E402
+from humimic.perception.cues.color_models import ColorLUT, fit_color_model  # noqa: E402
 
 BASE = np.array([[1.0, 0.25, 1.35], [1.0, -0.25, 1.35], [1.1, 0.2, 1.0], [1.1, -0.2, 1.0]])
 AXES = [(10, 7), (8, 12), (14, 9), (9, 9)]

@@ -25,7 +25,7 @@ PIXEL_STD = 0.3
 
 def skin_lut():
     """The shipped skin colour model as a look-up table, or a model fitted to a skin patch."""
-    from humimic.perception.color_models import ColorLUT, fit_color_model, load_color_model
+    from humimic.perception.cues.color_models import ColorLUT, fit_color_model, load_color_model
 
     if SKIN_MODEL.is_file():
         return ColorLUT(load_color_model(SKIN_MODEL)), "models/colors/skin.json"
@@ -63,7 +63,7 @@ def synthetic_blob_frames(n: int = 120):
 
 
 def bench_em(repeats: int) -> list[Row]:
-    from humimic.perception.em_blobs import BlobTracker
+    from humimic.perception.blobs.em_blobs import BlobTracker
 
     lut, source = skin_lut()
     frames, centres, axes = synthetic_blob_frames()
@@ -89,7 +89,7 @@ def bench_em(repeats: int) -> list[Row]:
 def bench_stereo(repeats: int, seq) -> list[Row]:
     """``StereoRig(...)`` + ``match_many`` per stereo frame on rendered frames, blob centres
     and shapes from ground truth (the stage's inputs), 1 and 3 targets."""
-    from humimic.perception.stereo import StereoRig
+    from humimic.perception.blobs.stereo import StereoRig
 
     L, R = seq.cameras
     C = np.eye(2) * PIXEL_STD**2

@@ -35,7 +35,7 @@ TERM = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 10, 1.0)
 
 def em_track(seq, lut) -> tuple[np.ndarray, float]:
     """Centres (frames, targets, 2) and seconds per frame."""
-    from humimic.perception.em_blobs import BlobTracker
+    from humimic.perception.blobs.em_blobs import BlobTracker
 
     cam = seq.cameras[0]
     K = len(seq.targets)

@@ -1,4 +1,4 @@
-"""Our ZNCC (``humimic.perception.zncc``) vs ``cv2.matchTemplate(TM_CCOEFF_NORMED)``.
+"""Our ZNCC (``humimic.perception.blobs.zncc``) vs ``cv2.matchTemplate(TM_CCOEFF_NORMED)``.
 
 Same inputs, from a rendered stereo frame of the wave: a 13x13 colour template around the
 waving hand in the left image, searched in the right image over (a) a 13-row strip 120 px wide
@@ -39,7 +39,7 @@ def check(ours: np.ndarray, peer: np.ndarray, name: str) -> float:
 
 
 def bench_zncc_peers(repeats: int, seq) -> list[Peer]:
-    from humimic.perception.zncc import zncc_map, zncc_strips
+    from humimic.perception.blobs.zncc import zncc_map, zncc_strips
 
     out = []
     cs, (strip, tpl) = cases(seq)

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from scipy.stats import multivariate_normal
 
-from humimic.perception.color_models import (
+from humimic.perception.cues.color_models import (
     ColorLUT,
     ColorModel,
     fit_color_model,

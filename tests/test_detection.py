@@ -7,8 +7,7 @@ import numpy as np
 import pytest
 from _synth_vision import SKIN_RGB, add_noise, clutter_background, draw_ellipse
 
-from humimic.perception.color_models import ColorLUT, fit_color_model
-from humimic.perception.detection import (
+from humimic.perception.blobs.detection import (
     DetectingTracker,
     DetectionParams,
     TargetState,
@@ -17,6 +16,7 @@ from humimic.perception.detection import (
     random_hypotheses,
     window_points,
 )
+from humimic.perception.cues.color_models import ColorLUT, fit_color_model
 
 DT = 1.0 / 60.0
 
@@ -151,7 +151,7 @@ def test_three_skin_targets_found_on_distinct_blobs(skin_lut):
 def test_fitted_hypotheses_take_the_blob_shape():
     """The colour-drawn hypotheses take the moments of the colour map around them: compared with
     the moments of the drawn ellipse's pixels computed directly."""
-    from humimic.perception.detection import fitted_hypotheses
+    from humimic.perception.blobs.detection import fitted_hypotheses
 
     img = np.zeros((240, 320), np.uint8)
     cv2.ellipse(img, (150, 100), (18, 8), 30, 0, 360, 255, -1)
@@ -183,7 +183,7 @@ def test_posterior_score_counts_target_pixels(skin_lut):
 def test_group_searches_once_per_frame_and_backs_off(skin_lut, monkeypatch):
     """Three same-coloured targets share one search per frame; after backoff_s of finding
     nothing it runs only every backoff_every frames."""
-    import humimic.perception.detection as D
+    import humimic.perception.blobs.detection as D
 
     calls = []
     real = D.color_sums

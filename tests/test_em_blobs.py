@@ -9,8 +9,7 @@ import pytest
 from _synth_vision import SKIN_RGB, add_noise, clutter_background, draw_ellipse
 from scipy.stats import multivariate_normal
 
-from humimic.perception.color_models import ColorLUT, ColorModel, fit_color_model
-from humimic.perception.em_blobs import (
+from humimic.perception.blobs.em_blobs import (
     BlobTracker,
     EMParams,
     e_step,
@@ -19,6 +18,7 @@ from humimic.perception.em_blobs import (
     roi_samples,
     shape_density,
 )
+from humimic.perception.cues.color_models import ColorLUT, ColorModel, fit_color_model
 
 
 @pytest.fixture(scope="module")

@@ -17,9 +17,9 @@ from humimic.motion.bvh import (
     load_bvh,
     parse_bvh,
 )
-from humimic.paths import SHARED_DATA_DIR
+from humimic.paths import DATA_DIR
 
-CMU = SHARED_DATA_DIR / "mocap" / "cmu_01_01.bvh"
+CMU = DATA_DIR / "mocap" / "cmu_01_01.bvh"
 
 SMALL = """HIERARCHY
 ROOT root

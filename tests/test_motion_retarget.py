@@ -19,9 +19,9 @@ from humimic.motion.bvh import (
 from humimic.motion.config import BVHMotion
 from humimic.motion.playback import BVHPlayback
 from humimic.motion.retarget import M_AVATAR_BVH, retarget
-from humimic.paths import SHARED_DATA_DIR
+from humimic.paths import DATA_DIR
 
-CMU = SHARED_DATA_DIR / "mocap" / "cmu_01_01.bvh"
+CMU = DATA_DIR / "mocap" / "cmu_01_01.bvh"
 SITES = {"r_shoulder": "RightArm", "r_elbow": "RightForeArm", "r_wrist": "RightHand",
          "l_shoulder": "LeftArm", "l_elbow": "LeftForeArm", "l_wrist": "LeftHand"}
 

@@ -16,7 +16,7 @@ import pytest
 
 from humimic.metrics.ude_tables import table2
 from humimic.paths import SCENARIOS_DIR
-from humimic.perception.stereo import StereoRig
+from humimic.perception.blobs.stereo import StereoRig
 from humimic.pipeline.build import build_stages
 from humimic.pipeline.simulation import simulate
 from humimic.pipeline.stage import Stage

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from _synth_vision import stereo_head
 
-from humimic.perception.identity import (
+from humimic.perception.blobs.identity import (
     HAND_MAX_RADIUS_M,
     HEAD_MIN_RADIUS_M,
     Blob,
@@ -18,7 +18,7 @@ from humimic.perception.identity import (
     image_rule_cost,
     stereo_evidence,
 )
-from humimic.perception.stereo import StereoRig
+from humimic.perception.blobs.stereo import StereoRig
 
 TARGETS = ["head", "right_hand", "left_hand"]
 #: Person ~1.2 m in front (base x forward, y left, z up): their right hand is at +y.

@@ -216,7 +216,7 @@ def test_pipelined_and_synchronous_give_identical_results(mode, synchronous_run,
     here also forced to take over mid-run, after detection and identities have settled) and
     the legacy ``true``: the same messages, numbers and times as synchronous processing."""
     if mode == "process_from_frame_40":
-        from humimic.perception.worker import ProcessWorker
+        from humimic.perception.blobs.worker import ProcessWorker
 
         real, calls = ProcessWorker.ready, []
 
@@ -237,7 +237,7 @@ def test_pipelined_and_synchronous_give_identical_results(mode, synchronous_run,
 
 
 def test_pipelined_mode_choice():
-    from humimic.perception.stage import PROCESS_MIN_S, worker_kind
+    from humimic.perception.blobs.stage import PROCESS_MIN_S, worker_kind
 
     def mode(value):
         return load_scenario(SCENARIOS_DIR / "ude_wave_tracking.yaml",

@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 
 from humimic.paths import SCENARIOS_DIR
-from humimic.perception.color_models import load_color_model
-from humimic.perception.config import DEFAULT_COLOR_MODEL
-from humimic.perception.learn_colors import collect, main, separation
+from humimic.perception.blobs.config import DEFAULT_COLOR_MODEL
+from humimic.perception.cues.color_models import load_color_model
+from humimic.perception.cues.learn_colors import collect, main, separation
 from humimic.scenario import load_scenario
 
 

@@ -68,8 +68,8 @@ def test_missing_scenario_file(tmp_path, capsys):
     assert code == 2 and "not found" in err and len(err.strip().splitlines()) == 1
 
 
-def test_malformed_bvh_names_the_line(tmp_path, capsys, shared_data):
-    lines = (shared_data / "mocap" / "cmu_01_01.bvh").read_text().splitlines()
+def test_malformed_bvh_names_the_line(tmp_path, capsys, data_dir):
+    lines = (data_dir / "mocap" / "cmu_01_01.bvh").read_text().splitlines()
     bad_line = next(i for i, line in enumerate(lines) if "OFFSET" in line and i > 10)
     lines[bad_line] = "    OFFSET 1.0 abc 2.0"
     clip = tmp_path / "bad.bvh"

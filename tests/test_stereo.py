@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from _synth_vision import TexturedPlane, point_on_plane_seen_at, stereo_head
 
-from humimic.perception.stereo import (
+from humimic.perception.blobs.stereo import (
     StereoRig,
     dlt_jacobian,
     match_and_triangulate,
@@ -141,7 +141,7 @@ def test_failures_are_flagged_not_nan(scene):
 def test_following_covariance_matches_monte_carlo():
     """The template follows the left centre: a centre error e moves the right match by e, and
     the match adds its own error along the epipolar line. Propagation vs sampling that model."""
-    from humimic.perception.stereo import following_covariance
+    from humimic.perception.blobs.stereo import following_covariance
 
     cam_l, cam_r = stereo_head(k1=0.0, k2=0.0)
     rig = StereoRig(cam_l, cam_r)
@@ -168,7 +168,7 @@ def test_colour_masked_match_ignores_background_clutter():
     (its outline) only."""
     from _synth_vision import SKIN_RGB, add_noise, draw_ellipse
 
-    from humimic.perception.color_models import ColorLUT, fit_color_model
+    from humimic.perception.cues.color_models import ColorLUT, fit_color_model
 
     rng = np.random.default_rng(6)
     cam_l, cam_r = stereo_head(k1=0.0, k2=0.0)

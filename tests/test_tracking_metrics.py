@@ -21,9 +21,9 @@ from humimic.metrics.tracking import (
     rmse,
 )
 from humimic.metrics.ude_tables import refilter, table2, table3
-from humimic.perception.archive import load_archive, save_archive
-from humimic.perception.record import STATE_CODE, PerceptionRecord
-from humimic.perception.stereo import StereoRig
+from humimic.perception.blobs.archive import load_archive, save_archive
+from humimic.perception.blobs.record import STATE_CODE, PerceptionRecord
+from humimic.perception.blobs.stereo import StereoRig
 
 S, T, L = (STATE_CODE[k] for k in ("searching", "tracking", "lost"))
 

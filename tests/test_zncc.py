@@ -6,7 +6,7 @@ import cv2
 import numpy as np
 import pytest
 
-from humimic.perception.zncc import parabola_offset, subpixel_peak, zncc_map, zncc_strips
+from humimic.perception.blobs.zncc import parabola_offset, subpixel_peak, zncc_map, zncc_strips
 
 
 @pytest.mark.parametrize(
@@ -93,7 +93,7 @@ def test_batched_strips_match_opencv():
 
 def test_windows_match_opencv_per_window():
     """zncc_windows (the fine sub-sample search) against cv2.matchTemplate on each window."""
-    from humimic.perception.zncc import zncc_windows
+    from humimic.perception.blobs.zncc import zncc_windows
 
     rng = np.random.default_rng(7)
     n, m, h, w = 3, 5, 9, 11
@@ -115,7 +115,7 @@ def test_windows_match_opencv_per_window():
 def test_prefiltered_reads_equal_blur_then_remap():
     """Prefiltered blurs only the crop the samples need: same values as blurring the whole
     image (away from its border), and masking multiplies by p / (p + 1) first."""
-    from humimic.perception.zncc import Prefiltered
+    from humimic.perception.blobs.zncc import Prefiltered
 
     rng = np.random.default_rng(8)
     img = rng.integers(0, 256, (120, 160, 3)).astype(np.uint8)
@@ -144,7 +144,7 @@ def test_prefiltered_reads_equal_blur_then_remap():
 def test_fast_paths_equal_numpys_bit_for_bit():
     """uint8 windows and templates take exact integer-sum shortcuts (channel means by one
     matrix product, per-channel centring): the same numbers as the generic float path."""
-    from humimic.perception.zncc import _center_channels, zncc_windows
+    from humimic.perception.blobs.zncc import _center_channels, zncc_windows
 
     rng = np.random.default_rng(11)
     windows = rng.integers(0, 256, (3, 9, 17, 17, 3)).astype(np.uint8)
@@ -164,7 +164,7 @@ def test_fast_paths_equal_numpys_bit_for_bit():
 def test_batched_reads_equal_single_reads():
     """read_batch (one float32 conversion and bound computation for all jobs) reads what each
     source's own remap reads."""
-    from humimic.perception.zncc import Prefiltered, read_batch
+    from humimic.perception.blobs.zncc import Prefiltered, read_batch
 
     rng = np.random.default_rng(12)
     img = rng.integers(0, 256, (120, 160, 3)).astype(np.uint8)

@@ -32,7 +32,7 @@ import math
 
 import numpy as np
 
-from humimic.perception.record import STATE_CODE
+from humimic.perception.blobs.record import STATE_CODE
 
 MM = 1e3
 #: Start-up transient of the filter excluded from its scores (s).

@@ -3,7 +3,7 @@
 Table 2 (a static object): the empirical covariances of the two image points of each stereo
 correspondence (px^2) and of the triangulated 3-D points, against the 3-D covariance obtained by
 propagating the 2-D ones through triangulation -- both the paper's way (left and right points
-independent) and the way this matcher needs (:func:`~humimic.perception.stereo.
+independent) and the way this matcher needs (:func:`~humimic.perception.blobs.stereo.
 following_covariance`: the right match follows the template cut at the left blob centre).
 
 Table 3 (a static hand): mean and standard deviation of raw and filtered positions and of the
@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from humimic.estimation.random_jerk import RandomJerkFilter
-from humimic.perception.stereo import StereoRig, following_covariance
+from humimic.perception.blobs.stereo import StereoRig, following_covariance
 from humimic.sensors.camera_model import invert_transform
 
 MM = 1e3

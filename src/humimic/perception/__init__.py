@@ -1,1 +1,2 @@
-"""Vision: colour models, EM blob tracking, detection, ZNCC stereo matching (Ude & Atkeson)."""
+"""Vision. ``blobs/``: Ude & Atkeson's colour-blob stereo tracker; ``cues/``: image cues shared
+by every tracker (colour models, ...); ``reproduce``: the papers' tables and figures."""

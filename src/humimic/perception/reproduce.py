@@ -28,7 +28,7 @@ from humimic.metrics.ude_tables import (
     table3,
 )
 from humimic.paths import SCENARIOS_DIR
-from humimic.perception.archive import load_archive
+from humimic.perception.blobs.archive import load_archive
 
 SCENARIOS = {"table2": "ude_table2_static_object.yaml", "table3": "ude_table3_static_hand.yaml",
              "fig1": "ude_fig1_axes.yaml"}

@@ -10,7 +10,7 @@ def build_stages(scenario, world, rngs, rlog) -> list[Stage]:
     stages: list[Stage] = []
     if (getattr(scenario, "perception", None) is not None
             or getattr(scenario, "filter", None) is not None):
-        from humimic.perception.build import perception_stages
+        from humimic.perception.blobs.build import perception_stages
 
         stages.extend(perception_stages(scenario, world, rngs, rlog))
     if getattr(scenario, "mimic", None) is not None:

@@ -67,7 +67,7 @@ def load_run(run_dir: str | Path) -> Run:
         raise NotARunError(f"{metrics_file}: not a humimic metrics file (no 'scenario' key)")
     archive = None
     if (path / "tracking.npz").is_file():
-        from humimic.perception.archive import load_archive
+        from humimic.perception.blobs.archive import load_archive
 
         archive = load_archive(path / "tracking.npz")
     images = []

@@ -11,7 +11,7 @@ from pydantic import Field
 
 from humimic.control.config import MimicConfig
 from humimic.estimation.config import FilterConfig
-from humimic.perception.config import PerceptionConfig
+from humimic.perception.blobs.config import PerceptionConfig
 from humimic.scenario.base import Section
 from humimic.sensors.config import Cameras, Sensors, Timing
 from humimic.viz.config import Output
@@ -34,7 +34,7 @@ class Scenario(Section):
     timing: Timing = Field(default_factory=Timing)
     output: Output = Field(default_factory=Output)
     perception: PerceptionConfig | None = None
-    """Colour-blob stereo tracking (see :mod:`humimic.perception.config`); absent: none."""
+    """Colour-blob stereo tracking (see :mod:`humimic.perception.blobs.config`); absent: none."""
     filter: FilterConfig | None = None
     """Random-jerk Kalman filter of perception's measurements (see
     :mod:`humimic.estimation.config`); needs ``perception``."""

@@ -1,6 +1,6 @@
 """Which blob is which target: identities of same-coloured blobs (head and hands are skin).
 
-The detector (:mod:`humimic.perception.detection`) finds blobs of one colour one by one and
+The detector (:mod:`humimic.perception.blobs.detection`) finds blobs of one colour one by one and
 cannot tell which body part each is. Identities are decided jointly for both eyes, whenever the
 set of tracked blobs changes or a new blob has settled, as the cheapest assignment of blobs to
 targets under:
@@ -39,7 +39,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from humimic.perception.stereo import StereoRig
+from humimic.perception.blobs.stereo import StereoRig
 
 AREA_RULE = 1.0
 ORDER_RULE = 1.0

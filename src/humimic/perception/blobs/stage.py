@@ -1,7 +1,7 @@
 """The perception stage: both eye images -> named 3-D measurements in the robot base frame.
 
 The per-frame work (tracking, identities, stereo, triangulation; Ude eqs. 1-10) is
-:class:`~humimic.perception.core.PerceptionCore`'s; this stage feeds it the ``frames`` topic,
+:class:`~humimic.perception.blobs.core.PerceptionCore`'s; this stage feeds it the ``frames`` topic,
 publishes ``measurements`` with the frame's photon time, ready ``latency`` after the frame was
 (a declared processing delay; the compute time itself is reported separately in
 ``stages.perception``), records every frame and logs blobs and state changes to rerun.
@@ -12,7 +12,7 @@ when the next frame arrives -- never later than its declared ready time, so what
 and when (simulated time), is the same as without the worker. ``stages.perception`` is then the
 worker's compute time, ``stages.perception_wait`` what the loop waited for it. The worker is
 
-* ``process``: a child process (:mod:`humimic.perception.worker`); no lock is shared with the
+* ``process``: a child process (:mod:`humimic.perception.blobs.worker`); no lock is shared with the
   simulation, whose own Python work (mimic, physics loop) would otherwise run about half as
   fast. Until the child has started (0.1-0.3 s) frames are processed in a thread, then the
   core is handed over;
@@ -33,8 +33,8 @@ from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 
-from humimic.perception.core import FrameResult, PerceptionCore
-from humimic.perception.record import PerceptionRecord
+from humimic.perception.blobs.core import FrameResult, PerceptionCore
+from humimic.perception.blobs.record import PerceptionRecord
 from humimic.pipeline.stage import Stage
 from humimic.viz.rerun_log import EVENTS, image_entity
 
@@ -65,7 +65,7 @@ def worker_kind(mode: str, duration: float) -> str:
 
 
 class PerceptionStage(Stage):
-    """See the module docstring; ``luts`` as :class:`~humimic.perception.core.PerceptionCore`.
+    """See the module docstring; ``luts`` as :class:`~humimic.perception.blobs.core.PerceptionCore`.
     ``duration`` (simulated s) is the run's length, for the ``auto`` worker choice."""
 
     name = "perception"
@@ -83,7 +83,7 @@ class PerceptionStage(Stage):
         self._pool = ThreadPoolExecutor(1, "perception") if self.pipelined else None
         self._proc = None
         if self.worker == "process":
-            from humimic.perception.worker import ProcessWorker
+            from humimic.perception.blobs.worker import ProcessWorker
 
             try:
                 self._proc = ProcessWorker()

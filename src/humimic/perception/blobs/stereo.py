@@ -22,7 +22,7 @@ The eyes pan and tilt, so the images are never assumed rectified. For each targe
    best sample; a parabola through the best three gives the match, exactly on the line.
 5. Homogeneous linear triangulation (DLT, as ``cv2.triangulatePoints``) of the undistorted
    normalised points with ``P = T_cam_base[:3]``: the base-frame point
-   (:mod:`humimic.perception.triangulation`).
+   (:mod:`humimic.perception.blobs.triangulation`).
 6. ``R = J C J^T``, ``J`` the analytic Jacobian of step 5 (first-order perturbation of the DLT
    null vector) chained with the Jacobians of undistortion; ``C`` the 4x4 pixel covariance of
    the correspondence: ``diag(C_left, C_right)`` (Ude's Table 2) or, since the right match
@@ -39,7 +39,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from humimic.perception.triangulation import (  # noqa: F401  (re-exported)
+from humimic.perception.blobs.triangulation import (  # noqa: F401  (re-exported)
     distort_to_pixels,
     dlt_jacobian,
     following_covariance,
@@ -48,8 +48,8 @@ from humimic.perception.triangulation import (  # noqa: F401  (re-exported)
     undistort_jacobian,
     undistort_point,
 )
-from humimic.perception.zncc import Prefiltered, zncc_strips, zncc_windows
-from humimic.perception.zncc import read_batch as _read
+from humimic.perception.blobs.zncc import Prefiltered, zncc_strips, zncc_windows
+from humimic.perception.blobs.zncc import read_batch as _read
 from humimic.sensors.camera_model import CameraModel, invert_transform
 
 
@@ -71,7 +71,7 @@ class StereoParams:
     """ZNCC below this fails with reason 'low_zncc'."""
     prefilter_sigma: float = 0.8
     """Least Gaussian blur (px) of the images before they are sampled, growing to half the
-    sample spacing for big blobs (:class:`~humimic.perception.zncc.Prefiltered`, on the crops
+    sample spacing for big blobs (:class:`~humimic.perception.blobs.zncc.Prefiltered`, on the crops
     the samples need): anti-aliasing, so a template shifted by a fraction of a pixel still
     matches at the shifted place (rendered edges are hard steps; bilinear reads of them are not
     shift-invariant). 0: no prefilter."""

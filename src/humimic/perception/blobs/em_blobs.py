@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from humimic.perception.color_models import ColorLUT
+from humimic.perception.cues.color_models import ColorLUT
 
 _TWO_PI = 2.0 * np.pi
 

@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from humimic.estimation.stage import FilterArrays
-from humimic.perception.record import PerceptionArrays
+from humimic.perception.blobs.record import PerceptionArrays
 from humimic.sensors.camera_model import Intrinsics
 
 _INTR = ("width", "height", "fx", "fy", "cx", "cy", "k1", "k2")

@@ -1,4 +1,4 @@
-"""Run a :class:`~humimic.perception.core.PerceptionCore` in a separate process.
+"""Run a :class:`~humimic.perception.blobs.core.PerceptionCore` in a separate process.
 
 Threads share one interpreter lock: perception in a worker *thread* slows the simulation's
 own Python work (the mimic stage, the physics loop) about twofold. A worker *process* does not.
@@ -6,7 +6,7 @@ own Python work (the mimic stage, the physics loop) about twofold. A worker *pro
 Protocol (one child per run, one frame in flight, FIFO, so results are those of the
 synchronous path):
 
-* the child is started with ``python -m humimic.perception.worker`` (no re-import of the
+* the child is started with ``python -m humimic.perception.blobs.worker`` (no re-import of the
   caller's ``__main__``, unlike ``multiprocessing``'s spawn) and imports only perception code;
   it says ``ready`` when it can work. Start-up (~0.1-0.3 s) never blocks the simulation: the
   stage keeps processing in a thread until :meth:`ProcessWorker.ready` and then hands its core
@@ -15,7 +15,7 @@ synchronous path):
 * per frame the images are copied into a shared memory block (an anonymous ``memfd``, or an
   unlinked temporary file, handed to the child at start) and only the frame's time and camera
   models go through the pipe; the child answers with the
-  :class:`~humimic.perception.core.FrameResult` and its compute time;
+  :class:`~humimic.perception.blobs.core.FrameResult` and its compute time;
 * closing the pipe ends the child; an error in the child is raised in the caller.
 
 Why not ``concurrent.futures.ProcessPoolExecutor``: ``fork`` would copy a process that holds an
@@ -65,7 +65,7 @@ class ProcessWorker:
             [root, *filter(None, os.environ.get("PYTHONPATH", "").split(os.pathsep))])}
         try:
             self.proc = subprocess.Popen(
-                [sys.executable, "-m", "humimic.perception.worker", str(r_in), str(w_out),
+                [sys.executable, "-m", "humimic.perception.blobs.worker", str(r_in), str(w_out),
                  str(self._shm_fd)],
                 pass_fds=(r_in, w_out, self._shm_fd), stdin=subprocess.DEVNULL,
                 close_fds=True, env=env)
@@ -155,7 +155,7 @@ class ProcessWorker:
 
 # ---- the child ---------------------------------------------------------------------------------
 def _serve(recv: Connection, send: Connection, shm_fd: int) -> None:
-    import humimic.perception.core  # noqa: F401  (imports everything a core unpickles)
+    import humimic.perception.blobs.core  # noqa: F401  (imports everything a core unpickles)
     from humimic.sensors.camera_model import CameraImage
 
     send.send_bytes(pickle.dumps(("ready",)))

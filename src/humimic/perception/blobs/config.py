@@ -122,7 +122,7 @@ class PerceptionConfig(Section):
     distractors, not published), so that e.g. a hand is never taken for the head."""
     identity_margin: float = Field(1.0, ge=0.0, le=10.0)
     """A target is measured only when the evidence for its identity beats the next best
-    assignment by this much (rule units, see :mod:`humimic.perception.identity`); 0 also
+    assignment by this much (rule units, see :mod:`humimic.perception.blobs.identity`); 0 also
     publishes guesses (e.g. a lone blob seen by one eye first)."""
     roi_side: int = Field(20, ge=4, le=200)
     """EM samples per side of each blob's region of interest (cost is bounded by it)."""

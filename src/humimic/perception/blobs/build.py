@@ -10,11 +10,11 @@ from __future__ import annotations
 from pathlib import Path
 
 from humimic.estimation.stage import FilterRecord, FilterStage
-from humimic.perception.color_models import ColorLUT, load_color_model
-from humimic.perception.config import DEFAULT_COLOR_MODEL, TRACKABLE_TARGETS
-from humimic.perception.record import PerceptionRecord
-from humimic.perception.report import TrackingReport
-from humimic.perception.stage import PerceptionStage
+from humimic.perception.blobs.config import DEFAULT_COLOR_MODEL, TRACKABLE_TARGETS
+from humimic.perception.blobs.record import PerceptionRecord
+from humimic.perception.blobs.report import TrackingReport
+from humimic.perception.blobs.stage import PerceptionStage
+from humimic.perception.cues.color_models import ColorLUT, load_color_model
 from humimic.pipeline.stage import Stage
 from humimic.scenario.errors import ScenarioError
 
@@ -63,15 +63,16 @@ def load_luts(scenario) -> dict[str, ColorLUT]:
         if path not in by_file:
             key = _color_key(cfg, target)
             if not path.is_file():
-                hint = ("learn one: python -m humimic.perception.learn_colors --out "
+                hint = ("learn one: python -m humimic.perception.cues.learn_colors --out "
                         f"{DEFAULT_COLOR_MODEL}") if path == DEFAULT_COLOR_MODEL.resolve() \
                     else "an existing colour-model file"
                 raise ScenarioError(where, key, "colour-model file not found", str(path), hint)
             try:
                 model = load_color_model(path)
             except ValueError as err:
-                raise ScenarioError(where, key, str(err), str(path),
-                                    "a file written by humimic.perception.learn_colors") from None
+                raise ScenarioError(
+                    where, key, str(err), str(path),
+                    "a file written by humimic.perception.cues.learn_colors") from None
             by_file[path] = ColorLUT(model, cfg.lut_bits)
         out[target] = by_file[path]
     return out

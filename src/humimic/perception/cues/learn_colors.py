@@ -1,6 +1,6 @@
 """Learn a colour model off-line from rendered frames, MuJoCo segmentation as the labels.
 
-``python -m humimic.perception.learn_colors --out models/colors/skin.json [options]``
+``python -m humimic.perception.cues.learn_colors --out models/colors/skin.json [options]``
 
 The person of a scenario (default ``scenarios/wave.yaml``) is rendered by the robot's eye
 cameras at ``--frames`` instants spread over its motion, for each camera kind in ``--which``
@@ -26,7 +26,7 @@ import numpy as np
 import humimic  # noqa: F401  (OpenGL backend before mujoco renders)
 from humimic.errors import InputError
 from humimic.paths import SCENARIOS_DIR
-from humimic.perception.color_models import ColorModel, fit_color_model, save_color_model
+from humimic.perception.cues.color_models import ColorModel, fit_color_model, save_color_model
 from humimic.rngs import Rngs
 from humimic.scenario import load_scenario
 from humimic.sensors.cameras import add_pixel_noise
@@ -115,7 +115,7 @@ def learn(scenario, which: list[str], n_frames: int, space: str, n_components: i
 
 
 def _parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="python -m humimic.perception.learn_colors",
+    p = argparse.ArgumentParser(prog="python -m humimic.perception.cues.learn_colors",
                                 description=__doc__.split("\n")[0])
     p.add_argument("--out", type=Path, required=True, help="output file (.json or .npz)")
     p.add_argument("--scenario", type=Path, default=SCENARIOS_DIR / "wave.yaml",

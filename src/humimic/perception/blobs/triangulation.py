@@ -3,7 +3,7 @@
 Homogeneous linear triangulation (DLT, as ``cv2.triangulatePoints``) of undistorted
 normalised points, the analytic Jacobian of the result w.r.t. the four image coordinates
 (first-order perturbation of the DLT null vector), and the radial (un)distortion helpers that
-chain raw pixels to normalised coordinates. Used by :mod:`humimic.perception.stereo`
+chain raw pixels to normalised coordinates. Used by :mod:`humimic.perception.blobs.stereo`
 (Ude eq. 10 and the covariance propagation of Table 2).
 """
 

@@ -4,7 +4,7 @@ perception + filter.
 A stage with no inputs: it reads the perception and filter records after the run and the
 ground truth at the frames' photon times (see :mod:`humimic.metrics.tracking` for the scores).
 ``plots(out_dir)`` writes ``tracking_<target>_error.png``, ``tracking_<target>_pva.png`` and
-``tracking.npz`` (:mod:`humimic.perception.archive`).
+``tracking.npz`` (:mod:`humimic.perception.blobs.archive`).
 """
 
 from __future__ import annotations
@@ -14,8 +14,8 @@ from pathlib import Path
 import numpy as np
 
 from humimic.metrics.tracking import FILTER_SETTLE_S, stereo_failures, target_scores
-from humimic.perception.archive import save_archive
-from humimic.perception.plots import plot_pva, plot_tracking_errors
+from humimic.perception.blobs.archive import save_archive
+from humimic.perception.blobs.plots import plot_pva, plot_tracking_errors
 from humimic.pipeline.stage import Stage
 from humimic.viz.rerun_log import SERIES
 

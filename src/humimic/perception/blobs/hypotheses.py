@@ -3,7 +3,7 @@
 Pure functions: hypothesis shapes (random within size limits, or fitted to the colour map),
 the fixed-size window warped onto each hypothesis, the colour sum f over it (eq. 8), the
 phase-one threshold (eq. 9) and the proposal of centres. Used by
-:class:`humimic.perception.detection.DetectingTracker`.
+:class:`humimic.perception.blobs.detection.DetectingTracker`.
 """
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ import math
 
 import numpy as np
 
-from humimic.perception.color_models import ColorLUT
+from humimic.perception.cues.color_models import ColorLUT
 
 
 def random_hypotheses(rng: np.random.Generator, centres: np.ndarray, sigma_min: float,

@@ -5,14 +5,14 @@ with their random generators, the blob identities and margins, the target states
 else: no bus, no recorder, no rerun. One call of :meth:`PerceptionCore.process` per stereo frame
 returns a :class:`FrameResult` (the measurements and what the stage records and logs), so the
 same object runs in the simulation's thread, in a worker thread or, pickled, in a worker process
-(:mod:`humimic.perception.worker`) with identical results.
+(:mod:`humimic.perception.blobs.worker`) with identical results.
 
 Per stereo frame (photon time ``t``):
 
-1. each eye's :class:`~humimic.perception.detection.DetectingTracker` runs EM on its tracked
+1. each eye's :class:`~humimic.perception.blobs.detection.DetectingTracker` runs EM on its tracked
    blobs (Ude eqs. 1-7) and searches for the others (eqs. 8-9);
 2. when the set of tracked blobs changed, blob identities are re-decided for both eyes jointly
-   (:mod:`humimic.perception.identity`); otherwise every blob keeps its name;
+   (:mod:`humimic.perception.blobs.identity`); otherwise every blob keeps its name;
 3. every published target with a blob in both eyes is matched by ZNCC along the epipolar line
    and triangulated (eq. 10) with the cameras' poses *at the photon time* (from the eyes'
    current kinematics), so the measurement is in the base frame however head and eyes moved,
@@ -30,11 +30,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from humimic.messages import Measurement, Measurements
-from humimic.perception.detection import DetectingTracker, DetectionParams, TargetState
-from humimic.perception.em_blobs import EMParams
-from humimic.perception.identity import Blob, assign, stereo_evidence
-from humimic.perception.record import STATE_CODE
-from humimic.perception.stereo import StereoParams, StereoRig
+from humimic.perception.blobs.detection import DetectingTracker, DetectionParams, TargetState
+from humimic.perception.blobs.em_blobs import EMParams
+from humimic.perception.blobs.identity import Blob, assign, stereo_evidence
+from humimic.perception.blobs.record import STATE_CODE
+from humimic.perception.blobs.stereo import StereoParams, StereoRig
 
 #: Identities are re-decided, and a target may be measured, once its blobs have been tracked
 #: this many frames (a new blob starts from a random hypothesis; its centre and shape, which the
@@ -69,7 +69,7 @@ class FrameResult:
 
     measurements: Measurements
     record_row: tuple
-    """Arguments of :meth:`~humimic.perception.record.PerceptionRecord.append`."""
+    """Arguments of :meth:`~humimic.perception.blobs.record.PerceptionRecord.append`."""
     intrinsics: tuple
     """(left, right) :class:`~humimic.sensors.camera_model.Intrinsics` of the frame."""
     events: list[tuple[float, str, str, str]]
@@ -82,8 +82,8 @@ class FrameResult:
 
 class PerceptionCore:
     """See the module docstring. ``luts`` maps every tracked target (published targets first,
-    then distractors) to its :class:`~humimic.perception.color_models.ColorLUT`; targets
-    sharing one LUT object are told apart by :mod:`~humimic.perception.identity`."""
+    then distractors) to its :class:`~humimic.perception.cues.color_models.ColorLUT`; targets
+    sharing one LUT object are told apart by :mod:`~humimic.perception.blobs.identity`."""
 
     def __init__(self, cfg, cameras: tuple[str, str], luts: dict, rng: np.random.Generator):
         self.cameras = tuple(cameras)

@@ -22,7 +22,7 @@ target of its colour may be acquired, and two blobs on one object (``merge_mahal
 the weaker. Several targets of one colour (head and hands: skin) form a group that searches for
 one missing member per frame with one threshold; they are found one by one and which blob is
 which target is not decided here (the first missing member is named;
-:mod:`humimic.perception.identity` names them).
+:mod:`humimic.perception.blobs.identity` names them).
 
 All randomness comes from the ``numpy.random.Generator`` passed in.
 """
@@ -34,9 +34,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from humimic.perception.color_models import ColorLUT
-from humimic.perception.em_blobs import BlobTracker, EMParams
-from humimic.perception.hypotheses import (  # noqa: F401  (re-exported)
+from humimic.perception.blobs.em_blobs import BlobTracker, EMParams
+from humimic.perception.blobs.hypotheses import (  # noqa: F401  (re-exported)
     _grid_points,
     color_sums,
     detection_threshold,
@@ -45,6 +44,7 @@ from humimic.perception.hypotheses import (  # noqa: F401  (re-exported)
     random_hypotheses,
     window_points,
 )
+from humimic.perception.cues.color_models import ColorLUT
 
 
 class TargetState(enum.Enum):

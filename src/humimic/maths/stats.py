@@ -1,0 +1,79 @@
+"""Error statistics with one convention for empty data.
+
+Errors are row vectors ``(N, d)`` (or ``(N,)`` scalars). Rows containing a NaN are skipped
+(a target not measured in that frame); a statistic over no rows is NaN. Convert to JSON's
+``null`` at the metrics boundary with :func:`finite_or_none`.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy.stats import chi2
+
+
+def _rows(err) -> np.ndarray:
+    e = np.asarray(err, dtype=float)
+    e = e.reshape(len(e), -1) if e.ndim != 2 else e
+    return e[np.all(np.isfinite(e), axis=1)]
+
+
+def rmse(err) -> float:
+    """Root mean squared norm of the finite rows of ``err``; NaN if there are none."""
+    e = _rows(err)
+    if len(e) == 0:
+        return math.nan
+    return float(np.sqrt(np.mean(np.sum(e * e, axis=1))))
+
+
+def nees(err, P) -> np.ndarray:
+    """Normalised estimation error squared ``e_k^T P_k^-1 e_k`` per sample.
+
+    ``err (N, n)``, ``P (N, n, n)`` (or one ``(n, n)`` for all); NaN where ``P`` is singular
+    or ``e`` is not finite. For a consistent filter each value is chi-square with ``n``
+    degrees of freedom (Bar-Shalom, Li & Kirubarajan 2001, sec. 5.4.2).
+    """
+    e = np.atleast_2d(np.asarray(err, dtype=float))
+    P = np.broadcast_to(np.asarray(P, dtype=float), (len(e),) + (e.shape[1],) * 2)
+    out = np.full(len(e), np.nan)
+    ok = np.all(np.isfinite(e), axis=1) & np.all(np.isfinite(P), axis=(1, 2))
+    if not ok.any():
+        return out
+    idx = np.flatnonzero(ok)
+    try:
+        sol = np.linalg.solve(P[idx], e[idx][..., None])[..., 0]
+        out[idx] = np.einsum("ni,ni->n", e[idx], sol)
+    except np.linalg.LinAlgError:  # some P singular: fall back per sample
+        for k in idx:
+            try:
+                out[k] = e[k] @ np.linalg.solve(P[k], e[k])
+            except np.linalg.LinAlgError:
+                pass
+    return out
+
+
+def chi2_band(dof: int, n_avg: int = 1, level: float = 0.95) -> tuple[float, float]:
+    """Two-sided ``level`` interval of the mean of ``n_avg`` independent chi-square(``dof``)
+    values (the band a consistent filter's NEES, averaged over ``n_avg`` samples, falls in)."""
+    a = (1.0 - level) / 2.0
+    k = dof * n_avg
+    return float(chi2.ppf(a, k) / n_avg), float(chi2.ppf(1.0 - a, k) / n_avg)
+
+
+def fraction_in_band(values, dof: int, level: float = 0.95) -> float:
+    """Fraction of the finite per-sample NEES ``values`` inside the single-sample band."""
+    v = np.asarray(values, dtype=float)
+    v = v[np.isfinite(v)]
+    if len(v) == 0:
+        return math.nan
+    lo, hi = chi2_band(dof, 1, level)
+    return float(np.mean((v >= lo) & (v <= hi)))
+
+
+def finite_or_none(x) -> float | None:
+    """``float(x)`` if finite, else None (JSON's null in ``metrics.json``)."""
+    if x is None:
+        return None
+    x = float(x)
+    return x if math.isfinite(x) else None

@@ -1,0 +1,1 @@
+"""Image cues any tracker uses: colour models learned per scenario (skin, shirt, marker)."""

@@ -1,0 +1,56 @@
+"""The shared maths against independent computations (scipy, closed forms)."""
+
+import math
+
+import numpy as np
+import pytest
+from scipy.linalg import expm
+from scipy.stats import chi2
+
+from humimic.maths.kinematics import ca_predict
+from humimic.maths.stats import chi2_band, fraction_in_band, nees, rmse
+
+
+def test_rmse_skips_nan_rows_and_is_nan_when_empty():
+    err = np.array([[3.0, 4.0, 0.0], [np.nan, 0.0, 0.0], [0.0, 0.0, 12.0]])
+    assert rmse(err) == pytest.approx(math.sqrt((25.0 + 144.0) / 2))
+    assert math.isnan(rmse(np.full((4, 3), np.nan)))
+    assert math.isnan(rmse(np.zeros((0, 3))))
+    assert rmse(np.array([1.0, -1.0, 1.0])) == pytest.approx(1.0)
+
+
+def test_nees_matches_explicit_inverse_and_flags_singular():
+    rng = np.random.default_rng(0)
+    A = rng.normal(size=(50, 3, 3))
+    P = A @ A.transpose(0, 2, 1) + 0.1 * np.eye(3)
+    e = rng.normal(size=(50, 3))
+    want = [e[k] @ np.linalg.inv(P[k]) @ e[k] for k in range(50)]
+    np.testing.assert_allclose(nees(e, P), want, rtol=1e-9)
+    P[7] = 0.0
+    out = nees(e, P)
+    assert math.isnan(out[7]) and np.isfinite(np.delete(out, 7)).all()
+
+
+def test_nees_of_consistent_samples_is_chi_square():
+    rng = np.random.default_rng(1)
+    L = np.array([[0.2, 0, 0], [0.05, 0.1, 0], [0.0, 0.02, 0.3]])
+    P = L @ L.T
+    e = rng.normal(size=(20000, 3)) @ L.T
+    v = nees(e, P)
+    assert v.mean() == pytest.approx(3.0, rel=0.03)
+    lo, hi = chi2_band(3)
+    assert (lo, hi) == pytest.approx((chi2.ppf(0.025, 3), chi2.ppf(0.975, 3)))
+    assert fraction_in_band(v, 3) == pytest.approx(0.95, abs=0.01)
+
+
+def test_ca_predict_is_the_exact_flow_of_the_constant_acceleration_model():
+    # x' = F x with x = (p, v, a): the prediction is expm(F dt) x.
+    F = np.kron(np.array([[0, 1, 0], [0, 0, 1], [0, 0, 0]]), np.eye(3))
+    p, v, a = np.array([1.0, 2, 3]), np.array([-0.5, 0.2, 0.1]), np.array([0.3, -9.81, 0.0])
+    for dt in (0.0, 0.01, 0.7):
+        want = expm(F * dt) @ np.concatenate([p, v, a])
+        got = np.concatenate(ca_predict(p, v, a, dt))
+        np.testing.assert_allclose(got, want, atol=1e-12)
+    dts = np.array([0.1, 0.2])
+    P2, V2, _ = ca_predict(np.stack([p, p]), np.stack([v, v]), np.stack([a, a]), dts)
+    np.testing.assert_allclose(P2[1], ca_predict(p, v, a, 0.2)[0])
