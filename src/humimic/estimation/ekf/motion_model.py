@@ -20,6 +20,8 @@ process noise therefore depends on the step, as the paper's).
 
 from __future__ import annotations
 
+import functools
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -62,56 +64,110 @@ def jerk_mean(x: np.ndarray) -> np.ndarray:
     return np.cross(quat.rotate(x[Q], x[W]), x[A])
 
 
+def _skew(v) -> np.ndarray:
+    """``[v]x`` of one 3-vector (a list or array; faster than the batched :func:`qj.skew`)."""
+    x, y, z = v
+    return np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
+
+
+def _rotmat(q) -> np.ndarray:
+    """``R(q)`` of one unit quaternion (the formula of :func:`humimic.motion.quat.to_matrix`)."""
+    w, x, y, z = q
+    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+                     [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+                     [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
+
+
+def _d_rotate_dq(q, v: np.ndarray) -> np.ndarray:
+    """:func:`qj.d_rotate_dq` for one vector (see there for the formula)."""
+    w, u = q[0], np.asarray(q[1:])
+    J = np.empty((3, 4))
+    J[:, 0] = 2.0 * (_skew(u) @ v)
+    J[:, 1:] = 2.0 * (-w * _skew(v) + float(u @ v) * np.eye(3) + np.outer(u, v)
+                      - 2.0 * np.outer(v, u))
+    return J
+
+
+@functools.lru_cache(maxsize=16)
+def _skeleton(dt: float) -> tuple[np.ndarray, np.ndarray]:
+    """The constant blocks of ``F`` and ``G`` for a step ``dt`` (read-only; copied per call)."""
+    dt2, dt3 = dt * dt / 2.0, dt**3 / 6.0
+    I3 = np.eye(3)
+    F = np.eye(DIM)
+    F[P, V], F[P, A], F[V, A] = dt * I3, dt2 * I3, dt * I3
+    G = np.zeros((DIM, 9))
+    G[P, 0:3], G[V, 0:3], G[A, 0:3] = dt3 * I3, dt2 * I3, dt * I3
+    G[W, 3:6], G[B, 6:9] = dt * I3, dt * I3
+    F.flags.writeable = G.flags.writeable = False
+    return F, G
+
+
+def _quat_increment(theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``q(θ)`` and ``dq(θ)/dθ`` for one rotation vector (scalar arithmetic: IMU rate)."""
+    tx, ty, tz = theta.tolist()
+    t = math.sqrt(tx * tx + ty * ty + tz * tz)
+    if t < 1e-6:
+        s, c, ds_over_t = 0.5 - t * t / 48.0, 1.0 - t * t / 8.0, -1.0 / 24.0
+    else:
+        s, c = math.sin(t / 2) / t, math.cos(t / 2)
+        ds_over_t = (0.5 * c * t - math.sin(t / 2)) / t**3
+    dq = np.array([c, s * tx, s * ty, s * tz])
+    J = np.empty((4, 3))
+    J[0] = -0.5 * s * theta
+    J[1:] = ds_over_t * np.outer(theta, theta)
+    J[1, 0] += s
+    J[2, 1] += s
+    J[3, 2] += s
+    return dq, J
+
+
 def predict(x: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Propagate the interface state by ``dt`` (s) with zero noise.  # Sugiyama eqs. 3-4
 
     Returns ``(x', F, G)``: the predicted state, ``F = dx'/dx`` (19x19) and ``G = dx'/dn``
-    (19x9) for the noise ``n = (j, α, b̄)``; the process noise is ``G Q_n G^T``.
+    (19x9) for the noise ``n = (j, α, b̄)``; the process noise is ``G Q_n G^T``. (Written for
+    one state with small-array arithmetic: it runs at the IMU rate.)
     """
-    p, q, v, w, a = x[P], x[Q], x[V], x[W], x[A]
+    q = x[Q].tolist()
+    v, w, a = x[V], x[W], x[A]
     dt2, dt3 = dt * dt / 2.0, dt**3 / 6.0
-    Rq = quat.to_matrix(q)
+    Rq = _rotmat(q)
     w_W = Rq @ w
-    da = np.cross(w_W, a)  # eq. 4, mean
-    theta = w * dt  # eq. 3: q(ω Δt + Δt^2/2 α), mean
-    dq = quat.from_rotvec(theta)
-    p_ca, v_ca, _ = ca_predict(p, v, a, dt)
+    Sa = _skew(a.tolist())
+    da = -(Sa @ w_W)  # (R(q) ω) × a, eq. 4 mean
+    dq, dq_dtheta = _quat_increment(w * dt)  # eq. 3: q(ω Δt + Δt^2/2 α), mean
+    Lq = qj.left(q)
+    dq_dtheta = Lq @ dq_dtheta
+    p_ca, v_ca, _ = ca_predict(x[P], v, a, dt)
 
     out = np.empty(DIM)
     out[P] = p_ca + dt3 * da
-    out[Q] = quat.mul(q, dq)
+    out[Q] = Lq @ dq
     out[V] = v_ca + dt2 * da
     out[W] = w
     out[A] = a + dt * da
     out[B] = x[B]
 
-    # d(da)/d(q, ω, a): da = (R(q) ω) × a = -[a]x R(q) ω
-    Sa = qj.skew(a)
-    dda_dq = -Sa @ qj.d_rotate_dq(q, w)
-    dda_dw = -Sa @ Rq
-    dda_da = qj.skew(w_W)
-    F = np.eye(DIM)
-    I3 = np.eye(3)
-    for rows, k in ((P, dt3), (V, dt2), (A, dt)):
-        F[rows, Q] = k * dda_dq
-        F[rows, W] = k * dda_dw
-        F[rows, A] += k * dda_da
-    F[P, V] = dt * I3
-    F[P, A] += dt2 * I3
-    F[V, A] += dt * I3
+    F0, G0 = _skeleton(float(dt))
+    F, G = F0.copy(), G0.copy()
+    # d(da)/d(q, ω, a) with da = -[a]x R(q) ω, entering p, v, a with dt^3/6, dt^2/2, dt
+    dda = np.empty((3, 13))  # columns as the state's 3..15: q (4), v (3, zero), ω (3), a (3)
+    dda[:, 0:4] = -Sa @ _d_rotate_dq(q, w)
+    dda[:, 4:7] = 0.0
+    dda[:, 7:10] = -Sa @ Rq
+    dda[:, 10:13] = _skew(w_W.tolist())
+    F[0:3, 3:16] += dt3 * dda
+    F[7:10, 3:16] += dt2 * dda
+    F[13:16, 3:16] += dt * dda
     F[Q, Q] = qj.right(dq)
-    dq_dtheta = qj.left(q) @ qj.d_rotvec_to_quat(theta)
     F[Q, W] = dq_dtheta * dt
 
     # Noise: a' = j + (R α) × v + ...; θ += α Δt^2/2; ω += α Δt; b += b̄ Δt.
-    G = np.zeros((DIM, 9))
-    dda_dalpha = -qj.skew(v) @ Rq
-    for rows, k in ((P, dt3), (V, dt2), (A, dt)):
-        G[rows, 0:3] = k * I3
-        G[rows, 3:6] = k * dda_dalpha
+    dda_dalpha = -_skew(v.tolist()) @ Rq
+    G[P, 3:6] = dt3 * dda_dalpha
+    G[V, 3:6] = dt2 * dda_dalpha
+    G[A, 3:6] = dt * dda_dalpha
     G[Q, 3:6] = dq_dtheta * dt2
-    G[W, 3:6] = dt * I3
-    G[B, 6:9] = dt * I3
     return out, F, G
 
 
