@@ -19,6 +19,8 @@ from humimic.motion import quat
 from humimic.sensors.camera_model import Intrinsics
 
 INTR = Intrinsics(368, 240, 320.0, 320.0, 183.5, 119.5)
+#: The paper's interface frame I (x left, y up, z forward) to OpenCV's camera axes.
+R_CV_I = np.diag([-1.0, -1.0, 1.0])
 SCREEN = np.array([[0.61, 0.455, 2.0], [-0.61, 0.455, 2.0], [-0.61, -0.455, 2.0],
                    [0.61, -0.455, 2.0]])
 
@@ -66,7 +68,7 @@ def run(seed: int = 0, duration: float = 3.0, imu_rate: float = 180.0, cam_every
     x0 = mm.initial_state(p=[0.0, 0.0, -2.5])
     t, X = sample_truth(rng, x0, duration, imu_rate, params.noise)
     P0 = np.diag(np.r_[np.full(3, 1e-6), np.full(4, 1e-8), np.full(12, 1e-6)])
-    f = SlamFilter(0.0, x0, P0, INTR, params)
+    f = SlamFilter(0.0, x0, P0, INTR, R_CV_I, params)
     point_of: dict[int, int] = {}
     if known:
         for fid, i in zip(f.add_known(SCREEN), range(len(SCREEN)), strict=True):
@@ -82,7 +84,7 @@ def run(seed: int = 0, duration: float = 3.0, imu_rate: float = 180.0, cam_every
             f.update_inertial(q_meas, a_meas)
         if use_camera and k % cam_every == 0:
             R = quat.to_matrix(x[3:7])
-            uv_all = INTR.project((pts - x[0:3]) @ R)
+            uv_all = INTR.project((pts - x[0:3]) @ R @ R_CV_I.T)
             pred = f.predict_features()
             if len(pred.fids):
                 idx = np.array([point_of[int(i)] for i in pred.fids])

@@ -16,6 +16,8 @@ from humimic.motion import quat
 from humimic.sensors.camera_model import Intrinsics
 
 INTR = Intrinsics(368, 240, 300.0, 302.0, 183.5, 119.5, -0.12, 0.03)
+#: The paper's interface frame I (x left, y up) to OpenCV's camera axes.
+R_CV_I = np.diag([-1.0, -1.0, 1.0])
 
 
 def numjac(f, x, eps=1e-6):
@@ -149,6 +151,7 @@ def _id_feature(rng):
 
 
 def _pose_looking_at(rng, target):
+    """A pose 3 m behind ``target`` along W's z, I's z (the optical axis) towards it."""
     p = target + np.r_[rng.uniform(-0.5, 0.5, 2), -3.0]
     q = xyzw_to_wxyz(Rotation.from_rotvec(0.1 * rng.standard_normal(3)).as_quat())
     return p, q
@@ -160,23 +163,23 @@ def test_observe_against_opencv_and_numerical(rng):
         y = _id_feature(rng)
         X = idp.to_xyz(y[None])[0][0]
         p, q = _pose_looking_at(rng, X)
-        # OpenCV: rvec/tvec map W to the camera: x_C = R^T (x_W - p)
-        Rwc = Rotation.from_quat(xyzw(q))
-        rvec = Rwc.inv().as_rotvec()
-        tvec = -Rwc.inv().apply(p)
+        # OpenCV: rvec/tvec map W to the camera: x_C = R_cv_I R^T (x_W - p)
+        R_cw = Rotation.from_matrix(R_CV_I) * Rotation.from_quat(xyzw(q)).inv()
+        rvec = R_cw.as_rotvec()
+        tvec = -R_cw.apply(p)
         uv_cv = cv2.projectPoints(X[None], rvec, tvec, intr.K, None)[0][0, 0]
         for yy in (y, X):
-            h, Hpq, Hy, z = idp.observe(yy[None], p, q, intr)
+            h, Hpq, Hy, z = idp.observe(yy[None], p, q, intr, R_CV_I)
             assert z[0] > 0
             np.testing.assert_allclose(h[0], uv_cv, atol=1e-8)
             pq = np.r_[p, q]
-            num_pq = numjac(lambda v, yy=yy: idp.observe(yy[None], v[:3], v[3:], intr)[0][0],
+            num_pq = numjac(lambda v, yy=yy: idp.observe(yy[None], v[:3], v[3:], intr, R_CV_I)[0][0],
                             pq)
             # q enters through R(q) for a unit q; compare along the sphere's tangent
             T = np.eye(7)
             T[3:, 3:] = qj.d_normalize(q)
             np.testing.assert_allclose(Hpq[0] @ T, num_pq @ T, rtol=1e-5, atol=1e-4)
-            num_y = numjac(lambda v: idp.observe(v[None], p, q, intr)[0][0], yy)
+            num_y = numjac(lambda v: idp.observe(v[None], p, q, intr, R_CV_I)[0][0], yy)
             np.testing.assert_allclose(Hy[0], num_y, rtol=1e-5, atol=1e-4)
 
 
@@ -206,16 +209,16 @@ def test_initialise_back_projects_and_jacobians(rng):
     intr = INTR.pinhole()
     uv = np.array([[30.0, 40.0], [183.5, 119.5], [350.0, 220.0]])
     p, q = rng.standard_normal(3), rand_quat(rng)
-    y, J_pq, J_z = idp.initialise(uv, p, q, intr, rho0=0.4)
-    h, *_ = idp.observe(y, p, q, intr)
+    y, J_pq, J_z = idp.initialise(uv, p, q, intr, R_CV_I, rho0=0.4)
+    h, *_ = idp.observe(y, p, q, intr, R_CV_I)
     np.testing.assert_allclose(h, uv, atol=1e-9)  # the new ray goes through its pixel
     np.testing.assert_allclose(np.linalg.norm(idp.to_xyz(y)[0] - p, axis=1), 2.5)
     for i in range(3):
         T = np.eye(7)
         T[3:, 3:] = qj.d_normalize(q)
-        f = lambda v, i=i: idp.initialise(uv[i:i + 1], v[:3], v[3:], intr, 0.4)[0][0]  # noqa: E731
+        f = lambda v, i=i: idp.initialise(uv[i:i + 1], v[:3], v[3:], intr, R_CV_I, 0.4)[0][0]  # noqa: E731
         np.testing.assert_allclose(J_pq[i] @ T, numjac(f, np.r_[p, q]) @ T, atol=1e-6)
-        g = lambda z, i=i: idp.initialise(z[None, :2], p, q, intr, z[2])[0][0]  # noqa: E731
+        g = lambda z, i=i: idp.initialise(z[None, :2], p, q, intr, R_CV_I, z[2])[0][0]  # noqa: E731
         np.testing.assert_allclose(J_z[i], numjac(g, np.r_[uv[i], 0.4]), atol=1e-6)
 
 

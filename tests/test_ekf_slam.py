@@ -23,7 +23,7 @@ def _random_cov(rng, n):
 
 def _filter_with_map(rng) -> SlamFilter:
     x0 = mm.initial_state(p=[0.1, 0.0, -2.5], q=[1, 0, 0, 0], v=[0.2, 0, 0.1])
-    f = SlamFilter(0.0, x0, _random_cov(rng, mm.DIM) * 1e-3, synth.INTR)
+    f = SlamFilter(0.0, x0, _random_cov(rng, mm.DIM) * 1e-3, synth.INTR, synth.R_CV_I)
     f.add_known(synth.SCREEN, sigma=0.01)
     f.add_features(np.array([[50.0, 60.0], [200.0, 100.0], [300.0, 200.0]]))
     f.P = _random_cov(rng, len(f.x)) * 1e-3  # a dense, correlated covariance
@@ -42,7 +42,7 @@ def test_feature_update_matches_filterpy(rng=np.random.default_rng(1)):
     for r, i in enumerate(matched):
         feat = f.feature(int(pred.fids[i]))
         y = f.x[feat.offset:feat.offset + feat.dim][None]
-        _, Hpq, Hy, _ = idp.observe(y, f.x[0:3], f.x[3:7], f.intr)
+        _, Hpq, Hy, _ = idp.observe(y, f.x[0:3], f.x[3:7], f.intr, f.R_cv_I)
         H[2 * r:2 * r + 2, 0:7] = Hpq[0]
         H[2 * r:2 * r + 2, feat.offset:feat.offset + feat.dim] = Hy[0]
     kf = KalmanFilter(dim_x=n, dim_z=10)

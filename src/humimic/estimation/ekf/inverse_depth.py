@@ -9,10 +9,11 @@ converted to plain XYZ, three numbers instead of six.
 ``m(θ, φ) = (cos φ sin θ, -sin φ, cos φ cos θ)`` is singular along the reference frame's y
 axis, which in the paper's W points up: the head camera never looks straight up or down.
 
-The camera frame is OpenCV's (x right, y down, z forward); the paper's eq. 8 writes the same
-projection with x left and y up (``u = u0 - f k_u x/z``), a rotation by pi about z. Pixels are
-those of the undistorted image (the estimator undistorts every frame first), projected with
-:meth:`humimic.sensors.camera_model.Intrinsics.project` and its Jacobian.
+The interface frame I is the paper's (x left, y up, z along the optical axis: eq. 8's
+``u = u0 - f k_u x/z``); pixels are projected in OpenCV's camera axes (x right, y down), which
+are ``R_cv_I`` away (``p_cv = R_cv_I p_I``), by
+:meth:`humimic.sensors.camera_model.Intrinsics.project` and its Jacobian. Pixels are those of
+the undistorted image (the estimator undistorts every frame first).
 
 Every function is vectorised over features: ``(k, 6)`` inverse-depth or ``(k, 3)`` XYZ rows.
 """
@@ -83,7 +84,7 @@ def linearity_index(y: np.ndarray, sigma_rho: np.ndarray, p_cam: np.ndarray) -> 
 
 
 def camera_rays(y: np.ndarray, p: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Rays to the features in the camera frame (``(k, 3)``, any positive scale) and the same
+    """Rays to the features in the interface frame (``(k, 3)``, any positive scale) and the same
     rays in W before rotation. Inverse depth: ``ρ (c - p) + m(θ, φ)``; XYZ: ``x - p``.
     # Sugiyama eq. 9"""
     if y.shape[1] == ID_DIM:
@@ -93,19 +94,21 @@ def camera_rays(y: np.ndarray, p: np.ndarray, q: np.ndarray) -> tuple[np.ndarray
     return d_W @ quat.to_matrix(q), d_W  # rows: R(q)^T d_W
 
 
-def observe(y: np.ndarray, p: np.ndarray, q: np.ndarray,
-            intr: Intrinsics) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Predicted pixels of features ``y`` seen from the camera pose ``(p, q)``, with Jacobians.
+def observe(y: np.ndarray, p: np.ndarray, q: np.ndarray, intr: Intrinsics,
+            R_cv_I: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Predicted pixels of features ``y`` seen from the interface pose ``(p, q)`` (``q = q_WI``)
+    through a camera whose OpenCV axes are ``R_cv_I`` from I, with Jacobians.
 
     Returns ``h (k, 2)``, ``H_pq (k, 2, 7)`` with respect to ``(p, q)``, ``H_y (k, 2, dim)``
     with respect to the feature, and the depth ``z (k,)`` of each ray in the camera frame
     (``h`` is meaningless where ``z <= 0``: the feature is behind the camera).
     # Sugiyama eqs. 8-9
     """
-    d_C, d_W = camera_rays(y, p, q)
+    d_I, d_W = camera_rays(y, p, q)
+    d_C = d_I @ R_cv_I.T
     R = quat.to_matrix(q)
     h = intr.project(d_C)
-    Jp = intr.project_jacobian(d_C)  # (k, 2, 3)
+    Jp = intr.project_jacobian(d_C) @ R_cv_I  # (k, 2, 3): d h / d d_I
     JR = Jp @ R.T  # d h / d d_W
     k = len(y)
     H_pq = np.empty((k, 2, 7))
@@ -126,8 +129,9 @@ def observe(y: np.ndarray, p: np.ndarray, q: np.ndarray,
 
 
 def initialise(uv: np.ndarray, p: np.ndarray, q: np.ndarray, intr: Intrinsics,
-               rho0: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """New inverse-depth features from undistorted pixels ``uv (k, 2)`` seen from ``(p, q)``.
+               R_cv_I: np.ndarray, rho0: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """New inverse-depth features from undistorted pixels ``uv (k, 2)`` seen from ``(p, q)``
+    (camera axes ``R_cv_I`` from I, as :func:`observe`).
 
     Civera et al. (2008) sec. III-C: ``y = (p, θ, φ, ρ0)`` with ``(θ, φ)`` the ray's angles in W.
     Returns ``y (k, 6)``, ``dy/d(p, q)`` ``(k, 6, 7)`` and ``dy/d(u, v, ρ)`` ``(k, 6, 3)``; the
@@ -138,7 +142,7 @@ def initialise(uv: np.ndarray, p: np.ndarray, q: np.ndarray, intr: Intrinsics,
     h_C = np.ones((k, 3))
     h_C[:, 0] = (uv[:, 0] - intr.cx) / intr.fx
     h_C[:, 1] = (uv[:, 1] - intr.cy) / intr.fy
-    R = quat.to_matrix(q)
+    R = quat.to_matrix(q) @ R_cv_I.T  # W <- camera axes
     h_W = h_C @ R.T
     th, ph, dang = angles(h_W)
     y = np.empty((k, ID_DIM))
@@ -146,7 +150,7 @@ def initialise(uv: np.ndarray, p: np.ndarray, q: np.ndarray, intr: Intrinsics,
     y[:, 3], y[:, 4], y[:, 5] = th, ph, rho0
     J_pq = np.zeros((k, ID_DIM, 7))
     J_pq[:, 0:3, 0:3] = np.eye(3)
-    J_pq[:, 3:5, 3:7] = dang @ qj.d_rotate_dq(q, h_C)
+    J_pq[:, 3:5, 3:7] = dang @ qj.d_rotate_dq(q, h_C @ R_cv_I)  # rays in I
     J_z = np.zeros((k, ID_DIM, 3))
     J_z[:, 3:5, 0] = dang @ R[:, 0] / intr.fx
     J_z[:, 3:5, 1] = dang @ R[:, 1] / intr.fy

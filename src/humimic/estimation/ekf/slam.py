@@ -83,11 +83,15 @@ class SlamFilter:
     """The EKF: state, covariance, map bookkeeping. Times in seconds, pixels undistorted."""
 
     def __init__(self, t0: float, x0: np.ndarray, P0: np.ndarray, intr: Intrinsics,
-                 params: SlamParams = SlamParams()):
+                 R_cv_I: np.ndarray, params: SlamParams = SlamParams()):
+        """``x0, P0`` the interface's state and covariance at ``t0``; ``intr`` the camera
+        (its undistorted image is what :meth:`predict_features` predicts); ``R_cv_I`` the
+        rotation from the interface frame I to the camera's OpenCV axes."""
         self.t = float(t0)
         self.x = np.array(x0, float)
         self.P = np.array(P0, float)
         self.intr = intr.pinhole()
+        self.R_cv_I = np.asarray(R_cv_I, float)
         self.params = params
         self.features: list[MapFeature] = []
         self._next_id = 0
@@ -188,7 +192,7 @@ class SlamFilter:
         groups = self._groups(feats)
         for g, (rows, offs, d) in enumerate(groups):
             y = self.x[offs[:, None] + np.arange(d)]
-            h, Hpq, Hy, z = idp.observe(y, p, q, self.intr)
+            h, Hpq, Hy, z = idp.observe(y, p, q, self.intr, self.R_cv_I)
             h[z <= 1e-6] = np.nan
             uv[rows], H_pq[rows], H_f[g] = h, Hpq, Hy
         m = self.params.margin_px
@@ -264,7 +268,8 @@ class SlamFilter:
         if len(uv) == 0:
             return []
         prm = self.params
-        y, J_pq, J_z = idp.initialise(uv, self.x[0:3], self.x[3:7], self.intr, prm.rho0)
+        y, J_pq, J_z = idp.initialise(uv, self.x[0:3], self.x[3:7], self.intr, self.R_cv_I,
+                                      prm.rho0)
         k = len(y)
         Jpq = J_pq.reshape(6 * k, 7)
         cross = Jpq @ self.P[POSE_COLS]  # (6k, n): new rows against the whole state
