@@ -18,6 +18,7 @@ from dm_control import mjcf
 
 from humimic.paths import MODELS_DIR
 from humimic.sensors.camera_model import fovy_from_hfov, make_transform
+from humimic.world.frames import paper_frame_of
 from humimic.world.names import (
     EYE_CAMERAS,
     HUMAN_JOINTS,
@@ -144,6 +145,8 @@ class Scene:
         self.human_qpos0 = m.qpos0[self.human_qpos].copy()
 
         self.T_world_base = self._body_pose(ROBOT_PREFIX + "pelvis", zero_pose=True)
+        self.T_world_W = paper_frame_of(m)
+        """Pose of the paper's frame W (Sugiyama & Miura; :mod:`humimic.world.frames`)."""
         frame_body = int(m.body(HUMAN_PREFIX + "pelvis").parentid[0])
         self.T_world_avatar = self._body_pose(frame_body, zero_pose=True)
 
