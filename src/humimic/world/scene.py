@@ -51,8 +51,8 @@ class SceneOptions:
     """Width, height of the eye cameras (sets MuJoCo's vertical fovy for the aspect ratio)."""
     wide_hfov_deg: float = WIDE_HFOV_DEG
     foveal_hfov_deg: float = FOVEAL_HFOV_DEG
-    headcam_resolution: tuple[int, int] = (320, 240)
-    headcam_hfov_deg: float = 60.0
+    headcam_resolution: tuple[int, int] = (368, 240)
+    headcam_hfov_deg: float = 70.0
     ambient: float = 0.3
     diffuse: float = 0.55
     shadows: bool = False
