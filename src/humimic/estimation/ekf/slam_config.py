@@ -33,14 +33,15 @@ class SlamNoise(Section):
     """sigma of the accelerometer-bias variation (m/s^3): 1e-3."""
     accel: float = Field(mm.SIGMA_ACCEL, gt=0.0, le=100.0)
     """sigma of the acceleration measurement (m/s^2), eq. 7: 0.5."""
-    orientation_std_deg: tuple[float, float] | None = (1.0, 10.0)
+    orientation_std_deg: tuple[float, float] | None = (1.0, 30.0)
     """sigma of the measured orientation's tilt (pitch, roll) and yaw (deg), as small rotations
     about W's axes. The InertiaCube3's errors (Table I: 0.25 deg tilt, 1 deg yaw RMS) vary
     slowly (seconds to a minute), so as white noise at 180 Hz they must count for far less
-    than their RMS: the paper's 1e-3 per quaternion component (0.11 deg) makes the filter
-    follow the sensor's yaw error, and 1 deg of yaw moves the estimated position ~8 cm at the
-    screen's 4.5 m (measured on the Table II walk: ATE 5.3 cm with it, 2.1 cm with the
-    default). ``null``: the paper's 1e-3 per component."""
+    than their RMS: with the paper's 1e-3 per quaternion component (0.11 deg) the filter
+    follows the sensor's yaw error, and 1 deg of yaw moves the estimated position ~8 cm at the
+    screen's 4.5 m (first 8 s of the Table II walk: ATE 5.3 cm with it, 2.2 cm with (0.25,
+    20) deg). The yaw here mostly holds the heading while no feature is seen. ``null``: the
+    paper's 1e-3 per component."""
     pixel: float = Field(1.0, gt=0.0, le=20.0)
     """sigma of a feature's image position (px), eq. 8: 1."""
 

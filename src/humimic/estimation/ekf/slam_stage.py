@@ -173,7 +173,8 @@ class SlamStage(Stage):
                              colors=[(230, 30, 30)])
 
     def trajectories(self) -> dict[str, np.ndarray]:
-        """Frame times and the estimated and true head positions and rotations in W."""
+        """Per frame: time, the estimated pose and its covariance, feature counts, cycle time,
+        and the true head position and rotation in W (what ``slam.npz`` holds)."""
         arr = self.record.arrays()
         gt = self.world.gt
         k = gt.index_of(arr["t"]) if len(arr["t"]) else np.zeros(0, int)
@@ -190,4 +191,5 @@ class SlamStage(Stage):
         tr = self.trajectories()
         if len(tr["t"]) == 0:
             return []
+        np.savez_compressed(out_dir / "slam.npz", **tr)
         return [plot_trajectory(out_dir / "slam_trajectory.png", tr)]
