@@ -9,9 +9,10 @@ eq. 13), the marker's size, and the colours of its own skin and sleeve. The mask
 1. the marker: the largest region of marker hue;
 2. the remote and the hand around it: the marker region grown by ``hand_scale`` marker radii
    (the remote is ~8 marker radii long, the fist ~5);
-3. the forearm and sleeve: skin- and sleeve-coloured connected regions touching (2), or, when
-   the marker is out of view, touching the bottom edge of the image (the arm enters from
-   below);
+3. the forearm and sleeve: skin- and sleeve-coloured connected regions touching (2), kept
+   inside the cone that opens downwards from the hand (the arm hangs from a shoulder below the
+   head camera, so it never rises above the hand in the image; a skin-toned poster beside the
+   hand stays out), or, when the marker is out of view, touching the bottom edge;
 
 grown by a margin so that no feature patch straddles the arm's outline. Colours match by
 chromaticity (``rgb / (r + g + b)``), which shading leaves nearly unchanged.
@@ -32,8 +33,8 @@ class ArmMaskParams:
     marker_hue_deg: tuple[float, float] = (-12.0, 12.0)
     """Marker hue band (deg; the lower bound may be negative to wrap through 0). The paper
     extracts 0-20 deg; a room with orange and brown posters needs the marker's own red."""
-    marker_min_saturation: float = 0.6
-    marker_min_value: float = 0.6
+    marker_min_saturation: float = 0.75
+    marker_min_value: float = 0.75
     marker_min_px: int = 6
     """Smallest marker region taken for the marker (px)."""
     marker_max_radius_px: float = 25.0
@@ -43,6 +44,8 @@ class ArmMaskParams:
     looks round; poster details rarely do)."""
     hand_scale: float = 5.0
     """The remote and fist extend this many marker radii around the marker."""
+    cone_slope: float = 1.0
+    """Half-width growth of the arm's cone per pixel below the hand (1: 90 deg opening)."""
     chroma_tol: float = 0.045
     """Largest chromaticity distance of a body-coloured pixel."""
     min_value: float = 0.12
@@ -118,7 +121,13 @@ def arm_mask(rgb: np.ndarray, prm: ArmMaskParams = ArmMaskParams()) -> np.ndarra
             if i > 0 and 4 * stats[i, cv2.CC_STAT_AREA] >= prm.min_region_px]
     mask = seed if marker is not None else np.zeros_like(seed)
     if keep:
-        mask[np.isin(labels, keep)] = 255
+        arm = np.isin(labels, keep)
+        if marker is not None:  # the cone below the hand
+            ys, xs = np.nonzero(seed)
+            x_m, y_top, half = xs.mean(), ys.min(), 0.5 * (xs.max() - xs.min())
+            yy, xx = np.mgrid[0:seed.shape[0], 0:seed.shape[1]]
+            arm &= (yy >= y_top) & (np.abs(xx - x_m) <= half + prm.cone_slope * (yy - y_top))
+        mask[arm] = 255
     if not mask.any():
         return np.zeros((h, w), bool)
     mask = grow(mask, prm.margin_px / 2)

@@ -51,11 +51,13 @@ def settings_from_config(cfg) -> EstimatorSettings:
     orient = (None if nz.orientation_std_deg is None
               else tuple(np.radians(nz.orientation_std_deg)))
     slam = SlamParams(noise=mm.MotionNoise(nz.jerk, nz.angular_acc, nz.accel_bias_drift),
-                      sigma_accel=nz.accel, sigma_px=nz.pixel, orientation_tilt_yaw=orient,
+                      sigma_accel=nz.accel, sigma_gyro=nz.gyro, sigma_px=nz.pixel,
+                      orientation_tilt_yaw=orient,
                       rho0=1.0 / cfg.init_depth, sigma_rho=cfg.init_inverse_depth_std)
     fe = FrontendParams(patch=cfg.patch_px, n_sigma=cfg.search_sigma,
                         max_search_px=cfg.max_search_px, min_score=cfg.min_zncc)
     return EstimatorSettings(use_camera=cfg.mode != "inertial", use_accel=cfg.mode != "camera",
+                             use_gyro=cfg.use_gyro and cfg.mode != "camera",
                              use_orientation=cfg.use_orientation and cfg.mode != "camera",
                              target_features=cfg.target_features, max_map=cfg.max_map,
                              max_measured=cfg.max_measured, slam=slam, frontend=fe)
@@ -117,7 +119,7 @@ class SlamStage(Stage):
             self._last_R = msg.value.R_W_sensor
             return
         with self._timer.time(self.name):
-            self.slam.on_imu(msg.t, msg.value.accel, msg.value.R_W_sensor)
+            self.slam.on_imu(msg.t, msg.value.accel, msg.value.R_W_sensor, msg.value.gyro)
         self._publish(msg, -1)
 
     def _on_frame(self, topic: str, msg) -> None:
