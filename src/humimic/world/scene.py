@@ -135,9 +135,9 @@ def compose(opts: SceneOptions) -> mjcf.RootElement:
 
 _EYE_X_Z = _robot_eye_height_and_x()
 
-#: Velocity-actuator gains of the planar base: time constants of ~0.05 s for the robot's
+#: Velocity-actuator gains of the planar base: time constants of ~0.01 s for the robot's
 #: 80 kg and its ~4 kg m^2 about the vertical.
-BASE_KV = {"base_x": 1600.0, "base_y": 1600.0, "base_yaw": 100.0}
+BASE_KV = {"base_x": 8000.0, "base_y": 8000.0, "base_yaw": 400.0}
 
 
 def add_planar_base(robot: mjcf.RootElement) -> None:
