@@ -20,6 +20,7 @@ chromaticity (``rgb / (r + g + b)``), which shading leaves nearly unchanged.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import cv2
@@ -62,6 +63,28 @@ def chromaticity(rgb: np.ndarray) -> np.ndarray:
     return x / np.maximum(x.sum(axis=-1, keepdims=True), 1.0)
 
 
+#: Colour quantisation of the body-colour look-up table (bits dropped per channel).
+LUT_SHIFT = 3
+
+
+@functools.lru_cache(maxsize=16)
+def body_colour_lut(body_rgb: tuple, chroma_tol: float, min_value: float) -> np.ndarray:
+    """Boolean ``(32, 32, 32)`` table: is the colour (each channel >> 3, bin centres) one of
+    the body colours by chromaticity, and bright enough?"""
+    n = 256 >> LUT_SHIFT
+    c = (np.arange(n) << LUT_SHIFT) + (1 << LUT_SHIFT) / 2
+    grid = np.stack(np.meshgrid(c, c, c, indexing="ij"), axis=-1)
+    chroma = chromaticity(grid)
+    out = np.zeros((n, n, n), bool)
+    for ref in body_rgb:
+        r = np.asarray(ref, np.float32)
+        d = chroma - r / max(float(r.sum()), 1e-6)
+        out |= np.einsum("...i,...i->...", d, d) <= chroma_tol**2
+    out &= grid.max(axis=-1) >= 255 * min_value
+    out.flags.writeable = False
+    return out
+
+
 def marker_region(hsv: np.ndarray, prm: ArmMaskParams) -> np.ndarray | None:
     """The marker (uint8 0/255) or None: hue extraction, labelling and the largest region
     (Sugiyama sec. IV-B) among the round ones no larger than a marker can look."""
@@ -82,16 +105,11 @@ def marker_region(hsv: np.ndarray, prm: ArmMaskParams) -> np.ndarray | None:
 
 
 def body_coloured(rgb: np.ndarray, prm: ArmMaskParams) -> np.ndarray:
-    """uint8 mask of the pixels with one of the wearer's body colours."""
-    chroma = chromaticity(rgb)
-    out = np.zeros(rgb.shape[:2], bool)
-    for ref in prm.body_rgb:
-        c = np.asarray(ref, np.float32)
-        c = c / max(float(c.sum()), 1e-6)
-        d = chroma - c
-        out |= np.einsum("...i,...i->...", d, d) <= prm.chroma_tol**2
-    out &= rgb.max(axis=-1) >= 255 * prm.min_value
-    return out.astype(np.uint8) * 255
+    """uint8 mask of the pixels with one of the wearer's body colours (a table look-up)."""
+    lut = body_colour_lut(tuple(tuple(c) for c in prm.body_rgb), prm.chroma_tol,
+                          prm.min_value)
+    q = rgb >> LUT_SHIFT
+    return lut[q[..., 0], q[..., 1], q[..., 2]].astype(np.uint8) * 255
 
 
 def grow(mask: np.ndarray, radius: float) -> np.ndarray:

@@ -31,20 +31,25 @@ POSE_COLS = np.arange(0, 7)
 Q_COLS = np.arange(3, 7)
 
 
-@functools.lru_cache(maxsize=8)
-def _inertial_model(given: tuple[bool, bool, bool]) -> tuple[np.ndarray, np.ndarray]:
-    """State columns and ``H`` of the inertial measurements ``given`` (q, a, ω): eq. 6
-    ``h = q``, eq. 7 ``h = a + b``, and ``h = ω``."""
-    blocks = [(mm.ORIENTATION_COLS, mm.H_ORIENTATION), (mm.ACCEL_COLS, mm.H_ACCEL),
-              (np.arange(10, 13), np.eye(3))]
+@functools.lru_cache(maxsize=32)
+def _inertial_model(given: tuple[bool, bool, bool], s_q: float, s_a: float, s_w: float
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """State columns, ``H`` and the (isotropic) noise of the inertial measurements ``given``
+    (q, a, ω): eq. 6 ``h = q``, eq. 7 ``h = a + b``, and ``h = ω``."""
+    blocks = [(mm.ORIENTATION_COLS, mm.H_ORIENTATION, s_q), (mm.ACCEL_COLS, mm.H_ACCEL, s_a),
+              (np.arange(10, 13), np.eye(3), s_w)]
     chosen = [b for b, g in zip(blocks, given, strict=True) if g]
-    cols = np.concatenate([c for c, _ in chosen])
-    H = np.zeros((sum(len(h) for _, h in chosen), len(cols)))
+    cols = np.concatenate([c for c, _, _ in chosen])
+    H = np.zeros((sum(len(h) for _, h, _ in chosen), len(cols)))
+    var = np.concatenate([np.full(len(h), s * s) for _, h, s in chosen])
     r = c = 0
-    for cc, h in chosen:
+    for cc, h, _ in chosen:
         H[r:r + h.shape[0], c:c + len(cc)] = h
         r, c = r + h.shape[0], c + len(cc)
-    return cols, H
+    out = cols, H, np.diag(var)
+    for a in out:
+        a.flags.writeable = False
+    return out
 
 
 @dataclass
@@ -171,23 +176,16 @@ class SlamFilter:
         given = (q_meas is not None, a_meas is not None, w_meas is not None)
         if not any(given):
             return
-        cols, H = _inertial_model(given)
-        nus, rs = [], []
-        if q_meas is not None:
-            nus.append(align_sign(q_meas, self.x[3:7]) - mm.h_orientation(self.x))
-            rs.append(self._orientation_noise())
-        if a_meas is not None:
-            nus.append(a_meas - mm.h_accel(self.x))
-            rs.append(np.eye(3) * self.params.sigma_accel**2)
-        if w_meas is not None:
-            nus.append(w_meas - self.x[mm.W])
-            rs.append(np.eye(3) * self.params.sigma_gyro**2)
-        nu = np.concatenate(nus)
-        R = np.zeros((len(nu), len(nu)))
-        i = 0
-        for r in rs:
-            R[i:i + len(r), i:i + len(r)] = r
-            i += len(r)
+        prm = self.params
+        cols, H, R0 = _inertial_model(given, prm.sigma_orientation, prm.sigma_accel,
+                                      prm.sigma_gyro)
+        z = [align_sign(q_meas, self.x[3:7])] if given[0] else []
+        z += [a for a in (a_meas, w_meas) if a is not None]
+        nu = np.concatenate(z) - H @ self.x[cols]  # all three models are linear: h = H x
+        R = R0
+        if given[0] and prm.orientation_tilt_yaw is not None:
+            R = R0.copy()
+            R[0:4, 0:4] = self._orientation_noise()
         PHt = up.dense_PHt(self.P, cols, H)
         S = up.dense_S(PHt, cols, H, R)
         try:
