@@ -18,14 +18,18 @@ head camera (frame I) in the paper's W:
 * ``heading_rmse_deg`` (the optical axis about W's vertical), ``rotation_rmse_deg``;
 * ``features_per_frame`` (measured), ``features_predicted_per_frame``,
   ``frames_without_features`` (and ``_fraction``), ``map_size_mean``, features added /
-  deleted / converted to XYZ;
+  deleted / converted to XYZ, ``features_added_on_arm`` (initialised inside the arm mask,
+  which is computed whether or not ``mask_arm`` uses it: 0 when it does);
 * ``cycle_ms`` -- the mean estimator cycle per frame: the IMU updates since the previous frame,
-  undistortion, active search, the EKF update, map management and detection (rendering and the
-  recording excluded; wall time, so it includes whatever else the machine does);
+  the arm mask, undistortion, active search, the EKF update, map management and detection
+  (rendering and the recording excluded; wall time, so it includes whatever else the machine
+  does);
 * ``position_nees_mean`` and its fraction in the 95 % chi-square band (3 dof).
 """
 
 from __future__ import annotations
+
+import time
 
 import numpy as np
 
@@ -129,12 +133,23 @@ class SlamStage(Stage):
         if self.slam is None:
             self._start(msg.t, image.camera.intrinsics, getattr(self, "_last_R", None))
             known_uv = self._start_calibration(msg.t, image.camera.intrinsics)
+        camera = self.cfg.mode != "inertial"
         with self._timer.time(self.name):
-            mask = (arm_mask(image.image, self.mask_params) if self.cfg.mask_arm
-                    and self.cfg.mode != "inertial" else None)
-            report = self.slam.on_frame(msg.t, image.image, mask, known_uv)
+            t0 = time.perf_counter()
+            mask = arm_mask(image.image, self.mask_params) if camera else None
+            mask_s = time.perf_counter() - t0
+            report = self.slam.on_frame(msg.t, image.image,
+                                        mask if self.cfg.mask_arm else None, known_uv)
+            if self.cfg.mask_arm:
+                report.cycle_s += mask_s  # masking is part of the estimator's cycle
+        on_arm = 0
+        if mask is not None and len(report.new_uv):  # how many new features sit on the arm
+            umask = self.slam.frontend.undistort_mask(mask)
+            u, v = np.rint(report.new_uv).astype(int).T
+            on_arm = int(np.sum(umask[v.clip(0, umask.shape[0] - 1),
+                                      u.clip(0, umask.shape[1] - 1)]))
         f = self.slam.filter
-        self.record.add(msg.t, f.x, f.P, report)
+        self.record.add(msg.t, f.x, f.P, report, on_arm)
         self._publish(msg, report.n_measured)
         if self.rlog is not None and self.rlog.enabled:
             with self._timer.time("slam_viz"):
