@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from humimic.estimation.ekf import motion_model as mm
+from humimic.estimation.ekf import quaternion as quat_jac  # noqa: F401 (tests use it)
 from humimic.estimation.ekf.slam import SlamFilter, SlamParams
 from humimic.motion import quat
 from humimic.sensors.camera_model import Intrinsics
@@ -112,8 +113,8 @@ def run(seed: int = 0, duration: float = 3.0, imu_rate: float = 180.0, cam_every
                     for fid, i in zip(f.add_features(uv_new), new, strict=True):
                         point_of[fid] = i
             out.frames.append(k)
-        out.est[k] = f.x[: mm.DIM]
-        out.cov[k] = f.P[: mm.DIM, : mm.DIM]
+        out.est[k] = f.interface
+        out.cov[k] = f.P_interface
     return out
 
 

@@ -183,3 +183,39 @@ def test_gain_update_rejects_indefinite_innovation():
     x, P = np.zeros(3), np.eye(3)
     with pytest.raises(np.linalg.LinAlgError):
         up.gain_update(x, P, np.eye(3)[:, :2], -np.eye(2), np.ones(2))
+
+
+def test_compressed_imu_steps_equal_the_dense_filter(rng=np.random.default_rng(6)):
+    """Six IMU steps on the interface block with the map's share deferred (Guivant & Nebot)
+    give the dense EKF's mean and covariance (filterpy, full-size F and H) exactly."""
+    f = _filter_with_map(rng)
+    n = len(f.x)
+    kf = KalmanFilter(dim_x=n, dim_z=10)
+    kf.x, kf.P = f.x.copy(), f.P.copy()
+    t = 0.0
+    for _ in range(6):
+        t += 1 / 180
+        x_new, F, G = mm.predict(kf.x[:19], 1 / 180)
+        F_full = np.eye(n)
+        F_full[:19, :19] = F
+        Q_full = np.zeros((n, n))
+        Q_full[:19, :19] = mm.process_noise(G, f.params.noise)
+        kf.predict(F=F_full, Q=Q_full)
+        kf.x[:19] = x_new  # the nonlinear mean, as the EKF
+        q = synth.quat.normalize(x_new[3:7] + 1e-3 * rng.standard_normal(4))
+        a, w = rng.standard_normal(3), rng.standard_normal(3)
+        H = np.zeros((10, n))
+        H[0:4, 3:7] = np.eye(4)
+        H[4:7, 13:16] = H[4:7, 16:19] = np.eye(3)
+        H[7:10, 10:13] = np.eye(3)
+        R = np.diag(np.r_[np.full(4, 1e-6), np.full(3, 0.25), np.full(3, 1e-4)])
+        kf.update(np.r_[q, a, w], R=R, H=H)
+        f.predict(t)
+        f.update_inertial(q, a, w)
+        # the filter renormalises q: do the same to the reference
+        J = np.eye(n)
+        J[3:7, 3:7] = synth.quat_jac.d_normalize(kf.x[3:7])
+        kf.x[3:7] /= np.linalg.norm(kf.x[3:7])
+        kf.P = J @ kf.P @ J.T
+    np.testing.assert_allclose(f.x, kf.x, rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(f.P, kf.P, rtol=1e-7, atol=1e-12)

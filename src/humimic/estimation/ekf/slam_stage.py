@@ -34,7 +34,7 @@ import time
 import numpy as np
 
 from humimic.estimation.ekf import motion_model as mm
-from humimic.estimation.ekf.arm_mask import ArmMaskParams, arm_mask
+from humimic.estimation.ekf.arm_mask import ArmMaskParams
 from humimic.estimation.ekf.estimator import EstimatorSettings, FrameReport, WearableSlam
 from humimic.estimation.ekf.frontend import FAILED, MEASURED, NOT_SELECTED, FrontendParams
 from humimic.estimation.ekf.slam import SlamParams
@@ -136,7 +136,7 @@ class SlamStage(Stage):
         camera = self.cfg.mode != "inertial"
         with self._timer.time(self.name):
             t0 = time.perf_counter()
-            mask = arm_mask(image.image, self.mask_params) if camera else None
+            mask = self.slam.frontend.arm_mask(image.image, self.mask_params) if camera else None
             mask_s = time.perf_counter() - t0
             report = self.slam.on_frame(msg.t, image.image,
                                         mask if self.cfg.mask_arm else None, known_uv)
@@ -144,12 +144,11 @@ class SlamStage(Stage):
                 report.cycle_s += mask_s  # masking is part of the estimator's cycle
         on_arm = 0
         if mask is not None and len(report.new_uv):  # how many new features sit on the arm
-            umask = self.slam.frontend.undistort_mask(mask)
             u, v = np.rint(report.new_uv).astype(int).T
-            on_arm = int(np.sum(umask[v.clip(0, umask.shape[0] - 1),
-                                      u.clip(0, umask.shape[1] - 1)]))
+            on_arm = int(np.sum(mask[v.clip(0, mask.shape[0] - 1),
+                                     u.clip(0, mask.shape[1] - 1)]))
         f = self.slam.filter
-        self.record.add(msg.t, f.x, f.P, report, on_arm)
+        self.record.add(msg.t, f.interface, f.P_interface, report, on_arm)
         self._publish(msg, report.n_measured)
         if self.rlog is not None and self.rlog.enabled:
             with self._timer.time("slam_viz"):
@@ -158,9 +157,9 @@ class SlamStage(Stage):
 
     def _publish(self, msg, measured: int) -> None:
         f = self.slam.filter
-        x = f.x
+        x = f.interface
         pose = HeadPose(x[0:3].copy(), x[3:7].copy(), x[7:10].copy(), x[10:13].copy(),
-                        x[13:16].copy(), f.P[:mm.DIM, :mm.DIM].copy(), f.n_features, measured)
+                        x[13:16].copy(), f.P_interface.copy(), f.n_features, measured)
         self._bus.publish("head_pose", msg.then(pose, self.cfg.latency))
 
     # ---- recording -------------------------------------------------------------------------
@@ -168,8 +167,9 @@ class SlamStage(Stage):
         rl, f = self.rlog, self.slam.filter
         if self._frames == 0:
             rl.log_transform(t, "world/W", self.world.T_world_W, static=True)
-        R_W_I = mm.rotmat(f.x[3:7])
-        T_W_cam = make_transform(R_W_I @ R_CV_I.T, f.x[0:3])
+        x = f.interface
+        R_W_I = mm.rotmat(x[3:7])
+        T_W_cam = make_transform(R_W_I @ R_CV_I.T, x[0:3])
         if self.image_every and self._frames % self.image_every == 0:
             grey = self.slam.frontend.undistort(image.image)
             cam = CameraModel("slam", f.intr, T_W_cam, T_W_cam)
@@ -187,8 +187,8 @@ class SlamStage(Stage):
         k = self.world.gt.index_of(t)
         rl.log_points(t, f"{SLAM}/truth/head", self.world.gt.position("headcam", "W")[k],
                       colors=[40, 200, 40], radii=0.02)
-        rl.log_ellipsoids_3d(t, f"{SLAM}/estimate/head", f.x[None, 0:3], f.P[None, 0:3, 0:3],
-                             colors=[(230, 30, 30)])
+        rl.log_ellipsoids_3d(t, f"{SLAM}/estimate/head", x[None, 0:3],
+                             f.P_interface[None, 0:3, 0:3], colors=[(230, 30, 30)])
 
     def trajectories(self) -> dict[str, np.ndarray]:
         """Per frame: time, the estimated pose and its covariance, feature counts, cycle time,
