@@ -62,8 +62,9 @@ class SynthRun:
 
 def run(seed: int = 0, duration: float = 3.0, imu_rate: float = 180.0, cam_every: int = 6,
         n_target: int = 12, known: bool = True, use_imu: bool = True,
-        use_camera: bool = True, params: SlamParams = SlamParams()) -> SynthRun:
+        use_camera: bool = True, params: SlamParams | None = None) -> SynthRun:
     """Run the filter over a sampled trajectory; returns truth and estimates at IMU times."""
+    params = params or SlamParams()
     rng = np.random.default_rng(seed)
     pts = np.vstack([SCREEN, world_points(rng)])
     x0 = mm.initial_state(p=[0.0, 0.0, -2.5])

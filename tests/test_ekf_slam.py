@@ -3,17 +3,17 @@ Kalman filter and unscented transform, NEES against the chi-square band, map man
 
 from __future__ import annotations
 
+import _synth_slam as synth
 import numpy as np
 import pytest
 from filterpy.kalman import KalmanFilter, MerweScaledSigmaPoints, unscented_transform
+from test_ekf_jacobians import sugiyama_eq3
 
-import _synth_slam as synth
 from humimic.estimation.ekf import inverse_depth as idp
 from humimic.estimation.ekf import motion_model as mm
 from humimic.estimation.ekf import update as up
 from humimic.estimation.ekf.slam import SlamFilter
 from humimic.maths.stats import chi2_band, nees, rmse
-from test_ekf_jacobians import sugiyama_eq3
 
 
 def _random_cov(rng, n):
@@ -30,7 +30,8 @@ def _filter_with_map(rng) -> SlamFilter:
     return f
 
 
-def test_feature_update_matches_filterpy(rng=np.random.default_rng(1)):
+def test_feature_update_matches_filterpy():
+    rng = np.random.default_rng(1)
     f = _filter_with_map(rng)
     pred = f.predict_features()
     assert len(pred.fids) == 7  # 4 corners + 3 new features, all in view
@@ -58,7 +59,8 @@ def test_feature_update_matches_filterpy(rng=np.random.default_rng(1)):
     np.testing.assert_allclose(f.x[0:3], kf.x[0:3], rtol=1e-8, atol=1e-10)
 
 
-def test_inertial_update_matches_filterpy(rng=np.random.default_rng(2)):
+def test_inertial_update_matches_filterpy():
+    rng = np.random.default_rng(2)
     f = _filter_with_map(rng)
     q_meas = f.x[3:7] + 1e-3 * rng.standard_normal(4)
     a_meas = rng.standard_normal(3)
@@ -79,7 +81,7 @@ def test_inertial_update_matches_filterpy(rng=np.random.default_rng(2)):
     assert not np.allclose(P_before, f.P)
 
 
-def test_prediction_matches_unscented_transform(rng=np.random.default_rng(3)):
+def test_prediction_matches_unscented_transform():
     """EKF ``F P F^T + G Q_n G^T`` against the unscented transform of the transcribed eq. 3
     on the state augmented with its noise (filterpy's sigma points)."""
     dt = 1 / 30
@@ -140,7 +142,8 @@ def test_slam_with_inverse_depth_features():
     assert np.mean(nees_means) < 12.0, nees_means  # measured 4.9
 
 
-def test_conversion_preserves_mean_and_covariance(rng=np.random.default_rng(4)):
+def test_conversion_preserves_mean_and_covariance():
+    rng = np.random.default_rng(4)
     f = _filter_with_map(rng)
     before_ids, before_pts, before_cov = f.feature_points()
     P_before = f.P.copy()
@@ -154,7 +157,8 @@ def test_conversion_preserves_mean_and_covariance(rng=np.random.default_rng(4)):
     assert len(f.x) == 19 + 7 * 3
 
 
-def test_delete_removes_rows_and_columns(rng=np.random.default_rng(5)):
+def test_delete_removes_rows_and_columns():
+    rng = np.random.default_rng(5)
     f = _filter_with_map(rng)
     ids = [ft.fid for ft in f.features]
     keep = f.feature(ids[5])
@@ -185,9 +189,10 @@ def test_gain_update_rejects_indefinite_innovation():
         up.gain_update(x, P, np.eye(3)[:, :2], -np.eye(2), np.ones(2))
 
 
-def test_compressed_imu_steps_equal_the_dense_filter(rng=np.random.default_rng(6)):
+def test_compressed_imu_steps_equal_the_dense_filter():
     """Six IMU steps on the interface block with the map's share deferred (Guivant & Nebot)
     give the dense EKF's mean and covariance (filterpy, full-size F and H) exactly."""
+    rng = np.random.default_rng(6)
     f = _filter_with_map(rng)
     n = len(f.x)
     kf = KalmanFilter(dim_x=n, dim_z=10)

@@ -4,11 +4,11 @@ an arm in view)."""
 
 from __future__ import annotations
 
+import _synth_images as si
 import cv2
 import numpy as np
 import pytest
 
-import _synth_images as si
 from humimic.estimation.ekf.arm_mask import ArmMaskParams, arm_mask
 from humimic.estimation.ekf.estimator import EstimatorSettings
 from humimic.estimation.ekf.frontend import FAILED, MEASURED, NOT_SELECTED, Frontend
