@@ -136,12 +136,12 @@ def predict(x: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarra
     wW = [R[i][0] * w[0] + R[i][1] * w[1] + R[i][2] * w[2] for i in range(3)]
     da = _cross(wW, a)  # eq. 4's mean: a' = (R(q) ω) × a
     dq, Jth = _quat_increment(w[0] * dt, w[1] * dt, w[2] * dt)  # eq. 3: q ⊗ q(ω Δt)
-    Lq = qj.left(q).tolist()
+    Lq = qj.left(q)
     p_ca, v_ca, _ = ca_predict(x[P], x[V], x[A], dt)
 
     out = np.empty(DIM)
     out[P] = p_ca + dt3 * np.array(da)
-    out[Q] = [sum(Lq[i][j] * dq[j] for j in range(4)) for i in range(4)]
+    out[Q] = Lq @ dq
     out[V] = v_ca + dt2 * np.array(da)
     out[W] = x[W]
     out[A] = x[A] + dt * np.array(da)
@@ -165,19 +165,18 @@ def predict(x: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarra
     # d(a')/da = [R ω]x: column j is (R ω) × e_j
     dda_a = [(0.0, wW[2], -wW[1]), (-wW[2], 0.0, wW[0]), (wW[1], -wW[0], 0.0)]
     cols = dda_q + dda_w + dda_a  # 10 columns (3-vectors) for q, ω, a
-    vals = [k * col[i] for k in (dt3, dt2, dt) for i in range(3) for col in cols]
-    dqw = [[sum(Lq[i][m] * Jth[m][j] for m in range(4)) for j in range(3)] for i in range(4)]
-    Rdq = qj.right(dq).tolist()  # d(q ⊗ dq)/dq
-    vals += [e for i in range(4) for e in (*Rdq[i], *(dt * c for c in dqw[i]))]
+    block = np.array(cols).T  # (3, 10): d(a')/d(q, ω, a)
+    dqw = Lq @ np.array(Jth)  # d(q ⊗ q(θ))/dθ (4x3)
+    vals = np.concatenate([np.multiply.outer(np.array([dt3, dt2, dt]), block).ravel(),
+                           np.hstack([qj.right(dq), dt * dqw]).ravel()])  # d(q ⊗ dq)/dq
 
     F0, G0, idx_f, F_const, idx_g = _layout(float(dt))
     F, G = F0.copy(), G0.copy()
-    F.flat[idx_f] = F_const + np.array(vals)
+    F.flat[idx_f] = F_const + vals
     # noise α enters a' as (R α) × v: d(a')/dα has the columns R[:, j] × v
-    dal = [_cross(col, v) for col in Rc]
-    gvals = [k * dal[j][i] for k in (dt3, dt2, dt) for i in range(3) for j in range(3)]
-    gvals += [dt2 * c for row in dqw for c in row]  # θ += α Δt^2/2
-    G.flat[idx_g] = gvals
+    dal = np.array([_cross(col, v) for col in Rc]).T  # (3, 3)
+    G.flat[idx_g] = np.concatenate([np.multiply.outer(np.array([dt3, dt2, dt]), dal).ravel(),
+                                    (dt2 * dqw).ravel()])  # θ += α Δt^2/2
     return out, F, G
 
 
