@@ -50,7 +50,12 @@ def run_one(scenario: Scenario, out_dir: str | Path | None = None, rerun: str | 
     world = World(scenario, rngs)
     setup_s = time.perf_counter() - t0
     cameras = world.eye_cameras + (["headcam"] if world.head_rig is not None else [])
-    blueprint = default_blueprint([camera_entity(n) for n in cameras], SERIES_ROOTS)
+    views = [camera_entity(n) for n in cameras]
+    if getattr(scenario, "slam", None) is not None:  # the SLAM's image with Fig. 7's features
+        from humimic.estimation.ekf.slam_stage import SLAM
+
+        views.append(f"{SLAM}/camera")
+    blueprint = default_blueprint(views, SERIES_ROOTS)
     stages: list = []
     try:
         with RerunLog(world.scene, mode, out / "run.rrd",

@@ -182,8 +182,17 @@ class SlamStage(Stage):
             rl.log_transform(t, f"{SLAM}/camera", T_W_cam)
         ids, pts, covs = f.feature_points()
         if len(ids):
-            rl.log_ellipsoids_3d(t, f"{SLAM}/map", pts, covs, n_sigma=2.0,
+            known = np.isin(ids, self.slam.known)
+            rl.log_ellipsoids_3d(t, f"{SLAM}/map/uncertainty", pts, covs, n_sigma=2.0,
                                  colors=[(255, 160, 0)] * len(ids))
+            rl.log_points(t, f"{SLAM}/map/features", pts, radii=0.015,
+                          colors=np.where(known[:, None], (20, 20, 20), (255, 120, 0)))
+        if self._frames % 15 == 0:  # the paths so far (the last 30 s, decimated)
+            tr = self.trajectories()
+            keep = slice(max(0, len(tr["t"]) - 900), None, 3)
+            rl.log_lines_3d(t, f"{SLAM}/trajectory", [tr["p"][keep], tr["p_true"][keep]],
+                            colors=[(230, 30, 30), (40, 200, 40)], radii=0.008,
+                            labels=["estimated", "true"])
         k = self.world.gt.index_of(t)
         rl.log_points(t, f"{SLAM}/truth/head", self.world.gt.position("headcam", "W")[k],
                       colors=[40, 200, 40], radii=0.02)
