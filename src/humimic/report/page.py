@@ -29,7 +29,7 @@ NEES_WINDOW = 30
 #: Seconds after a filter (re)start that are left out of the NEES plot (huge initial P).
 SETTLE_S = 0.5
 #: Embedded plots, in order, when the run wrote them.
-EMBED = ("mimic_*.png", "ground_truth.png")
+EMBED = ("slam_*.png", "mimic_*.png", "ground_truth.png")
 STATUS_COLOUR = {"ok": "#2e7d32", "warn": "#f9a825", "bad": "#c62828", "info": "#546e7a"}
 
 
@@ -122,6 +122,19 @@ def verdicts(metrics: dict) -> list[Verdict]:
         out.append(Verdict("robot joints", "NaN!" if not joints.get("finite", True) else
                            f"{joints.get('limit_violations', 0)} limit violations",
                            "bad" if bad else "ok"))
+    slam = metrics.get("slam")
+    if slam and slam.get("frames"):
+        ate, head = slam.get("ate_rmse_m"), slam.get("heading_rmse_deg")
+        out.append(Verdict(f"SLAM ({slam.get('mode')}): head position / heading RMSE",
+                           f"{100 * ate:.1f} cm / {head:.2f} deg" if ate is not None
+                           and head is not None else "no estimate",
+                           max((_grade(ate, 0.03, 0.10), _grade(head, 2.0, 5.0)),
+                               key=["ok", "warn", "bad"].index)))
+        if slam.get("mode") != "inertial":
+            lost = slam.get("frames_without_features", 0)
+            out.append(Verdict("SLAM features measured per frame",
+                               f"{slam.get('features_per_frame', 0):.1f}; {lost} frames "
+                               "without one", "ok" if lost == 0 else "warn"))
     e2e = (metrics.get("latency_ms") or {}).get("end_to_end")
     if e2e is not None:
         out.append(Verdict("end-to-end latency", f"{e2e:.0f} ms", _grade(e2e, 50.0, 100.0)))

@@ -213,10 +213,18 @@ class SlamStage(Stage):
         return {"slam": slam_metrics(tr, tr["p_true"], tr["R_true"], self.cfg.mode)}
 
     def plots(self, out_dir) -> list:
-        from humimic.estimation.ekf.slam_plots import plot_trajectory
+        from humimic.estimation.ekf.slam_plots import plot_table2, plot_trajectory
+        from humimic.estimation.ekf.sugiyama_tables import standing_intervals, table2
 
         tr = self.trajectories()
         if len(tr["t"]) == 0:
             return []
         np.savez_compressed(out_dir / "slam.npz", **tr)
-        return [plot_trajectory(out_dir / "slam_trajectory.png", tr)]
+        out = [plot_trajectory(out_dir / "slam_trajectory.png", tr)]
+        motion = self.world.scenario.human.motion
+        waypoints = [(w.t, w.at) for w in getattr(motion, "waypoints", None) or []]
+        if getattr(motion, "frame", None) == "W" and waypoints:  # the paper's Table II
+            rows = table2(tr, standing_intervals(waypoints))
+            if rows:
+                out.append(plot_table2(out_dir / "slam_table2.png", rows))
+        return out
