@@ -248,6 +248,7 @@ class SlamFilter:
         K = PHt @ S_inv
         xa += K @ nu
         Paa -= K @ PHt.T
+        up.symmetrize(Paa)  # rounding would otherwise grow while no feature is seen
         self._phi = phi - K @ HPhi
         self._normalize_q()
 
@@ -473,14 +474,16 @@ class SlamFilter:
             off += f.dim
 
     def _normalize_q(self) -> None:
-        """Renormalise ``q`` after an update; the interface's covariance (and the pending
-        cross-covariance) through the normalisation's Jacobian."""
+        """Renormalise ``q`` after an update; the covariance through the normalisation's
+        Jacobian: all of it after a map update, the interface block and the pending
+        cross-covariance transform ``Φ`` after an inertial one."""
         q = self._x[3:7]
         J = d_normalize(q)
         self._x[3:7] = q / math.sqrt(float(q @ q))
-        Paa = self._P[: mm.DIM, : mm.DIM]
-        up.transform_rows(Paa, slice(3, 7), J)
-        if self._phi is not None:
+        if self._phi is None:
+            up.transform_rows(self._P, slice(3, 7), J)
+        else:
+            up.transform_rows(self._P[: mm.DIM, : mm.DIM], slice(3, 7), J)
             self._phi[3:7] = J @ self._phi[3:7]
 
     def _flush(self) -> None:
@@ -493,6 +496,7 @@ class SlamFilter:
         if len(self._x) > d:
             Pab0 = self._P[:d, d:].copy()
             self._x[d:] += Pab0.T @ self._beta
+            up.symmetrize(self._psi)
             self._P[d:, d:] -= Pab0.T @ (self._psi @ Pab0)
             self._P[:d, d:] = self._phi @ Pab0
             self._P[d:, :d] = self._P[:d, d:].T
