@@ -36,6 +36,16 @@ def gain_update(x: np.ndarray, P: np.ndarray, PHt: np.ndarray, S: np.ndarray,
     P -= Kt.T @ PHt.T
 
 
+def dense_PHt(P: np.ndarray, cols: np.ndarray, H: np.ndarray) -> np.ndarray:
+    """``P H^T`` for a Jacobian that is ``H (m, c)`` on the columns ``cols`` and zero elsewhere."""
+    return P[:, cols] @ H.T
+
+
+def dense_S(PHt: np.ndarray, cols: np.ndarray, H: np.ndarray, R: np.ndarray) -> np.ndarray:
+    """``H P H^T + R`` from ``P H^T`` (same sparse ``H`` as :func:`dense_PHt`)."""
+    return H @ PHt[cols] + R
+
+
 def features_PHt(P: np.ndarray, pose_cols: np.ndarray, H_pose: np.ndarray,
                  groups: list[tuple[np.ndarray, np.ndarray, np.ndarray]]) -> np.ndarray:
     """``P H^T`` ``(n, 2k)`` for ``k`` image measurements, two rows each.
