@@ -59,6 +59,8 @@ def run_one(scenario: Scenario, out_dir: str | Path | None = None, rerun: str | 
             stages = build_stages(scenario, world, rngs, rlog)
             result = simulate(world, stages, rlog, progress=progress)
             metrics = _metrics(scenario, world, stages, result, setup_s, wall0)
+            for stage in stages:
+                stage.log(rlog)
             _log_ground_truth(rlog, world, result.ticks_done)
     finally:
         for stage in stages:
@@ -66,6 +68,8 @@ def run_one(scenario: Scenario, out_dir: str | Path | None = None, rerun: str | 
         world.close()
     metrics["wall_time_s"] = time.perf_counter() - wall0
     (out / "metrics.json").write_text(json.dumps(metrics, indent=2, allow_nan=False))
+    for stage in stages:
+        stage.archive(out)
     if scenario.output.plots:
         _plots(out, world, stages, result.ticks_done)
     return metrics

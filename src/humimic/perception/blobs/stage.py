@@ -176,8 +176,10 @@ class PerceptionStage(Stage):
                 labels=[self.targets[i] for i in idx])
 
     # ---- results -----------------------------------------------------------------------------
-    def metrics(self) -> dict:
+    def finish(self) -> None:
         self.flush()  # the last frame (after the loop: published to nobody, but recorded)
+
+    def metrics(self) -> dict:
         rows = self.record.arrays()
         out = {"targets": self.published, "distractors": self.targets[len(self.published):],
                "cameras": list(self.cameras), "frames": len(rows.t),
