@@ -39,7 +39,7 @@ from humimic.metrics.mimicry import (
     summary_stats,
     xcorr_lag,
 )
-from humimic.sensors.camera_model import Intrinsics
+from humimic.sensors.camera_model import R_MJCAM_CV, Intrinsics
 from humimic.world.names import ROBOT_JOINTS, TORSO_JOINTS
 
 #: Joints whose limits matter for a site (its arm and the torso).
@@ -206,7 +206,7 @@ def gaze_metrics(stage) -> dict | None:
         cid = scene.camera(f"{eye}_{cfg.camera}")
         intr = Intrinsics.from_fovy(np.radians(m.cam_fovy[cid]), w, h)
         R = rec.cam_mat[k0:n, e].reshape(-1, 3, 3)
-        p_cam = np.einsum("nji,nj->ni", R, p - rec.cam_pos[k0:n, e]) * np.array([1, -1, -1])
+        p_cam = np.einsum("nji,nj->ni", R, p - rec.cam_pos[k0:n, e]) @ R_MJCAM_CV.T
         off = image_offsets(p_cam, intr.fx, intr.fy, w, h)
         out[f"{eye}_offset_frac"] = summary_stats(off)
         worst = np.maximum(worst, off)

@@ -21,6 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from humimic.estimation.random_jerk import RandomJerkFilter
+from humimic.metrics.tracking import FILTER_SETTLE_S
 from humimic.perception.blobs.stereo import StereoRig, following_covariance
 from humimic.sensors.camera_model import invert_transform
 
@@ -83,7 +84,7 @@ def _to_camera(pa, frames: np.ndarray):
     return T[:3, :3], T[:3, 3]
 
 
-def table2(pa, target: str, skip_s: float = 0.5, frame: str = "camera") -> Table2:
+def table2(pa, target: str, skip_s: float = FILTER_SETTLE_S, frame: str = "camera") -> Table2:
     """Table 2 from a static target's measurements (``skip_s`` after its first one)."""
     i, frames = _used(pa, target, skip_s)
     uv = pa.uv_match[frames, i].reshape(-1, 4)
@@ -114,26 +115,18 @@ def refilter(t: np.ndarray, ok: np.ndarray, z: np.ndarray, R: np.ndarray, b: flo
     Returns the states ``(F, 9)`` (NaN before the first measurement or after a reset) and the
     seconds since (re)initialisation ``(F,)``.
     """
-    kf = RandomJerkFilter(b)
+    kf = RandomJerkFilter(b, max_gap=max_gap)
     x = np.full((len(t), 9), np.nan)
     since = np.full(len(t), np.inf)
-    t_meas = t_init = -np.inf
     for k in range(len(t)):
-        if not ok[k] and kf.initialised and t[k] - t_meas > max_gap:
-            kf.reset()
-        if ok[k]:
-            if not kf.initialised:
-                t_init = t[k]
-            kf.step(t[k], z[k], R[k])
-            t_meas = t[k]
-        elif kf.initialised:
-            kf.step(t[k])
+        kf.step(t[k], z[k] if ok[k] else None, R[k] if ok[k] else None)
         if kf.initialised:
-            x[k], since[k] = kf.x, t[k] - t_init
+            x[k], since[k] = kf.x, kf.since_init
     return x, since
 
 
-def table3(pa, target: str, x_filtered: np.ndarray, since: np.ndarray, skip_s: float = 0.5,
+def table3(pa, target: str, x_filtered: np.ndarray, since: np.ndarray,
+           skip_s: float = FILTER_SETTLE_S,
            frame: str = "camera") -> dict[str, np.ndarray]:
     """Table 3's rows (mm, mm/s, mm/s^2 per axis) from raw measurements and filter states
     ``(F, 9)`` aligned with the perception frames; frames ``skip_s`` after the filter started."""
@@ -149,6 +142,21 @@ def table3(pa, target: str, x_filtered: np.ndarray, since: np.ndarray, skip_s: f
         out[f"{key}_mean"] = MM * v.mean(axis=0)
         out[f"{key}_std"] = MM * v.std(axis=0)
     return out
+
+
+def filter_white_noise(raw_std_mm, b: float, rate: float = 60.0, n: int = 3000,
+                       seed: int = 0, skip_s: float = 1.0) -> dict[str, np.ndarray]:
+    """Table 3's filter rows for a still target measured with white noise of standard
+    deviation ``raw_std_mm`` (mm per axis; R the same): the filter (amplitude ``b``, m s^-2.5)
+    run at ``rate`` Hz for ``n`` frames; spreads (mm, mm/s, mm/s^2) after ``skip_s``. This is
+    how the paper's Table 3 pins down its effective b: its filtered/raw ratio and its v and a
+    spreads follow from b and the raw spread alone."""
+    sigma = 1e-3 * np.asarray(raw_std_mm, float)
+    z = np.random.default_rng(seed).normal(size=(n, 3)) * sigma
+    kf, R = RandomJerkFilter(b), np.diag(sigma**2)
+    x = np.array([kf.step(k / rate, z[k], R) for k in range(n)])[int(skip_s * rate):]
+    return {"filtered_std": MM * x[:, 0:3].std(axis=0), "vel_std": MM * x[:, 3:6].std(axis=0),
+            "acc_std": MM * x[:, 6:9].std(axis=0)}
 
 
 def fig1_rmse(x: np.ndarray, valid: np.ndarray, p: np.ndarray, v: np.ndarray, a: np.ndarray

@@ -53,6 +53,11 @@ from humimic.viz.geometry import (
     rigid_root,
 )
 
+#: Display colour (RGB) of each tracked target, everywhere it is drawn.
+TARGET_COLORS = {"head": (255, 210, 0), "right_hand": (230, 40, 40),
+                 "left_hand": (40, 200, 60)}
+OTHER_COLOR = (200, 200, 200)
+
 TIMELINE = "sim_time"
 WORLD = "world"
 ROOM = "world/room"
