@@ -22,7 +22,11 @@ import numpy as np
 
 from humimic.estimation.random_jerk import RandomJerkFilter
 from humimic.metrics.tracking import FILTER_SETTLE_S
-from humimic.perception.blobs.stereo import StereoRig, following_covariance
+from humimic.perception.blobs.stereo import (
+    StereoRig,
+    epipolar_direction,
+    following_covariance,
+)
 from humimic.sensors.camera_model import invert_transform
 
 MM = 1e3
@@ -70,14 +74,6 @@ def _used(pa, target: str, skip_s: float) -> tuple[int, np.ndarray]:
     return i, np.flatnonzero(ok & (pa.t >= t0 + skip_s))
 
 
-def _epipolar_direction(cam_left, cam_right, p_base: np.ndarray) -> np.ndarray:
-    """Raw-pixel direction in the right image of moving ``p_base`` along the left eye's ray."""
-    ray = p_base - cam_left.T_base_cam[:3, 3]
-    ray = ray / np.linalg.norm(ray)
-    t = cam_right.project_base(p_base + 0.01 * ray) - cam_right.project_base(p_base)
-    return t / np.linalg.norm(t)
-
-
 def _to_camera(pa, frames: np.ndarray):
     """Rotation base -> left camera (OpenCV axes) at the first used frame, and its origin."""
     T = invert_transform(pa.T_base_cam[frames[0], 0])
@@ -91,7 +87,7 @@ def table2(pa, target: str, skip_s: float = FILTER_SETTLE_S, frame: str = "camer
     C4 = np.cov(uv.T)
     Cl, Cr = C4[:2, :2], C4[2:, 2:]
     cams = [(pa.camera(f, 0), pa.camera(f, 1)) for f in frames]
-    t_dir = np.array([_epipolar_direction(cl, cr, p)
+    t_dir = np.array([epipolar_direction(cl, cr, p)
                       for (cl, cr), p in zip(cams, pa.p_base[frames, i], strict=True)])
     match_std = float(np.std(np.einsum("ni,ni->n", uv[:, 2:] - uv[:, :2], t_dir)))
     R_f, R_i = [], []

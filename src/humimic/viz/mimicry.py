@@ -17,7 +17,7 @@ import numpy as np
 from humimic.maths.stats import rmse
 from humimic.metrics.mimicry import TERMS, error_terms, mse_shares
 from humimic.metrics.mimicry_report import MIN_TICKS, site_series
-from humimic.viz.rerun_log import SERIES
+from humimic.viz.rerun_log import AXIS_RGB, SERIES
 from humimic.world.names import ROBOT_JOINTS
 
 #: The default layout's time-series root of mimicry.
@@ -74,7 +74,8 @@ def log_mimicry(stage, rlog) -> None:
         err = 1e3 * (s["robot"] - s["true_now"])
         rlog.log_series(f"{root}/error_mm", s["t"],
                         np.column_stack([err, np.linalg.norm(err, axis=1)]),
-                        names=[f"{a} error (mm)" for a in "xyz"] + ["|error| (mm)"])
+                        names=[f"{a} error (mm)" for a in "xyz"] + ["|error| (mm)"],
+                        colors=[*AXIS_RGB, (30, 30, 30)], widths=[1.0, 1.0, 1.0, 2.0])
         for a, axis in enumerate("xyz"):
             rlog.log_series(f"{root}/position_m/{axis}", s["t"],
                             np.stack([s["true_now"][:, a], s["cmd"][:, a], s["robot"][:, a]],

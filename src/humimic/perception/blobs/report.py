@@ -18,7 +18,7 @@ from humimic.metrics.tracking import FILTER_SETTLE_S, stereo_failures, target_sc
 from humimic.perception.blobs.archive import save_archive
 from humimic.perception.blobs.plots import plot_pva, plot_tracking_errors
 from humimic.pipeline.stage import Stage
-from humimic.viz.rerun_log import SERIES
+from humimic.viz.rerun_log import AXIS_RGB, SERIES
 
 
 class TrackingReport(Stage):
@@ -79,18 +79,24 @@ class TrackingReport(Stage):
         ok = pa.ok[:, i]
         root = f"{SERIES}/tracking/{target}"
         if ok.any():
-            rlog.log_series(f"{root}/raw_error_mm", pa.t[ok],
-                                 1e3 * (pa.p_base[ok, i] - p[ok]), names=["x", "y", "z"])
+            rlog.log_series(f"{root}/raw_error_mm", pa.t[ok], 1e3 * (pa.p_base[ok, i] - p[ok]),
+                            names=[f"raw {a} error (mm)" for a in "xyz"],
+                            colors=[tuple(128 + c // 2 for c in rgb) for rgb in AXIS_RGB],
+                            widths=[1.0] * 3)
         if fa is not None:
             j = fa.targets.index(target)
             use = fa.valid[:, j]
             pf, _, _ = self.truth(fa.t, target)
             if use.any():
                 rlog.log_series(f"{root}/filtered_error_mm", fa.t[use],
-                                     1e3 * (fa.x[use, j, :3] - pf[use]), names=["x", "y", "z"])
+                                1e3 * (fa.x[use, j, :3] - pf[use]),
+                                names=[f"filtered {a} error (mm)" for a in "xyz"],
+                                colors=list(AXIS_RGB), widths=[2.0] * 3)
                 sig = 1e3 * np.sqrt(np.diagonal(fa.P[use, j, :3, :3], axis1=-2, axis2=-1))
-                rlog.log_series(f"{root}/filter_2sigma_mm", fa.t[use], 2.0 * sig,
-                                     names=["x", "y", "z"])
+                rlog.log_series(f"{root}/filter_2sigma_mm", fa.t[use],
+                                np.concatenate([2.0 * sig, -2.0 * sig], axis=1),
+                                names=[f"{s}2σ {a} (mm)" for s in "+−" for a in "xyz"],
+                                colors=list(AXIS_RGB) * 2, widths=[0.75] * 6)
 
     def plots(self, out_dir) -> list:
         pa, fa = self.arrays()

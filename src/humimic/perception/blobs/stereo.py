@@ -369,6 +369,16 @@ class StereoRig:
                                None if template_lut is None else [template_lut])[0]
 
 
+def epipolar_direction(cam_left: CameraModel, cam_right: CameraModel, p_base: np.ndarray
+                       ) -> np.ndarray:
+    """Unit raw-pixel direction in the right image of moving ``p_base`` along the left eye's
+    ray (where a stereo match error moves the right point)."""
+    ray = p_base - cam_left.T_base_cam[:3, 3]
+    ray = ray / np.linalg.norm(ray)
+    t = cam_right.project_base(p_base + 0.01 * ray) - cam_right.project_base(p_base)
+    return t / np.linalg.norm(t)
+
+
 def match_and_triangulate(image_left, image_right, cam_left: CameraModel,
                           cam_right: CameraModel, uv_left, blob_cov_left, uv_right_blob,
                           blob_cov_right, cov_uv_left, cov_uv_right,
