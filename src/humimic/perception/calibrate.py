@@ -1,7 +1,8 @@
 """Calibrate the measurement noise the filter receives: ``perception.pixel_std`` and
 ``perception.match_std`` from a scenario's own renders.
 
-``python -m humimic.perception.calibrate SCENARIO.yaml [--seed N] [--duration S] [--out DIR]``
+``python -m humimic.perception.calibrate SCENARIO.yaml [--seed N] [--duration S] [--set K=V]
+[--out DIR]``
 
 Each 3-D measurement's covariance is ``R = pixel_std^2 R_c + match_std^2 R_m``: ``R_c`` the
 triangulated covariance of a unit blob-centre error that the right match follows, ``R_m`` that
@@ -109,6 +110,8 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("scenario", type=Path)
     p.add_argument("--seed", type=int, default=None)
     p.add_argument("--duration", type=float, default=None, help="override duration (s)")
+    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                   help="override a scenario key, as humimic.run takes it")
     p.add_argument("--out", type=Path, default=None, help="run directory (default: a temp dir)")
     args = p.parse_args(argv)
     try:
@@ -118,7 +121,8 @@ def main(argv: list[str] | None = None) -> int:
         from humimic.run import run_one
         from humimic.scenario import load_scenario
 
-        scenario = load_scenario(args.scenario, ["output.plots=false"], seed=args.seed,
+        scenario = load_scenario(args.scenario, [*args.overrides, "output.plots=false"],
+                                 seed=args.seed,
                                  duration=args.duration)
         if scenario.perception is None:
             raise InputError(f"{args.scenario}: no perception section: nothing to calibrate")
