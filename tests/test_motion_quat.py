@@ -27,6 +27,7 @@ def test_matrix_product_and_rotvec_agree_with_scipy():
     np.testing.assert_allclose(quat.to_matrix(quat.from_axis_angle(rv, th)),
                                Rotation.from_rotvec(rv).as_matrix(), atol=1e-12)
     np.testing.assert_allclose(quat.angle(qa), a.magnitude(), atol=1e-9)
+    np.testing.assert_allclose(quat.to_rotvec(qa), a.as_rotvec(), atol=1e-9)
 
 
 def test_elementary_rotations_and_swing():

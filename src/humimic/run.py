@@ -47,7 +47,8 @@ def run_one(scenario: Scenario, out_dir: str | Path | None = None, rerun: str | 
     t0 = time.perf_counter()
     world = World(scenario, rngs)
     setup_s = time.perf_counter() - t0
-    cameras = [camera_entity(n) for n in world.eye_cameras]
+    cameras = [camera_entity(n) for n in world.eye_cameras
+               + (["headcam"] if world.head_rig is not None else [])]
     stages: list = []
     try:  # a live viewer gets the layout at once; the file, with the views that got data
         with RerunLog(world.scene, mode, out / "run.rrd",

@@ -69,6 +69,12 @@ def from_rotvec(r: np.ndarray) -> np.ndarray:
         r.shape[:-1] + (4,))
 
 
+def to_rotvec(q: np.ndarray) -> np.ndarray:
+    """Rotation vector (axis * angle, angle in [0, pi]) of a quaternion."""
+    r, shape = _rot(q)
+    return r.as_rotvec().reshape(shape + (3,))
+
+
 def from_axis_angle(axis: np.ndarray, angle: np.ndarray) -> np.ndarray:
     """Quaternion of a rotation by ``angle`` (rad) about the unit ``axis``."""
     return from_rotvec(normalize(axis) * np.asarray(angle, float)[..., None])
