@@ -188,11 +188,7 @@ class SlamStage(Stage):
             rl.log_points(t, f"{SLAM}/map/features", pts, radii=0.015,
                           colors=np.where(known[:, None], (20, 20, 20), (255, 120, 0)))
         if self._frames % 15 == 0:  # the paths so far (the last 30 s, decimated)
-            tr = self.trajectories()
-            keep = slice(max(0, len(tr["t"]) - 900), None, 3)
-            rl.log_lines_3d(t, f"{SLAM}/trajectory", [tr["p"][keep], tr["p_true"][keep]],
-                            colors=[(230, 30, 30), (40, 200, 40)], radii=0.008,
-                            labels=["estimated", "true"])
+            self._log_paths(rl, t, self.trajectories(), last=900, step=3)
         k = self.world.gt.index_of(t)
         rl.log_points(t, f"{SLAM}/truth/head", self.world.gt.position("headcam", "W")[k],
                       colors=[40, 200, 40], radii=0.02)
@@ -212,6 +208,38 @@ class SlamStage(Stage):
         tr = self.trajectories()
         return {"slam": slam_metrics(tr, tr["p_true"], tr["R_true"], self.cfg.mode)}
 
+    @staticmethod
+    def _log_paths(rl, t: float, tr: dict, last: int, step: int) -> None:
+        keep = slice(max(0, len(tr["t"]) - last), None, step)
+        rl.log_lines_3d(t, f"{SLAM}/trajectory", [tr["p"][keep], tr["p_true"][keep]],
+                        colors=[(230, 30, 30), (40, 200, 40)], radii=0.008,
+                        labels=["estimated", "true"])
+
+    def log(self, rlog) -> None:
+        """The whole estimated and true paths, and the errors and feature counts as series."""
+        tr = self.trajectories()
+        if rlog is None or not rlog.enabled or len(tr["t"]) == 0:
+            return
+        from humimic.estimation.ekf.slam_record import pose_errors
+        from humimic.viz.rerun_log import SERIES
+
+        self._log_paths(rlog, float(tr["t"][-1]), tr, last=len(tr["t"]), step=1)
+        e = pose_errors(tr["p"], tr["q"], tr["p_true"], tr["R_true"])
+        rlog.log_series(f"{SERIES}/slam/error", tr["t"],
+                        np.c_[100 * np.linalg.norm(e["position"], axis=1),
+                              np.degrees(np.abs(e["heading"]))],
+                        names=["position error (cm)", "|heading error| (deg)"])
+        rlog.log_series(f"{SERIES}/slam/features", tr["t"],
+                        np.c_[tr["measured"], tr["predicted"], tr["map_size"]],
+                        names=["measured", "predicted in view", "map"])
+
+    def archive(self, out_dir) -> list:
+        tr = self.trajectories()
+        if len(tr["t"]) == 0:
+            return []
+        np.savez_compressed(out_dir / "slam.npz", **tr)
+        return [out_dir / "slam.npz"]
+
     def plots(self, out_dir) -> list:
         from humimic.estimation.ekf.slam_plots import plot_table2, plot_trajectory
         from humimic.estimation.ekf.sugiyama_tables import standing_intervals, table2
@@ -219,7 +247,6 @@ class SlamStage(Stage):
         tr = self.trajectories()
         if len(tr["t"]) == 0:
             return []
-        np.savez_compressed(out_dir / "slam.npz", **tr)
         out = [plot_trajectory(out_dir / "slam_trajectory.png", tr)]
         motion = self.world.scenario.human.motion
         waypoints = [(w.t, w.at) for w in getattr(motion, "waypoints", None) or []]
