@@ -127,28 +127,30 @@ def arm_mask(rgb: np.ndarray, prm: ArmMaskParams = ArmMaskParams(), scale: float
     """Boolean mask of the wearer's arm and Wii remote in an RGB head-camera image. ``scale``
     is the image's size relative to the camera's: the mask is coarse (grown by a margin), so
     it is computed on a half-size image (``scale=0.5``) and upsampled."""
-    hsv = cv2.cvtColor(rgb, cv2.COLOR_RGB2HSV)
-    marker = marker_region(hsv, prm, scale)
+    h, w = rgb.shape[:2]
+    marker = marker_region(cv2.cvtColor(rgb, cv2.COLOR_RGB2HSV), prm, scale)
     if marker is not None:
         radius = np.sqrt(np.count_nonzero(marker) / np.pi)
         seed = grow(marker, prm.hand_scale * radius)
+        top = int(np.nonzero(seed.any(axis=1))[0][0])  # the arm hangs below the hand
     else:
-        seed = np.zeros(rgb.shape[:2], np.uint8)
+        seed = np.zeros((h, w), np.uint8)
         seed[-1, :] = 255  # the arm enters from below
-    body = body_coloured(rgb, prm)
+        top = (3 * h) // 4
+    body = body_coloured(rgb[top:], prm)  # only where the arm can be
     n, labels, stats, _ = cv2.connectedComponentsWithStats(body, connectivity=8)
-    touching = np.unique(labels[(seed > 0) & (body > 0)])
+    touching = np.unique(labels[(seed[top:] > 0) & (body > 0)])
     keep = [i for i in touching
             if i > 0 and stats[i, cv2.CC_STAT_AREA] >= prm.min_region_px * scale * scale]
     mask = seed if marker is not None else np.zeros_like(seed)
     if keep:
         arm = np.isin(labels, keep)
         if marker is not None:  # the cone below the hand
-            ys, xs = np.nonzero(seed)
-            x_m, y_top, half = xs.mean(), ys.min(), 0.5 * (xs.max() - xs.min())
-            yy, xx = np.ogrid[0:seed.shape[0], 0:seed.shape[1]]
-            arm &= (yy >= y_top) & (np.abs(xx - x_m) <= half + prm.cone_slope * (yy - y_top))
-        mask[arm] = 255
+            xs = np.nonzero(seed.any(axis=0))[0]
+            x_m, half = 0.5 * (xs[0] + xs[-1]), 0.5 * (xs[-1] - xs[0])
+            yy, xx = np.ogrid[0:h - top, 0:w]
+            arm &= np.abs(xx - x_m) <= half + prm.cone_slope * yy
+        mask[top:][arm] = 255
     if not mask.any():
-        return np.zeros(rgb.shape[:2], bool)
+        return np.zeros((h, w), bool)
     return grow(mask, prm.margin_px * scale) > 0

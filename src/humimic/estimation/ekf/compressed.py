@@ -35,16 +35,14 @@ class Deferred:
         """The interface moved linearly by ``F`` (a prediction; a renormalisation)."""
         self.phi = F if self.phi is None else F @ self.phi
 
-    def measurement(self, H: np.ndarray, S_inv: np.ndarray, nu: np.ndarray,
-                    K: np.ndarray) -> None:
-        """An update of the interface by ``H`` (on its columns), ``S^-1``, innovation ``ν``
-        and gain ``K`` (its interface rows)."""
-        phi = np.eye(self.d) if self.phi is None else self.phi
-        HPhi = H @ phi
-        SiHPhi = S_inv @ HPhi
+    def measured(self, HPhi: np.ndarray, SiHPhi: np.ndarray, Sinu: np.ndarray,
+                 Kt: np.ndarray) -> None:
+        """An update of the interface: ``H Φ`` (with ``Φ`` as it was), ``S^-1 H Φ``,
+        ``S^-1 ν`` and the transposed gain ``K^T = S^-1 H P_aa``."""
         self.psi += HPhi.T @ SiHPhi
-        self.beta += SiHPhi.T @ nu
-        self.phi = phi - K @ HPhi
+        self.beta += HPhi.T @ Sinu
+        phi = np.eye(self.d) if self.phi is None else self.phi
+        self.phi = phi - Kt.T @ HPhi
 
     def apply(self, x: np.ndarray, P: np.ndarray) -> None:
         """Bring the map's mean and covariance in ``x``, ``P`` (interface first) up to date,

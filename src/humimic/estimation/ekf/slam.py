@@ -102,6 +102,7 @@ class SlamFilter:
         # The IMU steps touch only the interface; their effect on the map is deferred and
         # applied before anything reads or changes the map (:mod:`.compressed`).
         self._deferred = Deferred(mm.DIM)
+        self._orient_noise: tuple[np.ndarray, np.ndarray] | None = None
         self.intr = intr.pinhole()
         self.R_cv_I = np.asarray(R_cv_I, float)
         self.params = params
@@ -184,42 +185,50 @@ class SlamFilter:
                         a_meas: np.ndarray | None = None,
                         w_meas: np.ndarray | None = None) -> None:
         """Fuse, in one update, an orientation ``q_WI`` (eq. 6), an acceleration in W (eq. 7)
-        and/or an angular velocity in I (``h = ω``, the form of the arm's eq. 15).
-
-        These read the interface only: the update is done on its 19x19 block and its effect on
-        the map is accumulated (Guivant & Nebot's compressed filter, exact): with ``Φ`` the
-        interface's transition since the last flush, ``Ψ += Φ^T H^T S^-1 H Φ``,
-        ``β += Φ^T H^T S^-1 ν`` and ``Φ = (I - K H) Φ``."""
+        and/or an angular velocity in I (``h = ω``, the form of the arm's eq. 15). They read
+        the interface only: the update is done on its 19x19 block, the map's share deferred
+        (:mod:`.compressed`)."""
         given = (q_meas is not None, a_meas is not None, w_meas is not None)
         if not any(given):
             return
         prm = self.params
-        H, R0 = mm.inertial_model(given, prm.sigma_orientation, prm.sigma_accel,
-                                  prm.sigma_gyro)
+        H, R = mm.inertial_model(given, prm.sigma_orientation, prm.sigma_accel, prm.sigma_gyro)
         xa = self._x[: mm.DIM]
         z = [align_sign(q_meas, xa[3:7])] if given[0] else []
         z += [a for a in (a_meas, w_meas) if a is not None]
         nu = np.concatenate(z) - H @ xa  # all three models are linear: h = H x
-        R = R0
         if given[0] and prm.orientation_tilt_yaw is not None:
-            R = R0.copy()
-            R[0:4, 0:4] = mm.orientation_noise(xa[3:7], *prm.orientation_tilt_yaw,
-                                               prm.sigma_orientation)
+            R = R.copy()
+            R[0:4, 0:4] = self._orientation_noise()
         Paa = self._P[: mm.DIM, : mm.DIM]
         PHt = Paa @ H.T
         S = H @ PHt + R
         if not np.all(np.diagonal(S) > 0.0):
             return
-        try:
-            S_inv = np.linalg.inv(S)
+        phi = self._deferred.phi if self._deferred.pending else np.eye(mm.DIM)
+        HPhi = H @ phi
+        try:  # one solve for S^-1 [H Φ, (P H^T)^T, ν]
+            sol = np.linalg.solve(S, np.hstack([HPhi, PHt.T, nu[:, None]]))
         except np.linalg.LinAlgError:
             return
-        K = PHt @ S_inv
-        self._deferred.measurement(H, S_inv, nu, K)
-        xa += K @ nu
-        Paa -= K @ PHt.T
+        SiHPhi, Kt, Sinu = sol[:, : mm.DIM], sol[:, mm.DIM:2 * mm.DIM], sol[:, -1]
+        self._deferred.measured(HPhi, SiHPhi, Sinu, Kt)
+        xa += Kt.T @ nu
+        Paa -= Kt.T @ PHt.T
         up.symmetrize(Paa)  # rounding would otherwise grow while no feature is seen
         self._normalize_q()
+
+    def _orientation_noise(self) -> np.ndarray:
+        """Eq. 6's 4x4 noise for the anisotropic sensor error (:func:`mm.orientation_noise`),
+        recomputed when the orientation has moved by more than ~1 deg."""
+        q = self._x[3:7]
+        cached = self._orient_noise
+        if cached is None or abs(float(q @ cached[0])) < 0.99996:
+            prm = self.params
+            cached = (q.copy(), mm.orientation_noise(q, *prm.orientation_tilt_yaw,
+                                                     prm.sigma_orientation))
+            self._orient_noise = cached
+        return cached[1]
 
     # ---- features --------------------------------------------------------------------------
     def _groups(self, feats: list[MapFeature]) -> list[tuple[np.ndarray, np.ndarray, int]]:
@@ -411,18 +420,17 @@ class SlamFilter:
 
     def _normalize_q(self) -> None:
         """Renormalise ``q`` after an update; the covariance through the normalisation's
-        Jacobian: all of it after a map update, the interface block (and the deferred
-        cross-covariance) after an inertial one."""
+        Jacobian ``J``: all of it after a map update, the interface block and the deferred
+        cross-covariance (``Φ``'s quaternion rows) after an inertial one."""
         q = self._x[3:7]
         J = d_normalize(q)
         self._x[3:7] = q / math.sqrt(float(q @ q))
-        if not self._deferred.pending:
+        d = self._deferred
+        if not d.pending:
             up.transform_rows(self._P, slice(3, 7), J)
         else:
             up.transform_rows(self._P[: mm.DIM, : mm.DIM], slice(3, 7), J)
-            T = np.eye(mm.DIM)
-            T[3:7, 3:7] = J
-            self._deferred.transition(T)
+            d.phi[3:7] = J @ d.phi[3:7]
 
     def _flush(self) -> None:
         """Apply the deferred effect of the IMU steps to the map."""
