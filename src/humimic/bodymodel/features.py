@@ -1,0 +1,194 @@
+"""Image features sampled on a projected body model, for the trackers' likelihoods.
+
+* :func:`contour_points` -- ``n`` points per part spread uniformly (by arc length) along its
+  silhouette, with outward unit normals and a visibility flag after hidden-part removal:
+  Menezes et al.'s N_p model points of the shape cue (eqs. 2-5).
+* :func:`limb_edges` -- Schmidt et al.'s edge cue (eqs. 1-2): ``M_E`` points on a limb's two
+  boundary lines (the cone's contour generators), their normals and the limb's image angle.
+* :func:`limb_ridges` -- the ridge cue (eqs. 3-4): ``M_R`` points along the limb's image axis,
+  the limb's projected width there (px) and its depth (m), from which a tracker picks the
+  Gaussian-pyramid level.
+* :func:`limb_bands` -- the mean-colour cue (eqs. 5-7): ``B_l`` quadrilaterals tiling the limb
+  along its length, optionally shrunk towards the axis.
+
+Limb features are for the cone parts (``view.cone_idx``, in that order); their ``ok`` flag is
+False where the part is invalid or seen end-on (no contour generators). Pixels everywhere.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from humimic.bodymodel.occlusion import hidden
+from humimic.bodymodel.projection import BodyView, Outline
+
+
+@dataclass(frozen=True)
+class ContourPoints:
+    uv: np.ndarray
+    """(N, P, n, 2) pixels."""
+    normal: np.ndarray
+    """(N, P, n, 2) outward unit normals (pixels)."""
+    visible: np.ndarray
+    """(N, P, n) bool: the part is valid and the point is not hidden by another part."""
+    xy: np.ndarray
+    """(N, P, n, 2) undistorted normalised coordinates."""
+    inv_depth: np.ndarray
+    """(N, P, n) 1 / depth (1/m)."""
+
+
+def resample(outline: Outline, n: int) -> ContourPoints:
+    """``n`` points per outline, uniformly spaced by arc length (pixels) round the closed
+    polygon, starting half a step in; normals perpendicular to the polygon edge they lie on.
+    ``xy`` and ``inv_depth`` are interpolated linearly with the same fraction (exact for a
+    straight 3-D edge in ``xy`` and ``inv_depth``; the pixel fraction differs from it only by
+    the lens distortion across one edge)."""
+    N, P, V, _ = outline.uv.shape
+    uv_out = np.full((N, P, n, 2), np.nan)
+    normal = np.full((N, P, n, 2), np.nan)
+    xy_out = np.full((N, P, n, 2), np.nan)
+    s_out = np.full((N, P, n), np.nan)
+    rn, rp = np.nonzero(outline.valid)
+    if len(rn):
+        uv, xy, s = outline.uv[rn, rp], outline.xy[rn, rp], outline.inv_depth[rn, rp]
+        seg = np.roll(uv, -1, axis=-2) - uv                              # (R, V, 2)
+        length = np.hypot(seg[..., 0], seg[..., 1])
+        cum = np.concatenate([np.zeros((len(rn), 1)), np.cumsum(length, axis=-1)], axis=-1)
+        total = cum[:, -1:]
+        rows = np.arange(len(rn))[:, None]
+        # one sorted array for all rows: row r's positions in [2r, 2r + 1]
+        flat = (cum / total + 2.0 * rows).ravel()
+        target = (np.arange(n) + 0.5) / n
+        idx = np.searchsorted(flat, (target + 2.0 * rows).ravel(), side="right") - 1
+        idx = np.clip(idx.reshape(len(rn), n) - rows * (V + 1), 0, V - 1)
+        f = (target * total - np.take_along_axis(cum, idx, -1)) / np.maximum(
+            np.take_along_axis(length, idx, -1), 1e-12)
+        nxt = (idx + 1) % V
+
+        def lerp(a):
+            a0 = np.take_along_axis(a, idx.reshape(idx.shape + (1,) * (a.ndim - 2)), 1)
+            a1 = np.take_along_axis(a, nxt.reshape(nxt.shape + (1,) * (a.ndim - 2)), 1)
+            ff = f.reshape(f.shape + (1,) * (a.ndim - 2))
+            return a0 + ff * (a1 - a0)
+
+        area = np.sum(uv[..., 0] * np.roll(uv[..., 1], -1, -1)
+                      - np.roll(uv[..., 0], -1, -1) * uv[..., 1], axis=-1)
+        d = np.take_along_axis(seg, idx[..., None], 1)
+        nrm = np.stack([d[..., 1], -d[..., 0]], -1) * np.sign(area)[:, None, None]
+        normal[rn, rp] = nrm / np.maximum(np.linalg.norm(nrm, axis=-1, keepdims=True), 1e-12)
+        uv_out[rn, rp], xy_out[rn, rp], s_out[rn, rp] = lerp(uv), lerp(xy), lerp(s)
+    visible = np.broadcast_to(outline.valid[..., None], (N, P, n)).copy()
+    return ContourPoints(uv_out, normal, visible, xy_out, s_out)
+
+
+def contour_points(view: BodyView, n: int, occlusion: bool = True) -> ContourPoints:
+    """``n`` contour points per part with normals; ``visible`` after hidden-part removal
+    (``occlusion=False`` skips it, as Schmidt et al. do for speed)."""
+    pts = resample(view.outline, n)
+    if occlusion:
+        pts.visible[hidden(view, pts.xy, pts.inv_depth)] = False
+    return pts
+
+
+def _sides(view: BodyView) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The cones' boundary lines: ``(base, top)`` pixel ends of side 1 and side 2
+    ``(N, Pc, 2)`` each (both run from the base rim to the top rim)."""
+    uv = view.outline.uv[:, view.cone_idx]
+    m = view.m
+    return uv[:, :, 0], uv[:, :, 1], uv[:, :, m + 3], uv[:, :, m + 2]
+
+
+def _ok(view: BodyView) -> np.ndarray:
+    return view.outline.valid[:, view.cone_idx] & view.generators
+
+
+@dataclass(frozen=True)
+class LimbEdges:
+    uv: np.ndarray
+    """(N, Pc, M_E, 2) points, the first half on side 1, the rest on side 2 (pixels)."""
+    normal: np.ndarray
+    """(N, Pc, M_E, 2) outward unit normals of the boundary lines."""
+    angle: np.ndarray
+    """(N, Pc) the limb's image angle (rad, atan2 of its axis from base to top, pixels)."""
+    ok: np.ndarray
+    """(N, Pc) bool."""
+
+
+def limb_edges(view: BodyView, m_e: int) -> LimbEdges:
+    """``m_e`` (even) points equally spaced on the limbs' two boundary lines (Schmidt eq. 1)."""
+    if m_e < 2 or m_e % 2:
+        raise ValueError(f"limb_edges: M_E must be even and >= 2, got {m_e}")
+    b1, t1, b2, t2 = _sides(view)
+    f = ((np.arange(m_e // 2) + 0.5) / (m_e // 2))[:, None]
+    s1 = b1[:, :, None] + f * (t1 - b1)[:, :, None]
+    s2 = b2[:, :, None] + f * (t2 - b2)[:, :, None]
+    axis = view.axis_uv
+    ax = axis[:, :, 1] - axis[:, :, 0]
+    mid = 0.5 * (axis[:, :, 0] + axis[:, :, 1])
+
+    def out_normal(b, t, centre):
+        d = t - b
+        n = np.stack([d[..., 1], -d[..., 0]], -1)
+        n /= np.maximum(np.linalg.norm(n, axis=-1, keepdims=True), 1e-12)
+        flip = np.sum(n * (b - centre), axis=-1, keepdims=True) < 0
+        return np.where(flip, -n, n)
+
+    n1 = np.broadcast_to(out_normal(b1, t1, mid)[:, :, None], s1.shape)
+    n2 = np.broadcast_to(out_normal(b2, t2, mid)[:, :, None], s2.shape)
+    return LimbEdges(np.concatenate([s1, s2], 2), np.concatenate([n1, n2], 2),
+                     np.arctan2(ax[..., 1], ax[..., 0]), _ok(view))
+
+
+@dataclass(frozen=True)
+class LimbRidges:
+    uv: np.ndarray
+    """(N, Pc, M_R, 2) points on the limb's image axis (pixels)."""
+    width: np.ndarray
+    """(N, Pc, M_R) the limb's image width across its axis at each point (pixels)."""
+    depth: np.ndarray
+    """(N, Pc, M_R) depth of the axis point (m)."""
+    angle: np.ndarray
+    """(N, Pc) image angle of the axis (rad)."""
+    ok: np.ndarray
+    """(N, Pc) bool."""
+
+
+def limb_ridges(view: BodyView, m_r: int) -> LimbRidges:
+    """``m_r`` points equally spaced (in 3-D) along the limbs' axes (Schmidt eq. 3), the
+    projected width there and their depth."""
+    f = (np.arange(m_r) + 0.5) / m_r
+    ends = view.axis_xyz                                              # (N, Pc, 2, 3)
+    X = ends[:, :, None, 0] + f[:, None] * (ends[:, :, None, 1] - ends[:, :, None, 0])
+    uv = view.intrinsics.project(X)
+    axis = view.axis_uv
+    ax = axis[:, :, 1] - axis[:, :, 0]
+    ax /= np.maximum(np.linalg.norm(ax, axis=-1, keepdims=True), 1e-12)
+    perp = np.stack([-ax[..., 1], ax[..., 0]], -1)[:, :, None]       # (N, Pc, 1, 2)
+    b1, t1, b2, t2 = _sides(view)
+    width = np.zeros(uv.shape[:-1])
+    for b, t, sign in ((b1, t1, 1.0), (b2, t2, -1.0)):
+        # distance from the axis point to the boundary line, measured along ``perp``
+        d = (t - b)[:, :, None]
+        num = (b[:, :, None, 0] - uv[..., 0]) * d[..., 1] - (b[:, :, None, 1] - uv[..., 1]) * d[..., 0]
+        den = perp[..., 0] * d[..., 1] - perp[..., 1] * d[..., 0]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            width += sign * num / den
+    return LimbRidges(uv, np.abs(width), X[..., 2], np.arctan2(ax[..., 1], ax[..., 0]),
+                      _ok(view))
+
+
+def limb_bands(view: BodyView, bands: int, shrink: float = 0.0) -> np.ndarray:
+    """``(N, Pc, B, 4, 2)`` quadrilaterals (pixels) tiling each limb in ``bands`` equal
+    slices from base to top, each pulled towards the axis by the fraction ``shrink`` of its
+    half-width (Schmidt's B_l colour polygons; ``shrink > 0`` keeps them off the edges)."""
+    if bands < 1 or not 0.0 <= shrink < 1.0:
+        raise ValueError(f"limb_bands: bands >= 1 and 0 <= shrink < 1, got {bands}, {shrink}")
+    b1, t1, b2, t2 = _sides(view)
+    f = (np.arange(bands + 1) / bands)[:, None]
+    s1 = b1[:, :, None] + f * (t1 - b1)[:, :, None]                   # (N, Pc, B+1, 2)
+    s2 = b2[:, :, None] + f * (t2 - b2)[:, :, None]
+    mid = 0.5 * (s1 + s2)
+    s1, s2 = mid + (1 - shrink) * (s1 - mid), mid + (1 - shrink) * (s2 - mid)
+    return np.stack([s1[:, :, :-1], s1[:, :, 1:], s2[:, :, 1:], s2[:, :, :-1]], axis=3)
