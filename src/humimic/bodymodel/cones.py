@@ -105,7 +105,7 @@ def ray_cone_depth(R: np.ndarray, t: np.ndarray, a, b, L, k, x: np.ndarray) -> n
     ``g0 + l g1`` the cross-section scale), kept where ``0 <= z <= L``; caps: the planes
     ``z = 0`` and ``z = L`` inside their ellipses."""
     # Ray X = l (x, y, 1) in the camera; local: o + l d with o = -R^T t, d = R^T (x, y, 1).
-    o = -np.einsum("...ji,...j->...i", R, t)
+    o = -(t[..., None, :] @ R)[..., 0, :]
     d = (R[..., 0, :] * x[..., 0, None] + R[..., 1, :] * x[..., 1, None] + R[..., 2, :])
     px, py, pz = o[..., 0] / a, o[..., 1] / b, o[..., 2]
     qx, qy, qz = d[..., 0] / a, d[..., 1] / b, d[..., 2]

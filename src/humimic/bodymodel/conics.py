@@ -30,8 +30,8 @@ def ellipsoid_quadric(R: np.ndarray, t: np.ndarray, semi_axes: np.ndarray
     (camera frame)."""
     inv_s2 = 1.0 / np.square(semi_axes)
     A = (R * inv_s2[..., None, :]) @ np.swapaxes(R, -1, -2)
-    At = np.einsum("...ij,...j->...i", A, t)
-    c = np.einsum("...i,...i->...", t, At) - 1.0
+    At = (A @ t[..., None])[..., 0]
+    c = np.sum(t * At, axis=-1) - 1.0
     return A, -At, c
 
 
@@ -49,8 +49,8 @@ def conic_to_ellipse(C: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]
     with np.errstate(divide="ignore", invalid="ignore"):
         inv = np.stack([np.stack([C2[..., 1, 1], -C2[..., 0, 1]], -1),
                         np.stack([-C2[..., 1, 0], C2[..., 0, 0]], -1)], -2) / det[..., None, None]
-        centre = -np.einsum("...ij,...j->...i", inv, c2)
-        kappa = np.einsum("...i,...ij,...j->...", centre, C2, centre) - c33
+        centre = -(inv @ c2[..., None])[..., 0]
+        kappa = np.sum(centre * (C2 @ centre[..., None])[..., 0], axis=-1) - c33
         M = kappa[..., None, None] * inv
     ok = (det > 0) & (M[..., 0, 0] > 0) & np.isfinite(M).all(axis=(-1, -2))
     return centre, M, ok
@@ -94,8 +94,8 @@ def ray_quadric_inverse_depth(A: np.ndarray, b: np.ndarray, c: np.ndarray, x: np
     of the nearer intersection with the quadric, or 0 where the ray misses it (the camera must
     be outside: ``c > 0``)."""
     xh = np.concatenate([x, np.ones(x.shape[:-1] + (1,))], axis=-1)
-    xAx = np.einsum("...i,...ij,...j->...", xh, A, xh)
-    bx = np.einsum("...i,...i->...", b, xh)
+    xAx = np.sum(xh * (A @ xh[..., None])[..., 0], axis=-1)
+    bx = np.sum(b * xh, axis=-1)
     disc = bx * bx - c * xAx
     s = (-bx + np.sqrt(np.maximum(disc, 0.0))) / c
     return np.where(disc >= 0.0, np.maximum(s, 0.0), 0.0)

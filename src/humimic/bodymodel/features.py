@@ -46,41 +46,44 @@ def resample(outline: Outline, n: int) -> ContourPoints:
     straight 3-D edge in ``xy`` and ``inv_depth``; the pixel fraction differs from it only by
     the lens distortion across one edge)."""
     N, P, V, _ = outline.uv.shape
-    uv_out = np.full((N, P, n, 2), np.nan)
-    normal = np.full((N, P, n, 2), np.nan)
-    xy_out = np.full((N, P, n, 2), np.nan)
-    s_out = np.full((N, P, n), np.nan)
-    rn, rp = np.nonzero(outline.valid)
-    if len(rn):
-        uv, xy, s = outline.uv[rn, rp], outline.xy[rn, rp], outline.inv_depth[rn, rp]
-        seg = np.roll(uv, -1, axis=-2) - uv                              # (R, V, 2)
-        length = np.hypot(seg[..., 0], seg[..., 1])
-        cum = np.concatenate([np.zeros((len(rn), 1)), np.cumsum(length, axis=-1)], axis=-1)
-        total = cum[:, -1:]
-        rows = np.arange(len(rn))[:, None]
-        # one sorted array for all rows: row r's positions in [2r, 2r + 1]
-        flat = (cum / total + 2.0 * rows).ravel()
-        target = (np.arange(n) + 0.5) / n
-        idx = np.searchsorted(flat, (target + 2.0 * rows).ravel(), side="right") - 1
-        idx = np.clip(idx.reshape(len(rn), n) - rows * (V + 1), 0, V - 1)
-        f = (target * total - np.take_along_axis(cum, idx, -1)) / np.maximum(
-            np.take_along_axis(length, idx, -1), 1e-12)
-        nxt = (idx + 1) % V
+    R = N * P
+    uv = outline.uv.reshape(R, V, 2)
+    valid = outline.valid.reshape(R)
+    seg = np.roll(uv, -1, axis=-2) - uv
+    length = np.hypot(seg[..., 0], seg[..., 1])                       # (R, V)
+    cum = np.zeros((R, V + 1))
+    np.cumsum(length, axis=-1, out=cum[:, 1:])
+    total = cum[:, -1:]
+    rows = np.arange(R)[:, None]
+    # invalid (NaN) rows get evenly spaced dummies
+    with np.errstate(invalid="ignore", divide="ignore"):
+        unit = np.where(valid[:, None], cum / total, np.linspace(0.0, 1.0, V + 1))
+    target = (np.arange(n) + 0.5) / n
+    # The edge each target falls on: edge e holds the targets in [unit_e, unit_e+1); the
+    # number of targets below u is clip(ceil(u n - 1/2), 0, n).
+    below = np.clip(np.ceil(unit * n - 0.5), 0, n).astype(np.intp)
+    below[:, 0], below[:, -1] = 0, n
+    idx = np.repeat(np.tile(np.arange(V), R), np.diff(below, axis=1).ravel()).reshape(R, n)
+    fi = (idx + rows * V).ravel()                                       # flat vertex index
+    fn = ((idx + 1) % V + rows * V).ravel()
+    with np.errstate(invalid="ignore", divide="ignore"):
+        f = ((target * total - np.take(cum, idx + rows * (V + 1)))
+             / np.maximum(np.take(length, fi).reshape(R, n), 1e-12)).reshape(-1, 1)
 
-        def lerp(a):
-            a0 = np.take_along_axis(a, idx.reshape(idx.shape + (1,) * (a.ndim - 2)), 1)
-            a1 = np.take_along_axis(a, nxt.reshape(nxt.shape + (1,) * (a.ndim - 2)), 1)
-            ff = f.reshape(f.shape + (1,) * (a.ndim - 2))
-            return a0 + ff * (a1 - a0)
+    def lerp(a):
+        flat = a.reshape(R * V, -1)
+        a0 = np.take(flat, fi, axis=0)
+        return (a0 + f * (np.take(flat, fn, axis=0) - a0)).reshape((N, P, n) + a.shape[3:])
 
-        area = np.sum(uv[..., 0] * np.roll(uv[..., 1], -1, -1)
-                      - np.roll(uv[..., 0], -1, -1) * uv[..., 1], axis=-1)
-        d = np.take_along_axis(seg, idx[..., None], 1)
-        nrm = np.stack([d[..., 1], -d[..., 0]], -1) * np.sign(area)[:, None, None]
-        normal[rn, rp] = nrm / np.maximum(np.linalg.norm(nrm, axis=-1, keepdims=True), 1e-12)
-        uv_out[rn, rp], xy_out[rn, rp], s_out[rn, rp] = lerp(uv), lerp(xy), lerp(s)
+    area = np.sum(uv[..., 0] * np.roll(uv[..., 1], -1, -1)
+                  - np.roll(uv[..., 0], -1, -1) * uv[..., 1], axis=-1)
+    d = np.take(seg.reshape(R * V, 2), fi, axis=0) * np.repeat(np.sign(area), n)[:, None]
+    nrm = np.stack([d[:, 1], -d[:, 0]], -1)
+    with np.errstate(invalid="ignore"):
+        nrm /= np.maximum(np.hypot(nrm[:, 0], nrm[:, 1]), 1e-12)[:, None]
     visible = np.broadcast_to(outline.valid[..., None], (N, P, n)).copy()
-    return ContourPoints(uv_out, normal, visible, xy_out, s_out)
+    return ContourPoints(lerp(outline.uv), nrm.reshape(N, P, n, 2), visible,
+                         lerp(outline.xy), lerp(outline.inv_depth[..., None])[..., 0])
 
 
 def contour_points(view: BodyView, n: int, occlusion: bool = True) -> ContourPoints:

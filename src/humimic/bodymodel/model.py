@@ -199,7 +199,7 @@ class BodyModel:
         R_sp = np.stack([p.R_seg_part for p in self.parts])
         p_sp = np.stack([p.p_seg_part for p in self.parts])
         R_seg, p_seg = pose.R[:, seg], pose.p[:, seg]
-        return R_seg @ R_sp, p_seg + np.einsum("npij,pj->npi", R_seg, p_sp)
+        return R_seg @ R_sp, p_seg + (R_seg @ p_sp[:, :, None])[..., 0]
 
 
 def _complete(limits: JointLimits) -> JointLimits:

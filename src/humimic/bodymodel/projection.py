@@ -70,11 +70,11 @@ def project_cones(R: np.ndarray, t: np.ndarray, a, b, L, k, intr: Intrinsics, m:
     """Outlines (``4 + 2m`` vertices) of cones posed at ``R (..., 3, 3)``, ``t (..., 3)`` in the
     camera; ``a, b, L, k`` broadcast against ``t[..., 0]``. Also returns ``(...)`` bool: the
     contour generators exist (False: seen along the axis, the outline is one rim)."""
-    c_loc = -np.einsum("...ji,...j->...i", R, t)
+    c_loc = -(t[..., None, :] @ R)[..., 0, :]
     phi_c, delta, exists, facing = cones.generator_angles(a, b, L, k, c_loc)
     phi, rim = cones.outline_angles(phi_c, delta, exists, facing, c_loc[..., 2], L, m)
     p_loc = cones.rim_points(phi, rim, a, b, L, k)
-    X = np.einsum("...ij,...vj->...vi", R, p_loc) + t[..., None, :]
+    X = p_loc @ np.swapaxes(R, -1, -2) + t[..., None, :]
     valid = cones.in_front(R, t, a, b, L, k, Z_MIN)
     X = np.where(valid[..., None, None], X, np.nan)
     inv_z = 1.0 / X[..., 2]
