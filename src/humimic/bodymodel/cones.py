@@ -48,35 +48,48 @@ def generator_angles(a, b, L, k, c_loc: np.ndarray
 
 
 def outline_angles(phi_c: np.ndarray, delta: np.ndarray, exists: np.ndarray,
-                   facing: np.ndarray, c_z: np.ndarray, L, m: int
-                   ) -> tuple[np.ndarray, np.ndarray]:
-    """Rim angles ``(..., 4 + 2m)`` and rim index (0 base, 1 top) of the silhouette's vertices.
+                   facing: np.ndarray, c_loc: np.ndarray, L, k, m: int
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Rim angles ``(..., 4 + 2m)`` and rim index (0 base, 1 top) of the silhouette's vertices,
+    and the index ``j (...)`` of the second generator's top end.
 
-    Order: base and top ends of the generator at ``phi_c + delta``, ``m`` points inside the
-    top rim's silhouette arc, top and base ends of the generator at ``phi_c - delta``, ``m``
-    points inside the base rim's arc. Without generators, all ``4 + 2m`` vertices go round the
-    silhouette rim.
+    Order: base and top ends of the generator at ``phi_c + delta``, ``m_top`` points inside the
+    top rim's silhouette arc, top and base ends of the generator at ``phi_c - delta``
+    (vertices ``j``, ``j + 1``), ``2m - m_top`` points inside the base rim's arc. The ``2m``
+    arc points are shared in proportion to each arc's angular span times its rim's scale over
+    its distance (a rough image length), so a cap seen nearly end-on gets most of them.
+    Without generators, all ``4 + 2m`` vertices go round the silhouette rim.
     """
+    c_z = c_loc[..., 2]
     g1, g2 = phi_c + delta, phi_c - delta
-    t = np.arange(1, m + 1) / (m + 1.0)
-    front_arc, back_arc = 2.0 * delta[..., None], 2.0 * (np.pi - delta[..., None])
-    top_front = (c_z <= L)[..., None]
-    base_front = (c_z >= 0.0)[..., None]
-    top_arc = g1[..., None] + np.where(top_front, -front_arc, back_arc) * t
-    base_arc = g2[..., None] + np.where(base_front, front_arc, -back_arc) * t
-    phi = np.concatenate([g1[..., None], g1[..., None], top_arc,
-                          g2[..., None], g2[..., None], base_arc], axis=-1)
-    rim = np.concatenate([np.zeros(1, int), np.ones(m + 2, int), np.zeros(m + 1, int)])
-    rim = np.broadcast_to(rim, phi.shape)
+    top_front, base_front = c_z <= L, c_z >= 0.0
+    front, back = 2.0 * delta, 2.0 * (np.pi - delta)
+    top_span = np.where(top_front, -front, back)              # signed, from g1 to g2
+    base_span = np.where(base_front, front, -back)            # signed, from g2 to g1
+    d_top = np.linalg.norm(c_loc - np.stack([0 * c_z, 0 * c_z, 0 * c_z + L], -1), axis=-1)
+    d_base = np.linalg.norm(c_loc, axis=-1)
+    w_top = np.abs(top_span) * k / np.maximum(d_top, 1e-9)
+    w_base = np.abs(base_span) / np.maximum(d_base, 1e-9)
+    m_top = np.rint(2 * m * w_top / np.maximum(w_top + w_base, 1e-300)).astype(int)
+    m_base = 2 * m - m_top
+    slot = np.arange(4 + 2 * m)
+    mt = m_top[..., None]
+    on_top_arc = (slot >= 2) & (slot <= mt + 1)
+    on_base_arc = slot >= mt + 4
+    i_top = (slot - 1) / (mt + 1.0)
+    i_base = (slot - mt - 3) / (m_base[..., None] + 1.0)
+    phi = np.where(slot <= 1, g1[..., None], g2[..., None])
+    phi = np.where(on_top_arc, g1[..., None] + top_span[..., None] * i_top, phi)
+    phi = np.where(on_base_arc, g2[..., None] + base_span[..., None] * i_base, phi)
+    rim = ((slot >= 1) & (slot <= mt + 2)).astype(int)
     # No generators: the rim that bounds the silhouette all round (the one whose cap the camera
     # sees if the lateral surface faces away; the far one if it all faces the camera).
     sees_top = c_z > L
     whole_rim = np.where(facing, ~sees_top, sees_top).astype(int)
-    n = phi.shape[-1]
-    ring = 2.0 * np.pi * np.arange(n) / n
+    ring = 2.0 * np.pi * slot / len(slot)
     phi = np.where(exists[..., None], phi, ring)
     rim = np.where(exists[..., None], rim, whole_rim[..., None])
-    return phi, rim
+    return phi, rim, np.where(exists, m_top + 2, m + 2)
 
 
 def rim_points(phi: np.ndarray, rim: np.ndarray, a, b, L, k) -> np.ndarray:

@@ -99,8 +99,10 @@ def _sides(view: BodyView) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarr
     """The cones' boundary lines: ``(base, top)`` pixel ends of side 1 and side 2
     ``(N, Pc, 2)`` each (both run from the base rim to the top rim)."""
     uv = view.outline.uv[:, view.cone_idx]
-    m = view.m
-    return uv[:, :, 0], uv[:, :, 1], uv[:, :, m + 3], uv[:, :, m + 2]
+    j = view.second[..., None, None]
+    top2 = np.take_along_axis(uv, j, axis=2)[:, :, 0]
+    base2 = np.take_along_axis(uv, j + 1, axis=2)[:, :, 0]
+    return uv[:, :, 0], uv[:, :, 1], base2, top2
 
 
 def _ok(view: BodyView) -> np.ndarray:

@@ -11,7 +11,7 @@ projection implementation; distortion included).
 * Ellipsoids: quadric -> conic (Menezes eqs. 14-15, :mod:`humimic.bodymodel.conics`), V points
   on the image ellipse, each lifted to its 3-D tangent point (``s0 = -b^T x / c``).
 * Cones: the closed-form contour generators and rim arcs (:mod:`humimic.bodymodel.cones`);
-  vertices 0-1 and ``m+2``-``m+3`` are the two generators (limb boundary lines).
+  vertices 0-1 and ``second``-``second + 1`` are the two generators (limb boundary lines).
 
 A part is ``valid`` where it lies wholly in front of the camera (``z > z_min``); invalid parts'
 vertices are NaN. Cost: see ``benchmarks/bench_bodymodel.py``.
@@ -66,20 +66,22 @@ def project_ellipsoids(R: np.ndarray, t: np.ndarray, semi_axes: np.ndarray, intr
 
 
 def project_cones(R: np.ndarray, t: np.ndarray, a, b, L, k, intr: Intrinsics, m: int
-                  ) -> tuple[Outline, np.ndarray]:
+                  ) -> tuple[Outline, np.ndarray, np.ndarray]:
     """Outlines (``4 + 2m`` vertices) of cones posed at ``R (..., 3, 3)``, ``t (..., 3)`` in the
     camera; ``a, b, L, k`` broadcast against ``t[..., 0]``. Also returns ``(...)`` bool: the
-    contour generators exist (False: seen along the axis, the outline is one rim)."""
+    contour generators exist (False: seen along the axis, the outline is one rim), and the
+    index ``j (...)`` of the vertices ``j`` (top) and ``j + 1`` (base) of the second generator
+    (the first is vertices 0 (base) and 1 (top))."""
     c_loc = -(t[..., None, :] @ R)[..., 0, :]
     phi_c, delta, exists, facing = cones.generator_angles(a, b, L, k, c_loc)
-    phi, rim = cones.outline_angles(phi_c, delta, exists, facing, c_loc[..., 2], L, m)
+    phi, rim, second = cones.outline_angles(phi_c, delta, exists, facing, c_loc, L, k, m)
     p_loc = cones.rim_points(phi, rim, a, b, L, k)
     X = p_loc @ np.swapaxes(R, -1, -2) + t[..., None, :]
     valid = cones.in_front(R, t, a, b, L, k, Z_MIN)
     X = np.where(valid[..., None, None], X, np.nan)
     inv_z = 1.0 / X[..., 2]
     xy = X[..., :2] * inv_z[..., None]
-    return Outline(intr.project(X), xy, inv_z, valid), exists
+    return Outline(intr.project(X), xy, inv_z, valid), exists, second
 
 
 @dataclass(frozen=True, eq=False)
@@ -101,12 +103,15 @@ class BodyView:
     """(Pc, 4) ``a, b, length, taper`` of the cones."""
     generators: np.ndarray
     """(N, Pc) bool: the cone's contour generators exist (not seen end-on)."""
+    second: np.ndarray
+    """(N, Pc) int: vertices ``second`` (top) and ``second + 1`` (base) of a cone's outline are
+    its second contour generator (the first: vertices 0 (base) and 1 (top))."""
     quadric: tuple[np.ndarray, np.ndarray, np.ndarray]
     """Blocks ``A (N, Pe, 3, 3), b (N, Pe, 3), c (N, Pe)`` of the ellipsoids' quadrics."""
     conic: np.ndarray
     """(N, Pe, 3, 3) the ellipsoids' image conics, normalised coordinates (Menezes eq. 15)."""
     m: int
-    """Arc vertices per rim of a cone outline (V = 4 + 2 m)."""
+    """Arc vertices of a cone outline are ``2 m`` (V = 4 + 2 m)."""
 
     @property
     def n(self) -> int:
@@ -132,7 +137,7 @@ def project(body: BodyModel, pose: Pose, intr: Intrinsics, T_cam_ref: np.ndarray
     """Every part of ``body`` at ``pose`` seen by a camera with intrinsics ``intr`` at
     ``T_cam_ref`` (4x4: reference-frame points -> camera frame, OpenCV axes), e.g.
     ``invert_transform(camera.T_base_cam)`` when the torso pose is in the robot's base frame.
-    ``n_vertices`` = V >= 6, even (cones: ``m = (V - 4) / 2`` arc points per rim)."""
+    ``n_vertices`` = V >= 6, even (cones: 4 generator ends and ``V - 4`` rim-arc points)."""
     if n_vertices < 6 or n_vertices % 2:
         raise ValueError(f"project: n_vertices must be even and >= 6, got {n_vertices}")
     m = (n_vertices - 4) // 2
@@ -151,9 +156,9 @@ def project(body: BodyModel, pose: Pose, intr: Intrinsics, T_cam_ref: np.ndarray
 
     shape = np.array([[s.a, s.b, s.length, s.taper] for s in
                       (body.parts[i].shape for i in ci)]).reshape(-1, 4)
-    gen = np.zeros((n, 0), bool)
+    gen, second = np.zeros((n, 0), bool), np.zeros((n, 0), int)
     if len(ci):
-        out, gen = project_cones(R[:, ci], t[:, ci], *shape.T, intr, m)
+        out, gen, second = project_cones(R[:, ci], t[:, ci], *shape.T, intr, m)
         uv[:, ci], xy[:, ci], inv_z[:, ci], valid[:, ci] = (
             out.uv, out.xy, out.inv_depth, out.valid)
     quad = (np.zeros((n, 0, 3, 3)), np.zeros((n, 0, 3)), np.zeros((n, 0)))
@@ -164,4 +169,4 @@ def project(body: BodyModel, pose: Pose, intr: Intrinsics, T_cam_ref: np.ndarray
         uv[:, ei], xy[:, ei], inv_z[:, ei], valid[:, ei] = (
             out.uv, out.xy, out.inv_depth, out.valid)
     return BodyView(body.part_names, intr, Outline(uv, xy, inv_z, valid), ci, ei,
-                    R[:, ci], t[:, ci], shape, gen, quad, conic, m)
+                    R[:, ci], t[:, ci], shape, gen, second, quad, conic, m)
