@@ -8,7 +8,8 @@ Euler angles ``(alpha, beta, gamma)`` give ``SFE = s_SFE alpha``, ``SAA = s_SAA 
 ``HR = s_HR gamma`` (``s`` the axes' signs). Every rotation has two such decompositions,
 ``(alpha, beta, gamma)`` and ``(alpha + pi, pi - beta, gamma + pi)``; the one with the smaller
 excursion outside the joint limits is kept (an arm raised sideways to 120 deg is SAA = 120 deg,
-not SFE = SAA-complement = HR = 180 deg). At SAA = +-90 deg (arm horizontal, sideways) SFE and
+not SFE = 180, SAA = 60, HR = 180 deg), and of two inside the limits the one with the smaller
+sum of squared angles (the nearer to the rest pose). At SAA = +-90 deg (arm horizontal, sideways) SFE and
 HR turn about the same axis and only their sum is defined (scipy puts it in SFE): the angles
 still reproduce the pose exactly but may jump there. The elbow hinge is DB's EB directly (same
 axis, -y). The wrist is not a DOF of the model: the hand is fixed to the forearm, except in
@@ -67,7 +68,9 @@ def shoulder_angles(R_torso_upper: np.ndarray, side: str,
     def excess(a):
         return np.sum(np.maximum(lim.lower - a, 0) + np.maximum(a - lim.upper, 0), axis=-1)
 
-    use_second = excess(second) < excess(first) - 1e-9
+    e1, e2 = excess(first), excess(second)
+    tie = np.abs(e1 - e2) <= 1e-9
+    use_second = np.where(tie, np.sum(second ** 2, -1) < np.sum(first ** 2, -1), e2 < e1)
     out = np.where(use_second[:, None], second, first)
     return out.reshape(R_torso_upper.shape[:-2] + (3,))
 

@@ -7,7 +7,8 @@ bad limit exits with code 2 naming the dotted key, like every scenario error.
 
 Default limits (:data:`DEFAULT_LIMITS`) are a person's range of motion in DB's joint
 convention (wider than DB's own, which are deliberately tight): shoulder flexion -60..180 deg,
-abduction -30..180 deg, humeral rotation -90..90 deg, elbow flexion 0..150 deg (the avatar's
+abduction -30..180 deg, humeral rotation -100..100 deg (the avatar points sideways with its
+upper arm turned out by 90 deg), elbow flexion 0..150 deg (the avatar's
 elbow stops at 149 deg); torso turns +-180 deg, leans -30..60 deg forward and +-45 deg sideways;
 torso position unbounded.
 """
@@ -24,7 +25,8 @@ from pydantic import AfterValidator
 from humimic.bodymodel.kinematics import DOF_NAMES, SIDES
 from humimic.scenario.base import Section
 
-_ARM_DEG = {"SFE": (-60.0, 180.0), "SAA": (-30.0, 180.0), "HR": (-90.0, 90.0), "EB": (0.0, 150.0)}
+_ARM_DEG = {"SFE": (-60.0, 180.0), "SAA": (-30.0, 180.0), "HR": (-100.0, 100.0),
+            "EB": (0.0, 150.0)}
 _TORSO = {"torso_x": (-math.inf, math.inf), "torso_y": (-math.inf, math.inf),
           "torso_z": (-math.inf, math.inf), "torso_yaw": (-math.pi, math.pi),
           "torso_pitch": (math.radians(-30.0), math.radians(60.0)),
