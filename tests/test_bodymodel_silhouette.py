@@ -120,7 +120,7 @@ def _part_of(ids: dict) -> dict[int, str]:
 def test_hidden_part_removal_agrees_with_the_rendered_depth_order(views):
     """For contour points 1.5 px inside their part's outline and on the avatar's part (rendered
     alone), the full segmentation shows the part itself where we call the point visible and
-    another part where we call it hidden. Agreement is 0.87-0.91 (0.76-0.87 without the
+    another part where we call it hidden. Agreement is 0.91-0.94 (0.85-0.88 without the
     removal): most of the rest are contour points inside an interpenetrating neighbour (the
     thorax's lower outline inside the abdomen), hidden in the model while 1.5 px inwards the
     part's own surface is already in front."""
@@ -134,14 +134,16 @@ def test_hidden_part_removal_agrees_with_the_rendered_depth_order(views):
             for p, part in enumerate(body.part_names):
                 for k in range(24):
                     u, v = probe[p, k]
-                    if not (0 <= u < 320 and 0 <= v < 240):
+                    if not (0 <= u < 320 and 0 <= v < 240 and alone[part][v, u]):
                         continue
-                    shows_part = owner.get(int(full[v, u])) == part
+                    if int(full[v, u]) not in owner:      # neck, pelvis: not in the model
+                        continue
+                    shows_part = owner[int(full[v, u])] == part
                     agree[occlusion].append(shows_part == bool(pts.visible[0, p, k]))
     with_removal, without = np.mean(agree[True]), np.mean(agree[False])
     print(f"hidden-part agreement at {distance} m: {with_removal:.3f} (without removal "
           f"{without:.3f}, {len(agree[True])} points)")
-    assert with_removal > 0.84, f"{distance} m: {with_removal:.3f}"
+    assert with_removal > 0.88, f"{distance} m: {with_removal:.3f}"
     assert with_removal > without + 0.02, f"{distance} m: {with_removal:.3f} vs {without:.3f}"
 
 

@@ -30,7 +30,13 @@ import warnings
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from humimic.bodymodel.kinematics import ARM_AXES, ARM_DOFS, DOF_NAMES, SIDES, elbow_rotation
+from humimic.bodymodel.kinematics import (
+    ARM_AXES,
+    ARM_DOFS,
+    DOF_NAMES,
+    SIDES,
+    elbow_rotation,
+)
 from humimic.bodymodel.limits import JointLimits
 from humimic.motion import quat
 from humimic.motion.avatar import QPOS_SLICES, AvatarGeometry, ball, chest_pose

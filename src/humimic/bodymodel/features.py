@@ -161,27 +161,23 @@ class LimbRidges:
 
 
 def limb_ridges(view: BodyView, m_r: int) -> LimbRidges:
-    """``m_r`` points equally spaced (in 3-D) along the limbs' axes (Schmidt eq. 3), the
-    projected width there and their depth."""
+    """``m_r`` points equally spaced along the limbs' image axes (Schmidt eq. 3), the limb's
+    projected width there (interpolated between its widths at the two rims, measured across
+    the axis) and the points' depth (perspective-correct interpolation of the ends')."""
     f = (np.arange(m_r) + 0.5) / m_r
-    ends = view.axis_xyz                                              # (N, Pc, 2, 3)
-    X = ends[:, :, None, 0] + f[:, None] * (ends[:, :, None, 1] - ends[:, :, None, 0])
-    uv = view.intrinsics.project(X)
-    axis = view.axis_uv
-    ax = axis[:, :, 1] - axis[:, :, 0]
-    ax /= np.maximum(np.linalg.norm(ax, axis=-1, keepdims=True), 1e-12)
-    perp = np.stack([-ax[..., 1], ax[..., 0]], -1)[:, :, None]       # (N, Pc, 1, 2)
+    a0, a1 = view.axis_uv[:, :, 0], view.axis_uv[:, :, 1]
+    ax = a1 - a0
+    length = np.maximum(np.hypot(ax[..., 0], ax[..., 1]), 1e-12)
     b1, t1, b2, t2 = _sides(view)
-    width = np.zeros(uv.shape[:-1])
-    for b, t, sign in ((b1, t1, 1.0), (b2, t2, -1.0)):
-        # distance from the axis point to the boundary line, measured along ``perp``
-        d = (t - b)[:, :, None]
-        num = (b[:, :, None, 0] - uv[..., 0]) * d[..., 1] - (b[:, :, None, 1] - uv[..., 1]) * d[..., 0]
-        den = perp[..., 0] * d[..., 1] - perp[..., 1] * d[..., 0]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            width += sign * num / den
-    return LimbRidges(uv, np.abs(width), X[..., 2], np.arctan2(ax[..., 1], ax[..., 0]),
-                      _ok(view))
+    # across-axis distance between the two boundary lines at the base and top rims
+    w0 = np.abs((b1[..., 0] - b2[..., 0]) * ax[..., 1] - (b1[..., 1] - b2[..., 1]) * ax[..., 0])
+    w1 = np.abs((t1[..., 0] - t2[..., 0]) * ax[..., 1] - (t1[..., 1] - t2[..., 1]) * ax[..., 0])
+    w0, w1 = w0 / length, w1 / length
+    inv_z0, inv_z1 = 1.0 / view.axis_xyz[:, :, 0, 2], 1.0 / view.axis_xyz[:, :, 1, 2]
+    uv = a0[:, :, None] + f[:, None] * ax[:, :, None]
+    width = w0[..., None] + f * (w1 - w0)[..., None]
+    depth = 1.0 / (inv_z0[..., None] + f * (inv_z1 - inv_z0)[..., None])
+    return LimbRidges(uv, width, depth, np.arctan2(ax[..., 1], ax[..., 0]), _ok(view))
 
 
 def limb_bands(view: BodyView, bands: int, shrink: float = 0.0) -> np.ndarray:

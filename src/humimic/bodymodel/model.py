@@ -198,8 +198,11 @@ class BodyModel:
         seg = np.array([SEGMENTS.index(p.segment) for p in self.parts])
         R_sp = np.stack([p.R_seg_part for p in self.parts])
         p_sp = np.stack([p.p_seg_part for p in self.parts])
-        R_seg, p_seg = pose.R[:, seg], pose.p[:, seg]
-        return R_seg @ R_sp, p_seg + (R_seg @ p_sp[:, :, None])[..., 0]
+        R_seg, p_seg = np.take(pose.R, seg, axis=1), np.take(pose.p, seg, axis=1)
+        p = p_seg + (R_seg @ p_sp[:, :, None])[..., 0]
+        if np.array_equal(R_sp, np.broadcast_to(np.eye(3), R_sp.shape)):
+            return R_seg, p
+        return R_seg @ R_sp, p
 
 
 def _complete(limits: JointLimits) -> JointLimits:

@@ -5,7 +5,7 @@ each part as an ordered convex polygon of V vertices (``uv`` pixels with the cam
 distortion, ``xy`` undistorted normalised coordinates, ``inv_depth`` 1/m), plus what the
 feature samplers and hidden-part removal need (quadrics of the ellipsoids, poses of the cones,
 the limbs' image axes). Every vertex is the image of a 3-D point on the part's contour
-generator, projected by :meth:`humimic.sensors.camera_model.Intrinsics.project` (the one
+generator, mapped to pixels by :meth:`humimic.sensors.camera_model.Intrinsics.distort` (the one
 projection implementation; distortion included).
 
 * Ellipsoids: quadric -> conic (Menezes eqs. 14-15, :mod:`humimic.bodymodel.conics`), V points
@@ -46,7 +46,8 @@ class Outline:
 
 
 def _pixels(intr: Intrinsics, xy: np.ndarray) -> np.ndarray:
-    return intr.project(np.concatenate([xy, np.ones(xy.shape[:-1] + (1,))], axis=-1))
+    """Undistorted normalised points ``(..., 2)`` to pixels (the camera's distortion)."""
+    return np.stack(intr.distort(xy[..., 0], xy[..., 1]), axis=-1)
 
 
 def project_ellipsoids(R: np.ndarray, t: np.ndarray, semi_axes: np.ndarray, intr: Intrinsics,
@@ -81,7 +82,7 @@ def project_cones(R: np.ndarray, t: np.ndarray, a, b, L, k, intr: Intrinsics, m:
     X = np.where(valid[..., None, None], X, np.nan)
     inv_z = 1.0 / X[..., 2]
     xy = X[..., :2] * inv_z[..., None]
-    return Outline(intr.project(X), xy, inv_z, valid), exists, second
+    return Outline(_pixels(intr, xy), xy, inv_z, valid), exists, second
 
 
 @dataclass(frozen=True, eq=False)
@@ -112,6 +113,10 @@ class BodyView:
     """(N, Pe, 3, 3) the ellipsoids' image conics, normalised coordinates (Menezes eq. 15)."""
     m: int
     """Arc vertices of a cone outline are ``2 m`` (V = 4 + 2 m)."""
+    axis_xyz: np.ndarray
+    """(N, Pc, 2, 3) the cones' axis ends (base, top rim centres) in the camera (m)."""
+    axis_uv: np.ndarray
+    """(N, Pc, 2, 2) the cones' axis ends in pixels."""
 
     @property
     def n(self) -> int:
@@ -121,15 +126,9 @@ class BodyView:
         return self.part_names.index(name)
 
     @property
-    def axis_xyz(self) -> np.ndarray:
-        """(N, Pc, 2, 3) the cones' axis ends (base, top rim centres) in the camera (m)."""
-        top = self.cone_t + self.cone_R[..., :, 2] * self.cone_shape[:, 2, None]
-        return np.stack([self.cone_t, top], axis=-2)
-
-    @property
-    def axis_uv(self) -> np.ndarray:
-        """(N, Pc, 2, 2) the cones' axis ends in pixels."""
-        return self.intrinsics.project(self.axis_xyz)
+    def limb_names(self) -> tuple[str, ...]:
+        """Names of the cone parts, in the order of the limb features (axis 1)."""
+        return tuple(self.part_names[i] for i in self.cone_idx)
 
 
 def project(body: BodyModel, pose: Pose, intr: Intrinsics, T_cam_ref: np.ndarray,
@@ -168,5 +167,8 @@ def project(body: BodyModel, pose: Pose, intr: Intrinsics, T_cam_ref: np.ndarray
         out, quad, conic = project_ellipsoids(R[:, ei], t[:, ei], axes, intr, n_vertices)
         uv[:, ei], xy[:, ei], inv_z[:, ei], valid[:, ei] = (
             out.uv, out.xy, out.inv_depth, out.valid)
-    return BodyView(body.part_names, intr, Outline(uv, xy, inv_z, valid), ci, ei,
-                    R[:, ci], t[:, ci], shape, gen, second, quad, conic, m)
+    R_cone, t_cone = R[:, ci], t[:, ci]
+    axis_xyz = np.stack([t_cone, t_cone + R_cone[..., :, 2] * shape[:, 2, None]], axis=-2)
+    return BodyView(body.part_names, intr, Outline(uv, xy, inv_z, valid), ci, ei, R_cone,
+                    t_cone, shape, gen, second, quad, conic, m, axis_xyz,
+                    intr.project(axis_xyz))

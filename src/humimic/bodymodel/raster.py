@@ -13,6 +13,7 @@ from skimage.draw import polygon as draw_polygon
 
 from humimic.bodymodel.projection import BodyView
 
+
 def fill(mask: np.ndarray, polygons: np.ndarray, value: int) -> np.ndarray:
     """Fill polygons ``(K, V, 2)`` (pixels; rows with NaN are skipped) into ``mask``."""
     polygons = np.asarray(polygons, float).reshape((-1,) + np.shape(polygons)[-2:])
