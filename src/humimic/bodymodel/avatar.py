@@ -9,11 +9,11 @@ Euler angles ``(alpha, beta, gamma)`` give ``SFE = s_SFE alpha``, ``SAA = s_SAA 
 ``(alpha, beta, gamma)`` and ``(alpha + pi, pi - beta, gamma + pi)``; the one with the smaller
 excursion outside the joint limits is kept (an arm raised sideways to 120 deg is SAA = 120 deg,
 not SFE = 180, SAA = 60, HR = 180 deg), and of two inside the limits the one with the smaller
-sum of squared angles (the nearer to the rest pose). At SAA = +-90 deg (arm horizontal, sideways) SFE and
-HR turn about the same axis and only their sum is defined (scipy puts it in SFE): the angles
-still reproduce the pose exactly but may jump there. The elbow hinge is DB's EB directly (same
-axis, -y). The wrist is not a DOF of the model: the hand is fixed to the forearm, except in
-Menezes' free hand ellipsoid (:func:`truth_hand_state`).
+sum of squared angles (the nearer to the rest pose). At SAA = +-90 deg (arm horizontal,
+sideways) SFE and HR turn about the same axis and only one combination of them is defined
+(scipy sets HR = 0): the angles still reproduce the pose exactly but may jump there. The
+elbow hinge is DB's EB directly (same axis, -y). The wrist is not a DOF of the model: the hand
+is fixed to the forearm, except in Menezes' free hand ellipsoid (:func:`truth_hand_state`).
 
 Torso pose: the chest body's frame (origin at the spine joint) in the reference frame,
 ``(x, y, z, yaw, pitch, roll)`` as in :mod:`humimic.bodymodel.kinematics`.
