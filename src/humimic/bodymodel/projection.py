@@ -1,25 +1,24 @@
-"""Project a posed body model into a camera: one convex outline per part and particle.
+"""Project a posed body model into a camera, for N particles at once.
 
-:func:`project` returns a :class:`BodyView`: for N particles and P parts, the silhouette of
-each part as an ordered convex polygon of V vertices (``uv`` pixels with the camera's
-distortion, ``xy`` undistorted normalised coordinates, ``inv_depth`` 1/m), plus what the
-feature samplers and hidden-part removal need (quadrics of the ellipsoids, poses of the cones,
-the limbs' image axes). Every vertex is the image of a 3-D point on the part's contour
-generator, mapped to pixels by :meth:`humimic.sensors.camera_model.Intrinsics.distort` (the one
-projection implementation; distortion included).
+:func:`project` returns a :class:`BodyView`. Computed at once (cheap, ``(N, parts)`` arrays):
+which parts lie wholly in front of the camera (``valid``), the cones' contour generators
+(the limbs' two boundary lines, closed form, :mod:`humimic.bodymodel.cones`) and image axes,
+and the ellipsoids' quadrics and image conics (Menezes eqs. 14-15,
+:mod:`humimic.bodymodel.conics`). Computed on first use of ``view.outline``: every part's
+silhouette as an ordered convex polygon of V vertices -- ``uv`` pixels, ``xy`` undistorted
+normalised coordinates, ``inv_depth`` 1/m -- each vertex the image of a 3-D point on the
+part's contour generator (ellipsoids: points of the image ellipse lifted with
+``s0 = -b^T x / c``; cones: generator ends and rim arcs). Pixels come from
+:meth:`humimic.sensors.camera_model.Intrinsics.distort` (the one projection implementation;
+distortion included).
 
-* Ellipsoids: quadric -> conic (Menezes eqs. 14-15, :mod:`humimic.bodymodel.conics`), V points
-  on the image ellipse, each lifted to its 3-D tangent point (``s0 = -b^T x / c``).
-* Cones: the closed-form contour generators and rim arcs (:mod:`humimic.bodymodel.cones`);
-  vertices 0-1 and ``second``-``second + 1`` are the two generators (limb boundary lines).
-
-A part is ``valid`` where it lies wholly in front of the camera (``z > z_min``); invalid parts'
-vertices are NaN. Cost: see ``benchmarks/bench_bodymodel.py``.
+Invalid parts' vertices are NaN. Cost: ``benchmarks/bench_bodymodel.py``.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -50,6 +49,14 @@ def _pixels(intr: Intrinsics, xy: np.ndarray) -> np.ndarray:
     return np.stack(intr.distort(xy[..., 0], xy[..., 1]), axis=-1)
 
 
+def _image(intr: Intrinsics, X: np.ndarray, valid: np.ndarray) -> Outline:
+    """Camera-frame points ``(..., V, 3)`` as an :class:`Outline` (NaN where not ``valid``)."""
+    X = np.where(valid[..., None, None], X, np.nan)
+    inv_z = 1.0 / X[..., 2]
+    xy = X[..., :2] * inv_z[..., None]
+    return Outline(_pixels(intr, xy), xy, inv_z, valid)
+
+
 def project_ellipsoids(R: np.ndarray, t: np.ndarray, semi_axes: np.ndarray, intr: Intrinsics,
                        n_vertices: int) -> tuple[Outline, tuple, np.ndarray]:
     """Outlines of ellipsoids posed at ``R (..., 3, 3)``, ``t (..., 3)`` in the camera with
@@ -58,12 +65,20 @@ def project_ellipsoids(R: np.ndarray, t: np.ndarray, semi_axes: np.ndarray, intr
     A, b, c = conics.ellipsoid_quadric(R, t, semi_axes)
     C = conics.quadric_to_conic(A, b, c)
     centre, M, ok = conics.conic_to_ellipse(C)
+    valid = ok & (c > 0.0) & _ellipsoid_in_front(R, t, semi_axes)
+    return _ellipse_outline(intr, centre, M, b, c, valid, n_vertices), (A, b, c), C
+
+
+def _ellipsoid_in_front(R, t, semi_axes) -> np.ndarray:
     reach_z = np.sqrt(np.sum(np.square(R[..., 2, :] * semi_axes), axis=-1))
-    valid = ok & (c > 0.0) & (t[..., 2] - reach_z > Z_MIN)
+    return t[..., 2] - reach_z > Z_MIN
+
+
+def _ellipse_outline(intr, centre, M, b, c, valid, n_vertices) -> Outline:
     xy = conics.ellipse_points(centre, M, n_vertices)
     s0 = conics.contour_inverse_depth(b, c, xy)
     xy = np.where(valid[..., None, None], xy, np.nan)
-    return Outline(_pixels(intr, xy), xy, s0, valid), (A, b, c), C
+    return Outline(_pixels(intr, xy), xy, s0, valid)
 
 
 def project_cones(R: np.ndarray, t: np.ndarray, a, b, L, k, intr: Intrinsics, m: int
@@ -78,11 +93,7 @@ def project_cones(R: np.ndarray, t: np.ndarray, a, b, L, k, intr: Intrinsics, m:
     phi, rim, second = cones.outline_angles(phi_c, delta, exists, facing, c_loc, L, k, m)
     p_loc = cones.rim_points(phi, rim, a, b, L, k)
     X = p_loc @ np.swapaxes(R, -1, -2) + t[..., None, :]
-    valid = cones.in_front(R, t, a, b, L, k, Z_MIN)
-    X = np.where(valid[..., None, None], X, np.nan)
-    inv_z = 1.0 / X[..., 2]
-    xy = X[..., :2] * inv_z[..., None]
-    return Outline(_pixels(intr, xy), xy, inv_z, valid), exists, second
+    return _image(intr, X, cones.in_front(R, t, a, b, L, k, Z_MIN)), exists, second
 
 
 @dataclass(frozen=True, eq=False)
@@ -91,9 +102,12 @@ class BodyView:
 
     part_names: tuple[str, ...]
     intrinsics: Intrinsics
-    outline: Outline
+    n_vertices: int
+    """Vertices V of each part's outline."""
+    valid: np.ndarray
+    """(N, P) bool: the part lies wholly in front of the camera."""
     cone_idx: np.ndarray
-    """(Pc,) indices (into parts) of the cones."""
+    """(Pc,) indices (into parts) of the cones: the limbs of the limb features."""
     ellipsoid_idx: np.ndarray
     """(Pe,) indices of the ellipsoids."""
     cone_R: np.ndarray
@@ -104,23 +118,26 @@ class BodyView:
     """(Pc, 4) ``a, b, length, taper`` of the cones."""
     generators: np.ndarray
     """(N, Pc) bool: the cone's contour generators exist (not seen end-on)."""
-    second: np.ndarray
-    """(N, Pc) int: vertices ``second`` (top) and ``second + 1`` (base) of a cone's outline are
-    its second contour generator (the first: vertices 0 (base) and 1 (top))."""
-    quadric: tuple[np.ndarray, np.ndarray, np.ndarray]
-    """Blocks ``A (N, Pe, 3, 3), b (N, Pe, 3), c (N, Pe)`` of the ellipsoids' quadrics."""
-    conic: np.ndarray
-    """(N, Pe, 3, 3) the ellipsoids' image conics, normalised coordinates (Menezes eq. 15)."""
-    m: int
-    """Arc vertices of a cone outline are ``2 m`` (V = 4 + 2 m)."""
+    sides_uv: np.ndarray
+    """(N, Pc, 2, 2, 2) the contour generators in pixels: ``[:, :, side, end]``, end 0 on the
+    base rim, 1 on the top rim (NaN where invalid)."""
     axis_xyz: np.ndarray
     """(N, Pc, 2, 3) the cones' axis ends (base, top rim centres) in the camera (m)."""
     axis_uv: np.ndarray
     """(N, Pc, 2, 2) the cones' axis ends in pixels."""
+    quadric: tuple[np.ndarray, np.ndarray, np.ndarray]
+    """Blocks ``A (N, Pe, 3, 3), b (N, Pe, 3), c (N, Pe)`` of the ellipsoids' quadrics."""
+    conic: np.ndarray
+    """(N, Pe, 3, 3) the ellipsoids' image conics, normalised coordinates (Menezes eq. 15)."""
+    ellipse: tuple[np.ndarray, np.ndarray]
+    """Centres ``(N, Pe, 2)`` and shape matrices ``(N, Pe, 2, 2)`` of the ellipsoids' image
+    ellipses, normalised coordinates (:func:`conics.ellipse_axes` gives axes and angle)."""
+    cone_view: tuple[np.ndarray, ...]
+    """``(c_loc, phi_c, delta, facing)`` of the cones (for the outlines)."""
 
     @property
     def n(self) -> int:
-        return self.outline.uv.shape[0]
+        return self.valid.shape[0]
 
     def index(self, name: str) -> int:
         return self.part_names.index(name)
@@ -130,45 +147,71 @@ class BodyView:
         """Names of the cone parts, in the order of the limb features (axis 1)."""
         return tuple(self.part_names[i] for i in self.cone_idx)
 
+    @cached_property
+    def outline(self) -> Outline:
+        """Every part's silhouette polygon (computed on first use)."""
+        n, P, V = self.n, len(self.part_names), self.n_vertices
+        uv, xy = np.empty((n, P, V, 2)), np.empty((n, P, V, 2))
+        inv_z = np.empty((n, P, V))
+        ci, ei = self.cone_idx, self.ellipsoid_idx
+        if len(ci):
+            c_loc, phi_c, delta, facing = self.cone_view
+            a, b, L, k = self.cone_shape.T
+            phi, rim, _ = cones.outline_angles(phi_c, delta, self.generators, facing, c_loc,
+                                               L, k, (V - 4) // 2)
+            p_loc = cones.rim_points(phi, rim, a, b, L, k)
+            X = p_loc @ np.swapaxes(self.cone_R, -1, -2) + self.cone_t[..., None, :]
+            out = _image(self.intrinsics, X, self.valid[:, ci])
+            uv[:, ci], xy[:, ci], inv_z[:, ci] = out.uv, out.xy, out.inv_depth
+        if len(ei):
+            centre, M = self.ellipse
+            _, bq, c = self.quadric
+            out = _ellipse_outline(self.intrinsics, centre, M, bq, c, self.valid[:, ei], V)
+            uv[:, ei], xy[:, ei], inv_z[:, ei] = out.uv, out.xy, out.inv_depth
+        return Outline(uv, xy, inv_z, self.valid)
+
 
 def project(body: BodyModel, pose: Pose, intr: Intrinsics, T_cam_ref: np.ndarray,
             n_vertices: int = 16) -> BodyView:
     """Every part of ``body`` at ``pose`` seen by a camera with intrinsics ``intr`` at
     ``T_cam_ref`` (4x4: reference-frame points -> camera frame, OpenCV axes), e.g.
     ``invert_transform(camera.T_base_cam)`` when the torso pose is in the robot's base frame.
-    ``n_vertices`` = V >= 6, even (cones: 4 generator ends and ``V - 4`` rim-arc points)."""
+    ``n_vertices`` = V >= 6, even, of the outlines (cones: 4 generator ends and ``V - 4``
+    rim-arc points shared by the two rims)."""
     if n_vertices < 6 or n_vertices % 2:
         raise ValueError(f"project: n_vertices must be even and >= 6, got {n_vertices}")
-    m = (n_vertices - 4) // 2
     R_ref, p_ref = body.part_frames(pose)
-    R_c = np.asarray(T_cam_ref, float)[:3, :3]
-    R = R_c @ R_ref
-    t = p_ref @ R_c.T + np.asarray(T_cam_ref, float)[:3, 3]
+    T = np.asarray(T_cam_ref, float)
+    R = T[:3, :3] @ R_ref
+    t = p_ref @ T[:3, :3].T + T[:3, 3]
     n, P = t.shape[:2]
     kinds = [isinstance(p.shape, Cone) for p in body.parts]
     ci = np.array([i for i, k in enumerate(kinds) if k], int)
     ei = np.array([i for i, k in enumerate(kinds) if not k], int)
-    uv = np.empty((n, P, n_vertices, 2))
-    xy = np.empty((n, P, n_vertices, 2))
-    inv_z = np.empty((n, P, n_vertices))
     valid = np.empty((n, P), bool)
 
+    # cones: contour generators and axes
     shape = np.array([[s.a, s.b, s.length, s.taper] for s in
                       (body.parts[i].shape for i in ci)]).reshape(-1, 4)
-    gen, second = np.zeros((n, 0), bool), np.zeros((n, 0), int)
-    if len(ci):
-        out, gen, second = project_cones(R[:, ci], t[:, ci], *shape.T, intr, m)
-        uv[:, ci], xy[:, ci], inv_z[:, ci], valid[:, ci] = (
-            out.uv, out.xy, out.inv_depth, out.valid)
-    quad = (np.zeros((n, 0, 3, 3)), np.zeros((n, 0, 3)), np.zeros((n, 0)))
-    conic = np.zeros((n, 0, 3, 3))
-    if len(ei):
-        axes = np.array([body.parts[i].shape.semi_axes for i in ei], float)
-        out, quad, conic = project_ellipsoids(R[:, ei], t[:, ei], axes, intr, n_vertices)
-        uv[:, ei], xy[:, ei], inv_z[:, ei], valid[:, ei] = (
-            out.uv, out.xy, out.inv_depth, out.valid)
-    R_cone, t_cone = R[:, ci], t[:, ci]
-    axis_xyz = np.stack([t_cone, t_cone + R_cone[..., :, 2] * shape[:, 2, None]], axis=-2)
-    return BodyView(body.part_names, intr, Outline(uv, xy, inv_z, valid), ci, ei, R_cone,
-                    t_cone, shape, gen, second, quad, conic, m, axis_xyz,
-                    intr.project(axis_xyz))
+    a, b, L, k = shape.T
+    R_c, t_c = np.take(R, ci, axis=1), np.take(t, ci, axis=1)
+    c_loc = -(t_c[..., None, :] @ R_c)[..., 0, :]
+    phi_c, delta, exists, facing = cones.generator_angles(a, b, L, k, c_loc)
+    valid[:, ci] = cones.in_front(R_c, t_c, a, b, L, k, Z_MIN)
+    phi = np.stack([phi_c + delta, phi_c + delta, phi_c - delta, phi_c - delta], -1)
+    ends = cones.rim_points(phi, np.array([0, 1, 0, 1]), a, b, L, k)
+    X = ends @ np.swapaxes(R_c, -1, -2) + t_c[..., None, :]
+    sides = _image(intr, X, valid[:, ci]).uv.reshape(n, len(ci), 2, 2, 2)
+    axis_xyz = np.stack([t_c, t_c + R_c[..., :, 2] * L[:, None]], axis=-2)
+
+    # ellipsoids: quadrics and conics (Menezes eqs. 14-15)
+    axes = np.array([body.parts[i].shape.semi_axes for i in ei], float).reshape(-1, 3)
+    R_e, t_e = np.take(R, ei, axis=1), np.take(t, ei, axis=1)
+    A, bq, c = conics.ellipsoid_quadric(R_e, t_e, axes)
+    C = conics.quadric_to_conic(A, bq, c)
+    centre, M, ok = conics.conic_to_ellipse(C)
+    valid[:, ei] = ok & (c > 0.0) & _ellipsoid_in_front(R_e, t_e, axes)
+
+    return BodyView(body.part_names, intr, n_vertices, valid, ci, ei, R_c, t_c, shape, exists,
+                    sides, axis_xyz, _pixels(intr, axis_xyz[..., :2] / axis_xyz[..., 2:]),
+                    (A, bq, c), C, (centre, M), (c_loc, phi_c, delta, facing))
