@@ -117,11 +117,21 @@ def ray_cone_depth(R: np.ndarray, t: np.ndarray, a, b, L, k, x: np.ndarray) -> n
     ray's depth ``l`` (``p, q`` the ray's origin and direction scaled by ``1/a, 1/b``;
     ``g0 + l g1`` the cross-section scale), kept where ``0 <= z <= L``; caps: the planes
     ``z = 0`` and ``z = L`` inside their ellipses."""
-    # Ray X = l (x, y, 1) in the camera; local: o + l d with o = -R^T t, d = R^T (x, y, 1).
-    o = -(t[..., None, :] @ R)[..., 0, :]
-    d = (R[..., 0, :] * x[..., 0, None] + R[..., 1, :] * x[..., 1, None] + R[..., 2, :])
-    px, py, pz = o[..., 0] / a, o[..., 1] / b, o[..., 2]
-    qx, qy, qz = d[..., 0] / a, d[..., 1] / b, d[..., 2]
+    # Ray X = l (x, y, 1) in the camera; local: o + l d with o = -R^T t, d = R^T (x, y, 1)
+    # (component form: fast on long 1-D batches).
+    u, v = x[..., 0], x[..., 1]
+    t0, t1, t2 = t[..., 0], t[..., 1], t[..., 2]
+
+    def col(i):
+        return R[..., 0, i], R[..., 1, i], R[..., 2, i]
+
+    (r0x, r1x, r2x), (r0y, r1y, r2y), (r0z, r1z, r2z) = col(0), col(1), col(2)
+    px = -(r0x * t0 + r1x * t1 + r2x * t2) / a
+    py = -(r0y * t0 + r1y * t1 + r2y * t2) / b
+    pz = -(r0z * t0 + r1z * t1 + r2z * t2)
+    qx = (r0x * u + r1x * v + r2x) / a
+    qy = (r0y * u + r1y * v + r2y) / b
+    qz = r0z * u + r1z * v + r2z
     g0 = 1.0 + (k - 1.0) * pz / L
     g1 = (k - 1.0) * qz / L
     qa = qx * qx + qy * qy - g1 * g1

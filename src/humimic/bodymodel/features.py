@@ -47,14 +47,14 @@ def resample(outline: Outline, n: int) -> ContourPoints:
     the lens distortion across one edge)."""
     N, P, V, _ = outline.uv.shape
     R = N * P
-    uv = outline.uv.reshape(R, V, 2)
+    # coordinate planes (R, V): numpy is slow on trailing axes of size 2
+    u, v = outline.uv[..., 0].reshape(R, V), outline.uv[..., 1].reshape(R, V)
     valid = outline.valid.reshape(R)
-    seg = np.roll(uv, -1, axis=-2) - uv
-    length = np.hypot(seg[..., 0], seg[..., 1])                       # (R, V)
+    du, dv = np.roll(u, -1, axis=1) - u, np.roll(v, -1, axis=1) - v
+    length = np.hypot(du, dv)
     cum = np.zeros((R, V + 1))
-    np.cumsum(length, axis=-1, out=cum[:, 1:])
+    np.cumsum(length, axis=1, out=cum[:, 1:])
     total = cum[:, -1:]
-    rows = np.arange(R)[:, None]
     # invalid (NaN) rows get evenly spaced dummies
     with np.errstate(invalid="ignore", divide="ignore"):
         unit = np.where(valid[:, None], cum / total, np.linspace(0.0, 1.0, V + 1))
@@ -63,27 +63,28 @@ def resample(outline: Outline, n: int) -> ContourPoints:
     # number of targets below u is clip(ceil(u n - 1/2), 0, n).
     below = np.clip(np.ceil(unit * n - 0.5), 0, n).astype(np.intp)
     below[:, 0], below[:, -1] = 0, n
-    idx = np.repeat(np.tile(np.arange(V), R), np.diff(below, axis=1).ravel()).reshape(R, n)
-    fi = (idx + rows * V).ravel()                                       # flat vertex index
-    fn = ((idx + 1) % V + rows * V).ravel()
+    idx = np.repeat(np.tile(np.arange(V), R), np.diff(below, axis=1).ravel())   # (R n,)
+    rows = np.repeat(np.arange(R), n)
+    fi = idx + rows * V                                                 # flat vertex index
+    fn = np.where(idx + 1 == V, fi + 1 - V, fi + 1)
     with np.errstate(invalid="ignore", divide="ignore"):
-        f = ((target * total - np.take(cum, idx + rows * (V + 1)))
-             / np.maximum(np.take(length, fi).reshape(R, n), 1e-12)).reshape(-1, 1)
+        f = ((np.tile(target, R) * np.repeat(total[:, 0], n) - np.take(cum, idx + rows * (V + 1)))
+             / np.maximum(np.take(length, fi), 1e-12))
 
-    def lerp(a):
-        flat = a.reshape(R * V, -1)
-        a0 = np.take(flat, fi, axis=0)
-        return (a0 + f * (np.take(flat, fn, axis=0) - a0)).reshape((N, P, n) + a.shape[3:])
+    def lerp1(a):
+        a = a.ravel()
+        a0 = np.take(a, fi)
+        return (a0 + f * (np.take(a, fn) - a0)).reshape(N, P, n)
 
-    area = np.sum(uv[..., 0] * np.roll(uv[..., 1], -1, -1)
-                  - np.roll(uv[..., 0], -1, -1) * uv[..., 1], axis=-1)
-    d = np.take(seg.reshape(R * V, 2), fi, axis=0) * np.repeat(np.sign(area), n)[:, None]
-    nrm = np.stack([d[:, 1], -d[:, 0]], -1)
-    with np.errstate(invalid="ignore"):
-        nrm /= np.maximum(np.hypot(nrm[:, 0], nrm[:, 1]), 1e-12)[:, None]
+    area = np.sum(u * np.roll(v, -1, 1) - np.roll(u, -1, 1) * v, axis=1)
+    sign = np.repeat(np.sign(area), n)
+    nu, nv = np.take(dv, fi) * sign, -np.take(du, fi) * sign
+    norm = np.maximum(np.hypot(nu, nv), 1e-12)
+    xy = outline.xy
     visible = np.broadcast_to(outline.valid[..., None], (N, P, n)).copy()
-    return ContourPoints(lerp(outline.uv), nrm.reshape(N, P, n, 2), visible,
-                         lerp(outline.xy), lerp(outline.inv_depth[..., None])[..., 0])
+    return ContourPoints(
+        np.stack([lerp1(u), lerp1(v)], -1), np.stack([nu / norm, nv / norm], -1).reshape(N, P, n, 2),
+        visible, np.stack([lerp1(xy[..., 0]), lerp1(xy[..., 1])], -1), lerp1(outline.inv_depth))
 
 
 def contour_points(view: BodyView, n: int, occlusion: bool = True) -> ContourPoints:

@@ -14,6 +14,7 @@ the arms and takes the torso pose from a face tracker::
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
+from functools import cached_property
 
 import numpy as np
 
@@ -105,6 +106,23 @@ class Pose:
         return self.R[:, i], self.p[:, i]
 
 
+@dataclass(frozen=True)
+class PartLayout:
+    """A model's parts as arrays: segment index, placement, and the shapes by kind."""
+
+    segment: np.ndarray
+    R_seg_part: np.ndarray
+    p_seg_part: np.ndarray
+    aligned: bool
+    """Every part's frame is aligned with its segment's (``R_seg_part`` = identity)."""
+    cone_idx: np.ndarray
+    ellipsoid_idx: np.ndarray
+    cone_shape: np.ndarray
+    """(Pc, 4) ``a, b, length, taper``."""
+    semi_axes: np.ndarray
+    """(Pe, 3)."""
+
+
 @dataclass(frozen=True, eq=False)
 class BodyModel:
     """Skeleton + parts + limits; ``free`` DOFs are the tracker's state (in that order)."""
@@ -193,16 +211,28 @@ class BodyModel:
         return replace(self, parts=tuple(part if p.name == part.name else p
                                          for p in self.parts))
 
+    @cached_property
+    def layout(self) -> PartLayout:
+        """The parts as arrays (computed once per model)."""
+        cones = [i for i, p in enumerate(self.parts) if isinstance(p.shape, Cone)]
+        ells = [i for i, p in enumerate(self.parts) if not isinstance(p.shape, Cone)]
+        R_sp = np.stack([p.R_seg_part for p in self.parts])
+        return PartLayout(
+            segment=np.array([SEGMENTS.index(p.segment) for p in self.parts], int),
+            R_seg_part=R_sp, p_seg_part=np.stack([p.p_seg_part for p in self.parts]),
+            aligned=bool(np.array_equal(R_sp, np.broadcast_to(np.eye(3), R_sp.shape))),
+            cone_idx=np.array(cones, int), ellipsoid_idx=np.array(ells, int),
+            cone_shape=np.array([[s.a, s.b, s.length, s.taper] for s in
+                                 (self.parts[i].shape for i in cones)], float).reshape(-1, 4),
+            semi_axes=np.array([self.parts[i].shape.semi_axes for i in ells],
+                               float).reshape(-1, 3))
+
     def part_frames(self, pose: Pose) -> tuple[np.ndarray, np.ndarray]:
         """``R_ref_part (N, P, 3, 3)``, ``p_ref_part (N, P, 3)`` of every part."""
-        seg = np.array([SEGMENTS.index(p.segment) for p in self.parts])
-        R_sp = np.stack([p.R_seg_part for p in self.parts])
-        p_sp = np.stack([p.p_seg_part for p in self.parts])
-        R_seg, p_seg = np.take(pose.R, seg, axis=1), np.take(pose.p, seg, axis=1)
-        p = p_seg + (R_seg @ p_sp[:, :, None])[..., 0]
-        if np.array_equal(R_sp, np.broadcast_to(np.eye(3), R_sp.shape)):
-            return R_seg, p
-        return R_seg @ R_sp, p
+        lay = self.layout
+        R_seg, p_seg = np.take(pose.R, lay.segment, axis=1), np.take(pose.p, lay.segment, axis=1)
+        p = p_seg + (R_seg @ lay.p_seg_part[:, :, None])[..., 0]
+        return (R_seg if lay.aligned else R_seg @ lay.R_seg_part), p
 
 
 def _complete(limits: JointLimits) -> JointLimits:

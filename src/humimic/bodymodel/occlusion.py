@@ -20,12 +20,11 @@ DEPTH_MARGIN = 1e-6
 
 
 def _boxes(xy: np.ndarray, valid: np.ndarray) -> np.ndarray:
-    """(N, P, 4) ``xmin, ymin, xmax, ymax`` of outlines in normalised coordinates (NaN-safe:
-    invalid parts get an empty box)."""
-    filled = np.where(valid[..., None, None], xy, 0.0)
-    lo = np.where(valid[..., None], filled.min(axis=-2), np.inf)
-    hi = np.where(valid[..., None], filled.max(axis=-2), -np.inf)
-    return np.concatenate([lo, hi], axis=-1)
+    """(N, P, 4) ``xmin, ymin, xmax, ymax`` of outlines in normalised coordinates (invalid
+    parts get an empty box)."""
+    x, y = xy[..., 0], xy[..., 1]
+    box = np.stack([x.min(axis=-1), y.min(axis=-1), x.max(axis=-1), y.max(axis=-1)], -1)
+    return np.where(valid[..., None], box, [np.inf, np.inf, -np.inf, -np.inf])
 
 
 def hidden(view: BodyView, xy: np.ndarray, inv_depth: np.ndarray,

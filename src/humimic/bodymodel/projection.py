@@ -23,7 +23,7 @@ from functools import cached_property
 import numpy as np
 
 from humimic.bodymodel import cones, conics
-from humimic.bodymodel.model import BodyModel, Cone, Pose
+from humimic.bodymodel.model import BodyModel, Pose
 from humimic.sensors.camera_model import Intrinsics
 
 #: Nearest depth (m) a valid part may reach.
@@ -185,14 +185,11 @@ def project(body: BodyModel, pose: Pose, intr: Intrinsics, T_cam_ref: np.ndarray
     R = T[:3, :3] @ R_ref
     t = p_ref @ T[:3, :3].T + T[:3, 3]
     n, P = t.shape[:2]
-    kinds = [isinstance(p.shape, Cone) for p in body.parts]
-    ci = np.array([i for i, k in enumerate(kinds) if k], int)
-    ei = np.array([i for i, k in enumerate(kinds) if not k], int)
+    lay = body.layout
+    ci, ei, shape = lay.cone_idx, lay.ellipsoid_idx, lay.cone_shape
     valid = np.empty((n, P), bool)
 
     # cones: contour generators and axes
-    shape = np.array([[s.a, s.b, s.length, s.taper] for s in
-                      (body.parts[i].shape for i in ci)]).reshape(-1, 4)
     a, b, L, k = shape.T
     R_c, t_c = np.take(R, ci, axis=1), np.take(t, ci, axis=1)
     c_loc = -(t_c[..., None, :] @ R_c)[..., 0, :]
@@ -205,7 +202,7 @@ def project(body: BodyModel, pose: Pose, intr: Intrinsics, T_cam_ref: np.ndarray
     axis_xyz = np.stack([t_c, t_c + R_c[..., :, 2] * L[:, None]], axis=-2)
 
     # ellipsoids: quadrics and conics (Menezes eqs. 14-15)
-    axes = np.array([body.parts[i].shape.semi_axes for i in ei], float).reshape(-1, 3)
+    axes = lay.semi_axes
     R_e, t_e = np.take(R, ei, axis=1), np.take(t, ei, axis=1)
     A, bq, c = conics.ellipsoid_quadric(R_e, t_e, axes)
     C = conics.quadric_to_conic(A, bq, c)
