@@ -82,9 +82,10 @@ def resample(outline: Outline, n: int) -> ContourPoints:
     norm = np.maximum(np.hypot(nu, nv), 1e-12)
     xy = outline.xy
     visible = np.broadcast_to(outline.valid[..., None], (N, P, n)).copy()
-    return ContourPoints(
-        np.stack([lerp1(u), lerp1(v)], -1), np.stack([nu / norm, nv / norm], -1).reshape(N, P, n, 2),
-        visible, np.stack([lerp1(xy[..., 0]), lerp1(xy[..., 1])], -1), lerp1(outline.inv_depth))
+    normal = np.stack([nu / norm, nv / norm], -1).reshape(N, P, n, 2)
+    return ContourPoints(np.stack([lerp1(u), lerp1(v)], -1), normal, visible,
+                         np.stack([lerp1(xy[..., 0]), lerp1(xy[..., 1])], -1),
+                         lerp1(outline.inv_depth))
 
 
 def contour_points(view: BodyView, n: int, occlusion: bool = True) -> ContourPoints:
