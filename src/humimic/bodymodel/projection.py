@@ -49,12 +49,15 @@ def _pixels(intr: Intrinsics, xy: np.ndarray) -> np.ndarray:
     return np.stack(intr.distort(xy[..., 0], xy[..., 1]), axis=-1)
 
 
-def _image(intr: Intrinsics, X: np.ndarray, valid: np.ndarray) -> Outline:
-    """Camera-frame points ``(..., V, 3)`` as an :class:`Outline` (NaN where not ``valid``)."""
-    X = np.where(valid[..., None, None], X, np.nan)
-    inv_z = 1.0 / X[..., 2]
-    xy = X[..., :2] * inv_z[..., None]
-    return Outline(_pixels(intr, xy), xy, inv_z, valid)
+def _image(intr: Intrinsics, XYZ: tuple, valid: np.ndarray) -> Outline:
+    """Camera-frame points (components ``X, Y, Z``, each ``(..., V)``) as an
+    :class:`Outline` (NaN where not ``valid``)."""
+    X, Y, Z = XYZ
+    with np.errstate(divide="ignore", invalid="ignore"):
+        inv_z = np.where(valid[..., None], 1.0 / Z, np.nan)
+    x, y = X * inv_z, Y * inv_z
+    return Outline(np.stack(intr.distort(x, y), axis=-1), np.stack([x, y], axis=-1), inv_z,
+                   valid)
 
 
 def project_ellipsoids(R: np.ndarray, t: np.ndarray, semi_axes: np.ndarray, intr: Intrinsics,
@@ -91,9 +94,8 @@ def project_cones(R: np.ndarray, t: np.ndarray, a, b, L, k, intr: Intrinsics, m:
     c_loc = -(t[..., None, :] @ R)[..., 0, :]
     phi_c, delta, exists, facing = cones.generator_angles(a, b, L, k, c_loc)
     phi, rim, second = cones.outline_angles(phi_c, delta, exists, facing, c_loc, L, k, m)
-    p_loc = cones.rim_points(phi, rim, a, b, L, k)
-    X = p_loc @ np.swapaxes(R, -1, -2) + t[..., None, :]
-    return _image(intr, X, cones.in_front(R, t, a, b, L, k, Z_MIN)), exists, second
+    XYZ = cones.rim_points(phi, rim, a, b, L, k, R, t)
+    return _image(intr, XYZ, cones.in_front(R, t, a, b, L, k, Z_MIN)), exists, second
 
 
 @dataclass(frozen=True, eq=False)
@@ -159,9 +161,8 @@ class BodyView:
             a, b, L, k = self.cone_shape.T
             phi, rim, _ = cones.outline_angles(phi_c, delta, self.generators, facing, c_loc,
                                                L, k, (V - 4) // 2)
-            p_loc = cones.rim_points(phi, rim, a, b, L, k)
-            X = p_loc @ np.swapaxes(self.cone_R, -1, -2) + self.cone_t[..., None, :]
-            out = _image(self.intrinsics, X, self.valid[:, ci])
+            XYZ = cones.rim_points(phi, rim, a, b, L, k, self.cone_R, self.cone_t)
+            out = _image(self.intrinsics, XYZ, self.valid[:, ci])
             uv[:, ci], xy[:, ci], inv_z[:, ci] = out.uv, out.xy, out.inv_depth
         if len(ei):
             centre, M = self.ellipse
@@ -196,9 +197,8 @@ def project(body: BodyModel, pose: Pose, intr: Intrinsics, T_cam_ref: np.ndarray
     phi_c, delta, exists, facing = cones.generator_angles(a, b, L, k, c_loc)
     valid[:, ci] = cones.in_front(R_c, t_c, a, b, L, k, Z_MIN)
     phi = np.stack([phi_c + delta, phi_c + delta, phi_c - delta, phi_c - delta], -1)
-    ends = cones.rim_points(phi, np.array([0, 1, 0, 1]), a, b, L, k)
-    X = ends @ np.swapaxes(R_c, -1, -2) + t_c[..., None, :]
-    sides = _image(intr, X, valid[:, ci]).uv.reshape(n, len(ci), 2, 2, 2)
+    XYZ = cones.rim_points(phi, np.array([0, 1, 0, 1]), a, b, L, k, R_c, t_c)
+    sides = _image(intr, XYZ, valid[:, ci]).uv.reshape(n, len(ci), 2, 2, 2)
     axis_xyz = np.stack([t_c, t_c + R_c[..., :, 2] * L[:, None]], axis=-2)
 
     # ellipsoids: quadrics and conics (Menezes eqs. 14-15)
