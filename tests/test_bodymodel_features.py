@@ -68,6 +68,9 @@ def test_resampled_contour_is_uniform_with_outward_normals():
     step = np.linalg.norm(np.diff(np.vstack([ball, ball[:1]]), axis=0), axis=1)
     assert step.std() / step.mean() < 1e-3
     np.testing.assert_allclose(1 / pts.inv_depth[0, 1], 2 * Z - R_BALL ** 2 / (2 * Z), rtol=1e-3)
+    centre, axes, _ = view.ellipses_px()
+    np.testing.assert_allclose(centre[0, 0], [INTR.cx, INTR.cy], atol=1e-9)
+    np.testing.assert_allclose(axes[0, 0], [radius, radius], rtol=1e-9)
     bar = pts.uv[0, 0]
     on_side = np.abs(np.abs(bar[:, 1] - INTR.cy) - INTR.fy * R_CYL / np.sqrt(Z ** 2 - R_CYL ** 2))
     assert (on_side < 1e-6).sum() >= 30                         # most points on the long sides

@@ -86,17 +86,42 @@ def axis_rotation(axis: int, angle: np.ndarray) -> np.ndarray:
     return R
 
 
+def _matrix(rows) -> np.ndarray:
+    """``(..., 3, 3)`` from a 3x3 nested list of equally shaped arrays."""
+    out = np.empty(np.shape(rows[0][0]) + (3, 3))
+    for i, row in enumerate(rows):
+        for j, value in enumerate(row):
+            out[..., i, j] = value
+    return out
+
+
 def ypr_matrix(yaw: np.ndarray, pitch: np.ndarray, roll: np.ndarray) -> np.ndarray:
     """``Rz(yaw) Ry(pitch) Rx(roll)`` (scipy ``from_euler("ZYX", [yaw, pitch, roll])``)."""
-    return axis_rotation(2, yaw) @ axis_rotation(1, pitch) @ axis_rotation(0, roll)
+    cy, sy = np.cos(yaw), np.sin(yaw)
+    cp, sp = np.cos(pitch), np.sin(pitch)
+    cr, sr = np.cos(roll), np.sin(roll)
+    return _matrix([[cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+                    [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+                    [-sp, cp * sr, cp * cr]])
+
+
+def yxz_matrix(alpha: np.ndarray, beta: np.ndarray, gamma: np.ndarray) -> np.ndarray:
+    """``Ry(alpha) Rx(beta) Rz(gamma)`` (scipy ``from_euler("YXZ", ...)``), closed form."""
+    ca, sa = np.cos(alpha), np.sin(alpha)
+    cb, sb = np.cos(beta), np.sin(beta)
+    cg, sg = np.cos(gamma), np.sin(gamma)
+    return _matrix([[ca * cg + sa * sb * sg, sa * sb * cg - ca * sg, sa * cb],
+                    [cb * sg, cb * cg, -sb],
+                    [ca * sb * sg - sa * cg, sa * sg + ca * sb * cg, ca * cb]])
 
 
 def shoulder_rotation(side: str, sfe, saa, hr) -> np.ndarray:
     """``R_torso_upperarm`` ``(..., 3, 3)`` from DB's shoulder angles (rad)."""
     (a0, s0), (a1, s1), (a2, s2) = ARM_AXES[side][:3]
-    return (axis_rotation(a0, s0 * np.asarray(sfe, float))
-            @ axis_rotation(a1, s1 * np.asarray(saa, float))
-            @ axis_rotation(a2, s2 * np.asarray(hr, float)))
+    sfe, saa, hr = (np.asarray(v, float) for v in (sfe, saa, hr))
+    if (a0, a1, a2) == (1, 0, 2):                       # DB's y, x, z: closed form
+        return yxz_matrix(s0 * sfe, s1 * saa, s2 * hr)
+    return axis_rotation(a0, s0 * sfe) @ axis_rotation(a1, s1 * saa) @ axis_rotation(a2, s2 * hr)
 
 
 def elbow_rotation(side: str, eb) -> np.ndarray:

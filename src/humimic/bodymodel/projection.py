@@ -149,6 +149,15 @@ class BodyView:
         """Names of the cone parts, in the order of the limb features (axis 1)."""
         return tuple(self.part_names[i] for i in self.cone_idx)
 
+    def ellipses_px(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The ellipsoids' image ellipses in pixels, without the lens distortion (the outline
+        has it): centres ``(N, Pe, 2)``, semi-axes ``(N, Pe, 2)`` (major, minor) and the major
+        axis' angle ``(N, Pe)`` (rad, from +u towards +v)."""
+        centre, M, _ = conics.conic_to_ellipse(conics.conic_to_pixels(self.conic,
+                                                                      self.intrinsics.K))
+        major, minor, angle = conics.ellipse_axes(M)
+        return centre, np.stack([major, minor], -1), angle
+
     @cached_property
     def outline(self) -> Outline:
         """Every part's silhouette polygon (computed on first use)."""
