@@ -59,6 +59,13 @@ def test_free_and_fixed_dofs():
     assert pose.q.shape == (5, 14)
     np.testing.assert_allclose(pose.q[:, :6], np.broadcast_to(torso, (5, 6)))
     np.testing.assert_allclose(pose.joint("spine"), np.broadcast_to(torso[:3], (5, 3)))
+    T = np.eye(4)
+    T[:3, :3] = [[0, -1, 0], [1, 0, 0], [0, 0, 1]]
+    T[:3, 3] = [0.5, 0, 0]
+    moved = pose.to(T)
+    np.testing.assert_allclose(moved.joint("r_wrist"), pose.joint("r_wrist") @ T[:3, :3].T
+                               + T[:3, 3])
+    np.testing.assert_allclose(moved.R[:, 3], T[:3, :3] @ pose.R[:, 3])
     assert body.fixed_names == DOF_NAMES[:6]
     assert body.free_limits.names == ARM_DOFS["R"] + ARM_DOFS["L"]
     with pytest.raises(ValueError, match="free DOFs are 8"):

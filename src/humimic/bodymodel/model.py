@@ -105,6 +105,12 @@ class Pose:
         i = SEGMENTS.index(name)
         return self.R[:, i], self.p[:, i]
 
+    def to(self, T_frame_ref: np.ndarray) -> Pose:
+        """The same pose in another frame (``T_frame_ref`` maps reference-frame points into
+        it, e.g. ``T_cam_ref`` for the camera frame); ``q`` is kept as it was."""
+        T = np.asarray(T_frame_ref, float)
+        return Pose(self.q, T[:3, :3] @ self.R, self.p @ T[:3, :3].T + T[:3, 3])
+
 
 @dataclass(frozen=True)
 class PartLayout:
