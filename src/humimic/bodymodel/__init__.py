@@ -15,7 +15,8 @@ pixels. Usage, for the trackers::
     # Schmidt (kpf): 14 DOF, elliptic cylinders
     body = bm.avatar_body(torso="cylinder")
     q = body.clamp(bm.truth_state(world, 0, "base") + noise)          # (N, 14) particles
-    view = bm.project(body, body.forward(q), camera.intrinsics, T_cam_base, n_vertices=8)
+    pose = body.forward(q)                   # joints: pose.joint("r_wrist") (N, 3), base frame
+    view = bm.project(body, pose, camera.intrinsics, T_cam_base, n_vertices=8)
     edges = bm.limb_edges(view, 20)          # uv, normal (N, limbs, 20, 2), angle, ok
     ridges = bm.limb_ridges(view, 30)        # uv, width (px), depth (m) along each limb axis
     bands = bm.limb_bands(view, 3, 0.2)      # (N, limbs, 3, 4, 2) colour polygons
