@@ -18,6 +18,7 @@ from dm_control import mjcf
 
 from humimic.paths import MODELS_DIR
 from humimic.sensors.camera_model import fovy_from_hfov, make_transform
+from humimic.world import faces
 from humimic.world.names import (
     EYE_CAMERAS,
     HUMAN_JOINTS,
@@ -57,6 +58,11 @@ class SceneOptions:
     shadows: bool = False
     msaa: bool = False
     show_wiimote: bool = False
+    identity: str | None = None
+    """The person's face (:data:`humimic.world.faces.IDENTITY_NAMES`); None: the first one."""
+    show_headcam: bool = False
+    """Draw the worn head camera on the forehead (only when the scenario uses it: it covers the
+    brows and would hide the face from a face detector)."""
     max_render_size: tuple[int, int] = field(default=(1280, 960))
 
 
@@ -92,6 +98,10 @@ def compose(opts: SceneOptions) -> mjcf.RootElement:
     for name, rgb in (("skin", opts.skin), ("shirt", opts.shirt), ("trousers", opts.trousers)):
         human.find("material", name).rgba = [*rgb, 1.0]
 
+    add_face(human, opts.identity or faces.IDENTITY_NAMES[0])
+    if not opts.show_headcam:
+        human.find("geom", "headcam").group = WIIMOTE_GROUP + 1  # a hidden group
+
     # Lighting and rendering quality.
     key = room.find("light", "key")
     key.ambient = [opts.ambient] * 3
@@ -109,6 +119,18 @@ def compose(opts: SceneOptions) -> mjcf.RootElement:
     frame.pos = [eye_x + opts.distance + head_x_in_avatar, opts.lateral, 0.0]
     frame.euler = [0.0, 0.0, math.pi]  # face the robot (avatar +x points to world -x)
     return room
+
+
+def add_face(human: mjcf.RootElement, identity: str) -> None:
+    """Texture the avatar's head with ``identity``'s face (tinted by the ``skin`` material)."""
+    images = faces.cube_faces(identity)
+    texture = human.asset.add(
+        "texture", name="face", type="cube",
+        **{f"file{k}": mjcf.Asset(faces.png_bytes(v), ".png") for k, v in images.items()})
+    skin = human.find("material", "skin")
+    face = human.asset.add("material", name="face", texture=texture, rgba=skin.rgba,
+                           specular=skin.specular, shininess=skin.shininess)
+    human.find("geom", "head").material = face
 
 
 _EYE_X_Z = _robot_eye_height_and_x()
