@@ -28,6 +28,10 @@ FACES_DIR = DATA_DIR / "faces"
 TEXTURE_SIZE = 128
 """Side (px) of each cube-map face: the 25 px crops are upsampled (bicubic) so that close-up
 views are smooth."""
+FEATURE_CONTRAST = 1.8
+"""How much darker than in the photograph the features are drawn (``1 - c (1 - f)``): the
+rendered head is lit flatly and tinted, and at 24-34 px the frontal cascade found 40 % of
+faces drawn at contrast 1.0 and 80 % at 1.8 (16 crops, measured on renders)."""
 
 
 @dataclass(frozen=True)
@@ -140,7 +144,7 @@ class FaceLayout:
 
 
 def cube_faces(name: str, size: int = TEXTURE_SIZE, layout: FaceLayout = FaceLayout(),
-               contrast: float = 1.0) -> dict[str, np.ndarray]:
+               contrast: float = FEATURE_CONTRAST) -> dict[str, np.ndarray]:
     """The six ``(size, size, 3)`` uint8 images of the identity's head texture, by face.
 
     Each texel's point on the head ellipsoid is projected orthographically onto the frontal

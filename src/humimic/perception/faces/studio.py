@@ -42,6 +42,9 @@ class FaceView:
     """Head tilt towards a shoulder."""
     ambient: float = 0.3
     diffuse: float = 0.55
+    aim_offset: tuple[float, float] = (0.0, 0.0)
+    """Where the eyes look relative to the head centre (m, along the robot's y and z): moves the
+    face away from the image centre."""
 
 
 @dataclass(frozen=True)
@@ -96,7 +99,7 @@ class FaceStudio:
         m.light_ambient[self._key_light] = view.ambient
         m.light_diffuse[self._key_light] = view.diffuse
         mujoco.mj_kinematics(m, d)
-        self._aim_eyes(d.site_xpos[self._head_site].copy())
+        self._aim_eyes(d.site_xpos[self._head_site] + np.array([0.0, *view.aim_offset]))
         mujoco.mj_kinematics(m, d)
         mujoco.mj_camlight(m, d)
         shot = self.rig.capture_one(self.camera, 0.0)
