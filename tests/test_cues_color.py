@@ -38,7 +38,7 @@ def full_grid_hists():
     q = quantize(img, 32)
     state = np.array([[49.5, 41.5, 1.0]])
     patch = np.array([[0.0, 0.0, 20.0, 20.0]])
-    return img, patch_histograms(q, state, patch, bins=32, grid=20)
+    return img, patch_histograms(q, state, patch, grid=20)
 
 
 def test_full_grid_histogram_is_calchist(full_grid_hists):

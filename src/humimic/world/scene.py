@@ -128,8 +128,9 @@ def add_face(human: mjcf.RootElement, identity: str) -> None:
         "texture", name="face", type="cube",
         **{f"file{k}": mjcf.Asset(faces.png_bytes(v), ".png") for k, v in images.items()})
     skin = human.find("material", "skin")
+    # matte: a highlight that moves with the head over the features hides who it is
     face = human.asset.add("material", name="face", texture=texture, rgba=skin.rgba,
-                           specular=skin.specular, shininess=skin.shininess)
+                           specular=0.0, shininess=0.0)
     human.find("geom", "head").material = face
 
 

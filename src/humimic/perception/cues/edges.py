@@ -59,17 +59,33 @@ def edge_maps(image: np.ndarray, low: float = 50.0, high: float = 150.0,
     return EdgeMaps(edges, distance_transform(edges, cap))
 
 
+def remap_uv(image: np.ndarray, u: np.ndarray, v: np.ndarray, outside, interpolation: int
+             ) -> np.ndarray:
+    """``cv2.remap`` of ``image`` at points with coordinates ``u``, ``v`` (same shape, any
+    size) -> that shape (``+ (C,)`` for a C-channel image). The points are laid out in rows of
+    1024 (remap's maps must be under 32767 wide)."""
+    shape = np.shape(u)
+    m = int(np.prod(shape))
+    width = 1024
+    rows = max(1, -(-m // width))
+    mx = np.full(rows * width, -1e6, np.float32)
+    my = np.full(rows * width, -1e6, np.float32)
+    mx[:m] = np.ravel(u)
+    my[:m] = np.ravel(v)
+    out = cv2.remap(image, mx.reshape(rows, width), my.reshape(rows, width), interpolation,
+                    borderMode=cv2.BORDER_CONSTANT, borderValue=outside)
+    return out.reshape(rows * width, -1)[:m].reshape(shape + out.shape[2:])
+
+
 def sample(image: np.ndarray, points: np.ndarray, outside: float,
            nearest: bool = False) -> np.ndarray:
-    """Values of a single-channel float image at points ``(..., 2)`` (u, v) in one gather
-    (bilinear unless ``nearest``); points off the image get ``outside``."""
-    pts = np.asarray(points, dtype=np.float32)
-    flat = pts.reshape(1, -1, 2)
+    """Values of a single-channel image at points ``(..., 2)`` (u, v) in one gather (bilinear
+    unless ``nearest``); points off the image get ``outside``."""
     src = image if image.dtype in (np.uint8, np.float32) else image.astype(np.float32)
-    out = cv2.remap(src, flat[..., 0], flat[..., 1],
-                    cv2.INTER_NEAREST if nearest else cv2.INTER_LINEAR,
-                    borderMode=cv2.BORDER_CONSTANT, borderValue=float(outside))
-    return out.reshape(pts.shape[:-1]).astype(np.float64)
+    pts = np.asarray(points)
+    out = remap_uv(src, pts[..., 0], pts[..., 1], float(outside),
+                   cv2.INTER_NEAREST if nearest else cv2.INTER_LINEAR)
+    return out.astype(np.float64)
 
 
 def _reduce(per_point: np.ndarray, reduce: str) -> np.ndarray:
@@ -96,11 +112,16 @@ def nearest_along_normal(mask: np.ndarray, points: np.ndarray, normals: np.ndarr
                          search_px: int) -> np.ndarray:
     """Distance (px) from each point to the nearest set pixel of ``mask`` along its normal
     within ``search_px``; ``inf`` where there is none. ``(N, N_p, 2)`` -> ``(N, N_p)``."""
-    off = normal_offsets(search_px)
-    probes = points[..., None, :] + off[:, None] * normals[..., None, :]  # (N, Np, K, 2)
-    hit = sample(mask, probes, 0.0, nearest=True) > 0
+    off = normal_offsets(search_px).astype(np.float32)
+    p = np.asarray(points, np.float32)
+    n = np.asarray(normals, np.float32)
+    # probes (N, N_p, K), the offsets on the innermost axis (fast broadcasting)
+    u = p[..., 0, None] + n[..., 0, None] * off
+    v = p[..., 1, None] + n[..., 1, None] * off
+    src = mask if mask.dtype == np.uint8 else (mask > 0).astype(np.uint8)
+    hit = remap_uv(src, u, v, 0, cv2.INTER_NEAREST) > 0
     first = np.argmax(hit, axis=-1)
-    dist = np.abs(off)[first]
+    dist = np.abs(off.astype(np.float64))[first]
     return np.where(hit.any(axis=-1), dist, np.inf)
 
 

@@ -18,6 +18,8 @@ at the largest distance (1) from any reference.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 HEAD_TORSO_PATCHES = np.array([[0.0, 0.0, 0.8, 1.0],    # head (head width = 1)
@@ -25,11 +27,30 @@ HEAD_TORSO_PATCHES = np.array([[0.0, 0.0, 0.8, 1.0],    # head (head width = 1)
 """The ICU tracker's two patches (Menezes Fig. 8), in head widths from the head centre."""
 
 
-def quantize(image: np.ndarray, bins: int = 32) -> np.ndarray:
-    """Per-pixel, per-channel bin indices ``(H, W, 3)`` uint8 of an RGB uint8 image."""
+@dataclass(frozen=True)
+class QuantizedImage:
+    """An RGB image's bin indices, one flat plane per channel, ready for gathers: plane ``c``
+    holds ``bin + c (bins + 1)`` per pixel plus, at index ``H * W``, a sentinel in the extra
+    bin ``bins`` that samples off the image are pointed at (counted, then dropped)."""
+
+    planes: np.ndarray
+    """``(3, H * W + 1)`` int32"""
+    height: int
+    width: int
+    bins: int
+
+
+def quantize(image: np.ndarray, bins: int = 32) -> QuantizedImage:
+    """Per-pixel, per-channel bin indices of an RGB uint8 image (once per frame)."""
     if 256 % bins:
         raise ValueError(f"bins must divide 256, got {bins}")
-    return (np.asarray(image, np.uint8) // (256 // bins)).astype(np.uint8)
+    h, w = image.shape[:2]
+    q = np.asarray(image, np.uint8).reshape(-1, 3) // (256 // bins)
+    planes = np.empty((3, h * w + 1), np.int32)
+    planes[:, :-1] = q.T
+    planes[:, -1] = bins
+    planes += (np.arange(3, dtype=np.int32) * (bins + 1))[:, None]
+    return QuantizedImage(planes, h, w, bins)
 
 
 def patch_grid(states: np.ndarray, patches: np.ndarray, grid: int) -> np.ndarray:
@@ -47,23 +68,25 @@ def patch_grid(states: np.ndarray, patches: np.ndarray, grid: int) -> np.ndarray
     return np.stack([u, v], axis=-1)
 
 
-def patch_histograms(qimage: np.ndarray, states: np.ndarray, patches: np.ndarray,
-                     bins: int = 32, grid: int = 8) -> np.ndarray:
+def patch_histograms(qimage: QuantizedImage, states: np.ndarray, patches: np.ndarray,
+                     grid: int = 8) -> np.ndarray:
     """Normalised histograms ``(N, P, 3, bins)`` of every patch of every state.
 
-    ``qimage`` is :func:`quantize`'s output. A pixel at integer ``(i, j)`` covers
-    ``[i - 0.5, i + 0.5)``; samples off the image are dropped.
+    A pixel at integer ``(i, j)`` covers ``[i - 0.5, i + 0.5)``; samples off the image are
+    dropped.
     """
     pts = patch_grid(states, patches, grid)  # (N, P, S, 2)
-    n, p, s = pts.shape[:3]
-    h, w = qimage.shape[:2]
+    n, p = pts.shape[:2]
+    h, w, bins = qimage.height, qimage.width, qimage.bins
     col = np.floor(pts[..., 0] + 0.5).astype(np.int64)
     row = np.floor(pts[..., 1] + 0.5).astype(np.int64)
     inside = (col >= 0) & (col < w) & (row >= 0) & (row < h)
-    q = qimage[np.clip(row, 0, h - 1), np.clip(col, 0, w - 1)].astype(np.int64)  # (N,P,S,3)
-    base = (np.arange(n * p).reshape(n, p, 1, 1) * 3 + np.arange(3)) * bins  # (N,P,1,3)
-    ids = (base + q)[inside]  # (M, 3)
-    counts = np.bincount(ids.ravel(), minlength=n * p * 3 * bins).reshape(n, p, 3, bins)
+    flat = np.where(inside, row * w + col, h * w)  # off the image: the sentinel
+    stride = 3 * (bins + 1)
+    base = (np.arange(n * p).reshape(n, p, 1) * stride).astype(np.int32)
+    ids = np.stack([qimage.planes[c].take(flat) + base for c in range(3)])
+    counts = np.bincount(ids.ravel(), minlength=n * p * stride)
+    counts = counts.reshape(n, p, 3, bins + 1)[..., :bins]
     total = inside.sum(axis=-1)[..., None, None].astype(np.float64)
     return np.divide(counts, total, out=np.zeros(counts.shape), where=total > 0)
 

@@ -26,6 +26,7 @@ from humimic.perception.cues.edges import (
     distance_transform,
     grey,
     nearest_along_normal,
+    remap_uv,
 )
 
 
@@ -77,12 +78,10 @@ def motion_dt_distance(maps: MotionEdgeMaps, points: np.ndarray, K: float = 0.5,
 
 def sample_pair(image2: np.ndarray, points: np.ndarray, outside: float) -> np.ndarray:
     """Bilinear samples of a 2-channel float image at points ``(..., 2)`` -> ``(..., 2)``."""
-    pts = np.asarray(points, dtype=np.float32)
-    flat = pts.reshape(1, -1, 2)
-    out = cv2.remap(np.ascontiguousarray(image2, dtype=np.float32), flat[..., 0], flat[..., 1],
-                    cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT,
-                    borderValue=(float(outside), float(outside)))
-    return out.reshape(pts.shape[:-1] + (2,)).astype(np.float64)
+    pts = np.asarray(points)
+    out = remap_uv(np.ascontiguousarray(image2, dtype=np.float32), pts[..., 0], pts[..., 1],
+                   (float(outside), float(outside)), cv2.INTER_LINEAR)
+    return out.astype(np.float64)
 
 
 def motion_normal_distance(maps: MotionEdgeMaps, points: np.ndarray, normals: np.ndarray,

@@ -22,7 +22,9 @@ class DetectorParams:
 
     cascade: str = "haarcascade_frontalface_default.xml"
     scale_factor: float = 1.1
-    min_neighbors: int = 3
+    min_neighbors: int = 2
+    """2 rather than OpenCV's 3: on rendered frontal faces of 24-34 px, 97 % found instead of
+    91 %, at 6 instead of 1 false detection in 382 frames (``perception/faces/rates.py``)."""
     min_size: int = 20
     max_size: int = 0
     """0: no upper bound."""
@@ -64,18 +66,55 @@ def box_centers(boxes: np.ndarray) -> np.ndarray:
     return b[:, :2] + b[:, 2:] / 2.0
 
 
-def crop_faces(image: np.ndarray, boxes: np.ndarray, size: int = CROP_SIZE) -> np.ndarray:
-    """Grey ``(n, size, size)`` uint8 crops of the boxes, resized (area interpolation) and
-    histogram-equalised (the pre-processing Menezes found best, Fig. 7)."""
+def face_mask(size: int = CROP_SIZE, axes: tuple[float, float] = (0.30, 0.40)) -> np.ndarray:
+    """Elliptical mask ``(size, size)`` bool of the inner face in a detector box (semi-axes as
+    fractions of the side): the box's corners hold hair, ears and background."""
+    c = (size - 1) / 2.0
+    yy, xx = np.mgrid[0:size, 0:size]
+    return ((xx - c) / (axes[0] * size)) ** 2 + ((yy - c) / (axes[1] * size)) ** 2 <= 1.0
+
+
+_MASK = face_mask()
+
+
+def raw_crops(image: np.ndarray, boxes: np.ndarray, size: int = CROP_SIZE) -> np.ndarray:
+    """Grey ``(n, size, size)`` uint8 crops of boxes ``(n, 4)``, resized with area
+    interpolation (boxes are clipped to the image)."""
     grey = image if image.ndim == 2 else cv2.cvtColor(image, cv2.COLOR_RGB2GRAY)
     h, w = grey.shape
-    out = np.empty((len(boxes), size, size), np.uint8)
+    out = np.zeros((len(boxes), size, size), np.uint8)
     for i, (x, y, bw, bh) in enumerate(np.asarray(boxes, dtype=np.float64).reshape(-1, 4)):
         x0, y0 = int(round(max(x, 0))), int(round(max(y, 0)))
         x1, y1 = int(round(min(x + bw, w))), int(round(min(y + bh, h)))
         patch = grey[y0:max(y1, y0 + 1), x0:max(x1, x0 + 1)]
-        out[i] = cv2.equalizeHist(cv2.resize(patch, (size, size), interpolation=cv2.INTER_AREA))
+        out[i] = cv2.resize(patch, (size, size), interpolation=cv2.INTER_AREA)
     return out
+
+
+def equalize(crops: np.ndarray, mask: np.ndarray | None = _MASK, blur_sigma: float = 0.7
+             ) -> np.ndarray:
+    """Histogram equalisation (``cv2.equalizeHist``) of each crop over the pixels of ``mask``
+    (outside it the crop is 0; ``mask=None``: the whole crop), after a slight Gaussian blur
+    against pixel noise (``blur_sigma`` px; 0: none)."""
+    out = np.zeros_like(crops)
+    for i, c in enumerate(crops):
+        if blur_sigma > 0:
+            c = cv2.GaussianBlur(c, (0, 0), blur_sigma)
+        if mask is None:
+            out[i] = cv2.equalizeHist(c)
+        else:
+            out[i][mask] = cv2.equalizeHist(np.ascontiguousarray(c[mask])[:, None])[:, 0]
+    return out
+
+
+def crop_faces(image: np.ndarray, boxes: np.ndarray, size: int = CROP_SIZE,
+               mask: np.ndarray | None = _MASK) -> np.ndarray:
+    """The recogniser's input: crops of the boxes resized to ``size`` and histogram-equalised
+    (the pre-processing Menezes found best, Fig. 7) over the inner-face ``mask`` (default
+    :func:`face_mask`). Measured on held-out renders (10 known people, 6 strangers, yaw up to
+    25 deg): equalising the whole box recognised 59 % at 2 % false acceptance, equalising the
+    inner face (and leaving the rest out) 95 %."""
+    return equalize(raw_crops(image, boxes, size), mask)
 
 
 def matches_truth(boxes: np.ndarray, center_px: np.ndarray, size_px: float,

@@ -58,15 +58,15 @@ def detection_rates(identities: list[str], cameras=("foveal", "wide"),
     det = FaceDetector(params or DetectorParams())
     table = RateTable(tuple(bins[:-1]), {}, {}, 0, {})
     for ident in identities:
-        for cam in cameras:
-            with FaceStudio(ident, f"L_{cam}", rng=rng) as studio:
+        with FaceStudio(ident, tuple(f"L_{c}" for c in cameras), rng=rng) as studio:
+            for cam in cameras:
                 for b in range(len(bins) - 1):
                     for _ in range(per_bin):
                         size = rng.uniform(bins[b], bins[b + 1])
                         dist = size_to_distance(size, HFOV_DEG[cam])
                         if not distances[0] <= dist <= distances[1]:
                             continue
-                        shot = studio.render(random_view(rng, dist))
+                        shot = studio.render(random_view(rng, dist), f"L_{cam}")
                         boxes = det.detect(shot.image)
                         ok = matches_truth(boxes, shot.center_px, shot.size_px)
                         key = (cam, b)
@@ -76,6 +76,6 @@ def detection_rates(identities: list[str], cameras=("foveal", "wide"),
                         counts = table.by_identity.setdefault(ident, [0, 0])
                         counts[0] += int(ok.any())
                         counts[1] += 1
-            if progress is not None:
-                progress()
+        if progress is not None:
+            progress()
     return table

@@ -45,6 +45,8 @@ class FaceView:
     aim_offset: tuple[float, float] = (0.0, 0.0)
     """Where the eyes look relative to the head centre (m, along the robot's y and z): moves the
     face away from the image centre."""
+    skin: tuple[float, float, float] | None = None
+    """Skin colour (RGB in [0, 1]) of the face and hands; None: the studio's."""
 
 
 @dataclass(frozen=True)
@@ -61,31 +63,35 @@ class FaceShot:
 
 
 class FaceStudio:
-    """One identity's avatar in the scene, rendered by one robot eye camera.
+    """One identity's avatar in the scene, rendered by the robot's eye cameras.
 
-    ``camera`` is an eye camera name (``L_foveal``, ``L_wide`` ...). Pixel noise (grey levels)
-    is drawn from ``rng``.
+    ``cameras`` are eye camera names (``L_foveal``, ``L_wide`` ...); the first is the default
+    of :meth:`render`. Pixel noise (grey levels) is drawn from ``rng``.
     """
 
-    def __init__(self, identity: str, camera: str = "L_foveal",
+    def __init__(self, identity: str, cameras: str | tuple[str, ...] = ("L_foveal", "L_wide"),
                  resolution: tuple[int, int] = (320, 240), noise_std: float = 2.0,
                  skin: tuple[float, float, float] = (0.87, 0.67, 0.55),
                  rng: np.random.Generator | None = None):
-        self.identity, self.camera = identity, camera
+        cameras = (cameras,) if isinstance(cameras, str) else tuple(cameras)
+        self.identity, self.cameras = identity, cameras
         self.opts = SceneOptions(identity=identity, skin=skin, eye_resolution=resolution,
                                  distance=1.5)
         self.scene = build_scene(self.opts)
         m, s = self.scene.model, self.scene
-        self.rig = CameraRig(s, [CameraSpec(camera, *resolution, noise_std)],
+        self.rig = CameraRig(s, [CameraSpec(c, *resolution, noise_std) for c in cameras],
                              rng if rng is not None else np.random.default_rng(0))
         self._key_light = m.light("key").id
+        self._skin_materials = [m.material(HUMAN_PREFIX + n).id for n in ("skin", "face")]
         self._q_root = {j: m.jnt_qposadr[m.joint(HUMAN_PREFIX + j).id] for j in (
             "root_x", "root_y")}
         self._q_neck = m.jnt_qposadr[m.joint(HUMAN_PREFIX + "neck").id]
         self._head_site = s.human_site("head")
         self._ready = m.key(ROBOT_PREFIX + "ready").qpos.copy() if m.nkey else m.qpos0.copy()
 
-    def render(self, view: FaceView) -> FaceShot:
+    def render(self, view: FaceView, camera: str | None = None) -> FaceShot:
+        """Render ``view`` through ``camera`` (default: the first of the studio's)."""
+        camera = camera or self.cameras[0]
         m, d, s = self.scene.model, self.scene.data, self.scene
         d.qpos[:] = self._ready
         d.qpos[s.human_qpos] = s.human_qpos0
@@ -96,13 +102,15 @@ class FaceStudio:
                                                    view.roll_deg]))
         x, y, z, w = R.as_quat()
         d.qpos[self._q_neck:self._q_neck + 4] = (w, x, y, z)
+        skin = view.skin if view.skin is not None else self.opts.skin
+        m.mat_rgba[self._skin_materials, :3] = skin
         m.light_ambient[self._key_light] = view.ambient
         m.light_diffuse[self._key_light] = view.diffuse
         mujoco.mj_kinematics(m, d)
         self._aim_eyes(d.site_xpos[self._head_site] + np.array([0.0, *view.aim_offset]))
         mujoco.mj_kinematics(m, d)
         mujoco.mj_camlight(m, d)
-        shot = self.rig.capture_one(self.camera, 0.0)
+        shot = self.rig.capture_one(camera, 0.0)
         p_cam = shot.camera.T_world_cam[:3, :3].T @ (
             d.site_xpos[self._head_site] - shot.camera.T_world_cam[:3, 3])
         intr = shot.camera.intrinsics
