@@ -9,7 +9,7 @@ from pydantic_core import PydanticCustomError
 
 from humimic.motion.config import MotionConfig, StaticMotion
 from humimic.scenario.base import RGB, Section, Vec3
-from humimic.world.faces import IDENTITY_NAMES
+from humimic.world.faces import DEFAULT_IDENTITY, IDENTITY_NAMES
 from humimic.world.names import HUMAN_TARGETS, ROBOT_JOINTS
 
 
@@ -25,7 +25,7 @@ class Human(Section):
     trousers: RGB = (0.25, 0.25, 0.3)
     wiimote: bool = False
     """Show the Wii remote in the right hand (it is always simulated; this makes it visible)."""
-    identity: str = IDENTITY_NAMES[0]
+    identity: str = DEFAULT_IDENTITY
     """The person's face: a name of :data:`humimic.world.faces.IDENTITY_NAMES` or its index."""
     motion: MotionConfig = Field(default_factory=lambda: StaticMotion(kind="static"))
 

@@ -56,6 +56,11 @@ def _identity_table() -> tuple[Identity, ...]:
 
 IDENTITIES: tuple[Identity, ...] = _identity_table()
 IDENTITY_NAMES: tuple[str, ...] = tuple(i.name for i in IDENTITIES)
+DEFAULT_IDENTITY = "ben"
+"""The face of a scenario that does not choose one: a closed mouth and even lighting. Ude &
+Atkeson's identity rules assume a head is one skin blob; a head cut by the image border can
+split along a dark mouth into two (measured: ``ude_static_hand_foveal`` loses the hand with
+``ada`` and ``hal``, not with the others tried)."""
 
 
 def resolve_identity(key: str | int) -> Identity:

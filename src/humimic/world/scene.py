@@ -58,8 +58,8 @@ class SceneOptions:
     shadows: bool = False
     msaa: bool = False
     show_wiimote: bool = False
-    identity: str | None = None
-    """The person's face (:data:`humimic.world.faces.IDENTITY_NAMES`); None: the first one."""
+    identity: str = faces.DEFAULT_IDENTITY
+    """The person's face (one of :data:`humimic.world.faces.IDENTITY_NAMES`)."""
     show_headcam: bool = False
     """Draw the worn head camera on the forehead (only when the scenario uses it: it covers the
     brows and would hide the face from a face detector)."""
@@ -98,7 +98,7 @@ def compose(opts: SceneOptions) -> mjcf.RootElement:
     for name, rgb in (("skin", opts.skin), ("shirt", opts.shirt), ("trousers", opts.trousers)):
         human.find("material", name).rgba = [*rgb, 1.0]
 
-    add_face(human, opts.identity or faces.IDENTITY_NAMES[0])
+    add_face(human, opts.identity)
     if not opts.show_headcam:
         human.find("geom", "headcam").group = WIIMOTE_GROUP + 1  # a hidden group
 

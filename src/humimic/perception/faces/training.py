@@ -15,7 +15,9 @@ impostor scores (that fraction of impostors accepted) and ``sigma`` (eq. 11's sp
 standard deviation of the genuine scores. The final eigenspaces are refit on all crops.
 With ``far = 0.05`` (the default), held-out strangers -- six identities never trained on --
 were accepted 1.0 % of the time: the enrolled faces are closer to one another than strangers
-are to them, so the validation impostors are the harder case.
+are to them, so the validation impostors are the harder case. The rule needs several enrolled
+people: with 4 (3 "others" per class) tau came out 35 % higher and let a stranger in 60 % of
+the time.
 """
 
 from __future__ import annotations
