@@ -53,7 +53,7 @@ from humimic.perception.cues.motion import (  # noqa: E402
     motion_normal_distance,
 )
 from humimic.perception.cues.templates import hand, head_and_shoulders  # noqa: E402
-from humimic.perception.faces.detect import FaceDetector, crop_faces  # noqa: E402
+from humimic.perception.faces.detect import DetectorParams, FaceDetector, crop_faces  # noqa: E402
 from humimic.perception.faces.eigenfaces import train  # noqa: E402
 from humimic.perception.faces.studio import FaceStudio, FaceView  # noqa: E402
 
@@ -146,7 +146,12 @@ def bench(repeats: int) -> list[Row]:
     for cam in ("foveal", "wide"):
         rows.append(row(G, f"Haar frontal face, 320x240 ({cam} frame)", per_call(
             lambda im=fr[cam][1]: det.detect(im), repeats, 10), "ms", 1e3,
-            note="haarcascade_frontalface_default, scale 1.1, 3 neighbours, min 20 px"))
+            note="haarcascade_frontalface_default, scale 1.1, 2 neighbours, 20 px and up"))
+    for label, p in (("faces 20-80 px", DetectorParams(max_size=80)),
+                     ("scale step 1.2", DetectorParams(scale_factor=1.2))):
+        d = FaceDetector(p)
+        rows.append(row(G, f"Haar frontal face, 320x240, {label}", per_call(
+            lambda d=d: d.detect(img), repeats, 10), "ms", 1e3))
     boxes = det.detect(img)
     if len(boxes) == 0:
         boxes = np.array([[head[0] - 19, head[1] - 19, 38, 38]])

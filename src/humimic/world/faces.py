@@ -57,10 +57,11 @@ def _identity_table() -> tuple[Identity, ...]:
 IDENTITIES: tuple[Identity, ...] = _identity_table()
 IDENTITY_NAMES: tuple[str, ...] = tuple(i.name for i in IDENTITIES)
 DEFAULT_IDENTITY = "ben"
-"""The face of a scenario that does not choose one: a closed mouth and even lighting. Ude &
-Atkeson's identity rules assume a head is one skin blob; a head cut by the image border can
-split along a dark mouth into two (measured: ``ude_static_hand_foveal`` loses the hand with
-``ada`` and ``hal``, not with the others tried)."""
+"""The face of a scenario that does not choose one. Ude & Atkeson's identity rules assume a head
+is one skin blob; a head cut by the image border can split along its dark features into two,
+and the rules then cannot name the hand (measured: ``ude_static_hand_foveal``, where the foveal
+view shows the chin in a corner, loses the hand with ada, hal, ivo, kip, ned and oli; the
+other ten, this one among them, pass)."""
 
 
 def resolve_identity(key: str | int) -> Identity:
