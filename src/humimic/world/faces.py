@@ -30,8 +30,9 @@ TEXTURE_SIZE = 128
 views are smooth."""
 FEATURE_CONTRAST = 1.8
 """How much darker than in the photograph the features are drawn (``1 - c (1 - f)``): the
-rendered head is lit flatly and tinted, and at 24-34 px the frontal cascade found 40 % of
-faces drawn at contrast 1.0 and 80 % at 1.8 (16 crops, measured on renders)."""
+rendered head is lit flatly and tinted. Measured on 240 renders of the 16 identities (both eye
+cameras, frontal, 24-90 px): faces of 24-34 px found 82 % at contrast 1.0, 97 % at 1.8; all
+sizes 91 % and 99 %."""
 
 
 @dataclass(frozen=True)

@@ -62,7 +62,7 @@ def residual_indices(w: np.ndarray, u: np.ndarray, n: int | None = None) -> np.n
     remaining ``R = n - sum floor(n w_i)`` drawn multinomially from the residuals
     ``n w_i - floor(n w_i)``; ``u`` holds (at least) R uniforms.
 
-    (filterpy 1.4.5's ``residual_resample`` subtracts the counts from ``w`` instead of from
+    (filterpy 2.0.0's ``residual_resample`` subtracts the counts from ``w`` instead of from
     ``n w``, which makes the residuals negative: it is not used as a reference here.)"""
     w = np.asarray(w, dtype=np.float64)
     n = len(w) if n is None else n
