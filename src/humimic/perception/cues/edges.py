@@ -62,19 +62,24 @@ def edge_maps(image: np.ndarray, low: float = 50.0, high: float = 150.0,
 def remap_uv(image: np.ndarray, u: np.ndarray, v: np.ndarray, outside, interpolation: int
              ) -> np.ndarray:
     """``cv2.remap`` of ``image`` at points with coordinates ``u``, ``v`` (same shape, any
-    size) -> that shape (``+ (C,)`` for a C-channel image). The points are laid out in rows of
-    1024 (remap's maps must be under 32767 wide)."""
+    size) -> that shape (``+ (C,)`` for a C-channel image). remap's maps must be under 32767
+    wide: a longer last axis is laid out in rows of 1024."""
     shape = np.shape(u)
+    last = shape[-1] if shape else 1
+    if 0 < last < 32767:
+        mx = np.asarray(u, np.float32).reshape(-1, last)
+        my = np.asarray(v, np.float32).reshape(-1, last)
+    else:
+        m = int(np.prod(shape))
+        rows = max(1, -(-m // 1024))
+        mx = np.full(rows * 1024, -1e6, np.float32)
+        my = np.full(rows * 1024, -1e6, np.float32)
+        mx[:m], my[:m] = np.ravel(u), np.ravel(v)
+        mx, my = mx.reshape(rows, 1024), my.reshape(rows, 1024)
+    out = cv2.remap(image, mx, my, interpolation, borderMode=cv2.BORDER_CONSTANT,
+                    borderValue=outside)
     m = int(np.prod(shape))
-    width = 1024
-    rows = max(1, -(-m // width))
-    mx = np.full(rows * width, -1e6, np.float32)
-    my = np.full(rows * width, -1e6, np.float32)
-    mx[:m] = np.ravel(u)
-    my[:m] = np.ravel(v)
-    out = cv2.remap(image, mx.reshape(rows, width), my.reshape(rows, width), interpolation,
-                    borderMode=cv2.BORDER_CONSTANT, borderValue=outside)
-    return out.reshape(rows * width, -1)[:m].reshape(shape + out.shape[2:])
+    return out.reshape(mx.size, -1)[:m].reshape(shape + out.shape[2:])
 
 
 def sample(image: np.ndarray, points: np.ndarray, outside: float,
@@ -112,17 +117,17 @@ def nearest_along_normal(mask: np.ndarray, points: np.ndarray, normals: np.ndarr
                          search_px: int) -> np.ndarray:
     """Distance (px) from each point to the nearest set pixel of ``mask`` along its normal
     within ``search_px``; ``inf`` where there is none. ``(N, N_p, 2)`` -> ``(N, N_p)``."""
-    off = normal_offsets(search_px).astype(np.float32)
-    p = np.asarray(points, np.float32)
-    n = np.asarray(normals, np.float32)
-    # probes (N, N_p, K), the offsets on the innermost axis (fast broadcasting)
-    u = p[..., 0, None] + n[..., 0, None] * off
-    v = p[..., 1, None] + n[..., 1, None] * off
+    off = normal_offsets(search_px).astype(np.float32)[:, None]
+    p = np.asarray(points, np.float32).reshape(-1, 2)
+    n = np.asarray(normals, np.float32).reshape(-1, 2)
+    # probes (K, N * N_p): the offsets outermost, so numpy loops over long contiguous rows
+    u = p[:, 0] + off * n[:, 0]
+    v = p[:, 1] + off * n[:, 1]
     src = mask if mask.dtype == np.uint8 else (mask > 0).astype(np.uint8)
     hit = remap_uv(src, u, v, 0, cv2.INTER_NEAREST) > 0
-    first = np.argmax(hit, axis=-1)
-    dist = np.abs(off.astype(np.float64))[first]
-    return np.where(hit.any(axis=-1), dist, np.inf)
+    first = np.argmax(hit, axis=0)
+    dist = np.where(hit.any(axis=0), np.abs(off[:, 0].astype(np.float64))[first], np.inf)
+    return dist.reshape(np.shape(points)[:-1])
 
 
 def normal_edge_distance(edges: np.ndarray, points: np.ndarray, normals: np.ndarray,
