@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 from filterpy.kalman import KalmanFilter
 from filterpy.monte_carlo import multinomial_resample, stratified_resample, systematic_resample
+from scipy.special import logsumexp
 from scipy.stats import multivariate_normal
 
 from humimic.estimation.particles import (
@@ -272,3 +273,19 @@ def test_densities_against_scipy():
     assert GaussianMixture(np.zeros((0, 2)), [1.0, 1.0]).empty
     with pytest.raises(ValueError, match="empty"):
         GaussianMixture(np.zeros((0, 2)), [1.0, 1.0]).sample(3, rng)
+
+
+def test_predictive_density_tables_and_shortcuts_agree_with_broadcasting():
+    from humimic.estimation.particles.densities import pairwise_log_density
+    from humimic.estimation.particles.filters import predictive_log_density
+
+    rng = np.random.default_rng(8)
+    x, y = rng.normal(size=(40, 2)) * 5, rng.normal(size=(30, 2)) * 5
+    lw = normalize(rng.normal(size=30)).log_weights
+    box = UniformBox([-20, -20], [20, 20])
+    for dyn in (RandomWalk([1.0, 2.0]), LinearGaussian(F, Q), Resetting(RandomWalk([1.0, 2.0]),
+                                                                        box, 0.05)):
+        brute = dyn.log_density(x[:, None, :], y[None, :, :])
+        np.testing.assert_allclose(pairwise_log_density(dyn, x, y), brute, rtol=1e-9, atol=1e-9)
+        f = logsumexp(brute + lw, axis=1)
+        np.testing.assert_allclose(predictive_log_density(x, y, lw, dyn), f, rtol=1e-9)

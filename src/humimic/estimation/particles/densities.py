@@ -274,6 +274,16 @@ class Resetting:
         b = math.log(self.eps) + self.prior.log_density(x_new)
         return np.logaddexp(a, b[:, None])
 
+    def predictive_log_density(self, x: np.ndarray, particles: np.ndarray,
+                               log_weights: np.ndarray) -> np.ndarray:
+        """``log sum_j w_j p(x|x_j) = log((1 - eps) f(x) + eps p0(x))`` with ``f`` the
+        continuing dynamics' predictive density (weights normalised): O(N) beyond ``f``."""
+        from humimic.estimation.particles.filters import predictive_log_density
+
+        a = math.log1p(-self.eps) + predictive_log_density(x, particles, log_weights,
+                                                           self.dynamics)
+        return np.logaddexp(a, math.log(self.eps) + self.prior.log_density(x))
+
     def mean(self, x: np.ndarray) -> np.ndarray:
         """The continuing dynamics' mean (the auxiliary filter's point prediction)."""
         return self.dynamics.mean(x)

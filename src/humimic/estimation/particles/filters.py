@@ -186,7 +186,11 @@ def mixture_counts(n: int, alpha: float, beta: float, has_importance: bool,
 
 def predictive_log_density(x: np.ndarray, particles: np.ndarray, log_weights: np.ndarray,
                            dynamics: Dynamics) -> np.ndarray:
-    """``log f(x) = log sum_j w_j p(x | x_j)`` for every row of ``x`` (an ``(n, N)`` table)."""
+    """``log f(x) = log sum_j w_j p(x | x_j)`` for every row of ``x`` (an ``(n, N)`` table;
+    normalised ``log_weights``). A dynamics may shortcut it (``predictive_log_density``)."""
+    own = getattr(dynamics, "predictive_log_density", None)
+    if own is not None:
+        return own(x, particles, log_weights)
     table = pairwise_log_density(dynamics, x, particles) + log_weights[None, :]
     m = table.max(axis=1)
     safe = np.where(np.isfinite(m), m, 0.0)
