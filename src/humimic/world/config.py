@@ -4,10 +4,12 @@ from __future__ import annotations
 
 from typing import Literal
 
-from pydantic import Field
+from pydantic import Field, field_validator
+from pydantic_core import PydanticCustomError
 
 from humimic.motion.config import MotionConfig, StaticMotion
 from humimic.scenario.base import RGB, Section, Vec3
+from humimic.world.faces import DEFAULT_IDENTITY, IDENTITY_NAMES
 from humimic.world.names import HUMAN_TARGETS, ROBOT_JOINTS
 
 
@@ -23,7 +25,24 @@ class Human(Section):
     trousers: RGB = (0.25, 0.25, 0.3)
     wiimote: bool = False
     """Show the Wii remote in the right hand (it is always simulated; this makes it visible)."""
+    identity: str = DEFAULT_IDENTITY
+    """The person's face: a name of :data:`humimic.world.faces.IDENTITY_NAMES` or its index."""
     motion: MotionConfig = Field(default_factory=lambda: StaticMotion(kind="static"))
+
+    @field_validator("identity", mode="before")
+    @classmethod
+    def _known_identity(cls, v):
+        if isinstance(v, int) and not isinstance(v, bool):
+            if 0 <= v < len(IDENTITY_NAMES):
+                return IDENTITY_NAMES[v]
+            raise PydanticCustomError("less_than", "identity index out of range",
+                                      {"lt": len(IDENTITY_NAMES)})
+        if v not in IDENTITY_NAMES:
+            expected = ", ".join(f"'{n}'" for n in IDENTITY_NAMES)
+            raise PydanticCustomError("literal_error", "unknown identity",
+                                      {"expected": f"{expected} or an index 0.."
+                                                   f"{len(IDENTITY_NAMES) - 1}"})
+        return v
 
 
 class Robot(Section):

@@ -18,6 +18,7 @@ from dm_control import mjcf
 
 from humimic.paths import MODELS_DIR
 from humimic.sensors.camera_model import fovy_from_hfov, make_transform
+from humimic.world import faces
 from humimic.world.frames import paper_frame_of
 from humimic.world.names import (
     BASE_JOINTS,
@@ -63,6 +64,11 @@ class SceneOptions:
     shadows: bool = False
     msaa: bool = False
     show_wiimote: bool = False
+    identity: str = faces.DEFAULT_IDENTITY
+    """The person's face (one of :data:`humimic.world.faces.IDENTITY_NAMES`)."""
+    show_headcam: bool = False
+    """Draw the worn head camera on the forehead (only when the scenario uses it: it covers the
+    brows and would hide the face from a face detector)."""
     base: str = "fixed"
     """The robot's base: ``fixed`` (welded at the pelvis, as DB) or ``planar`` (x, y, yaw
     joints with velocity actuators: a wheeled base, see :func:`add_planar_base`)."""
@@ -108,6 +114,10 @@ def compose(opts: SceneOptions) -> mjcf.RootElement:
     for name, rgb in (("skin", opts.skin), ("shirt", opts.shirt), ("trousers", opts.trousers)):
         human.find("material", name).rgba = [*rgb, 1.0]
 
+    add_face(human, opts.identity)
+    if not opts.show_headcam:
+        human.find("geom", "headcam").group = WIIMOTE_GROUP + 1  # a hidden group
+
     # Lighting and rendering quality.
     key = room.find("light", "key")
     key.ambient = [opts.ambient] * 3
@@ -131,6 +141,19 @@ def compose(opts: SceneOptions) -> mjcf.RootElement:
     frame.pos = [eye_x + opts.distance + head_x_in_avatar, opts.lateral, 0.0]
     frame.euler = [0.0, 0.0, math.pi]  # face the robot (avatar +x points to world -x)
     return room
+
+
+def add_face(human: mjcf.RootElement, identity: str) -> None:
+    """Texture the avatar's head with ``identity``'s face (tinted by the ``skin`` material)."""
+    images = faces.cube_faces(identity)
+    texture = human.asset.add(
+        "texture", name="face", type="cube",
+        **{f"file{k}": mjcf.Asset(faces.png_bytes(v), ".png") for k, v in images.items()})
+    skin = human.find("material", "skin")
+    # matte: a highlight that moves with the head over the features hides who it is
+    face = human.asset.add("material", name="face", texture=texture, rgba=skin.rgba,
+                           specular=0.0, shininess=0.0)
+    human.find("geom", "head").material = face
 
 
 _EYE_X_Z = _robot_eye_height_and_x()

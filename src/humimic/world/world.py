@@ -35,6 +35,7 @@ def scene_options(scenario) -> SceneOptions:
         headcam_hfov_deg=scenario.sensors.head_camera.hfov_deg,
         ambient=light.ambient, diffuse=light.diffuse, shadows=light.shadows, msaa=light.msaa,
         show_wiimote=h.wiimote, room=scenario.room, base=scenario.robot.base,
+        identity=h.identity, show_headcam=scenario.sensors.head_camera.enabled,
     )
 
 

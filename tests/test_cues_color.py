@@ -1,0 +1,128 @@
+"""Colour cue (Menezes eqs. 6, 13), fusion (eq. 7) and importance functions (eqs. 8, 9, 12)
+against OpenCV and closed forms."""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+import pytest
+from scipy.stats import multivariate_normal
+
+from humimic.perception.cues.fusion import fuse
+from humimic.perception.cues.histograms import (
+    HEAD_TORSO_PATCHES,
+    bhattacharyya,
+    color_log_likelihood,
+    patch_histograms,
+    quantize,
+    update_reference,
+)
+from humimic.perception.cues.importance import (
+    detection_proposal,
+    mixed_proposal,
+    recognition_proposal,
+    skin_blobs,
+)
+
+
+def _image(seed=0):
+    rng = np.random.default_rng(seed)
+    img = rng.integers(0, 256, (120, 160, 3), dtype=np.uint8)
+    img[30:70, 40:80] = rng.integers(150, 256, (40, 40, 3), dtype=np.uint8)
+    return img
+
+
+@pytest.fixture
+def full_grid_hists():
+    img = _image()
+    q = quantize(img, 32)
+    state = np.array([[49.5, 41.5, 1.0]])
+    patch = np.array([[0.0, 0.0, 20.0, 20.0]])
+    return img, patch_histograms(q, state, patch, grid=20)
+
+
+def test_full_grid_histogram_is_calchist(full_grid_hists):
+    img, h = full_grid_hists
+    roi = img[32:52, 40:60]
+    for c in range(3):
+        ref = cv2.calcHist([roi], [c], None, [32], [0, 256])[:, 0]
+        np.testing.assert_allclose(h[0, 0, c], ref / ref.sum())
+
+
+def test_bhattacharyya_matches_numpy_and_opencv():
+    rng = np.random.default_rng(1)
+    a, b = rng.random((5, 32)), rng.random((5, 32))
+    a /= a.sum(1, keepdims=True)
+    b /= b.sum(1, keepdims=True)
+    ours = bhattacharyya(a, b)
+    numpy_ref = np.sqrt(1.0 - np.sum(np.sqrt(a * b), axis=1))
+    cv_ref = [cv2.compareHist(x.astype(np.float32), y.astype(np.float32),
+                              cv2.HISTCMP_BHATTACHARYYA) for x, y in zip(a, b, strict=True)]
+    np.testing.assert_allclose(ours, numpy_ref, atol=1e-12)
+    np.testing.assert_allclose(ours, cv_ref, atol=1e-6)
+    assert bhattacharyya(a[0], a[0]) == pytest.approx(0.0, abs=1e-7)
+    assert bhattacharyya(np.zeros(32), a[0]) == 1.0  # an empty patch is as far as can be
+
+
+def test_colour_likelihood_eq6_and_reference_update_eq13():
+    img = _image()
+    q = quantize(img)
+    states = np.array([[60.0, 50.0, 20.0], [120.0, 90.0, 20.0], [-500.0, 0.0, 20.0]])
+    h = patch_histograms(q, states, HEAD_TORSO_PATCHES)
+    refs = h[0]
+    lam = np.array([[1.0, 0.5, 0.2], [0.3, 1.0, 2.0]])
+    ll = color_log_likelihood(h, refs, sigma=0.03, weights=lam)
+    D = np.sqrt(np.clip(1 - np.sum(np.sqrt(h * refs[None]), -1), 0, 1))
+    np.testing.assert_allclose(ll, -np.sum(lam * D**2, axis=(1, 2)) / (2 * 0.03**2))
+    assert ll[0] == pytest.approx(0.0, abs=1e-9) and ll[1] < ll[0]
+    assert np.all(h[2] == 0) and ll[2] == pytest.approx(-lam.sum() / (2 * 0.03**2))
+    new = update_reference(refs, h[1], np.array([0.1, 0.05]))
+    np.testing.assert_allclose(new[0], 0.9 * refs[0] + 0.1 * h[1, 0])
+    np.testing.assert_allclose(new[1], 0.95 * refs[1] + 0.05 * h[1, 1])
+    np.testing.assert_allclose(new.sum(-1), 1.0)
+    np.testing.assert_array_equal(update_reference(refs, h[2], 0.1), refs)  # nothing seen
+
+
+def test_fusion_is_the_product_of_likelihoods():
+    a, b, c = np.log([0.2, 0.5]), np.log([0.1, 0.9]), np.array([-np.inf, 0.0])
+    np.testing.assert_allclose(np.exp(fuse(a, b)), [0.02, 0.45])
+    assert fuse(a, b, c)[0] == -np.inf
+    with pytest.raises(ValueError):
+        fuse()
+
+
+def test_importance_functions_eq8_eq9_eq12():
+    centers = np.array([[100.0, 50.0], [200.0, 120.0], [40.0, 40.0]])
+    rng = np.random.default_rng(2)
+    x = centers[rng.integers(0, 3, 50)] + rng.normal(0.0, 12.0, (50, 2))
+    pi = detection_proposal(centers, (6.0, 8.0))
+    ref = np.mean([multivariate_normal(c, np.diag([36.0, 64.0])).pdf(x) for c in centers], 0)
+    np.testing.assert_allclose(np.exp(pi.log_density(x)), ref, rtol=1e-9)
+    probs = np.array([0.7, 0.0, 0.3])
+    rec = recognition_proposal(centers, probs, (6.0, 6.0))
+    ref = sum(p * multivariate_normal(c, 36.0 * np.eye(2)).pdf(x)
+              for c, p in zip(centers, probs, strict=True))
+    np.testing.assert_allclose(np.exp(rec.log_density(x)), ref, rtol=1e-9)
+    assert len(rec.means) == 2  # the other person's face does not propose
+    blobs = detection_proposal(np.array([[160.0, 200.0]]), (6.0, 6.0))
+    mixed = mixed_proposal(pi, blobs, detection_proposal(np.zeros((0, 2))))
+    np.testing.assert_allclose(np.exp(mixed.log_density(x)),
+                               0.5 * np.exp(pi.log_density(x)) + 0.5 * np.exp(
+                                   blobs.log_density(x)), rtol=1e-9)
+    with3 = detection_proposal(centers, (6.0, 6.0), sizes=[30, 40, 50], sigma_s=3.0)
+    s = with3.sample(3000, np.random.default_rng(0))
+    assert s.shape == (3000, 3) and abs(s[:, 2].mean() - 40.0) < 1.0
+
+
+def test_skin_blobs_centroids_and_filters():
+    mask = np.zeros((240, 320), np.uint8)
+    cv2.circle(mask, (100, 80), 12, 255, -1)  # a face-sized blob
+    cv2.ellipse(mask, (220, 150), (8, 14), 0, 0, 360, 255, -1)  # a hand
+    mask[10:12, 10:200] = 255  # a thin line: aspect ratio out of range
+    mask[200, 300] = 255  # a speck: too small
+    b = skin_blobs(mask, subsample=2, min_area_px=40, aspect=(0.3, 3.0))
+    assert len(b.centers) == 2
+    order = np.argsort(b.centers[:, 0])
+    for k, (u, v) in zip(order, [(100, 80), (220, 150)], strict=True):
+        assert np.hypot(*(b.centers[k] - [u, v])) < 1.0
+    assert b.areas[order[0]] == pytest.approx(np.pi * 12**2, rel=0.15)

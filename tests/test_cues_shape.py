@@ -1,0 +1,165 @@
+"""Shape and motion cues (Menezes eqs. 2-5) against brute-force computations."""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+import pytest
+from scipy.spatial import cKDTree
+
+from humimic.perception.cues.edges import (
+    distance_transform,
+    dt_distance,
+    edge_maps,
+    nearest_along_normal,
+    normal_edge_distance,
+    shape_log_likelihood,
+)
+from humimic.perception.cues.motion import (
+    OpticalFlow,
+    motion_dt_distance,
+    motion_edge_maps,
+    motion_normal_distance,
+)
+from humimic.perception.cues.templates import hand, head_and_shoulders, resample_contour
+
+
+def _random_edges(rng, shape=(120, 160), n_lines=6) -> np.ndarray:
+    e = np.zeros(shape, np.uint8)
+    for _ in range(n_lines):
+        p0 = tuple(int(v) for v in rng.integers(0, shape[::-1]))
+        p1 = tuple(int(v) for v in rng.integers(0, shape[::-1]))
+        cv2.line(e, p0, p1, 255, 1)
+    return e
+
+
+def _brute_nearest(edges: np.ndarray, pts: np.ndarray) -> np.ndarray:
+    yx = np.argwhere(edges > 0)
+    d, _ = cKDTree(yx[:, ::-1].astype(float)).query(pts.reshape(-1, 2))
+    return d.reshape(pts.shape[:-1])
+
+
+def test_distance_transform_is_the_brute_force_nearest_edge_distance():
+    rng = np.random.default_rng(0)
+    edges = _random_edges(rng)
+    dt = distance_transform(edges, cap=1e9)
+    pts = np.stack([rng.integers(0, 160, (20, 15)), rng.integers(0, 120, (20, 15))], -1)
+    brute = _brute_nearest(edges, pts.astype(float))
+    np.testing.assert_allclose(dt_distance(dt, pts, cap=1e9), brute.mean(axis=1), atol=1e-3)
+    # between pixels the bilinear DT stays within half a diagonal of the true distance
+    frac = rng.uniform([0, 0], [159, 119], (20, 15, 2))
+    per_point = dt_distance(dt, frac[:, :, None, :], cap=1e9, reduce="sum")
+    assert np.max(np.abs(per_point - _brute_nearest(edges, frac))) < 0.75
+    # capped, and points off the image count the cap
+    capped = distance_transform(edges, cap=5.0)
+    assert capped.max() <= 5.0
+    assert dt_distance(capped, np.array([[[-50.0, 10.0]]]), cap=5.0)[0] == 5.0
+    assert np.all(distance_transform(np.zeros((10, 10), np.uint8), 7.0) == 7.0)
+
+
+def test_normal_search_matches_a_pixel_walk_and_bounds_the_dt_distance():
+    rng = np.random.default_rng(1)
+    edges = _random_edges(rng, n_lines=10)
+    pts = rng.uniform([5, 5], [154, 114], (12, 9, 2)) + 0.123  # off the half-pixel ties
+    ang = rng.uniform(0, 2 * np.pi, (12, 9))
+    nrm = np.stack([np.cos(ang), np.sin(ang)], -1)
+    search = 12
+    got = nearest_along_normal(edges, pts, nrm, search)
+    walk = np.full(got.shape, np.inf)
+    for i, j in np.ndindex(got.shape):
+        for t in sorted(range(-search, search + 1), key=abs):
+            x, y = np.floor(pts[i, j] + t * nrm[i, j] + 0.5).astype(int)
+            if 0 <= x < 160 and 0 <= y < 120 and edges[y, x]:
+                walk[i, j] = abs(t)
+                break
+    np.testing.assert_array_equal(got, walk)
+    # the nearest edge along a line is never nearer than the nearest edge at all
+    found = np.isfinite(got)
+    assert np.all(got[found] >= _brute_nearest(edges, pts)[found] - 0.71)
+    D = normal_edge_distance(edges, pts, nrm, search)
+    np.testing.assert_allclose(D, np.minimum(walk, search).mean(axis=1))
+
+
+def test_eq2_and_eq3_agree_on_a_circle_and_peak_at_the_true_state():
+    img = np.zeros((240, 320, 3), np.uint8)
+    cv2.circle(img, (160, 120), 40, (255, 255, 255), -1)
+    maps = edge_maps(img)
+    circle = resample_contour(np.stack([np.cos(t := np.linspace(0, 2 * np.pi, 400)[:-1]),
+                                        np.sin(t)], -1), 30, closed=True)
+    states = np.array([[160.0, 120.0, r] for r in (30.0, 35.0, 40.0, 45.0)])
+    p, n = circle.place(states)
+    d_normal = normal_edge_distance(maps.edges, p, n, 15)
+    d_dt = dt_distance(maps.dt, p)
+    np.testing.assert_allclose(d_normal, [10, 5, 0, 5], atol=1.3)
+    np.testing.assert_allclose(d_dt, d_normal, atol=1.0)
+    ll = shape_log_likelihood(d_dt, sigma=1.5)
+    assert np.argmax(ll) == 2 and ll[2] <= 0.0
+
+
+def test_templates_place_scale_rotate_and_have_unit_normals():
+    for t in (head_and_shoulders(15), hand(30)):
+        seg = np.linalg.norm(np.diff(t.points, axis=0), axis=1)
+        assert seg.std() / seg.mean() < 0.35  # roughly uniform along the contour
+        np.testing.assert_allclose(np.linalg.norm(t.normals, axis=1), 1.0, atol=1e-9)
+        p, n = t.place(np.array([[100.0, 50.0, 20.0, np.pi / 2]]))
+        R = np.array([[0.0, -1.0], [1.0, 0.0]])
+        np.testing.assert_allclose(p[0], [100.0, 50.0] + 20.0 * t.points @ R.T, atol=1e-9)
+        np.testing.assert_allclose(n[0], t.normals @ R.T, atol=1e-9)
+    h = hand(60)
+    w, ht = np.ptp(h.points, axis=0)
+    assert np.isclose(ht / w, 0.08 / 0.045, rtol=0.02)
+    hs = head_and_shoulders(40)
+    assert hs.points[:, 1].min() == pytest.approx(-0.65, abs=0.05)  # crown above the centre
+
+
+def _moving_scene():
+    a = np.full((120, 160), 60, np.uint8)
+    cv2.rectangle(a, (10, 10), (50, 60), 200, -1)  # static square
+    b = a.copy()
+    cv2.circle(a, (100, 60), 15, 230, -1)
+    cv2.circle(b, (104, 60), 15, 230, -1)  # the disc moved 4 px right
+    return a, b
+
+
+def test_moving_edges_follow_the_moving_object():
+    a, b = _moving_scene()
+    maps = edge_maps(b)
+    flow = OpticalFlow()(a, b)
+    mm = motion_edge_maps(maps, flow, min_flow_px=1.0)
+    ys, xs = np.nonzero(mm.moving)
+    assert len(xs) > 40
+    on_disc = np.hypot(xs - 104, ys - 60) < 20
+    assert on_disc.mean() > 0.9  # measured 1.0
+    static_edges = maps.edges[5:66, 5:56] > 0
+    assert (mm.moving[5:66, 5:56] > 0).sum() < 0.1 * static_edges.sum()
+    none = motion_edge_maps(maps, None)
+    assert not none.moving.any() and none.dt_moving.max() == pytest.approx(30.0)
+
+
+def test_eq5_and_eq4_against_direct_formulas():
+    a, b = _moving_scene()
+    mm = motion_edge_maps(edge_maps(b), OpticalFlow()(a, b), min_flow_px=1.0)
+    rng = np.random.default_rng(4)
+    pts = rng.integers([0, 0], [160, 120], (7, 11, 2)).astype(float)
+    K = 0.5
+    direct = np.minimum(mm.dt[pts[..., 1].astype(int), pts[..., 0].astype(int)],
+                        K * mm.dt_moving[pts[..., 1].astype(int), pts[..., 0].astype(int)])
+    np.testing.assert_allclose(motion_dt_distance(mm, pts, K=K), direct.mean(axis=1), atol=1e-4)
+    # eq. 4: a static edge costs rho more than a moving one at the same distance
+    nrm = np.broadcast_to([1.0, 0.0], pts.shape)
+    rho, search = 3.0, 10
+    d_any = nearest_along_normal(mm.edges, pts + 0.1, nrm, search)
+    d_mov = nearest_along_normal(mm.moving, pts + 0.1, nrm, search)
+    expect = np.minimum(np.minimum(d_mov, d_any + rho), search + rho).mean(axis=1)
+    np.testing.assert_allclose(motion_normal_distance(mm, pts + 0.1, nrm, rho, search), expect)
+    # 2 px off a moving outline costs K times less than 2 px off a static one (eq. 5)
+    circle = resample_contour(np.stack([np.cos(t := np.linspace(0, 2 * np.pi, 200)[:-1]),
+                                        np.sin(t)], -1), 30, closed=True)
+    inside_disc, _ = circle.place(np.array([[104.0, 60.0, 13.0]]))
+    inside_square = np.array([[[12.0, y] for y in range(15, 56, 2)]])
+    d_disc = motion_dt_distance(mm, inside_disc, K=K)[0]
+    d_square = motion_dt_distance(mm, inside_square, K=K)[0]
+    d_plain = motion_dt_distance(mm, inside_disc, K=1.0)[0]  # K = 1: plain eq. 3
+    # measured 0.84, 3.0 and 1.68: every point of the disc's outline moves
+    assert d_square > 1.4 and d_disc < 0.7 * d_square, (d_disc, d_square)
+    assert abs(d_disc - K * d_plain) < 0.15 and d_plain > 1.4
