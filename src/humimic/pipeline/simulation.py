@@ -14,12 +14,13 @@ A Ctrl-C stops the loop cleanly: the caller still gets the metrics so far.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import mujoco
 import numpy as np
 from tqdm import tqdm
 
+from humimic.messages import InertialReading
 from humimic.pipeline.bus import Bus
 from humimic.pipeline.stage import Stage, StageTimer
 from humimic.sensors.clock import Schedule
@@ -50,7 +51,8 @@ def simulate(world, stages: list[Stage], rlog, bus: Bus | None = None,
     for stage in stages:
         stage.attach(bus, timer)
 
-    cam_sched = Schedule(scenario.cameras.rate, phys_rate)
+    cam_sched = (Schedule(scenario.cameras.rate, phys_rate)
+                 if world.eye_rig is not None else None)
     head_sched = (Schedule(scenario.sensors.head_camera.rate, phys_rate)
                   if world.head_rig is not None else None)
     pose_sched = Schedule(min(scenario.output.pose_rate, phys_rate), phys_rate)
@@ -70,7 +72,7 @@ def simulate(world, stages: list[Stage], rlog, bus: Bus | None = None,
     n_servo = (world.n_ticks + servo_every - 1) // servo_every
     robot_qpos = np.zeros((n_servo, len(world.scene.robot_qpos)))
     servo_t = np.zeros(n_servo)
-    frames = 0
+    frames = head_frames = 0
     tick = 0
     interrupted = False
     bar = tqdm(total=round(scenario.duration, 3), unit="sim s", disable=not progress,
@@ -85,7 +87,7 @@ def simulate(world, stages: list[Stage], rlog, bus: Bus | None = None,
             mujoco.mj_step1(m, d)
             t_phys = time.perf_counter() - t0
 
-            if cam_sched.due(tick):
+            if cam_sched is not None and cam_sched.due(tick):
                 with timer.time("render"):
                     images = world.eye_rig.capture(t)
                 bus.publish("frames", Stamped(t, images, t + latency))
@@ -95,12 +97,18 @@ def simulate(world, stages: list[Stage], rlog, bus: Bus | None = None,
                 frames += 1
             if head_sched is not None and head_sched.due(tick):
                 with timer.time("render_headcam"):
-                    images = world.head_rig.capture(t)
-                bus.publish("headcam", Stamped(t, images["headcam"]))
+                    image = world.capture_headcam(t)
+                bus.publish("headcam", Stamped(t, image))
+                if image_every and head_frames % image_every == 0:  # shown at its true pose
+                    true = replace(image, camera=world.head_rig.camera_model("headcam"))
+                    rlog.log_camera_image(t, "world/cameras/headcam", true, quality)
+                head_frames += 1
             for topic, data, index in inertial:
                 i = index.get(tick)
                 if i is not None:
-                    bus.publish(topic, Stamped(t, (data.accel[i], data.gyro[i])))
+                    R = data.orientation.R[i] if data.orientation is not None else None
+                    bus.publish(topic, Stamped(t, InertialReading(data.accel[i], data.gyro[i],
+                                                                  R)))
 
             bus.deliver(t)
             if tick % servo_every == 0:

@@ -75,6 +75,36 @@ class Intrinsics:
         s = 1.0 + self.k1 * r2 + self.k2 * r2 * r2
         return np.stack([self.fx * x * s + self.cx, self.fy * y * s + self.cy], axis=-1)
 
+    def project_jacobian(self, p_cam: np.ndarray) -> np.ndarray:
+        """``d project(p) / dp`` ``(..., 2, 3)`` for camera-frame points ``(..., 3)`` (z > 0)."""
+        p = np.asarray(p_cam, dtype=float)
+        iz = 1.0 / p[..., 2]
+        x, y = p[..., 0] * iz, p[..., 1] * iz
+        r2 = x * x + y * y
+        s = 1.0 + self.k1 * r2 + self.k2 * r2 * r2
+        ds = 2.0 * (self.k1 + 2.0 * self.k2 * r2)  # d s / d(x or y), divided by x or y
+        # d(x s, y s)/d(x, y), then d(x, y)/dp = [[1/z, 0, -x/z], [0, 1/z, -y/z]]
+        a, b, c = s + ds * x * x, ds * x * y, s + ds * y * y
+        J = np.empty(p.shape[:-1] + (2, 3))
+        J[..., 0, 0], J[..., 0, 1] = self.fx * a * iz, self.fx * b * iz
+        J[..., 0, 2] = -self.fx * (a * x + b * y) * iz
+        J[..., 1, 0], J[..., 1, 1] = self.fy * b * iz, self.fy * c * iz
+        J[..., 1, 2] = -self.fy * (b * x + c * y) * iz
+        return J
+
+    def pinhole(self) -> Intrinsics:
+        """The same camera without distortion (what an undistorted image is taken with)."""
+        return Intrinsics(self.width, self.height, self.fx, self.fy, self.cx, self.cy)
+
+    def undistortion_maps(self) -> tuple[np.ndarray, np.ndarray]:
+        """``cv2.remap`` maps that undistort this camera's image into :meth:`pinhole`'s: for
+        each pixel of the undistorted image, where it lies in the distorted one (float32)."""
+        u, v = np.meshgrid(np.arange(self.width, dtype=float), np.arange(self.height,
+                                                                         dtype=float))
+        ray = np.stack([(u - self.cx) / self.fx, (v - self.cy) / self.fy, np.ones_like(u)], -1)
+        uv = self.project(ray)
+        return uv[..., 0].astype(np.float32), uv[..., 1].astype(np.float32)
+
     def undistort_normalized(self, uv: np.ndarray, iterations: int = 8) -> np.ndarray:
         """Pixels ``(..., 2)`` to undistorted normalised coordinates ``(..., 2)`` (fixed point)."""
         uv = np.asarray(uv, dtype=float)

@@ -52,4 +52,5 @@ HUMAN_TARGETS = {
     "head_imu": "head_imu",
     "wiimote": "wiimote_imu",
     "wiimote_marker": "wiimote_marker",
+    "headcam": "headcam",
 }

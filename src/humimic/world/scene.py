@@ -18,6 +18,7 @@ from dm_control import mjcf
 
 from humimic.paths import MODELS_DIR
 from humimic.sensors.camera_model import fovy_from_hfov, make_transform
+from humimic.world.frames import paper_frame_of
 from humimic.world.names import (
     EYE_CAMERAS,
     HUMAN_JOINTS,
@@ -50,8 +51,8 @@ class SceneOptions:
     """Width, height of the eye cameras (sets MuJoCo's vertical fovy for the aspect ratio)."""
     wide_hfov_deg: float = WIDE_HFOV_DEG
     foveal_hfov_deg: float = FOVEAL_HFOV_DEG
-    headcam_resolution: tuple[int, int] = (320, 240)
-    headcam_hfov_deg: float = 60.0
+    headcam_resolution: tuple[int, int] = (368, 240)
+    headcam_hfov_deg: float = 70.0
     ambient: float = 0.3
     diffuse: float = 0.55
     shadows: bool = False
@@ -144,6 +145,8 @@ class Scene:
         self.human_qpos0 = m.qpos0[self.human_qpos].copy()
 
         self.T_world_base = self._body_pose(ROBOT_PREFIX + "pelvis", zero_pose=True)
+        self.T_world_W = paper_frame_of(m)
+        """Pose of the paper's frame W (Sugiyama & Miura; :mod:`humimic.world.frames`)."""
         frame_body = int(m.body(HUMAN_PREFIX + "pelvis").parentid[0])
         self.T_world_avatar = self._body_pose(frame_body, zero_pose=True)
 

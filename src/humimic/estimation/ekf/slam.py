@@ -1,0 +1,382 @@
+"""Monocular EKF SLAM with inertial measurements: the estimator of Sugiyama & Miura sec. III.
+
+State (Sugiyama eq. 1): the 19-number interface (:mod:`.motion_model`) followed by the map,
+one block per feature: 6 numbers while it is an inverse-depth point, 3 once converted to XYZ
+(:mod:`.inverse_depth`). Known features (the screen corners) are XYZ blocks with zero
+covariance: they fix the frame and the scale.
+
+The filter advances to each measurement's time stamp (multi-rate, as Armesto et al.): the
+head IMU's orientation and acceleration at their own rate (eqs. 6-7), the camera's features
+once per frame (eqs. 8-9). The image side (detection, patch matching) lives in
+:mod:`.frontend`; this class only sees pixels: :meth:`SlamFilter.predict_features` says
+where each map feature should appear and how uncertain that is (the search ellipses), and
+:meth:`SlamFilter.update_features` fuses the matches.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from humimic.estimation.ekf import inverse_depth as idp
+from humimic.estimation.ekf import motion_model as mm
+from humimic.estimation.ekf import update as up
+from humimic.estimation.ekf.quaternion import align_sign, d_normalize
+from humimic.sensors.camera_model import Intrinsics
+
+POSE_COLS = np.arange(0, 7)
+Q_COLS = np.arange(3, 7)
+IMU_COLS = np.concatenate([mm.ORIENTATION_COLS, mm.ACCEL_COLS])
+
+
+@dataclass
+class MapFeature:
+    """Bookkeeping of one map feature (its numbers live in the filter's state)."""
+
+    fid: int
+    dim: int
+    """6 while inverse depth, 3 once XYZ."""
+    offset: int = 0
+    """First column of its block in the state."""
+    known: bool = False
+    """A prior known feature (never deleted or re-estimated)."""
+    tries: int = 0
+    hits: int = 0
+    misses_in_row: int = 0
+
+
+@dataclass
+class FeaturePrediction:
+    """Where the visible map features should appear in the next frame, and how sure we are."""
+
+    fids: np.ndarray
+    """(k,) feature ids, predicted inside the image and in front of the camera."""
+    uv: np.ndarray
+    """(k, 2) predicted undistorted pixels."""
+    S: np.ndarray
+    """(k, 2, 2) innovation covariance of each (px^2, measurement noise included)."""
+    PHt: np.ndarray = field(repr=False)
+    """(n, 2k) ``P H^T``, reused by the update."""
+    S_full: np.ndarray = field(repr=False)
+    """(2k, 2k) joint innovation covariance."""
+
+
+@dataclass(frozen=True)
+class SlamParams:
+    """Noise and map parameters (Sugiyama sec. III; Civera et al. 2008 for the inverse depth)."""
+
+    noise: mm.MotionNoise = mm.MotionNoise()
+    sigma_orientation: float = mm.SIGMA_ORIENTATION
+    sigma_accel: float = mm.SIGMA_ACCEL
+    sigma_px: float = 1.0
+    rho0: float = 0.5
+    """Initial inverse depth of a new feature (1/m)."""
+    sigma_rho: float = 0.5
+    """Its standard deviation (1/m): the 95 % region of ``rho0 ± 2 sigma`` spans 0.67 m to
+    infinity."""
+    margin_px: float = 4.0
+    """A feature predicted closer than this to the image border is not predicted visible."""
+
+
+class SlamFilter:
+    """The EKF: state, covariance, map bookkeeping. Times in seconds, pixels undistorted."""
+
+    def __init__(self, t0: float, x0: np.ndarray, P0: np.ndarray, intr: Intrinsics,
+                 R_cv_I: np.ndarray, params: SlamParams = SlamParams()):
+        """``x0, P0`` the interface's state and covariance at ``t0``; ``intr`` the camera
+        (its undistorted image is what :meth:`predict_features` predicts); ``R_cv_I`` the
+        rotation from the interface frame I to the camera's OpenCV axes."""
+        self.t = float(t0)
+        self.x = np.array(x0, float)
+        self.P = np.array(P0, float)
+        self.intr = intr.pinhole()
+        self.R_cv_I = np.asarray(R_cv_I, float)
+        self.params = params
+        self.features: list[MapFeature] = []
+        self._next_id = 0
+
+    # ---- state views -----------------------------------------------------------------------
+    @property
+    def interface(self) -> np.ndarray:
+        return self.x[: mm.DIM]
+
+    @property
+    def n_features(self) -> int:
+        return len(self.features)
+
+    def feature(self, fid: int) -> MapFeature:
+        for f in self.features:
+            if f.fid == fid:
+                return f
+        raise KeyError(fid)
+
+    def feature_points(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Ids ``(k,)``, XYZ points in W ``(k, 3)`` and their covariances ``(k, 3, 3)``."""
+        ids, pts, covs = [], [], []
+        for f in self.features:
+            blk = slice(f.offset, f.offset + f.dim)
+            y, Pyy = self.x[blk], self.P[blk, blk]
+            if f.dim == idp.ID_DIM:
+                pt, J = idp.to_xyz(y[None])
+                pt, Pyy = pt[0], J[0] @ Pyy @ J[0].T
+            else:
+                pt = y
+            ids.append(f.fid)
+            pts.append(pt)
+            covs.append(Pyy)
+        return (np.array(ids, int), np.reshape(pts, (-1, 3)), np.reshape(covs, (-1, 3, 3)))
+
+    # ---- time update -----------------------------------------------------------------------
+    def predict(self, t: float) -> None:
+        """Advance to time ``t`` (no-op if ``t`` is not later).  # Sugiyama eqs. 3-4"""
+        dt = t - self.t
+        if dt <= 0.0:
+            return
+        x_new, F, G = mm.predict(self.x[: mm.DIM], dt)
+        up.predict_block(self.x, self.P, x_new, F, mm.process_noise(G, self.params.noise))
+        self.t = float(t)
+
+    # ---- inertial updates ------------------------------------------------------------------
+    def update_inertial(self, q_meas: np.ndarray | None = None,
+                        a_meas: np.ndarray | None = None) -> None:
+        """Fuse an orientation ``q_WI`` (eq. 6) and/or an acceleration in W (eq. 7)."""
+        parts = []
+        if q_meas is not None:
+            q_meas = align_sign(np.asarray(q_meas, float), self.x[3:7])
+            parts.append((mm.ORIENTATION_COLS, mm.H_ORIENTATION, q_meas - mm.h_orientation(
+                self.x), self.params.sigma_orientation))
+        if a_meas is not None:
+            parts.append((mm.ACCEL_COLS, mm.H_ACCEL, np.asarray(a_meas, float)
+                          - mm.h_accel(self.x), self.params.sigma_accel))
+        if not parts:
+            return
+        if len(parts) == 2:  # one joint update: H over the union of the columns
+            cols = IMU_COLS
+            H = np.zeros((7, 10))
+            H[0:4, 0:4] = mm.H_ORIENTATION
+            H[4:7, 4:10] = mm.H_ACCEL
+            nu = np.concatenate([parts[0][2], parts[1][2]])
+            r = np.repeat([parts[0][3] ** 2, parts[1][3] ** 2], [4, 3])
+        else:
+            cols, H, nu, sigma = parts[0]
+            r = np.full(len(nu), sigma**2)
+        PHt = up.dense_PHt(self.P, cols, H)
+        S = up.dense_S(PHt, cols, H, np.diag(r))
+        try:
+            up.gain_update(self.x, self.P, PHt, S, nu)
+        except np.linalg.LinAlgError:
+            return
+        self._normalize_q()
+
+    # ---- features --------------------------------------------------------------------------
+    def _groups(self, feats: list[MapFeature]) -> list[tuple[np.ndarray, np.ndarray, int]]:
+        """Per feature size: (indices into ``feats``, state offsets, size)."""
+        out = []
+        dims = np.array([f.dim for f in feats], int)
+        offs = np.array([f.offset for f in feats], int)
+        for d in (idp.ID_DIM, idp.XYZ_DIM):
+            rows = np.flatnonzero(dims == d)
+            if len(rows):
+                out.append((rows, offs[rows], d))
+        return out
+
+    def predict_features(self, max_features: int | None = None) -> FeaturePrediction:
+        """Predicted pixels and innovation covariances of the map features in view."""
+        p, q = self.x[0:3], self.x[3:7]
+        feats = self.features
+        k = len(feats)
+        uv = np.full((k, 2), np.nan)
+        H_pq = np.zeros((k, 2, 7))
+        H_f: list[np.ndarray | None] = [None] * 2
+        groups = self._groups(feats)
+        for g, (rows, offs, d) in enumerate(groups):
+            y = self.x[offs[:, None] + np.arange(d)]
+            h, Hpq, Hy, z = idp.observe(y, p, q, self.intr, self.R_cv_I)
+            h[z <= 1e-6] = np.nan
+            uv[rows], H_pq[rows], H_f[g] = h, Hpq, Hy
+        m = self.params.margin_px
+        W, Hh = self.intr.width, self.intr.height
+        vis = np.all(np.isfinite(uv), axis=1)
+        vis[vis] &= ((uv[vis, 0] >= m) & (uv[vis, 0] <= W - 1 - m) & (uv[vis, 1] >= m)
+                     & (uv[vis, 1] <= Hh - 1 - m))
+        sel = np.flatnonzero(vis)
+        if max_features is not None and len(sel) > max_features:
+            sel = sel[:max_features]
+        return self._prediction(feats, sel, uv, H_pq, groups, H_f)
+
+    def _prediction(self, feats, sel, uv, H_pq, groups, H_f) -> FeaturePrediction:
+        k = len(sel)
+        n = len(self.x)
+        if k == 0:
+            return FeaturePrediction(np.zeros(0, int), np.zeros((0, 2)), np.zeros((0, 2, 2)),
+                                     np.zeros((n, 0)), np.zeros((0, 0)))
+        where = np.full(len(feats), -1)
+        where[sel] = np.arange(k)
+        sub = []
+        for g, (rows, offs, _) in enumerate(groups):
+            keep = where[rows] >= 0
+            if keep.any():
+                sub.append((where[rows[keep]], offs[keep], H_f[g][keep]))
+        Hp = H_pq[sel].reshape(2 * k, 7)
+        PHt = up.features_PHt(self.P, POSE_COLS, Hp, sub)
+        S = up.features_S(PHt, POSE_COLS, Hp, sub, self.params.sigma_px)
+        blocks = S.reshape(k, 2, k, 2)[np.arange(k), :, np.arange(k), :]
+        fids = np.array([feats[i].fid for i in sel], int)
+        return FeaturePrediction(fids, uv[sel], blocks, PHt, S)
+
+    def update_features(self, pred: FeaturePrediction, matched: np.ndarray,
+                        z: np.ndarray) -> bool:
+        """Fuse the measured pixels ``z (m, 2)`` of the predicted features ``matched`` (indices
+        into ``pred``); every other predicted feature counts as a failed attempt.
+        # Sugiyama eqs. 8-9; one batch update, as Davison's MonoSLAM."""
+        matched = np.asarray(matched, int)
+        by_id = {f.fid: f for f in self.features}
+        hit = np.zeros(len(pred.fids), bool)
+        hit[matched] = True
+        for fid, ok in zip(pred.fids, hit, strict=True):
+            f = by_id[int(fid)]
+            f.tries += 1
+            f.hits += int(ok)
+            f.misses_in_row = 0 if ok else f.misses_in_row + 1
+        if len(matched) == 0:
+            return False
+        rows = (2 * matched[:, None] + np.arange(2)).ravel()
+        nu = (np.asarray(z, float) - pred.uv[matched]).ravel()
+        try:
+            up.gain_update(self.x, self.P, pred.PHt[:, rows], pred.S_full[np.ix_(rows, rows)],
+                           nu)
+        except np.linalg.LinAlgError:
+            return False
+        self._normalize_q()
+        up.symmetrize(self.P)
+        return True
+
+    # ---- map management --------------------------------------------------------------------
+    def add_known(self, points_W: np.ndarray, sigma: float = 0.0) -> list[int]:
+        """Prior known XYZ features (the screen corners), with isotropic std ``sigma`` (m)."""
+        pts = np.atleast_2d(np.asarray(points_W, float))
+        k = len(pts)
+        Pyy = np.kron(np.eye(k), sigma**2 * np.eye(3))
+        return self._append(pts.ravel(), np.zeros((3 * k, len(self.x))), Pyy,
+                            [idp.XYZ_DIM] * k, known=True)
+
+    def add_features(self, uv: np.ndarray) -> list[int]:
+        """New inverse-depth features at undistorted pixels ``uv (k, 2)``.
+        # Civera et al. (2008) sec. III-C"""
+        uv = np.atleast_2d(np.asarray(uv, float))
+        if len(uv) == 0:
+            return []
+        prm = self.params
+        y, J_pq, J_z = idp.initialise(uv, self.x[0:3], self.x[3:7], self.intr, self.R_cv_I,
+                                      prm.rho0)
+        k = len(y)
+        Jpq = J_pq.reshape(6 * k, 7)
+        cross = Jpq @ self.P[POSE_COLS]  # (6k, n): new rows against the whole state
+        Rz = np.diag([prm.sigma_px**2, prm.sigma_px**2, prm.sigma_rho**2])
+        Pyy = cross[:, POSE_COLS] @ Jpq.T
+        for i in range(k):
+            blk = slice(6 * i, 6 * i + 6)
+            Pyy[blk, blk] += J_z[i] @ Rz @ J_z[i].T
+        return self._append(y.ravel(), cross, Pyy, [idp.ID_DIM] * k, known=False)
+
+    def _append(self, y: np.ndarray, cross: np.ndarray, Pyy: np.ndarray, dims: list[int],
+                known: bool) -> list[int]:
+        n, m = len(self.x), len(y)
+        P = np.empty((n + m, n + m))
+        P[:n, :n] = self.P
+        P[n:, :n] = cross
+        P[:n, n:] = cross.T
+        P[n:, n:] = Pyy
+        self.x = np.concatenate([self.x, y])
+        self.P = P
+        ids, off = [], n
+        for d in dims:
+            self.features.append(MapFeature(self._next_id, d, off, known=known))
+            ids.append(self._next_id)
+            self._next_id += 1
+            off += d
+        return ids
+
+    def delete(self, fids) -> None:
+        """Remove features (their rows and columns) from the state."""
+        drop = set(int(i) for i in fids)
+        if not drop:
+            return
+        keep_cols = [np.arange(mm.DIM)]
+        kept = []
+        for f in self.features:
+            if f.fid in drop:
+                continue
+            keep_cols.append(np.arange(f.offset, f.offset + f.dim))
+            kept.append(f)
+        cols = np.concatenate(keep_cols)
+        self.x = self.x[cols]
+        self.P = self.P[np.ix_(cols, cols)]
+        self.features = kept
+        self._reindex()
+
+    def prune(self, min_tries: int = 10, min_hit_ratio: float = 0.5,
+              max_misses_in_row: int = 5) -> list[int]:
+        """Delete unreliable features (Davison: fewer than half of the attempts matched, or
+        several failures in a row); known features stay. Returns the deleted ids."""
+        bad = [f.fid for f in self.features if not f.known and (
+            (f.tries >= min_tries and f.hits < min_hit_ratio * f.tries)
+            or f.misses_in_row >= max_misses_in_row)]
+        self.delete(bad)
+        return bad
+
+    def convert_linear(self, threshold: float = idp.LINEARITY_THRESHOLD) -> list[int]:
+        """Convert inverse-depth features whose linearity index is below ``threshold`` to XYZ
+        (Civera et al. 2008 sec. V). Returns the converted ids."""
+        inv = [f for f in self.features if f.dim == idp.ID_DIM]
+        if not inv:
+            return []
+        offs = np.array([f.offset for f in inv])
+        y = self.x[offs[:, None] + np.arange(6)]
+        s_rho = np.sqrt(np.maximum(self.P[offs + 5, offs + 5], 0.0))
+        L = idp.linearity_index(y, s_rho, self.x[0:3])
+        conv = [f for f, li in zip(inv, L, strict=True) if li < threshold]
+        if not conv:
+            return []
+        # x' = T(x): identity except each converted 6-block -> 3; P' = J P J^T with the
+        # block-diagonal J applied to rows, then to columns (O(n^2), no dense J).
+        conv_ids = {f.fid for f in conv}
+        src = np.array([f.offset for f in conv])[:, None] + np.arange(6)  # (c, 6) old cols
+        pts, Js = idp.to_xyz(self.x[src])
+        plain_old, plain_new, conv_new = [np.arange(mm.DIM)], [np.arange(mm.DIM)], []
+        r = mm.DIM
+        for f in self.features:
+            if f.fid in conv_ids:
+                conv_new.append(np.arange(r, r + 3))
+                f.dim = idp.XYZ_DIM
+            else:
+                plain_old.append(np.arange(f.offset, f.offset + f.dim))
+                plain_new.append(np.arange(r, r + f.dim))
+            r += f.dim
+        po, pn, cn = np.concatenate(plain_old), np.concatenate(plain_new), np.stack(conv_new)
+        x_new = np.empty(r)
+        x_new[pn], x_new[cn] = self.x[po], pts
+        rows = np.empty((r, len(self.x)))
+        rows[pn] = self.P[po]
+        rows[cn] = np.einsum("kij,kjn->kin", Js, self.P[src])
+        P_new = np.empty((r, r))
+        P_new[:, pn] = rows[:, po]
+        P_new[:, cn] = np.einsum("nkj,kij->nki", rows[:, src], Js)
+        self.x, self.P = x_new, P_new
+        self._reindex()
+        return sorted(conv_ids)
+
+    def _reindex(self) -> None:
+        off = mm.DIM
+        for f in self.features:
+            f.offset = off
+            off += f.dim
+
+    def _normalize_q(self) -> None:
+        """Renormalise ``q`` after an update; ``P`` through the normalisation's Jacobian."""
+        q = self.x[3:7]
+        J = d_normalize(q)
+        self.x[3:7] = q / np.linalg.norm(q)
+        self.P[3:7, :] = J @ self.P[3:7, :]
+        self.P[:, 3:7] = self.P[:, 3:7] @ J.T
