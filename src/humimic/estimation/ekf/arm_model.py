@@ -1,48 +1,51 @@
 """Measurement models of the Wii-remote arm EKF (Sugiyama & Miura Sec. IV-B, eqs. 11-24), with
-their Jacobians with respect to the state of :mod:`~humimic.estimation.ekf.jerk_model`.
+their Jacobians with respect to the 19-number state of :mod:`.motion_model` (eq. 10).
 
-Frames. ``I`` is the head camera's frame with OpenCV axes (x right, y down, z forward); the
-paper's ``I`` has x left and y up (its eq. 12 has ``u0 - f ku x/z``), a half turn about z, so its
-formulas carry over with the signs below. ``A`` is the Wii remote's frame: z along its pointing
-axis, x to its right, y down, so that ``q_A^I`` is the identity when the remote points along the
-optical axis held flat - the start pose the paper requires ("direct the Wii Remote to front").
-The state's position ``p_A^I`` is the centre of the marker's face; the marker is a flat
-rectangle of known size (its corners ``c_k`` in ``A``).
+Frames (:mod:`humimic.world.frames`): I is the head camera's, the paper's (x left, y up, z along
+the optical axis), projected in OpenCV's axes ``p_cv = R_CV_I p_I``; A is the remote's (z to the
+pointing end, y out of the button face, x left when held pointing ahead buttons up, where
+``R_IA = I``); W is the paper's world (y up). The state's position ``p_A^I`` is the marker's
+centre: eq. 12 projects it directly.
 
-Pitch and roll (eqs. 19-24) are elevations: the angle of the remote's z axis (pitch) and x axis
-(roll) out of the plane orthogonal to a "down" direction ``d``, positive towards ``d``. The
-paper measures them in I (``d = (0, 1, 0)``: its ``arctan(y / sqrt(x^2 + z^2))`` with y up, sign
-flipped with the axis) after subtracting the head's own pitch and roll in the world from the
-remote's accelerometer angles (eq. 22) - exact only while the head is level or the remote points
-where the head does. :func:`pitch_roll_measurement` gives that (``paper``) or the exact form
-(``gravity``: the head's orientation carries the world's down into I, ``d = R_WI^T d_W``, and the
-accelerometer angles are used as measured).
+The marker's area (eq. 13). The paper's marker is flat: the area of its four projected
+corners, two triangles (eqs. 13-14, :func:`plate_area`). The simulated remote may carry a
+sphere instead, whose silhouette is an ellipse of area ``pi fx fy r^2 sqrt(|c|^2 - r^2) /
+(c_z^2 - r^2)^(3/2)`` for a centre ``c`` in camera axes (:func:`sphere_area`): the same
+measurement, which then carries no orientation.
+
+Pitch and roll (eqs. 19-24) are elevations: eq. 19's ``-arctan(y_P / sqrt(x_P^2 + z_P^2))`` is
+the angle of the remote's z axis below I's x-z plane, ``arctan(y_R / ...)`` that of its x axis
+above it. With a "down" direction ``d`` they are ``(elev(R z_A, d), -elev(R x_A, d))``
+(:func:`pitch_roll`). The paper uses ``d = -y_I`` after subtracting the head's own pitch and
+roll in W from the accelerometer's angles (eq. 22): exact only with the head level or the remote
+pointing where the head does. :func:`pitch_roll_measurement` gives that (``paper``) or the exact
+form (``gravity``: the head's orientation carries W's down into I and the accelerometer's angles
+are used as measured).
 """
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
-from humimic.estimation.ekf.jerk_model import DIM, P, Q, W, d_rotate_dq, rotation
+from humimic.estimation.ekf import quaternion as qj
+from humimic.estimation.ekf.motion_model import DIM, P, Q, W
 from humimic.motion import quat
 from humimic.sensors.camera_model import Intrinsics
+from humimic.world.frames import GRAVITY_W, R_CV_I
 
-#: Columns: the remote's frame A in the MuJoCo site frame of the Wii remote (x along the remote,
-#: y left, z up): x_A = -y, y_A = -z, z_A = x.
-R_SITE_A = np.array([[0.0, 0.0, 1.0], [-1.0, 0.0, 0.0], [0.0, -1.0, 0.0]])
-#: The world's down in MuJoCo's z-up world frame.
-DOWN_WORLD = np.array([0.0, 0.0, -1.0])
-#: Standard gravity (m/s^2): the Wii's accelerometer reads in units of g.
-G0 = 9.80665
-_EZ, _EX = np.array([0.0, 0.0, 1.0]), np.array([1.0, 0.0, 0.0])
+#: Gravity's magnitude (m/s^2); the Wii's accelerometer reads in units of it.
+G0 = float(np.linalg.norm(GRAVITY_W))
+#: Up in the paper's W.
+UP_W = -GRAVITY_W / G0
+_EX, _EY, _EZ = np.eye(3)
 
 
-def project(p_cam: np.ndarray, K: Intrinsics) -> tuple[np.ndarray, np.ndarray]:
-    """Undistorted pixel of a camera-frame point and its Jacobian (2x3).  # Sugiyama eq. 12"""
-    x, y, z = p_cam
-    uv = np.array([K.fx * x / z + K.cx, K.fy * y / z + K.cy])
-    J = np.array([[K.fx / z, 0.0, -K.fx * x / (z * z)], [0.0, K.fy / z, -K.fy * y / (z * z)]])
-    return uv, J
+def project(p_I: np.ndarray, K: Intrinsics) -> tuple[np.ndarray, np.ndarray]:
+    """Pinhole pixel of a point in I and its Jacobian (2x3).  # Sugiyama eq. 12"""
+    p_cv = R_CV_I @ p_I
+    return K.project(p_cv), K.project_jacobian(p_cv) @ R_CV_I
 
 
 def centroid(x: np.ndarray, K: Intrinsics) -> tuple[np.ndarray, np.ndarray]:
@@ -58,7 +61,7 @@ def _cross2(a: np.ndarray, b: np.ndarray) -> float:
 
 
 def quad_area(uv: np.ndarray) -> tuple[float, np.ndarray]:
-    """Area of the image quadrilateral ``uv`` (4x2, in order) as two triangles (0, 1, 3) and
+    """Area of the image quadrilateral ``uv`` (4x2, in order) as the triangles (0, 1, 3) and
     (2, 1, 3), and its gradient (4x2).  # Sugiyama eqs. 13-14"""
     area, grad = 0.0, np.zeros((4, 2))
     for k in (0, 2):  # the triangles' apexes; e_1k = p1 - pk, e_3k = p3 - pk
@@ -73,12 +76,12 @@ def quad_area(uv: np.ndarray) -> tuple[float, np.ndarray]:
     return area, grad
 
 
-def marker_area(x: np.ndarray, K: Intrinsics, corners_A: np.ndarray
-                ) -> tuple[float, np.ndarray]:
-    """``h_areaA`` (px^2) and ``dh/dx`` (1x19): the projected area of the marker whose corners
-    are ``corners_A`` (4x3, in order around it) in A.  # Sugiyama eqs. 13-14"""
+def plate_area(x: np.ndarray, K: Intrinsics, corners_A: np.ndarray
+               ) -> tuple[float, np.ndarray]:
+    """``h_areaA`` (px^2) and ``dh/dx`` (1x19) of a flat marker whose corners relative to its
+    centre are ``corners_A`` (4x3, in order around it, frame A).  # Sugiyama eqs. 13-14"""
     p, q = x[P], x[Q]
-    Rq = rotation(q)
+    Rq = quat.to_matrix(q)
     uv = np.empty((4, 2))
     Js = []
     for k, c in enumerate(corners_A):
@@ -89,7 +92,20 @@ def marker_area(x: np.ndarray, K: Intrinsics, corners_A: np.ndarray
     for k, c in enumerate(corners_A):
         g = grad[k] @ Js[k]  # d area / d corner (3,)
         H[0, P] += g
-        H[0, Q] += g @ d_rotate_dq(q, c)
+        H[0, Q] += g @ qj.d_rotate_dq(q, c)
+    return area, H
+
+
+def sphere_area(x: np.ndarray, K: Intrinsics, radius: float) -> tuple[float, np.ndarray]:
+    """``h_areaA`` (px^2) and ``dh/dx`` (1x19) of a spherical marker of ``radius`` (m): the
+    ellipse its silhouette projects to (see the module docstring)."""
+    c = R_CV_I @ x[P]
+    r2 = radius * radius
+    g, hz = float(c @ c) - r2, c[2] * c[2] - r2
+    area = math.pi * K.fx * K.fy * r2 * math.sqrt(g) / hz**1.5
+    grad_c = area * (c / g - 3.0 * c[2] / hz * _EZ)
+    H = np.zeros((1, DIM))
+    H[0, P] = grad_c @ R_CV_I
     return area, H
 
 
@@ -105,11 +121,12 @@ def relative_rate(z_gyro_A: np.ndarray, q_IA: np.ndarray, w_head_I: np.ndarray,
     """The remote's angular velocity relative to the head, in A, from its raw gyro reading
     ``z_gyro_A`` (rad/s, which includes the head's rotation) over ``dt`` (s).
 
-    Sugiyama eqs. 16-18: with the head's body-frame rotation over the step ``dq_I = q(w_I dt)``
-    (the paper's ``Delta q_I^W`` between consecutive head estimates) and the remote's
-    orientation ``q_IA`` in I, ``R_IA(t + dt) = dq_I^-1 R_IA(t) q(z dt)``, so the remote's
-    increment relative to the head is ``q_IA^-1 (x) dq_I^-1 (x) q_IA (x) q(z dt)`` and the rate
-    is its rotation vector over ``dt`` (eq. 18: ``2 arccos(q_r) / (dt |q_v|) q_v``).
+    Sugiyama eqs. 16-18, our reading of the garbled chain: with the head's body-frame rotation
+    over the step ``dq_I = q(w_I dt)`` (the paper's ``Delta q_I^W`` between consecutive head
+    estimates) and the remote's orientation ``q_IA``, ``R_IA(t + dt) = dq_I^-1 R_IA(t) q(z dt)``,
+    so the remote's increment relative to the head is ``q_IA^-1 (x) dq_I^-1 (x) q_IA (x)
+    q(z dt)``, and the rate is its rotation vector over ``dt`` (eq. 18:
+    ``2 arccos(q_r) / (dt |q_v|) q_v``).
     """
     dq = quat.mul(quat.mul(quat.conj(q_IA), quat.from_rotvec(-np.asarray(w_head_I) * dt)),
                   quat.mul(q_IA, quat.from_rotvec(np.asarray(z_gyro_A) * dt)))
@@ -121,29 +138,32 @@ def elevation(u: np.ndarray, d: np.ndarray) -> tuple[float, np.ndarray]:
     (``arctan(d.u / sqrt(|u|^2 - (d.u)^2))``, scale-invariant), and its gradient in ``u``."""
     s = float(d @ u)
     n2 = float(u @ u)
-    c = float(np.sqrt(max(n2 - s * s, 1e-300)))
+    c = math.sqrt(max(n2 - s * s, 1e-300))
     grad = (c * d - s * (u - s * d) / c) / n2
-    return float(np.arctan2(s, c)), grad
+    return math.atan2(s, c), grad
 
 
 def pitch_roll(x: np.ndarray, d_I: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``h_PRA`` (2,): the elevations of the remote's z (pitch) and x (roll) axes towards the
-    down direction ``d_I`` in I, and the Jacobian (2x19).  # Sugiyama eqs. 19-21"""
+    """``h_PRA`` (2,): the pitch (the remote's z axis below the plane orthogonal to the down
+    direction ``d_I``) and roll (its x axis above it), and the Jacobian (2x19).
+    # Sugiyama eqs. 19-21"""
     q = x[Q]
-    Rq = rotation(q)
+    Rq = quat.to_matrix(q)
     H = np.zeros((2, DIM))
     out = np.empty(2)
-    for i, e in enumerate((_EZ, _EX)):
-        out[i], g = elevation(Rq @ e, d_I)
-        H[i, Q] = g @ d_rotate_dq(q, e)
+    for i, (e, sign) in enumerate(((_EZ, 1.0), (_EX, -1.0))):
+        ang, g = elevation(Rq @ e, d_I)
+        out[i] = sign * ang
+        H[i, Q] = sign * (g @ qj.d_rotate_dq(q, e))
     return out, H
 
 
 def accel_pitch_roll(f_A: np.ndarray) -> np.ndarray:
-    """The remote's pitch and roll (rad) from its accelerometer's specific force ``f_A`` (in A):
-    at rest ``f`` points up, so the world's down in A is ``-f / |f|``.  # Sugiyama z_wii"""
+    """``z_wii``: the remote's pitch and roll (rad) from its accelerometer's specific force
+    ``f_A`` (at rest ``f`` points up, so W's down in A is ``-f / |f|``)."""
     d_A = -np.asarray(f_A, float) / np.linalg.norm(f_A)
-    return np.array([np.arcsin(np.clip(d_A[2], -1, 1)), np.arcsin(np.clip(d_A[0], -1, 1))])
+    return np.array([math.asin(min(1.0, max(-1.0, d_A[2]))),
+                     -math.asin(min(1.0, max(-1.0, d_A[0])))])
 
 
 def accel_is_static(f_A: np.ndarray, R_IA: np.ndarray, R_WI: np.ndarray,
@@ -153,42 +173,40 @@ def accel_is_static(f_A: np.ndarray, R_IA: np.ndarray, R_WI: np.ndarray,
     g (the Wii's). A test on the norms alone would pass sideways accelerations of up to 0.2 g
     (an 11 deg tilt error); this one also fails once the orientation is more than about 1 deg
     off, which the gyro and the start pose prevent."""
-    up_I = R_WI.T @ np.array([0.0, 0.0, G0])
+    up_I = R_WI.T @ (G0 * UP_W)
     return float(np.linalg.norm(R_IA @ f_A - up_I)) <= tol_g * G0
 
 
 def head_pitch_roll(R_WI: np.ndarray) -> np.ndarray:
-    """The head camera's pitch and roll in the world (elevations of its z and x axes towards
-    the world's down).  # Sugiyama eqs. 22-24"""
-    return np.array([elevation(R_WI[:, 2], DOWN_WORLD)[0], elevation(R_WI[:, 0], DOWN_WORLD)[0]])
+    """The head camera's pitch and roll in W (its z axis below, its x axis above the
+    horizontal).  # Sugiyama eqs. 22-24"""
+    return np.array([elevation(R_WI[:, 2], -UP_W)[0], -elevation(R_WI[:, 0], -UP_W)[0]])
 
 
 def pitch_roll_measurement(f_A: np.ndarray, R_WI: np.ndarray, mode: str
                            ) -> tuple[np.ndarray, np.ndarray]:
     """The measurement ``z_PRA`` and the down direction ``d_I`` its model uses.
 
-    ``paper``: ``z_wii - (head pitch, head roll)`` against ``d_I = (0, 1, 0)`` (eq. 22);
-    ``gravity``: ``z_wii`` against ``d_I = R_WI^T d_W``, exact for any head orientation."""
+    ``paper``: ``z_wii - (head pitch, head roll)`` against ``d_I = -y_I`` (eq. 22);
+    ``gravity``: ``z_wii`` against ``d_I = R_WI^T down_W``, exact for any head orientation."""
     z = accel_pitch_roll(f_A)
     if mode == "paper":
-        return z - head_pitch_roll(R_WI), np.array([0.0, 1.0, 0.0])
+        return z - head_pitch_roll(R_WI), -_EY
     if mode == "gravity":
-        return z, R_WI.T @ DOWN_WORLD
+        return z, -(R_WI.T @ UP_W)
     raise ValueError(f"pitch/roll mode must be 'paper' or 'gravity', got {mode!r}")
 
 
-def _level_frame(down: np.ndarray) -> np.ndarray:
-    """Columns x, y = ``down``, z = the frame's own z made horizontal (orthogonal to down)."""
-    y = down / np.linalg.norm(down)
-    z = np.array([0.0, 0.0, 1.0]) - y[2] * y
+def _level_frame(up: np.ndarray) -> np.ndarray:
+    """Columns ``x = y cross z``, ``y = up``, ``z`` = the frame's own z made horizontal."""
+    y = up / np.linalg.norm(up)
+    z = _EZ - y[2] * y
     z /= np.linalg.norm(z)
     return np.column_stack([np.cross(y, z), y, z])
 
 
 def start_pose(f_A: np.ndarray, R_WI: np.ndarray) -> np.ndarray:
     """The unit ``q_A^I`` (wxyz) of a remote held still "directed to the front" (Sugiyama
-    Sec. IV): its pitch and roll from the accelerometer, and its pointing axis made horizontal
+    Sec. IV): its pitch and roll from the accelerometer, its pointing axis made horizontal
     along the head's optical axis made horizontal (the yaw nothing else measures)."""
-    L_I = _level_frame(R_WI.T @ DOWN_WORLD)
-    L_A = _level_frame(-np.asarray(f_A, float))
-    return quat.from_matrix(L_I @ L_A.T)
+    return quat.from_matrix(_level_frame(R_WI.T @ UP_W) @ _level_frame(f_A).T)
