@@ -74,3 +74,65 @@ def render(p_W: np.ndarray, R_W_I: np.ndarray, rng: np.random.Generator | None =
     if rng is not None and noise_std > 0:
         img = np.clip(img + rng.normal(0, noise_std, img.shape), 0, 255).astype(np.uint8)
     return img
+
+
+# ---- a walk in front of the wall, and the estimator run over it ----------------------------
+def _rot_y(a):
+    c, s = np.cos(a), np.sin(a)
+    return np.array([[c, 0, s], [0, 1, 0], [-s, 0, c]])
+
+
+def _rot_x(a):
+    c, s = np.cos(a), np.sin(a)
+    return np.array([[1, 0, 0], [0, c, -s], [0, s, c]])
+
+
+def walk(t: float, amp: float = 0.6) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Pose ``(p_W, R_W_I)`` and acceleration ``a_W`` of a head swaying sideways while walking
+    slowly towards the wall, with a small head bob, yaw and pitch."""
+    w1, w2 = 0.8, 2 * np.pi * 1.8
+    p = np.array([amp * np.sin(w1 * t), 0.02 * np.sin(w2 * t), -2.5 + 0.25 * t])
+    a = np.array([-amp * w1**2 * np.sin(w1 * t), -0.02 * w2**2 * np.sin(w2 * t), 0.0])
+    R = _rot_y(0.12 * np.sin(0.6 * t)) @ _rot_x(0.04 * np.sin(1.1 * t))
+    return p, R, a
+
+
+def run_wall(duration: float = 2.0, seed: int = 0, imu_rate: float = 180.0,
+             cam_rate: float = 30.0, settings=None, mask_fn=None, cover=None):
+    """Run :class:`WearableSlam` over :func:`walk` rendered on the wall. Returns the estimator,
+    the frame reports and ``(t, p_true, p_est)`` at the frames. ``cover``: (t0, t1) during
+    which the lens is covered (a black frame)."""
+    from humimic.estimation.ekf.estimator import EstimatorSettings, WearableSlam
+    from humimic.estimation.ekf.motion_model import initial_state
+    from humimic.motion import quat
+
+    rng = np.random.default_rng(seed)
+    g_W = np.array([0.0, -9.81, 0.0])
+    p0, R0, _ = walk(0.0)
+    x0 = initial_state(p=p0, q=quat.from_matrix(R0))
+    P0 = np.diag(np.r_[np.full(3, 1e-6), np.full(4, 1e-8), np.full(3, 0.1**2),
+                       np.full(3, 0.1**2), np.full(3, 1.0), np.full(3, 1e-4)])
+    from _synth_slam import SCREEN
+    est = WearableSlam(0.0, x0, P0, CAMERA, R_CV_I, g_W, SCREEN,
+                       settings or EstimatorSettings())
+    n_imu = int(duration * imu_rate)
+    t_imu = np.arange(1, n_imu + 1) / imu_rate
+    t_cam = np.arange(0, int(duration * cam_rate) + 1) / cam_rate
+    events = sorted([(t, 0) for t in t_imu] + [(t, 1) for t in t_cam])
+    reports, truth, estimate = [], [], []
+    for t, kind in events:
+        p, R, a = walk(t)
+        if kind == 0:
+            f_I = R.T @ (a - g_W) + 0.05 * rng.standard_normal(3)
+            dR = _rot_y(np.radians(0.25) * rng.standard_normal()) @ _rot_x(
+                np.radians(0.25) * rng.standard_normal())
+            est.on_imu(t, f_I, R @ dR)
+        else:
+            img = render(p, R, rng)
+            if cover is not None and cover[0] <= t < cover[1]:
+                img = np.zeros_like(img)
+            mask = mask_fn(t, img) if mask_fn is not None else None
+            reports.append(est.on_frame(t, img, mask))
+            truth.append(p)
+            estimate.append(est.x[0:3].copy())
+    return est, reports, (t_cam, np.array(truth), np.array(estimate))

@@ -72,6 +72,14 @@ def test_quaternion_jacobians(rng):
                                    numjac(quat.from_rotvec, theta, 1e-5), atol=1e-7)
 
 
+def test_scalar_rotation_helpers_match_batched(rng):
+    for _ in range(50):
+        q = rand_quat(rng)
+        R = quat.to_matrix(q)
+        np.testing.assert_allclose(mm.rotmat(q), R, atol=1e-14)
+        np.testing.assert_allclose(mm.quat_from_matrix(R), quat.from_matrix(R), atol=1e-12)
+
+
 def xyzw_to_wxyz(q):
     return np.r_[q[3], q[:3]]
 

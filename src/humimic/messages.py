@@ -9,6 +9,7 @@ topic          value                                       producer -> consumer
 ``headcam``    ``CameraImage`` (pose withheld: NaN)        world -> wearable stages
 ``imu``        :class:`InertialReading` (+ orientation)    world -> wearable stages
 ``wiimote``    :class:`InertialReading`                    world -> wearable stages
+``head_pose``  :class:`HeadPose` (paper's W, frame I)      slam -> arm EKF, commands
 ``measurements`` :class:`Measurements` (robot base frame)  perception -> filter
 ``estimates``  :class:`Estimates` (robot base frame)       filter / oracle -> control
 =============  ==========================================  ===========================
@@ -87,3 +88,33 @@ class InertialReading:
     """(3, 3) measured orientation: the sensor frame in the paper's W (the head IMU, an
     InertiaCube3; its frame is I). ``None`` for a sensor without orientation output (the Wii
     remote). ``scipy.spatial.transform.Rotation.from_matrix`` gives a quaternion (xyzw)."""
+
+
+@dataclass(frozen=True)
+class HeadPose:
+    """The wearer's head (interface frame I) in the paper's frame W, as the SLAM estimates it
+    (topic ``head_pose``, Sugiyama & Miura sec. III). Published after every IMU sample and every
+    head-camera frame, stamped with that sample's or frame's time."""
+
+    p_W: np.ndarray
+    """(3,) position of I's origin (the head camera's optical centre) in W (m)."""
+    q_W_I: np.ndarray
+    """(4,) orientation ``[w, x, y, z]``: ``v_W = R(q) v_I``."""
+    v_W: np.ndarray
+    """(3,) velocity in W (m/s)."""
+    w_I: np.ndarray
+    """(3,) angular velocity in I (rad/s)."""
+    a_W: np.ndarray
+    """(3,) acceleration in W, gravity excluded (m/s^2)."""
+    P: np.ndarray
+    """(19, 19) covariance of the interface state (p, q, v, w, a, b)."""
+    map_size: int = 0
+    """Features in the map."""
+    measured: int = -1
+    """Features measured in this frame (-1 for an IMU sample)."""
+
+    @property
+    def R_W_I(self) -> np.ndarray:
+        from humimic.motion import quat
+
+        return quat.to_matrix(self.q_W_I)

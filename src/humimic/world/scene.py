@@ -28,6 +28,10 @@ from humimic.world.names import (
     ROBOT_PREFIX,
 )
 
+#: Room name -> MJCF file in ``models/``.
+ROOMS = {"lab": "room.xml", "sugiyama": "room_sugiyama.xml"}
+#: Room site at which the person's (avatar) frame is placed, when the room has one.
+PERSON_START_SITE = "person_start"
 WIDE_HFOV_DEG = 100.0
 FOVEAL_HFOV_DEG = 24.0
 #: MuJoCo geom group of the Wii remote (hidden unless the scenario shows it).
@@ -58,6 +62,10 @@ class SceneOptions:
     shadows: bool = False
     msaa: bool = False
     show_wiimote: bool = False
+    room: str = "lab"
+    """Room model (:data:`ROOMS`): ``lab`` (Ude & Atkeson's; the person stands ``distance``
+    in front of the robot) or ``sugiyama`` (the wearable room; the person starts at its
+    ``person_start`` site and ``distance``/``lateral`` do not apply)."""
     max_render_size: tuple[int, int] = field(default=(1280, 960))
 
 
@@ -73,7 +81,7 @@ def _robot_eye_height_and_x() -> tuple[float, float]:
 
 def compose(opts: SceneOptions) -> mjcf.RootElement:
     """The scene's MJCF tree for ``opts`` (not yet compiled)."""
-    room = mjcf.from_path(str(MODELS_DIR / "room.xml"))
+    room = mjcf.from_path(str(MODELS_DIR / ROOMS[opts.room]))
     robot = mjcf.from_path(str(MODELS_DIR / "db_humanoid.xml"))
     human = mjcf.from_path(str(MODELS_DIR / "avatar.xml"))
 
@@ -104,6 +112,12 @@ def compose(opts: SceneOptions) -> mjcf.RootElement:
     room.visual.get_children("global").offheight = max(opts.max_render_size[1], h, hh)
 
     room.attach(robot)
+    start = room.find("site", PERSON_START_SITE)
+    if start is not None:  # the room says where the person starts (a site on the world body)
+        frame = room.attach(human)  # after the robot: its keyframe's qpos stays first
+        frame.pos = start.pos
+        frame.quat = start.quat if start.quat is not None else [1.0, 0.0, 0.0, 0.0]
+        return room
     eye_x, _ = _EYE_X_Z
     head_x_in_avatar = 0.0  # the avatar's head centre is above its origin in the zero pose
     frame = room.attach(human)

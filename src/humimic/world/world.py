@@ -33,7 +33,7 @@ def scene_options(scenario) -> SceneOptions:
         headcam_resolution=scenario.sensors.head_camera.resolution,
         headcam_hfov_deg=scenario.sensors.head_camera.hfov_deg,
         ambient=light.ambient, diffuse=light.diffuse, shadows=light.shadows, msaa=light.msaa,
-        show_wiimote=h.wiimote,
+        show_wiimote=h.wiimote, room=scenario.room,
     )
 
 

@@ -68,10 +68,10 @@ def subpixel_peak(r: np.ndarray, i: int, j: int) -> tuple[float, float]:
     """Parabola-fitted offsets ``(dx, dy)`` of the maximum at ``r[i, j]`` (0 on the border)."""
     def vertex(a, b, c):
         den = a - 2.0 * b + c
-        return 0.0 if den >= 0.0 else float(np.clip(0.5 * (a - c) / den, -0.5, 0.5))
+        return 0.0 if den >= 0.0 else min(max(0.5 * (a - c) / den, -0.5), 0.5)
     h, w = r.shape
-    dx = vertex(r[i, j - 1], r[i, j], r[i, j + 1]) if 0 < j < w - 1 else 0.0
-    dy = vertex(r[i - 1, j], r[i, j], r[i + 1, j]) if 0 < i < h - 1 else 0.0
+    dx = vertex(*r[i, j - 1:j + 2].tolist()) if 0 < j < w - 1 else 0.0
+    dy = vertex(*r[i - 1:i + 2, j].tolist()) if 0 < i < h - 1 else 0.0
     return dx, dy
 
 
@@ -137,8 +137,9 @@ class Frontend:
             return Matches(np.zeros(0, int), np.zeros((0, 2)), np.zeros(0), status)
         r = prm.patch // 2
         h, w = grey.shape
-        half = search_box(uv, S, prm.n_sigma, prm.max_search_px)
-        S_inv = np.linalg.inv(S)
+        half = search_box(uv, S, prm.n_sigma, prm.max_search_px).tolist()
+        S_inv = np.linalg.inv(S).reshape(k, 4).tolist()
+        centre = uv.tolist()
         lim = prm.n_sigma**2
         for i in range(k):
             if select is not None and not select[i]:
@@ -147,27 +148,28 @@ class Frontend:
             patch = self.patches.get(int(fids[i]))
             if patch is None:
                 continue
-            cu, cv_ = int(round(uv[i, 0])), int(round(uv[i, 1]))
-            x0, x1 = max(cu - half[i, 0], r), min(cu + half[i, 0], w - 1 - r)
-            y0, y1 = max(cv_ - half[i, 1], r), min(cv_ + half[i, 1], h - 1 - r)
+            pu, pv = centre[i]
+            cu, cv_ = int(round(pu)), int(round(pv))
+            x0, x1 = max(cu - half[i][0], r), min(cu + half[i][0], w - 1 - r)
+            y0, y1 = max(cv_ - half[i][1], r), min(cv_ + half[i][1], h - 1 - r)
             if x1 < x0 or y1 < y0:
                 continue
             res = cv2.matchTemplate(grey[y0 - r:y1 + r + 1, x0 - r:x1 + r + 1], patch,
                                     cv2.TM_CCOEFF_NORMED)
-            # candidate centres outside the ellipse (or masked) cannot match
-            du = np.arange(x0, x1 + 1) - uv[i, 0]
-            dv = np.arange(y0, y1 + 1) - uv[i, 1]
-            Si = S_inv[i]
-            d2 = (Si[0, 0] * du[None, :] ** 2 + 2 * Si[0, 1] * du[None, :] * dv[:, None]
-                  + Si[1, 1] * dv[:, None] ** 2)
-            res[~(d2 <= lim) | ~np.isfinite(res)] = -1.0
-            if mask is not None:
-                res[mask[y0:y1 + 1, x0:x1 + 1]] = -1.0
-            j = int(np.argmax(res))
-            best = float(res.flat[j])
-            if best < prm.min_score:
+            a, b, _, d = S_inv[i]
+            _, best, _, (ix, iy) = cv2.minMaxLoc(res)
+            du, dv = x0 + ix - pu, y0 + iy - pv
+            outside = a * du * du + 2 * b * du * dv + d * dv * dv > lim
+            if outside or (mask is not None and mask[y0 + iy, x0 + ix]):
+                # the box's best lies outside the ellipse or on the arm: search the allowed part
+                gu = np.arange(x0, x1 + 1) - pu
+                gv = (np.arange(y0, y1 + 1) - pv)[:, None]
+                res[a * gu * gu + 2 * b * gu * gv + d * gv * gv > lim] = -1.0
+                if mask is not None:
+                    res[mask[y0:y1 + 1, x0:x1 + 1]] = -1.0
+                _, best, _, (ix, iy) = cv2.minMaxLoc(res)
+            if not best >= prm.min_score:  # also rejects NaN (a flat window)
                 continue
-            iy, ix = divmod(j, res.shape[1])
             dx, dy = subpixel_peak(res, iy, ix)
             idx.append(i)
             out_uv.append((x0 + ix + dx, y0 + iy + dy))

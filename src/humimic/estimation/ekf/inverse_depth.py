@@ -23,7 +23,7 @@ from __future__ import annotations
 import numpy as np
 
 from humimic.estimation.ekf import quaternion as qj
-from humimic.motion import quat
+from humimic.estimation.ekf.motion_model import rotmat
 from humimic.sensors.camera_model import Intrinsics
 
 ID_DIM, XYZ_DIM = 6, 3
@@ -91,7 +91,7 @@ def camera_rays(y: np.ndarray, p: np.ndarray, q: np.ndarray) -> tuple[np.ndarray
         d_W = y[:, 5:6] * (y[:, 0:3] - p) + direction(y[:, 3], y[:, 4])
     else:
         d_W = y - p
-    return d_W @ quat.to_matrix(q), d_W  # rows: R(q)^T d_W
+    return d_W @ rotmat(q), d_W  # rows: R(q)^T d_W
 
 
 def observe(y: np.ndarray, p: np.ndarray, q: np.ndarray, intr: Intrinsics,
@@ -106,7 +106,7 @@ def observe(y: np.ndarray, p: np.ndarray, q: np.ndarray, intr: Intrinsics,
     """
     d_I, d_W = camera_rays(y, p, q)
     d_C = d_I @ R_cv_I.T
-    R = quat.to_matrix(q)
+    R = rotmat(q)
     h = intr.project(d_C)
     Jp = intr.project_jacobian(d_C) @ R_cv_I  # (k, 2, 3): d h / d d_I
     JR = Jp @ R.T  # d h / d d_W
@@ -142,7 +142,7 @@ def initialise(uv: np.ndarray, p: np.ndarray, q: np.ndarray, intr: Intrinsics,
     h_C = np.ones((k, 3))
     h_C[:, 0] = (uv[:, 0] - intr.cx) / intr.fx
     h_C[:, 1] = (uv[:, 1] - intr.cy) / intr.fy
-    R = quat.to_matrix(q) @ R_cv_I.T  # W <- camera axes
+    R = rotmat(q) @ R_cv_I.T  # W <- camera axes
     h_W = h_C @ R.T
     th, ph, dang = angles(h_W)
     y = np.empty((k, ID_DIM))

@@ -50,7 +50,11 @@ class MotionNoise:
 
     def covariance(self) -> np.ndarray:
         """``diag(σ_j^2 I, σ_α^2 I, σ_b^2 I)`` (9x9), noise order ``(j, α, b̄)``."""
-        return np.diag(np.repeat([self.jerk**2, self.alpha**2, self.bias**2], 3))
+        return np.diag(self.variances())
+
+    def variances(self) -> np.ndarray:
+        """The diagonal of :meth:`covariance` (9,)."""
+        return np.repeat([self.jerk**2, self.alpha**2, self.bias**2], 3)
 
 
 def initial_state(p=(0, 0, 0), q=(1, 0, 0, 0), v=(0, 0, 0), w=(0, 0, 0), a=(0, 0, 0),
@@ -59,33 +63,31 @@ def initial_state(p=(0, 0, 0), q=(1, 0, 0, 0), v=(0, 0, 0), w=(0, 0, 0), a=(0, 0
     return np.concatenate([p, q, v, w, a, b]).astype(float)
 
 
-def jerk_mean(x: np.ndarray) -> np.ndarray:
-    """Mean of ``a'`` (eq. 4 with zero noise): ``(R(q) ω) × a``."""
-    return np.cross(quat.rotate(x[Q], x[W]), x[A])
-
-
 def _skew(v) -> np.ndarray:
     """``[v]x`` of one 3-vector (a list or array; faster than the batched :func:`qj.skew`)."""
     x, y, z = v
     return np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
 
 
-def _rotmat(q) -> np.ndarray:
-    """``R(q)`` of one unit quaternion (the formula of :func:`humimic.motion.quat.to_matrix`)."""
+def rotmat(q) -> np.ndarray:
+    """``R(q)`` of one unit quaternion (the formula of :func:`humimic.motion.quat.to_matrix`,
+    without its batching overhead)."""
     w, x, y, z = q
     return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
                      [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
                      [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
 
 
-def _d_rotate_dq(q, v: np.ndarray) -> np.ndarray:
-    """:func:`qj.d_rotate_dq` for one vector (see there for the formula)."""
-    w, u = q[0], np.asarray(q[1:])
-    J = np.empty((3, 4))
-    J[:, 0] = 2.0 * (_skew(u) @ v)
-    J[:, 1:] = 2.0 * (-w * _skew(v) + float(u @ v) * np.eye(3) + np.outer(u, v)
-                      - 2.0 * np.outer(v, u))
-    return J
+def _d_rotate_dq(q, v) -> np.ndarray:
+    """:func:`qj.d_rotate_dq` for one vector, written out: ``d(R(q) v)/dq`` (3x4) with the
+    ``w`` column ``2 u x v`` and the ``u`` block ``2 (-w [v]x + (u.v) I + u v^T - 2 v u^T)``."""
+    w, a, b, c = q
+    x, y, z = v
+    s = a * x + b * y + c * z
+    return 2.0 * np.array([
+        [b * z - c * y, s - a * x, w * z + a * y - 2 * x * b, -w * y + a * z - 2 * x * c],
+        [c * x - a * z, -w * z + b * x - 2 * y * a, s - b * y, w * x + b * z - 2 * y * c],
+        [a * y - b * x, w * y + c * x - 2 * z * a, -w * x + c * y - 2 * z * b, s - c * z]])
 
 
 @functools.lru_cache(maxsize=16)
@@ -131,7 +133,7 @@ def predict(x: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarra
     q = x[Q].tolist()
     v, w, a = x[V], x[W], x[A]
     dt2, dt3 = dt * dt / 2.0, dt**3 / 6.0
-    Rq = _rotmat(q)
+    Rq = rotmat(q)
     w_W = Rq @ w
     Sa = _skew(a.tolist())
     da = -(Sa @ w_W)  # (R(q) ω) × a, eq. 4 mean
@@ -152,7 +154,7 @@ def predict(x: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarra
     F, G = F0.copy(), G0.copy()
     # d(da)/d(q, ω, a) with da = -[a]x R(q) ω, entering p, v, a with dt^3/6, dt^2/2, dt
     dda = np.empty((3, 13))  # columns as the state's 3..15: q (4), v (3, zero), ω (3), a (3)
-    dda[:, 0:4] = -Sa @ _d_rotate_dq(q, w)
+    dda[:, 0:4] = -Sa @ _d_rotate_dq(q, w.tolist())
     dda[:, 4:7] = 0.0
     dda[:, 7:10] = -Sa @ Rq
     dda[:, 10:13] = _skew(w_W.tolist())
@@ -173,7 +175,14 @@ def predict(x: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarra
 
 def process_noise(G: np.ndarray, noise: MotionNoise) -> np.ndarray:
     """``G Q_n G^T`` (19x19) for the noise Jacobian ``G`` of :func:`predict`."""
-    return G @ noise.covariance() @ G.T
+    return (G * _variances(noise)) @ G.T
+
+
+@functools.lru_cache(maxsize=8)
+def _variances(noise: MotionNoise) -> np.ndarray:
+    v = noise.variances()
+    v.flags.writeable = False
+    return v
 
 
 # ---- inertial measurement models (Sugiyama eqs. 6-7) --------------------------------------
@@ -196,7 +205,26 @@ def h_accel(x: np.ndarray) -> np.ndarray:
     return x[A] + x[B]
 
 
-def world_acceleration(f_I: np.ndarray, q_WI: np.ndarray, g_W: np.ndarray) -> np.ndarray:
-    """The measured acceleration in W that eq. 7 compares with: ``R(q_WI) f_I + g_W`` for the
-    accelerometer's specific force ``f_I`` (gravity included, as read) and gravity ``g_W``."""
-    return quat.rotate(q_WI, f_I) + g_W
+def world_acceleration(f_I: np.ndarray, R_WI: np.ndarray, g_W: np.ndarray) -> np.ndarray:
+    """The measured acceleration in W that eq. 7 compares with: ``R_WI f_I + g_W`` for the
+    accelerometer's specific force ``f_I`` (gravity included, as read), the measured
+    orientation ``R_WI`` and gravity ``g_W``."""
+    return R_WI @ f_I + g_W
+
+
+def quat_from_matrix(R: np.ndarray) -> np.ndarray:
+    """Unit quaternion ``[w, x, y, z]`` (``w >= 0``) of one rotation matrix (Shepperd's method
+    as :func:`humimic.motion.quat.from_matrix`, scalar: it runs at the IMU rate)."""
+    (m00, m01, m02), (m10, m11, m12), (m20, m21, m22) = R.tolist()
+    tr = m00 + m11 + m22
+    if tr >= max(m00, m11, m22):
+        q = (1.0 + tr, m21 - m12, m02 - m20, m10 - m01)
+    elif m00 >= m11 and m00 >= m22:
+        q = (m21 - m12, 1.0 + m00 - m11 - m22, m01 + m10, m02 + m20)
+    elif m11 >= m22:
+        q = (m02 - m20, m01 + m10, 1.0 - m00 + m11 - m22, m12 + m21)
+    else:
+        q = (m10 - m01, m02 + m20, m12 + m21, 1.0 - m00 - m11 + m22)
+    out = np.array(q)
+    out /= math.copysign(math.sqrt(float(out @ out)), out[0])
+    return out

@@ -79,9 +79,11 @@ def d_rotvec_to_quat(theta: np.ndarray) -> np.ndarray:
 
 def d_normalize(q: np.ndarray) -> np.ndarray:
     """``d(q/|q|)/dq`` (4x4): applied to the covariance when the state's ``q`` is renormalised."""
-    n = float(np.linalg.norm(q))
-    u = q / n
-    return (np.eye(4) - np.outer(u, u)) / n
+    n2 = float(q @ q)
+    J = np.outer(q, q)
+    J *= -1.0 / n2
+    J[np.diag_indices(4)] += 1.0
+    return J / np.sqrt(n2)
 
 
 def align_sign(q_meas: np.ndarray, q_ref: np.ndarray) -> np.ndarray:

@@ -15,6 +15,7 @@ where each map feature should appear and how uncertain that is (the search ellip
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -92,6 +93,11 @@ class SlamFilter:
         self.P = np.array(P0, float)
         self.intr = intr.pinhole()
         self.R_cv_I = np.asarray(R_cv_I, float)
+        self._H_imu = np.zeros((7, 10))  # eqs. 6-7 on the columns IMU_COLS
+        self._H_imu[0:4, 0:4] = mm.H_ORIENTATION
+        self._H_imu[4:7, 4:10] = mm.H_ACCEL
+        self._R_imu = np.diag(np.repeat([params.sigma_orientation**2, params.sigma_accel**2],
+                                        [4, 3]))
         self.params = params
         self.features: list[MapFeature] = []
         self._next_id = 0
@@ -141,28 +147,20 @@ class SlamFilter:
     def update_inertial(self, q_meas: np.ndarray | None = None,
                         a_meas: np.ndarray | None = None) -> None:
         """Fuse an orientation ``q_WI`` (eq. 6) and/or an acceleration in W (eq. 7)."""
-        parts = []
-        if q_meas is not None:
-            q_meas = align_sign(np.asarray(q_meas, float), self.x[3:7])
-            parts.append((mm.ORIENTATION_COLS, mm.H_ORIENTATION, q_meas - mm.h_orientation(
-                self.x), self.params.sigma_orientation))
-        if a_meas is not None:
-            parts.append((mm.ACCEL_COLS, mm.H_ACCEL, np.asarray(a_meas, float)
-                          - mm.h_accel(self.x), self.params.sigma_accel))
-        if not parts:
+        if q_meas is None and a_meas is None:
             return
-        if len(parts) == 2:  # one joint update: H over the union of the columns
-            cols = IMU_COLS
-            H = np.zeros((7, 10))
-            H[0:4, 0:4] = mm.H_ORIENTATION
-            H[4:7, 4:10] = mm.H_ACCEL
-            nu = np.concatenate([parts[0][2], parts[1][2]])
-            r = np.repeat([parts[0][3] ** 2, parts[1][3] ** 2], [4, 3])
+        if q_meas is not None and a_meas is not None:  # one joint update
+            cols, H, R = IMU_COLS, self._H_imu, self._R_imu
+            nu = np.concatenate([align_sign(q_meas, self.x[3:7]) - mm.h_orientation(self.x),
+                                 a_meas - mm.h_accel(self.x)])
+        elif q_meas is not None:
+            cols, H, R = mm.ORIENTATION_COLS, mm.H_ORIENTATION, self._R_imu[:4, :4]
+            nu = align_sign(q_meas, self.x[3:7]) - mm.h_orientation(self.x)
         else:
-            cols, H, nu, sigma = parts[0]
-            r = np.full(len(nu), sigma**2)
+            cols, H, R = mm.ACCEL_COLS, mm.H_ACCEL, self._R_imu[4:, 4:]
+            nu = a_meas - mm.h_accel(self.x)
         PHt = up.dense_PHt(self.P, cols, H)
-        S = up.dense_S(PHt, cols, H, np.diag(r))
+        S = up.dense_S(PHt, cols, H, R)
         try:
             up.gain_update(self.x, self.P, PHt, S, nu)
         except np.linalg.LinAlgError:
@@ -377,6 +375,6 @@ class SlamFilter:
         """Renormalise ``q`` after an update; ``P`` through the normalisation's Jacobian."""
         q = self.x[3:7]
         J = d_normalize(q)
-        self.x[3:7] = q / np.linalg.norm(q)
+        self.x[3:7] = q / math.sqrt(float(q @ q))
         self.P[3:7, :] = J @ self.P[3:7, :]
         self.P[:, 3:7] = self.P[:, 3:7] @ J.T

@@ -10,7 +10,6 @@ never a product with a dense ``n x n`` Jacobian.
 from __future__ import annotations
 
 import numpy as np
-from scipy.linalg import cho_factor, cho_solve
 
 
 def predict_block(x: np.ndarray, P: np.ndarray, x_block: np.ndarray, F: np.ndarray,
@@ -32,9 +31,9 @@ def gain_update(x: np.ndarray, P: np.ndarray, PHt: np.ndarray, S: np.ndarray,
     :func:`dense_PHt` or :func:`features_PHt`. Raises ``LinAlgError`` if ``S`` is not
     positive definite (the caller skips the update).
     """
-    c = cho_factor(S, check_finite=False)
-    Kt = cho_solve(c, PHt.T, check_finite=False)  # (m, n) = S^-1 (P H^T)^T = K^T
-    x += Kt.T @ innovation
+    np.linalg.cholesky(S)  # raises LinAlgError unless S is positive definite
+    Kt = np.linalg.solve(S, PHt.T)  # (m, n) = S^-1 (P H^T)^T = K^T
+    x += innovation @ Kt
     P -= Kt.T @ PHt.T
 
 

@@ -1,0 +1,111 @@
+"""Where the wearer's own arm is in the head-camera image, from what the wearer knows.
+
+Features on the moving arm and Wii remote corrupt the SLAM map: they move with the arm, not
+the room (Sugiyama & Miura sec. V-B notice it and leave it open: "it might be necessary to use
+only the features lying away from the arm region"). The wearer's camera knows three things
+about its own arm: the Wii remote's red marker (hue 0-20 deg, the paper's marker extraction,
+eq. 13), the marker's size, and the colours of its own skin and sleeve. The mask is
+
+1. the marker: the largest region of marker hue;
+2. the remote and the hand around it: the marker region grown by ``hand_scale`` marker radii
+   (the remote is ~8 marker radii long, the fist ~5);
+3. the forearm and sleeve: skin- and sleeve-coloured connected regions touching (2), or, when
+   the marker is out of view, touching the bottom edge of the image (the arm enters from
+   below);
+
+grown by a margin so that no feature patch straddles the arm's outline. Colours match by
+chromaticity (``rgb / (r + g + b)``), which shading leaves nearly unchanged.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+
+@dataclass(frozen=True)
+class ArmMaskParams:
+    body_rgb: tuple[tuple[float, float, float], ...] = ((0.87, 0.67, 0.55), (0.2, 0.3, 0.8))
+    """The wearer's skin and sleeve colours (0..1)."""
+    marker_hue_deg: tuple[float, float] = (-10.0, 20.0)
+    """Marker hue band (deg; the lower bound may be negative to wrap through 0)."""
+    marker_min_saturation: float = 0.5
+    marker_min_value: float = 0.25
+    marker_min_px: int = 6
+    """Smallest marker region taken for the marker (px)."""
+    hand_scale: float = 5.0
+    """The remote and fist extend this many marker radii around the marker."""
+    chroma_tol: float = 0.045
+    """Largest chromaticity distance of a body-coloured pixel."""
+    min_value: float = 0.12
+    """Darker pixels are never body-coloured (shadows have no reliable chromaticity)."""
+    min_region_px: int = 40
+    """Smallest body-coloured region taken for the arm."""
+    margin_px: int = 7
+    """The mask is grown by this much (about half a feature patch)."""
+
+
+def chromaticity(rgb: np.ndarray) -> np.ndarray:
+    """``rgb / (r + g + b)`` ``(..., 3)`` of an image (uint8 or float)."""
+    x = rgb.astype(np.float32)
+    return x / np.maximum(x.sum(axis=-1, keepdims=True), 1.0)
+
+
+def marker_region(hsv: np.ndarray, prm: ArmMaskParams) -> np.ndarray | None:
+    """The largest marker-hue region (uint8 0/255) or None (hue extraction, labelling and the
+    largest region: Sugiyama sec. IV-B)."""
+    lo, hi = prm.marker_hue_deg
+    s, v = int(255 * prm.marker_min_saturation), int(255 * prm.marker_min_value)
+    m = cv2.inRange(hsv, (max(0, int(lo // 2)), s, v), (int(hi // 2), 255, 255))
+    if lo < 0:
+        m |= cv2.inRange(hsv, (int(180 + lo / 2), s, v), (180, 255, 255))
+    n, labels, stats, _ = cv2.connectedComponentsWithStats(m, connectivity=8)
+    if n <= 1:
+        return None
+    best = 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
+    if stats[best, cv2.CC_STAT_AREA] < prm.marker_min_px:
+        return None
+    return np.where(labels == best, 255, 0).astype(np.uint8)
+
+
+def body_coloured(rgb: np.ndarray, hsv: np.ndarray, prm: ArmMaskParams) -> np.ndarray:
+    """uint8 mask of the pixels with one of the wearer's body colours."""
+    chroma = chromaticity(rgb)
+    out = np.zeros(rgb.shape[:2], bool)
+    for ref in prm.body_rgb:
+        c = np.asarray(ref, np.float32)
+        c = c / max(float(c.sum()), 1e-6)
+        out |= np.sum((chroma - c) ** 2, axis=-1) <= prm.chroma_tol**2
+    out &= hsv[..., 2] >= 255 * prm.min_value
+    return out.astype(np.uint8) * 255
+
+
+def _disk(radius: float) -> np.ndarray:
+    r = max(1, int(round(radius)))
+    return cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * r + 1, 2 * r + 1))
+
+
+def arm_mask(rgb: np.ndarray, prm: ArmMaskParams = ArmMaskParams()) -> np.ndarray:
+    """Boolean mask of the wearer's arm and Wii remote in an RGB head-camera frame."""
+    hsv = cv2.cvtColor(rgb, cv2.COLOR_RGB2HSV)
+    h, w = rgb.shape[:2]
+    seed = np.zeros((h, w), np.uint8)
+    marker = marker_region(hsv, prm)
+    if marker is not None:
+        radius = np.sqrt(np.count_nonzero(marker) / np.pi)
+        seed = cv2.dilate(marker, _disk(prm.hand_scale * radius))
+    else:
+        seed[-1, :] = 255  # the arm enters from below
+    body = body_coloured(rgb, hsv, prm)
+    n, labels, stats, _ = cv2.connectedComponentsWithStats(body, connectivity=8)
+    touching = np.unique(labels[(seed > 0) & (body > 0)])
+    keep = [i for i in touching
+            if i > 0 and stats[i, cv2.CC_STAT_AREA] >= prm.min_region_px]
+    mask = seed.copy() if marker is not None else np.zeros((h, w), np.uint8)
+    if keep:
+        mask[np.isin(labels, keep)] = 255
+    if prm.margin_px > 0 and mask.any():
+        mask = cv2.dilate(mask, _disk(prm.margin_px))
+    return mask > 0

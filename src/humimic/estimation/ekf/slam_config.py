@@ -1,0 +1,81 @@
+"""The scenario's ``slam`` section: Sugiyama & Miura's movement EKF SLAM (sec. III).
+
+Example::
+
+    slam:
+      mode: fusion            # fusion | camera | inertial (Fig. 8's three ways)
+      target_features: 20     # add new features while fewer are in view
+      mask_arm: true          # never detect or match on the wearer's own arm
+
+Units: m, s; pixel noise in pixels; angles in degrees where a key says ``_deg``. The noise
+defaults are the paper's (sec. III-A/B) except the orientation sensor's, see
+``orientation_std_deg``.
+"""
+
+from __future__ import annotations
+
+from typing import Literal
+
+from pydantic import Field
+
+from humimic.estimation.ekf import motion_model as mm
+from humimic.scenario.base import Section
+
+
+class SlamNoise(Section):
+    """Noise of the motion and measurement models."""
+
+    jerk: float = Field(mm.SIGMA_JERK, gt=0.0, le=1e4)
+    """sigma of the translational jerk (m/s^3), Sugiyama sec. III-A: 15."""
+    angular_acc: float = Field(mm.SIGMA_ALPHA, gt=0.0, le=1e4)
+    """sigma of the angular acceleration (rad/s^2): 15."""
+    accel_bias_drift: float = Field(mm.SIGMA_BIAS, ge=0.0, le=10.0)
+    """sigma of the accelerometer-bias variation (m/s^3): 1e-3."""
+    accel: float = Field(mm.SIGMA_ACCEL, gt=0.0, le=100.0)
+    """sigma of the acceleration measurement (m/s^2), eq. 7: 0.5."""
+    orientation_std_deg: tuple[float, float] | None = (0.25, 2.0)
+    """sigma of the measured orientation's tilt (pitch, roll) and yaw (deg), about W's axes.
+    The paper's 1e-3 on each quaternion component (0.11 deg) trusts the InertiaCube3 more than
+    its own specification (Table I: 0.25 deg tilt, 1 deg yaw, slowly varying); with it a 1 deg
+    yaw error moves the estimated position by ~8 cm at the screen's 4.5 m. ``null``: the
+    paper's 1e-3 per component."""
+    pixel: float = Field(1.0, gt=0.0, le=20.0)
+    """sigma of a feature's image position (px), eq. 8: 1."""
+
+
+class SlamConfig(Section):
+    """The wearer's head pose and a map of image features from the head camera and IMU."""
+
+    mode: Literal["fusion", "camera", "inertial"] = "fusion"
+    """``fusion``: camera and IMU (the paper's method); ``camera``: frames only (the filter
+    predicts from frame to frame); ``inertial``: the IMU only (no map). Fig. 8 (a)-(c)."""
+    use_orientation: bool = True
+    """Fuse the IMU's orientation output (eq. 6); without it only its acceleration (eq. 7)."""
+    target_features: int = Field(20, ge=0, le=200)
+    """Initialise new features while fewer than this many are predicted in view."""
+    max_map: int = Field(60, ge=4, le=400)
+    """Most features held in the map (features long out of view are forgotten first)."""
+    max_measured: int | None = Field(None, ge=1, le=400)
+    """Search at most this many features per frame (the most uncertain); null: all in view."""
+    mask_arm: bool = True
+    """Keep features off the wearer's own arm and Wii remote (Sugiyama sec. V-B leaves this
+    open): pixels of the red marker and the arm's colours below it are neither detected in
+    nor matched (:mod:`humimic.estimation.ekf.arm_mask`)."""
+    noise: SlamNoise = Field(default_factory=SlamNoise)
+    init_depth: float = Field(2.0, gt=0.1, le=100.0)
+    """Depth a new feature is initialised at (m): ``rho0 = 1/init_depth`` (Civera)."""
+    init_inverse_depth_std: float = Field(0.5, gt=0.0, le=10.0)
+    """sigma of a new feature's inverse depth (1/m)."""
+    init_position_std: float = Field(0.02, ge=0.0, le=1.0)
+    """How well the wearer knows where they start (m): the filter starts from the true head
+    position plus a seeded error of this sigma (the paper: at (0, -2.5), facing the screen)."""
+    patch_px: int = Field(11, ge=5, le=41)
+    """Side of a feature's square patch (px, odd)."""
+    min_zncc: float = Field(0.8, gt=0.0, le=1.0)
+    """Correlation a match must reach."""
+    search_sigma: float = Field(3.0, gt=0.0, le=10.0)
+    """Active search inside this many sigma of the predicted innovation."""
+    max_search_px: int = Field(48, ge=4, le=400)
+    """Half-size cap of a search window (px)."""
+    latency: float = Field(0.0, ge=0.0, le=0.5)
+    """Declared processing latency (s) added to each ``head_pose``'s ready time."""
