@@ -18,6 +18,12 @@ def build_stages(scenario, world, rngs, rlog) -> list[Stage]:
         from humimic.perception.blobs.build import perception_stages
 
         stages.extend(perception_stages(scenario, world, rngs, rlog))
+    if getattr(scenario, "arm", None) is not None:
+        from humimic.estimation.ekf.arm_config import check_arm
+        from humimic.estimation.ekf.arm_stage import ArmStage
+
+        check_arm(scenario)
+        stages.append(ArmStage(world, scenario.arm, rlog))
     if getattr(scenario, "mimic", None) is not None:
         from humimic.control.build import mimic_stages
 

@@ -13,6 +13,7 @@ from pydantic import Field, model_validator
 
 from humimic.control.config import MimicConfig
 from humimic.estimation.config import FilterConfig
+from humimic.estimation.ekf.arm_config import ArmConfig
 from humimic.perception.blobs.config import PerceptionConfig
 from humimic.scenario.base import Section
 from humimic.sensors.config import Cameras, Sensors, Timing
@@ -46,6 +47,9 @@ class Scenario(Section):
     :mod:`humimic.estimation.config`); needs ``perception``."""
     mimic: MimicConfig | None = None
     """Imitation by the robot (see :mod:`humimic.control.config`); absent: the robot holds."""
+    arm: ArmConfig | None = None
+    """The Wii remote's pose in the head frame, Sugiyama & Miura's arm EKF (see
+    :mod:`humimic.estimation.ekf.arm_config`); needs the head camera and the Wii remote."""
 
     @model_validator(mode="after")
     def _placement_fits_the_room(self) -> Scenario:

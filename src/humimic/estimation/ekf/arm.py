@@ -100,12 +100,14 @@ class ArmEKF:
     def __init__(self, K: Intrinsics, marker: Marker, motion: mm.MotionNoise | None = None,
                  noise: ArmNoise | None = None, use_area: bool = True,
                  pitch_roll: str = "gravity", gate_prob: float | None = 0.9999,
-                 max_gap: float = 0.25, max_rejected: int = 3, min_depth: float = 0.05):
+                 max_gap: float = 0.25, max_rejected: int = 3, min_depth: float = 0.05,
+                 static_tol_g: float = 0.02):
         self.K, self.marker = K, marker
         self.motion = motion or mm.MotionNoise()
         self.noise = noise or ArmNoise()
         self.use_area = use_area
         self.pitch_roll_mode = pitch_roll
+        self.static_tol_g = static_tol_g
         self.gate = {d: chi2.ppf(gate_prob, d) for d in (1, 2, 3)} if gate_prob else None
         self.max_gap = max_gap
         """Seconds without an accepted marker after which the next one restarts the position
@@ -161,21 +163,45 @@ class ArmEKF:
         self.run_rejected += 1
         return math.nan
 
+    def _marker_model(self) -> tuple[np.ndarray, np.ndarray]:
+        """Predicted ``(u, v[, area])`` and its Jacobian at the current state."""
+        h, H = am.centroid(self.x, self.K)
+        if self.use_area:
+            ha, Ha = self.marker.area(self.x, self.K)
+            h, H = np.append(h, ha), np.vstack([H, Ha])
+        return h, H
+
+    def _marker_R(self, area_px: float) -> np.ndarray:
+        var = [self.noise.centroid_px**2] * 2
+        if self.use_area:
+            var.append((self.noise.area_rel * area_px) ** 2)
+        return np.diag(var)
+
+    def _marker_z(self, uv: np.ndarray, area_px: float) -> np.ndarray:
+        return np.append(uv, area_px) if self.use_area else np.asarray(uv, float)
+
     def update_marker(self, t: float, uv: np.ndarray, area_px: float) -> float:
         """Marker centroid (undistorted px) and area (px^2).  # Sugiyama eqs. 12-14"""
         self.predict(t)
-        h, H = am.centroid(self.x, self.K)
-        y, R = uv - h, np.eye(2) * self.noise.centroid_px**2
-        if self.use_area:
-            ha, Ha = self.marker.area(self.x, self.K)
-            y = np.append(y, area_px - ha)
-            H = np.vstack([H, Ha])
-            R = np.diag([R[0, 0], R[1, 1], (self.noise.area_rel * area_px) ** 2])
-        d2 = self._update(y, H, R, gated=True)
+        h, H = self._marker_model()
+        d2 = self._update(self._marker_z(uv, area_px) - h, H, self._marker_R(area_px),
+                          gated=True)
         if math.isfinite(d2):
             self.t_marker = t
             self.run_rejected = 0
         return d2
+
+    def marker_nis(self, t: float, candidates) -> np.ndarray:
+        """NIS of each candidate ``(uv, area)`` against the prediction at ``t`` (the estimate
+        is moved to ``t``)."""
+        self.predict(t)
+        h, H = self._marker_model()
+        HPH = H @ self.P @ H.T
+        out = np.empty(len(candidates))
+        for i, (uv, area) in enumerate(candidates):
+            y = self._marker_z(uv, area) - h
+            out[i] = float(y @ np.linalg.solve(HPH + self._marker_R(area), y))
+        return out
 
     def update_gyro(self, t: float, w_rel_A: np.ndarray) -> float:
         """The remote's rate relative to the head, in A (:func:`.arm_model.relative_rate`).
@@ -200,25 +226,29 @@ class ArmEKF:
         if not self.initialized or not dt or dt <= 0.0:
             return
         self.update_gyro(t, am.relative_rate(gyro_A, self.x[Q], w_head_I, dt))
-        if am.accel_is_static(f_A, quat.to_matrix(self.x[Q]), R_WI):
+        if am.accel_is_static(f_A, quat.to_matrix(self.x[Q]), R_WI, self.static_tol_g):
             z, d_I = am.pitch_roll_measurement(f_A, R_WI, self.pitch_roll_mode)
             self.update_pitch_roll(t, z, d_I)
             self.static_updates += 1
 
+    def needs_start(self, t: float) -> bool:
+        """Whether a marker at ``t`` (re)starts the filter rather than updating it."""
+        return (not self.initialized or t - self.t_marker > self.max_gap
+                or self.run_rejected >= self.max_rejected)
+
     def on_marker(self, t: float, uv: np.ndarray, area_px: float, R_WI: np.ndarray) -> float:
-        """A marker measurement; the first one starts the filter (the remote pointing ahead,
-        pitch and roll from the latest accelerometer sample); one after ``max_gap`` or
+        """A marker measurement; the first one after an accelerometer sample starts the filter
+        (the remote pointing ahead, pitch and roll from that sample); one after ``max_gap`` or
         ``max_rejected`` gated-out ones restarts the position, the orientation kept. Returns
         the update's NIS (NaN: gated out or started)."""
-        if (not self.initialized or t - self.t_marker > self.max_gap
-                or self.run_rejected >= self.max_rejected):
+        if self.needs_start(t):
             if self.initialized:
                 q0 = self.x[Q].copy()
                 self.restarts += 1
             elif self.f_A is not None:
                 q0 = am.start_pose(self.f_A, R_WI)
-            else:
-                q0 = np.array([1.0, 0.0, 0.0, 0.0])
+            else:  # no accelerometer sample yet: wait for one
+                return math.nan
             self.initialize(t, uv, area_px, q0)
             return math.nan
         return self.update_marker(t, uv, area_px)

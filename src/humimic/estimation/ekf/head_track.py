@@ -1,0 +1,95 @@
+"""The wearer's head pose at any instant, for the stages that use it (arm EKF, commands).
+
+Two sources with one interface: :class:`SlamHeadTrack` keeps the ``head_pose`` messages the
+SLAM publishes (:class:`~humimic.messages.HeadPose`, in the paper's W) and interpolates between
+them; :class:`OracleHeadTrack` reads the ground truth of the head camera (the scenario option
+``head_pose: oracle``, which separates the consumer's errors from the SLAM's). A consumer asks
+:meth:`HeadTrack.ready_until` before :meth:`HeadTrack.at`: a SLAM estimate for time ``t``
+arrives at its ready time, so measurements wait until the head is known at theirs.
+"""
+
+from __future__ import annotations
+
+import bisect
+from collections import deque
+from dataclasses import dataclass
+
+import numpy as np
+
+from humimic.motion import quat
+
+
+@dataclass(frozen=True)
+class HeadState:
+    """The head camera (frame I) in W at one instant."""
+
+    p_W: np.ndarray
+    R_W_I: np.ndarray
+    w_I: np.ndarray
+    """Angular velocity in I (rad/s)."""
+
+
+class HeadTrack:
+    def ready_until(self) -> float:
+        """The latest time (s) at which the head is known."""
+        raise NotImplementedError
+
+    def at(self, t: float) -> HeadState:
+        raise NotImplementedError
+
+
+class OracleHeadTrack(HeadTrack):
+    """Ground truth of the head camera (``gt.pose("headcam", "W")``) at the nearest tick."""
+
+    def __init__(self, gt):
+        self.gt = gt
+        T = gt.pose("headcam", "W")
+        self._p, self._R = T[:, :3, 3], T[:, :3, :3]
+        self._w = gt.angular_velocity("headcam", "site")
+
+    def ready_until(self) -> float:
+        return float("inf")
+
+    def at(self, t: float) -> HeadState:
+        k = self.gt.index_of(min(max(t, self.gt.t[0]), self.gt.t[-1]))
+        return HeadState(self._p[k], self._R[k], self._w[k])
+
+
+class SlamHeadTrack(HeadTrack):
+    """``head_pose`` messages kept for ``horizon`` seconds and interpolated (slerp for the
+    orientation, linear for position and rate); held beyond the last one."""
+
+    def __init__(self, horizon: float = 2.0):
+        self.horizon = horizon
+        self._t: deque[float] = deque()
+        self._v: deque = deque()
+
+    def add(self, t: float, pose) -> None:
+        """A :class:`~humimic.messages.HeadPose` sampled at ``t`` (s)."""
+        if self._t and t <= self._t[-1]:
+            return
+        self._t.append(t)
+        self._v.append(HeadState(np.asarray(pose.p_W, float), pose.R_W_I,
+                                 np.asarray(pose.w_I, float)))
+        while len(self._t) > 2 and self._t[1] < t - self.horizon:
+            self._t.popleft()
+            self._v.popleft()
+
+    def ready_until(self) -> float:
+        return self._t[-1] if self._t else float("-inf")
+
+    def at(self, t: float) -> HeadState:
+        if not self._t:
+            raise LookupError("no head pose yet")
+        ts = self._t
+        i = bisect.bisect_right(ts, t)
+        if i == 0:
+            return self._v[0]
+        if i == len(ts):
+            return self._v[-1]
+        a, b = self._v[i - 1], self._v[i]
+        s = (t - ts[i - 1]) / (ts[i] - ts[i - 1])
+        qa, qb = quat.from_matrix(a.R_W_I), quat.from_matrix(b.R_W_I)
+        dq = quat.to_rotvec(quat.mul(quat.conj(qa), qb))
+        R = quat.to_matrix(quat.mul(qa, quat.from_rotvec(s * dq)))
+        return HeadState((1 - s) * a.p_W + s * b.p_W, R, (1 - s) * a.w_I + s * b.w_I)
