@@ -5,7 +5,8 @@ Per physics tick ``k`` (time ``t = k / physics_rate``):
 1. write the person's state at ``t`` into the scene, ``mj_step1`` (kinematics at ``t``);
 2. sample the sensors that are due (eye cameras, IMU, Wii remote) and publish them;
 3. deliver every bus value that is ready at ``t`` (stages run here, in causal order);
-4. at servo ticks, let control stages write actuator targets;
+4. at servo ticks, let control stages write actuator targets, then step the planar base's
+   controller (``world.base``) towards its target;
 5. log poses to rerun at ``output.pose_rate``; ``mj_step2`` integrates to ``t + dt``.
 
 A Ctrl-C stops the loop cleanly: the caller still gets the metrics so far.
@@ -117,6 +118,8 @@ def simulate(world, stages: list[Stage], rlog, bus: Bus | None = None,
                 servo_t[k] = t
                 for stage in stages:
                     stage.servo(t, bus)
+                if world.base is not None:  # after the stages: they may set its target
+                    world.base.step(servo_every / phys_rate)
             if pose_sched.due(tick):
                 with timer.time("viz"):
                     rlog.log_poses(t)

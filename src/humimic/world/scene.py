@@ -20,6 +20,7 @@ from humimic.paths import MODELS_DIR
 from humimic.sensors.camera_model import fovy_from_hfov, make_transform
 from humimic.world.frames import paper_frame_of
 from humimic.world.names import (
+    BASE_JOINTS,
     EYE_CAMERAS,
     HUMAN_JOINTS,
     HUMAN_PREFIX,
@@ -62,6 +63,9 @@ class SceneOptions:
     shadows: bool = False
     msaa: bool = False
     show_wiimote: bool = False
+    base: str = "fixed"
+    """The robot's base: ``fixed`` (welded at the pelvis, as DB) or ``planar`` (x, y, yaw
+    joints with velocity actuators: a wheeled base, see :func:`add_planar_base`)."""
     room: str = "lab"
     """Room model (:data:`ROOMS`): ``lab`` (Ude & Atkeson's; the person stands ``distance``
     in front of the robot) or ``sugiyama`` (the wearable room; the person starts at its
@@ -97,6 +101,9 @@ def compose(opts: SceneOptions) -> mjcf.RootElement:
     human.find("camera", "headcam").fovy = math.degrees(
         fovy_from_hfov(math.radians(opts.headcam_hfov_deg), hw, hh))
 
+    if opts.base == "planar":
+        add_planar_base(robot)
+
     # Avatar colours.
     for name, rgb in (("skin", opts.skin), ("shirt", opts.shirt), ("trousers", opts.trousers)):
         human.find("material", name).rgba = [*rgb, 1.0]
@@ -128,6 +135,29 @@ def compose(opts: SceneOptions) -> mjcf.RootElement:
 
 _EYE_X_Z = _robot_eye_height_and_x()
 
+#: Velocity-actuator gains of the planar base: time constants of ~0.01 s for the robot's
+#: 80 kg and its ~4 kg m^2 about the vertical.
+BASE_KV = {"base_x": 8000.0, "base_y": 8000.0, "base_yaw": 400.0}
+
+
+def add_planar_base(robot: mjcf.RootElement) -> None:
+    """Give the robot's pelvis the joints of a wheeled base (:data:`BASE_JOINTS`: slides along
+    x and y, then a turn about z, in the parent's = world frame) and velocity actuators
+    (``ctrl`` = joint velocity, m/s and rad/s, driven by :mod:`humimic.control.base`). The
+    ``ready`` keyframe gets the base at its start pose."""
+    pelvis = robot.find("body", "pelvis")
+    axes = {"base_x": ("slide", [1, 0, 0]), "base_y": ("slide", [0, 1, 0]),
+            "base_yaw": ("hinge", [0, 0, 1])}
+    for i, name in enumerate(BASE_JOINTS):
+        kind, axis = axes[name]
+        pelvis.insert("joint", i, name=name, type=kind, axis=axis, damping=0.0,
+                      armature=0.0, limited=False)
+        robot.actuator.add("velocity", name=name, joint=name, kv=BASE_KV[name])
+    for key in robot.keyframe.key:
+        key.qpos = [0.0] * len(BASE_JOINTS) + list(key.qpos)
+        if key.ctrl is not None:
+            key.ctrl = list(key.ctrl) + [0.0] * len(BASE_JOINTS)
+
 
 class Scene:
     """The compiled scene with named accessors for robot and avatar parts.
@@ -148,6 +178,13 @@ class Scene:
         self.robot_dof = m.jnt_dofadr[self.robot_joint_ids]
         self.robot_actuators = np.array([m.actuator(ROBOT_PREFIX + j).id for j in ROBOT_JOINTS])
         self.robot_range = m.jnt_range[self.robot_joint_ids].copy()
+        has_base = opts.base == "planar"
+        self.base_joint_ids = np.array(
+            [m.joint(ROBOT_PREFIX + j).id for j in BASE_JOINTS] if has_base else [], int)
+        self.base_qpos = m.jnt_qposadr[self.base_joint_ids]
+        self.base_dof = m.jnt_dofadr[self.base_joint_ids]
+        self.base_actuators = np.array(
+            [m.actuator(ROBOT_PREFIX + j).id for j in BASE_JOINTS] if has_base else [], int)
 
         first = m.joint(HUMAN_PREFIX + HUMAN_JOINTS[0][0]).id
         last = m.joint(HUMAN_PREFIX + HUMAN_JOINTS[-1][0]).id
@@ -193,6 +230,12 @@ class Scene:
 
     def robot_qpos_vector(self) -> np.ndarray:
         return self.data.qpos[self.robot_qpos].copy()
+
+    def T_world_base_now(self) -> np.ndarray:
+        """The robot base's pose at the scene's current kinematics (``T_world_base`` is its pose
+        at t = 0; they differ once a planar base has moved)."""
+        b = self.model.body(ROBOT_PREFIX + "pelvis").id
+        return make_transform(self.data.xmat[b].reshape(3, 3).copy(), self.data.xpos[b].copy())
 
 
 def build_scene(opts: SceneOptions | None = None) -> Scene:

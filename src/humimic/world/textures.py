@@ -2,8 +2,9 @@
 
 Posters are natural images shipped with scikit-image (all CC0 or public domain; attribution in
 ``models/textures/README.md``); the bookshelf, the door, the drawers and the floor are drawn
-here from a fixed seed. The PNGs are committed in ``models/textures/`` so the MJCF file compiles
-on its own; ``python -m humimic.world.textures`` rewrites them.
+here from a fixed seed. Reds are desaturated (:func:`suppress_red`): the Wii remote's marker is
+the only strongly red thing in the room. The PNGs are committed in ``models/textures/`` so the
+MJCF file compiles on its own; ``python -m humimic.world.textures`` rewrites them.
 
 Textures are cheap to render on a CPU, geoms are not (llvmpipe pays ~30 us per drawn geom), so
 the room's detail lives in a few large textured boxes.
@@ -176,8 +177,26 @@ def floor(rng: np.random.Generator, size: int = 256, planks: int = 6) -> np.ndar
     return img
 
 
+#: Hue band (degrees, both ends of the circle) kept desaturated in the room: the Wii remote's
+#: marker is the only strongly red thing (Sugiyama & Miura extract it as the largest region of
+#: hue 0-20 deg), as in their lab.
+RED_HUES_DEG = (25.0, 335.0)
+#: Largest saturation (of 255) left in that band.
+RED_MAX_SATURATION = 90
+
+
+def suppress_red(image: np.ndarray) -> np.ndarray:
+    """``image`` (RGB) with the saturation of reddish pixels (hue below 25 deg or above 335
+    deg) capped at :data:`RED_MAX_SATURATION`."""
+    hsv = cv2.cvtColor(image, cv2.COLOR_RGB2HSV)  # OpenCV hue: degrees / 2
+    h, sat = hsv[..., 0], hsv[..., 1]
+    red = (h <= RED_HUES_DEG[0] / 2) | (h >= RED_HUES_DEG[1] / 2)
+    hsv[..., 1] = np.where(red, np.minimum(sat, RED_MAX_SATURATION), sat)
+    return cv2.cvtColor(hsv, cv2.COLOR_HSV2RGB)
+
+
 def all_textures() -> dict[str, np.ndarray]:
-    """Every texture of the room by file stem (RGB uint8)."""
+    """Every texture of the room by file stem (RGB uint8), red suppressed."""
     rng = np.random.default_rng(SEED)
     out = {name: poster(*spec) for name, spec in POSTERS.items()}
     out["books_a"] = bookshelf(rng)
@@ -189,7 +208,7 @@ def all_textures() -> dict[str, np.ndarray]:
         out[name] = abstract_art(rng)
     out["calendar"] = calendar()
     out["banner"] = banner(rng)
-    return out
+    return {name: suppress_red(image) for name, image in out.items()}
 
 
 def write_textures(directory=TEXTURE_DIR) -> list:

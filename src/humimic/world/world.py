@@ -13,6 +13,7 @@ from dataclasses import replace
 import mujoco
 import numpy as np
 
+from humimic.control.base import BaseController
 from humimic.motion import MotionContext, compute_ground_truth, make_motion
 from humimic.sensors.camera_model import CameraImage
 from humimic.sensors.cameras import CameraRig, CameraSpec
@@ -33,7 +34,7 @@ def scene_options(scenario) -> SceneOptions:
         headcam_resolution=scenario.sensors.head_camera.resolution,
         headcam_hfov_deg=scenario.sensors.head_camera.hfov_deg,
         ambient=light.ambient, diffuse=light.diffuse, shadows=light.shadows, msaa=light.msaa,
-        show_wiimote=h.wiimote, room=scenario.room,
+        show_wiimote=h.wiimote, room=scenario.room, base=scenario.robot.base,
     )
 
 
@@ -59,6 +60,9 @@ class World:
         self.motion = make_motion(scenario.human.motion, ctx)
         self.gt = compute_ground_truth(self.scene, self.motion, self.times)
         self.set_robot_pose()
+        self.base = BaseController(self.scene) if scenario.robot.base == "planar" else None
+        """The planar base's controller (``robot.base: planar``), stepped by the simulation
+        at the servo rate; it holds the start pose until a stage calls ``set_target``."""
 
         c = scenario.cameras
         self.eye_cameras = eye_camera_names(c) if c.enabled else []
