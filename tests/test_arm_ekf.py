@@ -47,12 +47,14 @@ def test_predict_update_sequence_matches_filterpy():
     ref = JerkEKF(19, 3)
     started = False
     for t, kind, val in events:
-        if kind == "marker" and not started:
-            ekf.on_marker(t, *val, np.eye(3))
-            ref.x, ref.P = ekf.x.copy(), ekf.P.copy()
-            started = True
-            continue
-        if not started:
+        if not started:  # the filter starts with a marker after an accelerometer sample
+            if kind == "marker":
+                ekf.on_marker(t, *val, np.eye(3))
+            else:
+                ekf.on_wii(t, *val)
+            if ekf.initialized:
+                ref.x, ref.P = ekf.x.copy(), ekf.P.copy()
+                started = True
             continue
         ref.predict_dt(t - ekf.t)
         if kind == "marker":
@@ -63,13 +65,17 @@ def test_predict_update_sequence_matches_filterpy():
                 return np.append(am.centroid(x, K)[0], am.sphere_area(x, K, RADIUS)[0])
 
             def hj(x):
-                return np.vstack([am.centroid(x, K)[1], am.sphere_area(x, K, RADIUS)[1]])
+                H = np.zeros((3, 19))
+                H[0:2, 0:3] = am.centroid(x, K)[1]
+                H[2, 0:3] = am.sphere_area(x, K, RADIUS)[1]
+                return H
             ref.update(np.append(val[0], val[1]), hj, hx, R=R)
         else:
             w_rel = am.relative_rate(val[0], ekf.q, val[2], 0.01)
             ekf.update_gyro(t, w_rel)
-            ref.update(w_rel, lambda x: am.gyro(x)[1], lambda x: am.gyro(x)[0],
-                       R=np.eye(3) * 0.01**2)
+            H_w = np.zeros((3, 19))
+            H_w[:, 10:13] = np.eye(3)
+            ref.update(w_rel, lambda x, H=H_w: H, lambda x: x[10:13], R=np.eye(3) * 0.01**2)
         ref.x, ref.P = normalize(ref.x, ref.P)
         np.testing.assert_allclose(ekf.x, ref.x, atol=1e-9)
         np.testing.assert_allclose(ekf.P, ref.P, atol=1e-9, rtol=1e-6)
@@ -137,6 +143,7 @@ def test_a_wrong_marker_is_gated_and_a_persistent_one_restarts():
     R_WI = np.eye(3)
     x = state_of(m, 0.0)
     uv, area = am.centroid(x, K)[0], am.sphere_area(x, K, RADIUS)[0]
+    ekf.on_wii(0.0, np.zeros(3), np.array([0.0, 9.81, 0.0]), np.zeros(3), R_WI)
     for k in range(30):
         ekf.on_marker(k / 30, uv, area, R_WI)
     p_before = ekf.p.copy()

@@ -24,6 +24,10 @@ def build_stages(scenario, world, rngs, rlog) -> list[Stage]:
 
         check_arm(scenario)
         stages.append(ArmStage(world, scenario.arm, rlog))
+    if getattr(scenario, "commands", None) is not None:
+        from humimic.control.build import commands_stages
+
+        stages.extend(commands_stages(scenario, world, rngs, rlog))
     if getattr(scenario, "mimic", None) is not None:
         from humimic.control.build import mimic_stages
 

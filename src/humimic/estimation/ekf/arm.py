@@ -26,12 +26,9 @@ from scipy.stats import chi2
 from humimic.estimation.ekf import arm_model as am
 from humimic.estimation.ekf import motion_model as mm
 from humimic.estimation.ekf import quaternion as qj
-from humimic.estimation.ekf.motion_model import DIM, P, Q, V, W
+from humimic.estimation.ekf.motion_model import P, Q, V, W
 from humimic.estimation.ekf.update import dense_PHt, dense_S, gain_update
-from humimic.motion import quat
 from humimic.sensors.camera_model import Intrinsics
-
-_ALL = np.arange(DIM)
 
 
 @dataclass(frozen=True)
@@ -66,9 +63,11 @@ class Marker:
             raise ValueError("a marker is a sphere (radius) or a plate (corners), not both")
 
     def area(self, x: np.ndarray, K: Intrinsics) -> tuple[float, np.ndarray]:
-        """Its projected area (px^2) and the Jacobian (1x19).  # Sugiyama eq. 13"""
+        """Its projected area (px^2) and the Jacobian on the state's columns 0-6 (p, q; 1x7).
+        # Sugiyama eq. 13"""
         if self.radius is not None:
-            return am.sphere_area(x, K, self.radius)
+            area, H = am.sphere_area(x, K, self.radius)
+            return area, np.hstack([H, np.zeros((1, 4))])
         return am.plate_area(x, K, self.corners)
 
     def depth(self, area_px: float, K: Intrinsics) -> float:
@@ -144,10 +143,12 @@ class ArmEKF:
             self.P = F @ self.P @ F.T + mm.process_noise(G, self.motion)
             self.x, self.t = x, t
 
-    def _update(self, y: np.ndarray, H: np.ndarray, R: np.ndarray, gated: bool) -> float:
-        """One Kalman update with innovation ``y``; returns its NIS (NaN if refused)."""
-        PHt = dense_PHt(self.P, _ALL, H)
-        S = dense_S(PHt, _ALL, H, R)
+    def _update(self, y: np.ndarray, cols: np.ndarray, H: np.ndarray, R: np.ndarray,
+                gated: bool) -> float:
+        """One Kalman update with innovation ``y`` and the Jacobian ``H`` on the state's
+        columns ``cols``; returns its NIS (NaN if refused)."""
+        PHt = dense_PHt(self.P, cols, H)
+        S = dense_S(PHt, cols, H, R)
         d2 = float(y @ np.linalg.solve(S, y))
         x, Pn = self.x.copy(), self.P.copy()
         if not (gated and self.gate is not None and d2 > self.gate[len(y)]):
@@ -164,8 +165,9 @@ class ArmEKF:
         return math.nan
 
     def _marker_model(self) -> tuple[np.ndarray, np.ndarray]:
-        """Predicted ``(u, v[, area])`` and its Jacobian at the current state."""
-        h, H = am.centroid(self.x, self.K)
+        """Predicted ``(u, v[, area])`` and its Jacobian on :data:`.arm_model.COLS_PQ`."""
+        h, Hc = am.centroid(self.x, self.K)
+        H = np.hstack([Hc, np.zeros((2, 4))])
         if self.use_area:
             ha, Ha = self.marker.area(self.x, self.K)
             h, H = np.append(h, ha), np.vstack([H, Ha])
@@ -184,8 +186,8 @@ class ArmEKF:
         """Marker centroid (undistorted px) and area (px^2).  # Sugiyama eqs. 12-14"""
         self.predict(t)
         h, H = self._marker_model()
-        d2 = self._update(self._marker_z(uv, area_px) - h, H, self._marker_R(area_px),
-                          gated=True)
+        d2 = self._update(self._marker_z(uv, area_px) - h, am.COLS_PQ, H,
+                          self._marker_R(area_px), gated=True)
         if math.isfinite(d2):
             self.t_marker = t
             self.run_rejected = 0
@@ -196,7 +198,7 @@ class ArmEKF:
         is moved to ``t``)."""
         self.predict(t)
         h, H = self._marker_model()
-        HPH = H @ self.P @ H.T
+        HPH = H @ self.P[:7, :7] @ H.T
         out = np.empty(len(candidates))
         for i, (uv, area) in enumerate(candidates):
             y = self._marker_z(uv, area) - h
@@ -208,13 +210,15 @@ class ArmEKF:
         # Sugiyama eq. 15"""
         self.predict(t)
         h, H = am.gyro(self.x)
-        return self._update(w_rel_A - h, H, np.eye(3) * self.noise.gyro**2, gated=False)
+        return self._update(w_rel_A - h, am.COLS_W, H, np.eye(3) * self.noise.gyro**2,
+                            gated=False)
 
     def update_pitch_roll(self, t: float, z: np.ndarray, d_I: np.ndarray) -> float:
         """Pitch and roll (rad) against the down direction ``d_I``.  # Sugiyama eqs. 19-24"""
         self.predict(t)
         h, H = am.pitch_roll(self.x, d_I)
-        return self._update(z - h, H, np.eye(2) * self.noise.pitch_roll**2, gated=False)
+        return self._update(z - h, am.COLS_Q, H, np.eye(2) * self.noise.pitch_roll**2,
+                            gated=False)
 
     # ---- one sensor sample at a time (what the stage calls) ------------------------------
     def on_wii(self, t: float, gyro_A: np.ndarray, f_A: np.ndarray, w_head_I: np.ndarray,
@@ -226,7 +230,7 @@ class ArmEKF:
         if not self.initialized or not dt or dt <= 0.0:
             return
         self.update_gyro(t, am.relative_rate(gyro_A, self.x[Q], w_head_I, dt))
-        if am.accel_is_static(f_A, quat.to_matrix(self.x[Q]), R_WI, self.static_tol_g):
+        if am.accel_is_static(f_A, am.rotation(self.x[Q]), R_WI, self.static_tol_g):
             z, d_I = am.pitch_roll_measurement(f_A, R_WI, self.pitch_roll_mode)
             self.update_pitch_roll(t, z, d_I)
             self.static_updates += 1

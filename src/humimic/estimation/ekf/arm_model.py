@@ -30,11 +30,14 @@ import math
 import numpy as np
 
 from humimic.estimation.ekf import quaternion as qj
-from humimic.estimation.ekf.motion_model import DIM, P, Q, W
+from humimic.estimation.ekf.motion_model import P, Q, W
 from humimic.motion import quat
 from humimic.sensors.camera_model import Intrinsics
 from humimic.world.frames import GRAVITY_W, R_CV_I
 
+#: State columns each model reads (its Jacobian is over these only).
+COLS_P, COLS_Q, COLS_W = np.arange(0, 3), np.arange(3, 7), np.arange(10, 13)
+COLS_PQ = np.arange(0, 7)
 #: Gravity's magnitude (m/s^2); the Wii's accelerometer reads in units of it.
 G0 = float(np.linalg.norm(GRAVITY_W))
 #: Up in the paper's W.
@@ -49,11 +52,9 @@ def project(p_I: np.ndarray, K: Intrinsics) -> tuple[np.ndarray, np.ndarray]:
 
 
 def centroid(x: np.ndarray, K: Intrinsics) -> tuple[np.ndarray, np.ndarray]:
-    """``h_pA`` (2,) and ``dh/dx`` (2x19): the projection of the marker centre.  # eq. 12"""
-    uv, J = project(x[P], K)
-    H = np.zeros((2, DIM))
-    H[:, P] = J
-    return uv, H
+    """``h_pA`` (2,) and its Jacobian on :data:`COLS_P` (2x3): the projection of the marker
+    centre.  # Sugiyama eq. 12"""
+    return project(x[P], K)
 
 
 def _cross2(a: np.ndarray, b: np.ndarray) -> float:
@@ -78,42 +79,39 @@ def quad_area(uv: np.ndarray) -> tuple[float, np.ndarray]:
 
 def plate_area(x: np.ndarray, K: Intrinsics, corners_A: np.ndarray
                ) -> tuple[float, np.ndarray]:
-    """``h_areaA`` (px^2) and ``dh/dx`` (1x19) of a flat marker whose corners relative to its
-    centre are ``corners_A`` (4x3, in order around it, frame A).  # Sugiyama eqs. 13-14"""
+    """``h_areaA`` (px^2) and its Jacobian on :data:`COLS_PQ` (1x7) of a flat marker whose
+    corners relative to its centre are ``corners_A`` (4x3, in order, frame A).
+    # Sugiyama eqs. 13-14"""
     p, q = x[P], x[Q]
-    Rq = quat.to_matrix(q)
+    Rq = rotation(q)
     uv = np.empty((4, 2))
     Js = []
     for k, c in enumerate(corners_A):
         uv[k], J = project(p + Rq @ c, K)
         Js.append(J)
     area, grad = quad_area(uv)
-    H = np.zeros((1, DIM))
+    H = np.zeros((1, 7))
     for k, c in enumerate(corners_A):
         g = grad[k] @ Js[k]  # d area / d corner (3,)
-        H[0, P] += g
-        H[0, Q] += g @ qj.d_rotate_dq(q, c)
+        H[0, 0:3] += g
+        H[0, 3:7] += g @ qj.d_rotate_dq(q, c)
     return area, H
 
 
 def sphere_area(x: np.ndarray, K: Intrinsics, radius: float) -> tuple[float, np.ndarray]:
-    """``h_areaA`` (px^2) and ``dh/dx`` (1x19) of a spherical marker of ``radius`` (m): the
-    ellipse its silhouette projects to (see the module docstring)."""
+    """``h_areaA`` (px^2) and its Jacobian on :data:`COLS_P` (1x3) of a spherical marker of
+    ``radius`` (m): the ellipse its silhouette projects to (see the module docstring)."""
     c = R_CV_I @ x[P]
     r2 = radius * radius
     g, hz = float(c @ c) - r2, c[2] * c[2] - r2
     area = math.pi * K.fx * K.fy * r2 * math.sqrt(g) / hz**1.5
     grad_c = area * (c / g - 3.0 * c[2] / hz * _EZ)
-    H = np.zeros((1, DIM))
-    H[0, P] = grad_c @ R_CV_I
-    return area, H
+    return area, (grad_c @ R_CV_I)[None]
 
 
 def gyro(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``h_wA = w_A`` and its Jacobian (3x19).  # Sugiyama eq. 15"""
-    H = np.zeros((3, DIM))
-    H[:, W] = np.eye(3)
-    return x[W].copy(), H
+    """``h_wA = w_A`` and its Jacobian on :data:`COLS_W` (3x3).  # Sugiyama eq. 15"""
+    return x[W].copy(), np.eye(3)
 
 
 def relative_rate(z_gyro_A: np.ndarray, q_IA: np.ndarray, w_head_I: np.ndarray,
@@ -128,9 +126,44 @@ def relative_rate(z_gyro_A: np.ndarray, q_IA: np.ndarray, w_head_I: np.ndarray,
     q(z dt)``, and the rate is its rotation vector over ``dt`` (eq. 18:
     ``2 arccos(q_r) / (dt |q_v|) q_v``).
     """
-    dq = quat.mul(quat.mul(quat.conj(q_IA), quat.from_rotvec(-np.asarray(w_head_I) * dt)),
-                  quat.mul(q_IA, quat.from_rotvec(np.asarray(z_gyro_A) * dt)))
-    return quat.to_rotvec(dq) / dt
+    qc = (q_IA[0], -q_IA[1], -q_IA[2], -q_IA[3])
+    dq = _qmul(_qmul(qc, _qexp(-dt * np.asarray(w_head_I))),
+               _qmul(q_IA, _qexp(dt * np.asarray(z_gyro_A))))
+    return _qlog(dq) / dt
+
+
+# ---- one quaternion at a time (the batched humimic.motion.quat costs 10x more per call) -----
+def _qmul(a, b) -> tuple[float, float, float, float]:
+    aw, ax, ay, az = a
+    bw, bx, by, bz = b
+    return (aw * bw - ax * bx - ay * by - az * bz, aw * bx + ax * bw + ay * bz - az * by,
+            aw * by - ax * bz + ay * bw + az * bx, aw * bz + ax * by - ay * bx + az * bw)
+
+
+def _qexp(r) -> tuple[float, float, float, float]:
+    """The quaternion of the rotation vector ``r``."""
+    x, y, z = float(r[0]), float(r[1]), float(r[2])
+    th = math.sqrt(x * x + y * y + z * z)
+    k = math.sin(th / 2.0) / th if th > 1e-8 else 0.5 - th * th / 48.0
+    return (math.cos(th / 2.0), k * x, k * y, k * z)
+
+
+def _qlog(q) -> np.ndarray:
+    """The rotation vector (angle in [0, pi]) of a unit quaternion."""
+    w, x, y, z = q
+    if w < 0.0:
+        w, x, y, z = -w, -x, -y, -z
+    s = math.sqrt(x * x + y * y + z * z)
+    k = 2.0 * math.atan2(s, w) / s if s > 1e-12 else 2.0
+    return np.array([k * x, k * y, k * z])
+
+
+def rotation(q) -> np.ndarray:
+    """``R(q)`` of one unit quaternion (as :func:`humimic.motion.quat.to_matrix`)."""
+    w, x, y, z = q
+    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+                     [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+                     [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
 
 
 def elevation(u: np.ndarray, d: np.ndarray) -> tuple[float, np.ndarray]:
@@ -145,16 +178,16 @@ def elevation(u: np.ndarray, d: np.ndarray) -> tuple[float, np.ndarray]:
 
 def pitch_roll(x: np.ndarray, d_I: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """``h_PRA`` (2,): the pitch (the remote's z axis below the plane orthogonal to the down
-    direction ``d_I``) and roll (its x axis above it), and the Jacobian (2x19).
-    # Sugiyama eqs. 19-21"""
+    direction ``d_I``) and roll (its x axis above it), and the Jacobian on :data:`COLS_Q`
+    (2x4).  # Sugiyama eqs. 19-21"""
     q = x[Q]
-    Rq = quat.to_matrix(q)
-    H = np.zeros((2, DIM))
+    Rq = rotation(q)
+    H = np.empty((2, 4))
     out = np.empty(2)
     for i, (e, sign) in enumerate(((_EZ, 1.0), (_EX, -1.0))):
         ang, g = elevation(Rq @ e, d_I)
         out[i] = sign * ang
-        H[i, Q] = sign * (g @ qj.d_rotate_dq(q, e))
+        H[i] = sign * (g @ qj.d_rotate_dq(q, e))
     return out, H
 
 
@@ -173,8 +206,8 @@ def accel_is_static(f_A: np.ndarray, R_IA: np.ndarray, R_WI: np.ndarray,
     g (the Wii's). A test on the norms alone would pass sideways accelerations of up to 0.2 g
     (an 11 deg tilt error); this one also fails once the orientation is more than about 1 deg
     off, which the gyro and the start pose prevent."""
-    up_I = R_WI.T @ (G0 * UP_W)
-    return float(np.linalg.norm(R_IA @ f_A - up_I)) <= tol_g * G0
+    e = R_IA @ f_A - R_WI.T @ (G0 * UP_W)
+    return float(e @ e) <= (tol_g * G0) ** 2
 
 
 def head_pitch_roll(R_WI: np.ndarray) -> np.ndarray:
