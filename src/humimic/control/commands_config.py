@@ -30,7 +30,9 @@ class FollowConfig(Section):
     """How the robot carries out the commands (base: ``control.base``'s limits, 0.4 m/s)."""
 
     head_speed: float = Field(1.0, gt=0.0, le=10.0)
-    """Pan and tilt speed (rad/s)."""
+    """Peak pan and tilt speed (rad/s) of a head motion (minimum jerk)."""
+    arm_speed: float = Field(0.5, gt=0.0, le=5.0)
+    """Peak palm speed (m/s) of an arm motion (minimum jerk)."""
     head_tolerance_deg: float = Field(1.0, gt=0.0, le=10.0)
     """A head command has finished when both angles are this close (deg)."""
     arm_tolerance: float = Field(0.02, gt=0.0, le=0.5)

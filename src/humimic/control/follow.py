@@ -1,8 +1,10 @@
 """The robot carrying out the ``commands`` (Sugiyama & Miura sec. V-C): the mobile base through
 the world's :class:`~humimic.control.base.BaseController` (at most 0.4 m/s), the head's pan
 and tilt (``B_HR``, ``B_HN``) at a limited speed, the right palm through the mink IK
-(:class:`~humimic.control.ik.MimicIK`, the head's angles its posture targets). When a command
-has finished it is published on ``command_done`` (the command stage issues the next of its kind
+(:class:`~humimic.control.ik.MimicIK`, the head's angles its posture targets). Head and palm
+move to a new target along a minimum-jerk path whose peak speed is the configured one (a step
+would saturate the IK's joint speeds and shake the head on its servos). When a command has
+finished it is published on ``command_done`` (the command stage issues the next of its kind
 only then).
 
 The IK runs on the robot model alone, whose base stays at the start pose: arm targets are in
@@ -19,6 +21,7 @@ import numpy as np
 from humimic.control.ik import MimicIK, build_robot_model, posture_costs
 from humimic.control.mapping import reach_shell
 from humimic.control.servo import Servo
+from humimic.motion.primitives import min_jerk
 from humimic.pipeline.stage import Stage
 from humimic.stamped import Stamped
 from humimic.world.names import ROBOT_JOINTS, ROBOT_PREFIX
@@ -49,6 +52,29 @@ class FollowRecord:
 
     def arrays(self) -> dict[str, np.ndarray]:
         return {k: np.asarray(v) for k, v in self.__dict__.items() if k != "done"}
+
+
+@dataclass
+class Segment:
+    """A minimum-jerk move from ``start`` to ``end`` beginning at ``t0``, lasting ``duration``
+    (s); the peak speed of a minimum-jerk move is 1.875 |end - start| / duration."""
+
+    start: np.ndarray
+    end: np.ndarray
+    t0: float = 0.0
+    duration: float = 0.0
+
+    @classmethod
+    def to(cls, start, end, t0: float, peak_speed: float, min_duration: float) -> Segment:
+        start, end = np.asarray(start, float).copy(), np.asarray(end, float).copy()
+        d = float(np.linalg.norm(end - start))
+        return cls(start, end, t0, max(min_duration, 1.875 * d / peak_speed))
+
+    def at(self, t: float) -> np.ndarray:
+        if self.duration <= 0.0:
+            return self.end.copy()
+        return self.start + (self.end - self.start) * float(min_jerk((t - self.t0)
+                                                                     / self.duration))
 
 
 def base_pose(data, pelvis: int) -> np.ndarray:
@@ -82,9 +108,11 @@ class FollowStage(Stage):
                                "dynamics")
         self.pelvis = scene.model.body(ROBOT_PREFIX + "pelvis").id
         self.palm_site = scene.robot_site("R_palm")
-        self.head_ref = q0[[PAN, TILT]].copy()
-        self.head_target = self.head_ref.copy()
+        self.head_target = q0[[PAN, TILT]].copy()
+        self.head_path = Segment(self.head_target, self.head_target)
         self.palm_target = self._to_base0(self.ik.site_positions()[0])
+        self.palm_path = Segment(self.palm_target, self.palm_target)
+        self._t = 0.0
         self.active: dict[str, object] = {}
         self._still_since: float | None = None
         self._palm_prev: np.ndarray | None = None
@@ -110,8 +138,12 @@ class FollowStage(Stage):
         elif cmd.kind == "head":
             lo, hi = self.scene.robot_range[[PAN, TILT]].T
             self.head_target = np.clip(cmd.target, lo + 0.02, hi - 0.02)
+            self.head_path = Segment.to(self.head_path.at(self._t), self.head_target, self._t,
+                                        self.cfg.head_speed, 0.1)
         elif cmd.kind == "arm":
             self.palm_target, _ = self.shell.clamp(np.asarray(cmd.target, float))
+            self.palm_path = Segment.to(self.palm_path.at(self._t), self.palm_target, self._t,
+                                        self.cfg.arm_speed, 0.2)
             self._still_since = None
 
     def _finish(self, t: float, kind: str) -> None:
@@ -122,12 +154,12 @@ class FollowStage(Stage):
     # ---- servo ----------------------------------------------------------------------------
     def servo(self, t: float, bus) -> None:
         t0 = time.perf_counter()
+        self._t = t
         d = self.scene.data
-        step = self.cfg.head_speed * self.dt
-        self.head_ref += np.clip(self.head_target - self.head_ref, -step, step)
-        self.posture[[PAN, TILT]] = self.head_ref
+        self.posture[[PAN, TILT]] = self.head_path.at(t + self.dt)
         self.ik.posture_task.set_target(self.posture)
-        q, v = self.ik.step((self.T0[:3, :3] @ self.palm_target + self.T0[:3, 3])[None])
+        palm = self.palm_path.at(t + self.dt)
+        q, v = self.ik.step((self.T0[:3, :3] @ palm + self.T0[:3, 3])[None])
         a = (v - self.v_prev) / self.dt
         self.v_prev = v
         self.servo_out.command(q - 0.5 * self.dt * v, v, a)
