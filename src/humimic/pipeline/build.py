@@ -18,6 +18,10 @@ def build_stages(scenario, world, rngs, rlog) -> list[Stage]:
         from humimic.perception.blobs.build import perception_stages
 
         stages.extend(perception_stages(scenario, world, rngs, rlog))
+    if getattr(scenario, "slam", None) is not None:  # the wearable's head pose (Sugiyama)
+        from humimic.estimation.ekf.build import slam_stages
+
+        stages.extend(slam_stages(scenario, world, rngs, rlog))
     if getattr(scenario, "arm", None) is not None:
         from humimic.estimation.ekf.arm_config import check_arm
         from humimic.estimation.ekf.arm_stage import ArmStage

@@ -15,6 +15,7 @@ from humimic.control.commands_config import CommandsConfig
 from humimic.control.config import MimicConfig
 from humimic.estimation.config import FilterConfig
 from humimic.estimation.ekf.arm_config import ArmConfig
+from humimic.estimation.ekf.slam_config import SlamConfig
 from humimic.perception.blobs.config import PerceptionConfig
 from humimic.scenario.base import Section
 from humimic.sensors.config import Cameras, Sensors, Timing
@@ -46,6 +47,9 @@ class Scenario(Section):
     filter: FilterConfig | None = None
     """Random-jerk Kalman filter of perception's measurements (see
     :mod:`humimic.estimation.config`); needs ``perception``."""
+    slam: SlamConfig | None = None
+    """The wearer's head pose by EKF SLAM from the head camera and IMU (Sugiyama & Miura sec.
+    III, see :mod:`humimic.estimation.ekf.slam_config`); needs those sensors."""
     mimic: MimicConfig | None = None
     """Imitation by the robot (see :mod:`humimic.control.config`); absent: the robot holds."""
     arm: ArmConfig | None = None

@@ -29,12 +29,18 @@ import numpy as np
 class ArmMaskParams:
     body_rgb: tuple[tuple[float, float, float], ...] = ((0.87, 0.67, 0.55), (0.2, 0.3, 0.8))
     """The wearer's skin and sleeve colours (0..1)."""
-    marker_hue_deg: tuple[float, float] = (-10.0, 20.0)
-    """Marker hue band (deg; the lower bound may be negative to wrap through 0)."""
-    marker_min_saturation: float = 0.5
-    marker_min_value: float = 0.25
+    marker_hue_deg: tuple[float, float] = (-12.0, 12.0)
+    """Marker hue band (deg; the lower bound may be negative to wrap through 0). The paper
+    extracts 0-20 deg; a room with orange and brown posters needs the marker's own red."""
+    marker_min_saturation: float = 0.6
+    marker_min_value: float = 0.6
     marker_min_px: int = 6
     """Smallest marker region taken for the marker (px)."""
+    marker_max_radius_px: float = 25.0
+    """Largest marker radius (px): a 2 cm sphere held no nearer than 0.2 m."""
+    marker_min_fill: float = 0.55
+    """A marker region fills at least this much of the disk around its bounding box (a sphere
+    looks round; poster details rarely do)."""
     hand_scale: float = 5.0
     """The remote and fist extend this many marker radii around the marker."""
     chroma_tol: float = 0.045
@@ -54,58 +60,66 @@ def chromaticity(rgb: np.ndarray) -> np.ndarray:
 
 
 def marker_region(hsv: np.ndarray, prm: ArmMaskParams) -> np.ndarray | None:
-    """The largest marker-hue region (uint8 0/255) or None (hue extraction, labelling and the
-    largest region: Sugiyama sec. IV-B)."""
+    """The marker (uint8 0/255) or None: hue extraction, labelling and the largest region
+    (Sugiyama sec. IV-B) among the round ones no larger than a marker can look."""
     lo, hi = prm.marker_hue_deg
     s, v = int(255 * prm.marker_min_saturation), int(255 * prm.marker_min_value)
     m = cv2.inRange(hsv, (max(0, int(lo // 2)), s, v), (int(hi // 2), 255, 255))
     if lo < 0:
         m |= cv2.inRange(hsv, (int(180 + lo / 2), s, v), (180, 255, 255))
     n, labels, stats, _ = cv2.connectedComponentsWithStats(m, connectivity=8)
-    if n <= 1:
+    area = stats[1:, cv2.CC_STAT_AREA].astype(float)
+    r = 0.5 * np.maximum(stats[1:, cv2.CC_STAT_WIDTH], stats[1:, cv2.CC_STAT_HEIGHT])
+    ok = ((area >= prm.marker_min_px) & (r <= prm.marker_max_radius_px)
+          & (area >= prm.marker_min_fill * np.pi * r * r))
+    if not ok.any():
         return None
-    best = 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
-    if stats[best, cv2.CC_STAT_AREA] < prm.marker_min_px:
-        return None
+    best = 1 + int(np.argmax(np.where(ok, area, -1.0)))
     return np.where(labels == best, 255, 0).astype(np.uint8)
 
 
-def body_coloured(rgb: np.ndarray, hsv: np.ndarray, prm: ArmMaskParams) -> np.ndarray:
+def body_coloured(rgb: np.ndarray, prm: ArmMaskParams) -> np.ndarray:
     """uint8 mask of the pixels with one of the wearer's body colours."""
     chroma = chromaticity(rgb)
     out = np.zeros(rgb.shape[:2], bool)
     for ref in prm.body_rgb:
         c = np.asarray(ref, np.float32)
         c = c / max(float(c.sum()), 1e-6)
-        out |= np.sum((chroma - c) ** 2, axis=-1) <= prm.chroma_tol**2
-    out &= hsv[..., 2] >= 255 * prm.min_value
+        d = chroma - c
+        out |= np.einsum("...i,...i->...", d, d) <= prm.chroma_tol**2
+    out &= rgb.max(axis=-1) >= 255 * prm.min_value
     return out.astype(np.uint8) * 255
 
 
-def _disk(radius: float) -> np.ndarray:
-    r = max(1, int(round(radius)))
-    return cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * r + 1, 2 * r + 1))
+def grow(mask: np.ndarray, radius: float) -> np.ndarray:
+    """uint8 mask grown by ``radius`` px (Euclidean; a distance transform, not a dilation with
+    a large kernel, which costs ~100x more)."""
+    dist = cv2.distanceTransform(np.where(mask > 0, 0, 255).astype(np.uint8), cv2.DIST_L2, 3)
+    return np.where(dist <= radius, 255, 0).astype(np.uint8)
 
 
 def arm_mask(rgb: np.ndarray, prm: ArmMaskParams = ArmMaskParams()) -> np.ndarray:
-    """Boolean mask of the wearer's arm and Wii remote in an RGB head-camera frame."""
-    hsv = cv2.cvtColor(rgb, cv2.COLOR_RGB2HSV)
+    """Boolean mask of the wearer's arm and Wii remote in an RGB head-camera frame (colours
+    are classified at half resolution: the mask is grown by a margin anyway)."""
     h, w = rgb.shape[:2]
-    seed = np.zeros((h, w), np.uint8)
-    marker = marker_region(hsv, prm)
+    marker = marker_region(cv2.cvtColor(rgb, cv2.COLOR_RGB2HSV), prm)
+    small = cv2.resize(rgb, (w // 2, h // 2), interpolation=cv2.INTER_AREA)
+    seed = np.zeros(small.shape[:2], np.uint8)
     if marker is not None:
         radius = np.sqrt(np.count_nonzero(marker) / np.pi)
-        seed = cv2.dilate(marker, _disk(prm.hand_scale * radius))
+        seed = grow(cv2.resize(marker, (w // 2, h // 2), interpolation=cv2.INTER_NEAREST),
+                    prm.hand_scale * radius / 2)
     else:
         seed[-1, :] = 255  # the arm enters from below
-    body = body_coloured(rgb, hsv, prm)
+    body = body_coloured(small, prm)
     n, labels, stats, _ = cv2.connectedComponentsWithStats(body, connectivity=8)
     touching = np.unique(labels[(seed > 0) & (body > 0)])
     keep = [i for i in touching
-            if i > 0 and stats[i, cv2.CC_STAT_AREA] >= prm.min_region_px]
-    mask = seed.copy() if marker is not None else np.zeros((h, w), np.uint8)
+            if i > 0 and 4 * stats[i, cv2.CC_STAT_AREA] >= prm.min_region_px]
+    mask = seed if marker is not None else np.zeros_like(seed)
     if keep:
         mask[np.isin(labels, keep)] = 255
-    if prm.margin_px > 0 and mask.any():
-        mask = cv2.dilate(mask, _disk(prm.margin_px))
-    return mask > 0
+    if not mask.any():
+        return np.zeros((h, w), bool)
+    mask = grow(mask, prm.margin_px / 2)
+    return cv2.resize(mask, (w, h), interpolation=cv2.INTER_NEAREST) > 0

@@ -105,10 +105,11 @@ class WearableSlam:
         self._pending_s += time.perf_counter() - t0
 
     # ---- camera ----------------------------------------------------------------------------
-    def on_frame(self, t: float, image: np.ndarray, mask: np.ndarray | None = None
-                 ) -> FrameReport:
+    def on_frame(self, t: float, image: np.ndarray, mask: np.ndarray | None = None,
+                 known_uv: np.ndarray | None = None) -> FrameReport:
         """One head-camera frame (distorted RGB as captured; ``mask``: pixels of the wearer's
-        arm in that image, never matched nor detected in)."""
+        arm in that image, never matched nor detected in; ``known_uv``: where the known
+        features are in this frame, if known -- see :meth:`_cut_known_patches`)."""
         t0 = time.perf_counter()
         s, f, fe = self.settings, self.filter, self.frontend
         f.predict(t)
@@ -117,7 +118,7 @@ class WearableSlam:
         grey = fe.undistort(image)
         umask = fe.undistort_mask(mask) if mask is not None else None
         pred = f.predict_features()
-        self._cut_known_patches(grey, pred)
+        self._cut_known_patches(grey, pred, known_uv)
         select = self._select(pred)
         m = fe.match(grey, pred.fids, pred.uv, pred.S, umask, select)
         if len(m.index):
@@ -151,12 +152,18 @@ class WearableSlam:
         sel[order[:cap]] = True
         return sel
 
-    def _cut_known_patches(self, grey: np.ndarray, pred) -> None:
-        """A known feature's patch is cut where it is predicted, the first time it is in view
-        with a prediction sharper than a pixel or two."""
+    def _cut_known_patches(self, grey: np.ndarray, pred, known_uv: np.ndarray | None) -> None:
+        """Cut the patches of the known features: at ``known_uv`` (undistorted pixels, one row
+        per known feature, NaN where not in view) when given -- the start calibration: where
+        the corners are seen from the marked start position -- and otherwise the first time the
+        filter predicts one sharply (innovation covariance trace under 6 px^2)."""
         fe = self.frontend
+        if known_uv is not None:
+            for fid, uv in zip(self.known, np.asarray(known_uv, float), strict=True):
+                if fid not in fe.patches and np.all(np.isfinite(uv)):
+                    fe.add([fid], grey, uv[None])
         for fid, uv, S in zip(pred.fids, pred.uv, pred.S, strict=True):
-            if int(fid) in self.known and int(fid) not in fe.patches and np.trace(S) < 8.0:
+            if int(fid) in self.known and int(fid) not in fe.patches and np.trace(S) < 6.0:
                 fe.add([fid], grey, uv[None])
 
     def _add_features(self, grey: np.ndarray, umask, report: FrameReport) -> None:

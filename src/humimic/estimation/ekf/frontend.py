@@ -98,13 +98,15 @@ class Frontend:
 
     # ---- patches ---------------------------------------------------------------------------
     def cut(self, grey: np.ndarray, uv: np.ndarray) -> list[np.ndarray | None]:
-        """Patches centred on (rounded) pixels ``uv (k, 2)``; None where one does not fit."""
+        """Patches centred on the sub-pixel positions ``uv (k, 2)`` (bilinear,
+        ``cv2.getRectSubPix``); None where one does not fit in the image."""
         r = self.params.patch // 2
+        s = self.params.patch
         h, w = grey.shape
         out: list[np.ndarray | None] = []
-        for u, v in np.rint(uv).astype(int):
-            ok = r <= u < w - r and r <= v < h - r
-            out.append(grey[v - r:v + r + 1, u - r:u + r + 1].copy() if ok else None)
+        for u, v in np.asarray(uv, float).tolist():
+            ok = r <= u <= w - 1 - r and r <= v <= h - 1 - r
+            out.append(cv2.getRectSubPix(grey, (s, s), (u, v)) if ok else None)
         return out
 
     def add(self, fids, grey: np.ndarray, uv: np.ndarray) -> list[int]:

@@ -23,7 +23,7 @@ import numpy as np
 from humimic.estimation.ekf import inverse_depth as idp
 from humimic.estimation.ekf import motion_model as mm
 from humimic.estimation.ekf import update as up
-from humimic.estimation.ekf.quaternion import align_sign, d_normalize
+from humimic.estimation.ekf.quaternion import align_sign, d_normalize, right
 from humimic.sensors.camera_model import Intrinsics
 
 POSE_COLS = np.arange(0, 7)
@@ -69,6 +69,12 @@ class SlamParams:
 
     noise: mm.MotionNoise = mm.MotionNoise()
     sigma_orientation: float = mm.SIGMA_ORIENTATION
+    """Per quaternion component (the paper's eq. 6 noise), used when
+    ``orientation_tilt_yaw`` is None and along ``q`` itself otherwise."""
+    orientation_tilt_yaw: tuple[float, float] | None = None
+    """sigma (rad) of the measured orientation's error as small rotations about W's
+    horizontal axes (tilt) and its vertical (yaw): the quaternion noise is
+    ``J diag(tilt^2, yaw^2, tilt^2) J^T`` with ``J = d(q(δ) ⊗ q)/dδ`` (W's y is up)."""
     sigma_accel: float = mm.SIGMA_ACCEL
     sigma_px: float = 1.0
     rho0: float = 0.5
@@ -149,15 +155,16 @@ class SlamFilter:
         """Fuse an orientation ``q_WI`` (eq. 6) and/or an acceleration in W (eq. 7)."""
         if q_meas is None and a_meas is None:
             return
+        R_imu = self._orientation_noise()
         if q_meas is not None and a_meas is not None:  # one joint update
-            cols, H, R = IMU_COLS, self._H_imu, self._R_imu
+            cols, H, R = IMU_COLS, self._H_imu, R_imu
             nu = np.concatenate([align_sign(q_meas, self.x[3:7]) - mm.h_orientation(self.x),
                                  a_meas - mm.h_accel(self.x)])
         elif q_meas is not None:
-            cols, H, R = mm.ORIENTATION_COLS, mm.H_ORIENTATION, self._R_imu[:4, :4]
+            cols, H, R = mm.ORIENTATION_COLS, mm.H_ORIENTATION, R_imu[:4, :4]
             nu = align_sign(q_meas, self.x[3:7]) - mm.h_orientation(self.x)
         else:
-            cols, H, R = mm.ACCEL_COLS, mm.H_ACCEL, self._R_imu[4:, 4:]
+            cols, H, R = mm.ACCEL_COLS, mm.H_ACCEL, R_imu[4:, 4:]
             nu = a_meas - mm.h_accel(self.x)
         PHt = up.dense_PHt(self.P, cols, H)
         S = up.dense_S(PHt, cols, H, R)
@@ -166,6 +173,18 @@ class SlamFilter:
         except np.linalg.LinAlgError:
             return
         self._normalize_q()
+
+    def _orientation_noise(self) -> np.ndarray:
+        """The 7x7 noise of (eq. 6, eq. 7) at the current orientation."""
+        ty = self.params.orientation_tilt_yaw
+        if ty is None:
+            return self._R_imu
+        R = self._R_imu.copy()
+        q = self.x[3:7]
+        J = 0.5 * right(q)[:, 1:]  # d(q(δ) ⊗ q)/dδ for a small rotation δ in W
+        var = np.array([ty[0] ** 2, ty[1] ** 2, ty[0] ** 2])
+        R[0:4, 0:4] = (J * var) @ J.T + self.params.sigma_orientation**2 * np.outer(q, q)
+        return R
 
     # ---- features --------------------------------------------------------------------------
     def _groups(self, feats: list[MapFeature]) -> list[tuple[np.ndarray, np.ndarray, int]]:

@@ -1,0 +1,103 @@
+"""What the SLAM stage keeps per frame, and the ``slam.*`` scores computed from it.
+
+Scores compare the estimated interface pose (the head camera's frame I in the paper's W) with
+the ground truth at each frame's photon time. The screen's known corners fix W, so the plain
+error is the headline (``ate_rmse_m``); the aligned variants (SE(3), Sim(3), Umeyama) say how
+much of it is a rigid offset or a scale error of the map.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from humimic.maths.stats import chi2_band, finite_or_none, nees, rmse
+from humimic.motion import quat
+
+
+@dataclass
+class SlamRecord:
+    """Rows appended by the stage, one per head-camera frame."""
+
+    rows: list[tuple] = field(default_factory=list)
+
+    def add(self, t: float, x: np.ndarray, P: np.ndarray, report) -> None:
+        status = report.status
+        self.rows.append((t, x[0:3].copy(), x[3:7].copy(), P[0:7, 0:7].copy(),
+                          len(report.fids), int(np.sum(status == 0)), int(np.sum(status == 1)),
+                          report.added, report.deleted, report.converted, report.map_size,
+                          report.cycle_s))
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        names = ("t", "p", "q", "P", "predicted", "measured", "failed", "added", "deleted",
+                 "converted", "map_size", "cycle_s")
+        if not self.rows:
+            return {n: np.zeros(0) for n in names}
+        cols = list(zip(*self.rows, strict=True))
+        return {n: np.array(c) for n, c in zip(names, cols, strict=True)}
+
+
+def heading(R_W_I: np.ndarray) -> np.ndarray:
+    """Heading (rad) of the optical axis (I's z) about W's vertical y: ``atan2(z_x, z_z)``."""
+    z = R_W_I[..., :, 2]
+    return np.arctan2(z[..., 0], z[..., 2])
+
+
+def wrap(a: np.ndarray) -> np.ndarray:
+    return (a + np.pi) % (2 * np.pi) - np.pi
+
+
+def pose_errors(p: np.ndarray, q: np.ndarray, p_true: np.ndarray, R_true: np.ndarray
+                ) -> dict[str, np.ndarray]:
+    """Per-frame position error (m, W), heading error and whole-rotation error (rad)."""
+    R = quat.to_matrix(q)
+    dR = np.einsum("nji,njk->nik", R_true, R)
+    angle = np.arccos(np.clip((np.trace(dR, axis1=1, axis2=2) - 1.0) / 2.0, -1.0, 1.0))
+    return {"position": p - p_true, "heading": wrap(heading(R) - heading(R_true)),
+            "rotation": angle}
+
+
+def slam_metrics(arr: dict[str, np.ndarray], p_true: np.ndarray, R_true: np.ndarray,
+                 mode: str, trajectory_scores: dict | None = None) -> dict:
+    """``slam.*`` scores (see :mod:`humimic.estimation.ekf.slam_stage` for each key)."""
+    n = len(arr["t"])
+    out: dict = {"mode": mode, "frames": n}
+    if n == 0:
+        return out
+    e = pose_errors(arr["p"], arr["q"], p_true, R_true)
+    ep = e["position"]
+    out.update({
+        "ate_rmse_m": finite_or_none(rmse(ep)),
+        "horizontal_rmse_m": finite_or_none(rmse(ep[:, [0, 2]])),
+        "vertical_rmse_m": finite_or_none(rmse(ep[:, 1])),
+        "position_max_error_m": finite_or_none(np.max(np.linalg.norm(ep, axis=1))),
+        "heading_rmse_deg": finite_or_none(math.degrees(rmse(e["heading"]))),
+        "rotation_rmse_deg": finite_or_none(math.degrees(rmse(e["rotation"]))),
+    })
+    if trajectory_scores:
+        out.update(trajectory_scores)
+    camera = mode != "inertial"
+    measured = arr["measured"]
+    out.update({
+        "features_per_frame": float(np.mean(measured)) if camera else 0.0,
+        "features_predicted_per_frame": float(np.mean(arr["predicted"])) if camera else 0.0,
+        "frames_without_features": int(np.sum(measured == 0)) if camera else n,
+        "frames_without_features_fraction": float(np.mean(measured == 0)) if camera else 1.0,
+        "map_size_mean": float(np.mean(arr["map_size"])),
+        "features_added": int(np.sum(arr["added"])),
+        "features_deleted": int(np.sum(arr["deleted"])),
+        "features_converted_xyz": int(np.sum(arr["converted"])),
+        "cycle_ms": float(1e3 * np.mean(arr["cycle_s"])),
+        "cycle_ms_p95": float(1e3 * np.percentile(arr["cycle_s"], 95)),
+    })
+    v = nees(ep, arr["P"][:, 0:3, 0:3])
+    lo, hi = chi2_band(3, 1)
+    ok = np.isfinite(v)
+    out["position_nees_mean"] = finite_or_none(np.mean(v[ok]) if ok.any() else math.nan)
+    out["position_nees_in_band_fraction"] = finite_or_none(
+        np.mean((v[ok] >= lo) & (v[ok] <= hi)) if ok.any() else math.nan)
+    out["position_std_final_m"] = finite_or_none(
+        math.sqrt(max(float(np.trace(arr["P"][-1, 0:3, 0:3])), 0.0)))
+    return out

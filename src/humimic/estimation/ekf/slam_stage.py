@@ -1,0 +1,193 @@
+"""The SLAM stage: ``imu`` + ``headcam`` -> ``head_pose`` (Sugiyama & Miura sec. III).
+
+The estimator (:class:`~humimic.estimation.ekf.estimator.WearableSlam`) runs on the head IMU's
+samples and the head camera's frames in time order; after each it publishes a
+:class:`~humimic.messages.HeadPose` stamped with that sample's time (ready ``latency`` later).
+It starts where the wearer starts (the true head pose at the first frame plus a seeded error of
+``init_position_std``, orientation from the IMU) with the screen's four corners as known
+features, their patches cut where the start pose projects them.
+
+Scores (``metrics.json`` ``slam``), per head-camera frame against the ground-truth pose of the
+head camera (frame I) in the paper's W:
+
+* ``ate_rmse_m`` -- position error, no alignment (the screen fixes the frame);
+  ``horizontal_rmse_m`` (x, z: Table II's), ``vertical_rmse_m``, ``position_max_error_m``;
+* ``ate_se3_rmse_m``, ``ate_sim3_rmse_m`` -- the same after the best rigid (scaled) alignment,
+  ``rpe_rmse_m`` -- relative translation error over 1 s (:mod:`humimic.maths`);
+* ``heading_rmse_deg`` (the optical axis about W's vertical), ``rotation_rmse_deg``;
+* ``features_per_frame`` (measured), ``features_predicted_per_frame``,
+  ``frames_without_features`` (and ``_fraction``), ``map_size_mean``, features added /
+  deleted / converted to XYZ;
+* ``cycle_ms`` -- the mean estimator cycle per frame: the IMU updates since the previous frame,
+  undistortion, active search, the EKF update, map management and detection (rendering and the
+  recording excluded; wall time, so it includes whatever else the machine does);
+* ``position_nees_mean`` and its fraction in the 95 % chi-square band (3 dof).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from humimic.estimation.ekf import motion_model as mm
+from humimic.estimation.ekf.arm_mask import ArmMaskParams, arm_mask
+from humimic.estimation.ekf.estimator import EstimatorSettings, FrameReport, WearableSlam
+from humimic.estimation.ekf.frontend import FAILED, MEASURED, NOT_SELECTED, FrontendParams
+from humimic.estimation.ekf.slam import SlamParams
+from humimic.estimation.ekf.slam_record import SlamRecord, slam_metrics
+from humimic.messages import HeadPose
+from humimic.motion import quat
+from humimic.pipeline.stage import Stage
+from humimic.sensors.camera_model import CameraImage, CameraModel, make_transform
+from humimic.world.frames import GRAVITY_W, R_CV_I, SCREEN_CORNERS_W
+
+#: Fig. 7's colours: measured red, failed blue, not selected green.
+STATUS_COLORS = {MEASURED: (230, 30, 30), FAILED: (40, 80, 255), NOT_SELECTED: (40, 200, 60)}
+SLAM = "world/W/slam"
+
+
+def settings_from_config(cfg) -> EstimatorSettings:
+    """The estimator's settings from a scenario's ``slam`` section."""
+    nz = cfg.noise
+    orient = (None if nz.orientation_std_deg is None
+              else tuple(np.radians(nz.orientation_std_deg)))
+    slam = SlamParams(noise=mm.MotionNoise(nz.jerk, nz.angular_acc, nz.accel_bias_drift),
+                      sigma_accel=nz.accel, sigma_px=nz.pixel, orientation_tilt_yaw=orient,
+                      rho0=1.0 / cfg.init_depth, sigma_rho=cfg.init_inverse_depth_std)
+    fe = FrontendParams(patch=cfg.patch_px, n_sigma=cfg.search_sigma,
+                        max_search_px=cfg.max_search_px, min_score=cfg.min_zncc)
+    return EstimatorSettings(use_camera=cfg.mode != "inertial", use_accel=cfg.mode != "camera",
+                             use_orientation=cfg.use_orientation and cfg.mode != "camera",
+                             target_features=cfg.target_features, max_map=cfg.max_map,
+                             max_measured=cfg.max_measured, slam=slam, frontend=fe)
+
+
+class SlamStage(Stage):
+    name = "slam"
+
+    def __init__(self, cfg, world, rng: np.random.Generator, rlog=None, mask_params=None,
+                 image_every: int = 1):
+        self.cfg, self.world, self.rng, self.rlog = cfg, world, rng, rlog
+        self.settings = settings_from_config(cfg)
+        self.mask_params = mask_params or ArmMaskParams()
+        self.image_every = image_every
+        self.record = SlamRecord()
+        self.slam: WearableSlam | None = None
+        self._bus = self._timer = None
+        self._frames = 0
+
+    def attach(self, bus, timer) -> None:
+        self._bus, self._timer = bus, timer
+        bus.subscribe("imu", self._on_imu)
+        bus.subscribe("headcam", self._on_frame)
+
+    # ---- start -----------------------------------------------------------------------------
+    def _start(self, t: float, intr, R_W_I: np.ndarray | None) -> None:
+        """Start at the wearer's start: the true head position plus a seeded error of
+        ``init_position_std``; the orientation the IMU reads (in camera-only mode, the true
+        one with a seeded 0.5 deg error: the wearer faces the screen)."""
+        gt, rng = self.world.gt, self.rng
+        k = gt.index_of(t)
+        p0 = gt.position("headcam", "W")[k] + self.cfg.init_position_std * rng.standard_normal(3)
+        if R_W_I is None:
+            R_W_I = gt.rotation("headcam", "W")[k] @ quat.to_matrix(
+                quat.from_rotvec(np.radians(0.5) * rng.standard_normal(3)))
+        x0 = mm.initial_state(p=p0, q=mm.quat_from_matrix(R_W_I))
+        var = np.r_[np.full(3, max(self.cfg.init_position_std, 1e-3) ** 2),
+                    np.full(4, 0.01**2), np.full(3, 0.05**2), np.full(3, 0.1**2),
+                    np.full(3, 0.5**2), np.full(3, 0.05**2)]
+        self.slam = WearableSlam(t, x0, np.diag(var), intr, R_CV_I, GRAVITY_W,
+                                 SCREEN_CORNERS_W, self.settings)
+
+    def _start_calibration(self, t: float, intr) -> np.ndarray:
+        """Where the screen's corners appear from the marked start (undistorted pixels, NaN
+        outside the image): the wearer starts where the system was calibrated, so the known
+        features' first image positions are known (not the pose's: the filter starts with the
+        seeded position error and the IMU's orientation, which the corners then correct)."""
+        T = self.world.gt.pose("headcam", "W")[self.world.gt.index_of(t)]
+        p_cv = (SCREEN_CORNERS_W - T[:3, 3]) @ T[:3, :3] @ R_CV_I.T
+        uv = intr.pinhole().project(p_cv)
+        inside = ((uv[:, 0] >= 0) & (uv[:, 0] <= intr.width - 1) & (uv[:, 1] >= 0)
+                  & (uv[:, 1] <= intr.height - 1))
+        uv[~inside] = np.nan
+        return uv
+
+    # ---- inputs ----------------------------------------------------------------------------
+    def _on_imu(self, topic: str, msg) -> None:
+        if self.slam is None or self.cfg.mode == "camera":
+            self._last_R = msg.value.R_W_sensor
+            return
+        with self._timer.time(self.name):
+            self.slam.on_imu(msg.t, msg.value.accel, msg.value.R_W_sensor)
+        self._publish(msg, -1)
+
+    def _on_frame(self, topic: str, msg) -> None:
+        image: CameraImage = msg.value
+        known_uv = None
+        if self.slam is None:
+            self._start(msg.t, image.camera.intrinsics, getattr(self, "_last_R", None))
+            known_uv = self._start_calibration(msg.t, image.camera.intrinsics)
+        with self._timer.time(self.name):
+            mask = (arm_mask(image.image, self.mask_params) if self.cfg.mask_arm
+                    and self.cfg.mode != "inertial" else None)
+            report = self.slam.on_frame(msg.t, image.image, mask, known_uv)
+        f = self.slam.filter
+        self.record.add(msg.t, f.x, f.P, report)
+        self._publish(msg, report.n_measured)
+        if self.rlog is not None and self.rlog.enabled:
+            with self._timer.time("slam_viz"):
+                self._log(msg.t, image, report)
+        self._frames += 1
+
+    def _publish(self, msg, measured: int) -> None:
+        f = self.slam.filter
+        x = f.x
+        pose = HeadPose(x[0:3].copy(), x[3:7].copy(), x[7:10].copy(), x[10:13].copy(),
+                        x[13:16].copy(), f.P[:mm.DIM, :mm.DIM].copy(), f.n_features, measured)
+        self._bus.publish("head_pose", msg.then(pose, self.cfg.latency))
+
+    # ---- recording -------------------------------------------------------------------------
+    def _log(self, t: float, image: CameraImage, report: FrameReport) -> None:
+        rl, f = self.rlog, self.slam.filter
+        if self._frames == 0:
+            rl.log_transform(t, "world/W", self.world.T_world_W, static=True)
+        R_W_I = mm.rotmat(f.x[3:7])
+        T_W_cam = make_transform(R_W_I @ R_CV_I.T, f.x[0:3])
+        if self.image_every and self._frames % self.image_every == 0:
+            grey = self.slam.frontend.undistort(image.image)
+            cam = CameraModel("slam", f.intr, T_W_cam, T_W_cam)
+            rl.log_camera_image(t, f"{SLAM}/camera", CameraImage(t, cam, np.dstack([grey] * 3)))
+            if len(report.fids):
+                colors = [STATUS_COLORS[int(s)] for s in report.status]
+                rl.log_ellipses_2d(t, f"{SLAM}/camera/image/features", report.uv, report.S,
+                                   n_sigma=self.settings.frontend.n_sigma, colors=colors)
+        else:
+            rl.log_transform(t, f"{SLAM}/camera", T_W_cam)
+        ids, pts, covs = f.feature_points()
+        if len(ids):
+            rl.log_ellipsoids_3d(t, f"{SLAM}/map", pts, covs, n_sigma=2.0,
+                                 colors=[(255, 160, 0)] * len(ids))
+        k = self.world.gt.index_of(t)
+        rl.log_points(t, f"{SLAM}/truth/head", self.world.gt.position("headcam", "W")[k],
+                      colors=[40, 200, 40], radii=0.02)
+        rl.log_ellipsoids_3d(t, f"{SLAM}/estimate/head", f.x[None, 0:3], f.P[None, 0:3, 0:3],
+                             colors=[(230, 30, 30)])
+
+    def trajectories(self) -> dict[str, np.ndarray]:
+        """Frame times and the estimated and true head positions and rotations in W."""
+        arr = self.record.arrays()
+        gt = self.world.gt
+        k = gt.index_of(arr["t"]) if len(arr["t"]) else np.zeros(0, int)
+        return {**arr, "p_true": gt.position("headcam", "W")[k],
+                "R_true": gt.rotation("headcam", "W")[k]}
+
+    def metrics(self) -> dict:
+        tr = self.trajectories()
+        return {"slam": slam_metrics(tr, tr["p_true"], tr["R_true"], self.cfg.mode)}
+
+    def plots(self, out_dir) -> list:
+        from humimic.estimation.ekf.slam_plots import plot_trajectory
+
+        tr = self.trajectories()
+        if len(tr["t"]) == 0:
+            return []
+        return [plot_trajectory(out_dir / "slam_trajectory.png", tr)]
