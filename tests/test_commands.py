@@ -86,7 +86,9 @@ def test_segment_is_minimum_jerk_at_the_peak_speed():
 def test_the_robot_follows_a_step_to_the_left(tmp_path):
     """Fig. 10's first 9.5 s: the wearer steps 1.25 m left and back right; ground-truth head,
     the arm EKF's remote."""
-    scenario = load_scenario(SCENARIOS_DIR / "sugiyama_fig10_robot_control.yaml", duration=9.5)
+    scenario = load_scenario(SCENARIOS_DIR / "sugiyama_fig10_robot_control.yaml", duration=9.5,
+                             overrides=["slam=null", "arm.head_pose=oracle",
+                                        "commands.head_pose=oracle"])
     m = run_one(scenario, tmp_path, rerun="off", progress=False)
     c = m["commands"]
     assert c["count"]["move"] == 2  # left once 1.0 m lateral, right once back past it
