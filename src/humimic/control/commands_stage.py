@@ -110,16 +110,19 @@ class CommandStage(Stage):
 
     # ---- results --------------------------------------------------------------------------
     def metrics(self) -> dict:
+        """The scores; the paths go to the recording here (the last hook before it closes)."""
         from humimic.control.commands_report import commands_metrics
 
-        return commands_metrics(self, self.follower) if self.follower is not None else {}
+        if self.follower is None:
+            return {}
+        self._log_paths()
+        return commands_metrics(self, self.follower)
 
     def plots(self, out_dir) -> list:
         from humimic.control.commands_report import commands_plot
 
         if self.follower is None:
             return []
-        self._log_paths()
         return commands_plot(self, self.follower, out_dir / "commands.png")
 
     def _log_paths(self) -> None:

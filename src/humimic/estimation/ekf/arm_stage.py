@@ -173,10 +173,12 @@ class ArmStage(Stage):
                                colors=[[255, 255, 0]])
 
     def metrics(self) -> dict:
+        """The scores; the whole trajectories go to the recording here (the last hook before
+        it closes)."""
+        self._log_trajectories()
         return arm_metrics(self.rec, self.world.gt, self.K, self.ekf)
 
     def plots(self, out_dir) -> list:
-        self._log_trajectories()
         return arm_plot(self.rec, self.world.gt, out_dir / "arm_position.png")
 
     def _log_trajectories(self) -> None:
