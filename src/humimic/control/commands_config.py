@@ -29,6 +29,9 @@ _T = Thresholds()
 class FollowConfig(Section):
     """How the robot carries out the commands (base: ``control.base``'s limits, 0.4 m/s)."""
 
+    rate: float = Field(105.0, gt=0.0, le=5000.0)
+    """IK and servo-target rate (Hz; rounded to ``timing.servo_rate`` divided by a whole
+    number); the IK rests while the robot holds still."""
     head_speed: float = Field(1.0, gt=0.0, le=10.0)
     """Peak pan and tilt speed (rad/s) of a head motion (minimum jerk)."""
     arm_speed: float = Field(0.5, gt=0.0, le=5.0)

@@ -93,7 +93,9 @@ class FollowStage(Stage):
     def __init__(self, world, cfg):
         self.world, self.cfg, scene = world, cfg, world.scene
         self.scene = scene
-        self.dt = 1.0 / world.scenario.timing.servo_rate
+        servo_rate = world.scenario.timing.servo_rate
+        self.every = max(1, int(round(servo_rate / min(cfg.rate, servo_rate))))
+        self.dt = self.every / servo_rate
         q0 = scene.data.qpos[scene.robot_qpos].copy()
         model = build_robot_model(scene.opts.interocular)
         self.ik = MimicIK(model, q0, ["R_palm"], cfg.ik, self.dt)
@@ -119,6 +121,7 @@ class FollowStage(Stage):
         self.v_prev = np.zeros(len(ROBOT_JOINTS))
         self.rec = FollowRecord()
         self._record_every = max(1, int(round(1.0 / (RECORD_RATE * self.dt))))
+        self._settled = False
         self._calls = 0
         self._bus = self._timer = None
 
@@ -132,6 +135,7 @@ class FollowStage(Stage):
 
     def _on_command(self, topic: str, msg: Stamped) -> None:
         cmd = msg.value
+        self._settled = False
         self.active[cmd.kind] = (cmd, msg.t_ready)
         if cmd.kind == "move":
             self.world.base.set_target(float(cmd.target[0]), float(cmd.target[1]), 0.0)
@@ -153,22 +157,30 @@ class FollowStage(Stage):
 
     # ---- servo ----------------------------------------------------------------------------
     def servo(self, t: float, bus) -> None:
+        call = self._calls
+        self._calls += 1
+        if call % self.every:
+            return
         t0 = time.perf_counter()
         self._t = t
         d = self.scene.data
-        self.posture[[PAN, TILT]] = self.head_path.at(t + self.dt)
-        self.ik.posture_task.set_target(self.posture)
-        palm = self.palm_path.at(t + self.dt)
-        q, v = self.ik.step((self.T0[:3, :3] @ palm + self.T0[:3, 3])[None])
-        a = (v - self.v_prev) / self.dt
-        self.v_prev = v
-        self.servo_out.command(q - 0.5 * self.dt * v, v, a)
+        moving = (t <= self.head_path.t0 + self.head_path.duration
+                  or t <= self.palm_path.t0 + self.palm_path.duration)
+        if moving or not self._settled:  # an IK at rest with fixed targets stays where it is
+            self.posture[[PAN, TILT]] = self.head_path.at(t + self.dt)
+            self.ik.posture_task.set_target(self.posture)
+            palm = self.palm_path.at(t + self.dt)
+            q, v = self.ik.step((self.T0[:3, :3] @ palm + self.T0[:3, 3])[None])
+            a = (v - self.v_prev) / self.dt
+            self.v_prev = v
+            self.servo_out.command(q - 0.5 * self.dt * v, v, a)
+            self._settled = not moving and float(np.max(np.abs(v))) < 1e-3
 
         T_wb = base_pose(d, self.pelvis)
         palm = (d.site_xpos[self.palm_site] - T_wb[:3, 3]) @ T_wb[:3, :3]
         head = d.qpos[self.scene.robot_qpos[[PAN, TILT]]]
         self._check_done(t, palm, head)
-        if self._calls % self._record_every == 0:
+        if (call // self.every) % self._record_every == 0:
             r = self.rec
             r.t.append(t)
             base = self.world.base
@@ -178,7 +190,6 @@ class FollowStage(Stage):
             r.head_target.append(self.head_target.copy())
             r.palm.append(palm)
             r.palm_target.append(self.palm_target.copy())
-        self._calls += 1
         self._timer.add(self.name, time.perf_counter() - t0)
 
     def _check_done(self, t: float, palm: np.ndarray, head: np.ndarray) -> None:

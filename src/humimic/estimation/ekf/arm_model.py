@@ -127,20 +127,21 @@ def relative_rate(z_gyro_A: np.ndarray, q_IA: np.ndarray, w_head_I: np.ndarray,
     ``2 arccos(q_r) / (dt |q_v|) q_v``).
     """
     qc = (q_IA[0], -q_IA[1], -q_IA[2], -q_IA[3])
-    dq = _qmul(_qmul(qc, _qexp(-dt * np.asarray(w_head_I))),
-               _qmul(q_IA, _qexp(dt * np.asarray(z_gyro_A))))
-    return _qlog(dq) / dt
+    dq = qmul(qmul(qc, qexp(-dt * np.asarray(w_head_I))),
+               qmul(q_IA, qexp(dt * np.asarray(z_gyro_A))))
+    return qlog(dq) / dt
 
 
-# ---- one quaternion at a time (the batched humimic.motion.quat costs 10x more per call) -----
-def _qmul(a, b) -> tuple[float, float, float, float]:
+# ---- one quaternion at a time (the batched humimic.motion.quat costs 10x more per call) ----
+def qmul(a, b) -> tuple[float, float, float, float]:
+    """The Hamilton product ``a (x) b`` of two quaternions (wxyz)."""
     aw, ax, ay, az = a
     bw, bx, by, bz = b
     return (aw * bw - ax * bx - ay * by - az * bz, aw * bx + ax * bw + ay * bz - az * by,
             aw * by - ax * bz + ay * bw + az * bx, aw * bz + ax * by - ay * bx + az * bw)
 
 
-def _qexp(r) -> tuple[float, float, float, float]:
+def qexp(r) -> tuple[float, float, float, float]:
     """The quaternion of the rotation vector ``r``."""
     x, y, z = float(r[0]), float(r[1]), float(r[2])
     th = math.sqrt(x * x + y * y + z * z)
@@ -148,7 +149,7 @@ def _qexp(r) -> tuple[float, float, float, float]:
     return (math.cos(th / 2.0), k * x, k * y, k * z)
 
 
-def _qlog(q) -> np.ndarray:
+def qlog(q) -> np.ndarray:
     """The rotation vector (angle in [0, pi]) of a unit quaternion."""
     w, x, y, z = q
     if w < 0.0:

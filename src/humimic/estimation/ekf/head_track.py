@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from humimic.motion import quat
+from humimic.estimation.ekf.arm_model import qexp, qlog, qmul, rotation
 
 
 @dataclass(frozen=True)
@@ -42,16 +42,17 @@ class OracleHeadTrack(HeadTrack):
     """Ground truth of the head camera (``gt.pose("headcam", "W")``) at the nearest tick."""
 
     def __init__(self, gt):
-        self.gt = gt
         T = gt.pose("headcam", "W")
         self._p, self._R = T[:, :3, 3], T[:, :3, :3]
         self._w = gt.angular_velocity("headcam", "site")
+        self._t0 = float(gt.t[0])
+        self._rate = (len(gt.t) - 1) / float(gt.t[-1] - gt.t[0]) if len(gt.t) > 1 else 1.0
 
     def ready_until(self) -> float:
         return float("inf")
 
     def at(self, t: float) -> HeadState:
-        k = self.gt.index_of(min(max(t, self.gt.t[0]), self.gt.t[-1]))
+        k = min(max(int(round((t - self._t0) * self._rate)), 0), len(self._p) - 1)
         return HeadState(self._p[k], self._R[k], self._w[k])
 
 
@@ -69,8 +70,9 @@ class SlamHeadTrack(HeadTrack):
         if self._t and t <= self._t[-1]:
             return
         self._t.append(t)
-        self._v.append(HeadState(np.asarray(pose.p_W, float), pose.R_W_I,
-                                 np.asarray(pose.w_I, float)))
+        q = np.asarray(pose.q_W_I, float)
+        self._v.append((HeadState(np.asarray(pose.p_W, float), rotation(q),
+                                  np.asarray(pose.w_I, float)), q / np.linalg.norm(q)))
         while len(self._t) > 2 and self._t[1] < t - self.horizon:
             self._t.popleft()
             self._v.popleft()
@@ -84,12 +86,11 @@ class SlamHeadTrack(HeadTrack):
         ts = self._t
         i = bisect.bisect_right(ts, t)
         if i == 0:
-            return self._v[0]
+            return self._v[0][0]
         if i == len(ts):
-            return self._v[-1]
-        a, b = self._v[i - 1], self._v[i]
+            return self._v[-1][0]
+        (a, qa), (b, qb) = self._v[i - 1], self._v[i]
         s = (t - ts[i - 1]) / (ts[i] - ts[i - 1])
-        qa, qb = quat.from_matrix(a.R_W_I), quat.from_matrix(b.R_W_I)
-        dq = quat.to_rotvec(quat.mul(quat.conj(qa), qb))
-        R = quat.to_matrix(quat.mul(qa, quat.from_rotvec(s * dq)))
-        return HeadState((1 - s) * a.p_W + s * b.p_W, R, (1 - s) * a.w_I + s * b.w_I)
+        qac = (qa[0], -qa[1], -qa[2], -qa[3])
+        q = qmul(qa, qexp(s * qlog(qmul(qac, qb))))  # slerp
+        return HeadState((1 - s) * a.p_W + s * b.p_W, rotation(q), (1 - s) * a.w_I + s * b.w_I)
