@@ -146,23 +146,28 @@ class ArmEKF:
     def _update(self, y: np.ndarray, cols: np.ndarray, H: np.ndarray, R: np.ndarray,
                 gated: bool) -> float:
         """One Kalman update with innovation ``y`` and the Jacobian ``H`` on the state's
-        columns ``cols``; returns its NIS (NaN if refused)."""
+        columns ``cols``; returns its NIS when ``gated`` (else 0), NaN if refused."""
         PHt = dense_PHt(self.P, cols, H)
         S = dense_S(PHt, cols, H, R)
-        d2 = float(y @ np.linalg.solve(S, y))
+        d2 = 0.0
+        if gated and self.gate is not None:
+            d2 = float(y @ np.linalg.solve(S, y))
+            if d2 > self.gate[len(y)]:
+                self.rejected += 1
+                self.run_rejected += 1
+                return math.nan
         x, Pn = self.x.copy(), self.P.copy()
-        if not (gated and self.gate is not None and d2 > self.gate[len(y)]):
-            gain_update(x, Pn, PHt, S, y)
-            if x[2] >= self.min_depth:
-                J = qj.d_normalize(x[Q])
-                x[Q] /= np.linalg.norm(x[Q])
-                Pn[Q, :] = J @ Pn[Q, :]
-                Pn[:, Q] = Pn[:, Q] @ J.T
-                self.x, self.P = x, 0.5 * (Pn + Pn.T)
-                return d2
-        self.rejected += 1
-        self.run_rejected += 1
-        return math.nan
+        gain_update(x, Pn, PHt, S, y)
+        if x[2] < self.min_depth:
+            self.rejected += 1
+            self.run_rejected += 1
+            return math.nan
+        J = qj.d_normalize(x[Q])
+        x[Q] /= np.linalg.norm(x[Q])
+        Pn[Q, :] = J @ Pn[Q, :]
+        Pn[:, Q] = Pn[:, Q] @ J.T
+        self.x, self.P = x, 0.5 * (Pn + Pn.T)
+        return d2
 
     def _marker_model(self) -> tuple[np.ndarray, np.ndarray]:
         """Predicted ``(u, v[, area])`` and its Jacobian on :data:`.arm_model.COLS_PQ`."""
