@@ -120,12 +120,12 @@ class Jump:
 
     def __init__(self, c: JumpMotion, ctx: MotionContext):
         self.c, self.geometry = c, ctx.geometry
-        if c.at is None:
-            self.xy, self.psi = np.zeros(2), np.radians(c.heading_deg)
-        elif c.frame == "W":
-            self.xy, self.psi = ctx.W_to_avatar(np.array(c.at, float), c.heading_deg)
+        at = np.zeros(2) if c.at is None else np.array(c.at, float)
+        if c.frame == "W":
+            xy, self.psi = ctx.W_to_avatar(at, c.heading_deg)
+            self.xy = xy if c.at is not None else np.zeros(2)  # None: where the room puts them
         else:
-            self.xy, self.psi = np.array(c.at, float), np.radians(c.heading_deg)
+            self.xy, self.psi = at, np.radians(c.heading_deg)
         g: AvatarGeometry = ctx.geometry
         self.leg = g.thigh + g.shank
 

@@ -9,9 +9,10 @@ eq. 13), the marker's size, and the colours of its own skin and sleeve. The mask
 1. the marker: the largest region of marker hue;
 2. the remote and the hand around it: the marker region grown by ``hand_scale`` marker radii
    (the remote is ~8 marker radii long, the fist ~5);
-3. the forearm and sleeve: skin- and sleeve-coloured connected regions touching (2), or, when
-   the marker is out of view, touching the bottom edge of the image (the arm enters from
-   below);
+3. the forearm and sleeve: skin- and sleeve-coloured connected regions touching (2), kept
+   inside the cone that opens downwards from the hand (the arm hangs from a shoulder below the
+   head camera, so it never rises above the hand in the image; a skin-toned poster beside the
+   hand stays out), or, when the marker is out of view, touching the bottom edge;
 
 grown by a margin so that no feature patch straddles the arm's outline. Colours match by
 chromaticity (``rgb / (r + g + b)``), which shading leaves nearly unchanged.
@@ -19,6 +20,7 @@ chromaticity (``rgb / (r + g + b)``), which shading leaves nearly unchanged.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import cv2
@@ -32,8 +34,8 @@ class ArmMaskParams:
     marker_hue_deg: tuple[float, float] = (-12.0, 12.0)
     """Marker hue band (deg; the lower bound may be negative to wrap through 0). The paper
     extracts 0-20 deg; a room with orange and brown posters needs the marker's own red."""
-    marker_min_saturation: float = 0.6
-    marker_min_value: float = 0.6
+    marker_min_saturation: float = 0.75
+    marker_min_value: float = 0.75
     marker_min_px: int = 6
     """Smallest marker region taken for the marker (px)."""
     marker_max_radius_px: float = 25.0
@@ -43,6 +45,8 @@ class ArmMaskParams:
     looks round; poster details rarely do)."""
     hand_scale: float = 5.0
     """The remote and fist extend this many marker radii around the marker."""
+    cone_slope: float = 1.0
+    """Half-width growth of the arm's cone per pixel below the hand (1: 90 deg opening)."""
     chroma_tol: float = 0.045
     """Largest chromaticity distance of a body-coloured pixel."""
     min_value: float = 0.12
@@ -57,6 +61,28 @@ def chromaticity(rgb: np.ndarray) -> np.ndarray:
     """``rgb / (r + g + b)`` ``(..., 3)`` of an image (uint8 or float)."""
     x = rgb.astype(np.float32)
     return x / np.maximum(x.sum(axis=-1, keepdims=True), 1.0)
+
+
+#: Colour quantisation of the body-colour look-up table (bits dropped per channel).
+LUT_SHIFT = 3
+
+
+@functools.lru_cache(maxsize=16)
+def body_colour_lut(body_rgb: tuple, chroma_tol: float, min_value: float) -> np.ndarray:
+    """Boolean ``(32, 32, 32)`` table: is the colour (each channel >> 3, bin centres) one of
+    the body colours by chromaticity, and bright enough?"""
+    n = 256 >> LUT_SHIFT
+    c = (np.arange(n) << LUT_SHIFT) + (1 << LUT_SHIFT) / 2
+    grid = np.stack(np.meshgrid(c, c, c, indexing="ij"), axis=-1)
+    chroma = chromaticity(grid)
+    out = np.zeros((n, n, n), bool)
+    for ref in body_rgb:
+        r = np.asarray(ref, np.float32)
+        d = chroma - r / max(float(r.sum()), 1e-6)
+        out |= np.einsum("...i,...i->...", d, d) <= chroma_tol**2
+    out &= grid.max(axis=-1) >= 255 * min_value
+    out.flags.writeable = False
+    return out
 
 
 def marker_region(hsv: np.ndarray, prm: ArmMaskParams) -> np.ndarray | None:
@@ -79,16 +105,11 @@ def marker_region(hsv: np.ndarray, prm: ArmMaskParams) -> np.ndarray | None:
 
 
 def body_coloured(rgb: np.ndarray, prm: ArmMaskParams) -> np.ndarray:
-    """uint8 mask of the pixels with one of the wearer's body colours."""
-    chroma = chromaticity(rgb)
-    out = np.zeros(rgb.shape[:2], bool)
-    for ref in prm.body_rgb:
-        c = np.asarray(ref, np.float32)
-        c = c / max(float(c.sum()), 1e-6)
-        d = chroma - c
-        out |= np.einsum("...i,...i->...", d, d) <= prm.chroma_tol**2
-    out &= rgb.max(axis=-1) >= 255 * prm.min_value
-    return out.astype(np.uint8) * 255
+    """uint8 mask of the pixels with one of the wearer's body colours (a table look-up)."""
+    lut = body_colour_lut(tuple(tuple(c) for c in prm.body_rgb), prm.chroma_tol,
+                          prm.min_value)
+    q = rgb >> LUT_SHIFT
+    return lut[q[..., 0], q[..., 1], q[..., 2]].astype(np.uint8) * 255
 
 
 def grow(mask: np.ndarray, radius: float) -> np.ndarray:
@@ -118,7 +139,13 @@ def arm_mask(rgb: np.ndarray, prm: ArmMaskParams = ArmMaskParams()) -> np.ndarra
             if i > 0 and 4 * stats[i, cv2.CC_STAT_AREA] >= prm.min_region_px]
     mask = seed if marker is not None else np.zeros_like(seed)
     if keep:
-        mask[np.isin(labels, keep)] = 255
+        arm = np.isin(labels, keep)
+        if marker is not None:  # the cone below the hand
+            ys, xs = np.nonzero(seed)
+            x_m, y_top, half = xs.mean(), ys.min(), 0.5 * (xs.max() - xs.min())
+            yy, xx = np.mgrid[0:seed.shape[0], 0:seed.shape[1]]
+            arm &= (yy >= y_top) & (np.abs(xx - x_m) <= half + prm.cone_slope * (yy - y_top))
+        mask[arm] = 255
     if not mask.any():
         return np.zeros((h, w), bool)
     mask = grow(mask, prm.margin_px / 2)

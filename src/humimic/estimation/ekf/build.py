@@ -31,9 +31,13 @@ def check_slam(scenario) -> None:
                                 False, "true, or slam.use_orientation: false")
 
 
+def mask_params(scenario) -> ArmMaskParams:
+    """The arm mask for the scenario's wearer: their skin and sleeve colours."""
+    h = scenario.human
+    return ArmMaskParams(body_rgb=(tuple(h.skin), tuple(h.shirt)))
+
+
 def slam_stages(scenario, world, rngs, rlog) -> list:
     check_slam(scenario)
-    h = scenario.human
-    mask = ArmMaskParams(body_rgb=(tuple(h.skin), tuple(h.shirt)))
-    return [SlamStage(scenario.slam, world, rngs["slam"], rlog, mask,
+    return [SlamStage(scenario.slam, world, rngs["slam"], rlog, mask_params(scenario),
                       image_every=scenario.output.image_every)]

@@ -32,6 +32,7 @@ class EstimatorSettings:
     use_camera: bool = True
     use_orientation: bool = True
     use_accel: bool = True
+    use_gyro: bool = True
     target_features: int = 20
     """Add new features while fewer than this many are predicted in view."""
     max_map: int = 60
@@ -93,15 +94,20 @@ class WearableSlam:
         return self.filter.interface
 
     # ---- IMU -------------------------------------------------------------------------------
-    def on_imu(self, t: float, accel_I: np.ndarray, R_W_I: np.ndarray | None) -> None:
-        """One head-IMU sample: specific force in I and the sensor's orientation in W."""
+    def on_imu(self, t: float, accel_I: np.ndarray, R_W_I: np.ndarray | None,
+               gyro_I: np.ndarray | None = None) -> None:
+        """One head-IMU sample: specific force in I, the sensor's orientation in W and its
+        angular rate in I (each fused if given and enabled)."""
         t0 = time.perf_counter()
         s = self.settings
         self.filter.predict(t)
-        if R_W_I is not None and (s.use_orientation or s.use_accel):
-            q_meas = mm.quat_from_matrix(R_W_I)
+        q_meas = a_W = w = None
+        if R_W_I is not None:
+            q_meas = mm.quat_from_matrix(R_W_I) if s.use_orientation else None
             a_W = mm.world_acceleration(accel_I, R_W_I, self.g_W) if s.use_accel else None
-            self.filter.update_inertial(q_meas if s.use_orientation else None, a_W)
+        if gyro_I is not None and s.use_gyro:
+            w = np.asarray(gyro_I, float)
+        self.filter.update_inertial(q_meas, a_W, w)
         self._pending_s += time.perf_counter() - t0
 
     # ---- camera ----------------------------------------------------------------------------

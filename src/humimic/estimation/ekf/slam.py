@@ -15,6 +15,7 @@ where each map feature should appear and how uncertain that is (the search ellip
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 
@@ -28,7 +29,27 @@ from humimic.sensors.camera_model import Intrinsics
 
 POSE_COLS = np.arange(0, 7)
 Q_COLS = np.arange(3, 7)
-IMU_COLS = np.concatenate([mm.ORIENTATION_COLS, mm.ACCEL_COLS])
+
+
+@functools.lru_cache(maxsize=32)
+def _inertial_model(given: tuple[bool, bool, bool], s_q: float, s_a: float, s_w: float
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """State columns, ``H`` and the (isotropic) noise of the inertial measurements ``given``
+    (q, a, ω): eq. 6 ``h = q``, eq. 7 ``h = a + b``, and ``h = ω``."""
+    blocks = [(mm.ORIENTATION_COLS, mm.H_ORIENTATION, s_q), (mm.ACCEL_COLS, mm.H_ACCEL, s_a),
+              (np.arange(10, 13), np.eye(3), s_w)]
+    chosen = [b for b, g in zip(blocks, given, strict=True) if g]
+    cols = np.concatenate([c for c, _, _ in chosen])
+    H = np.zeros((sum(len(h) for _, h, _ in chosen), len(cols)))
+    var = np.concatenate([np.full(len(h), s * s) for _, h, s in chosen])
+    r = c = 0
+    for cc, h, _ in chosen:
+        H[r:r + h.shape[0], c:c + len(cc)] = h
+        r, c = r + h.shape[0], c + len(cc)
+    out = cols, H, np.diag(var)
+    for a in out:
+        a.flags.writeable = False
+    return out
 
 
 @dataclass
@@ -76,6 +97,8 @@ class SlamParams:
     horizontal axes (tilt) and its vertical (yaw): the quaternion noise is
     ``J diag(tilt^2, yaw^2, tilt^2) J^T`` with ``J = d(q(δ) ⊗ q)/dδ`` (W's y is up)."""
     sigma_accel: float = mm.SIGMA_ACCEL
+    sigma_gyro: float = 0.01
+    """rad/s, when the IMU's angular rate is fused (the arm EKF's eq. 15 value)."""
     sigma_px: float = 1.0
     rho0: float = 0.5
     """Initial inverse depth of a new feature (1/m)."""
@@ -99,11 +122,6 @@ class SlamFilter:
         self.P = np.array(P0, float)
         self.intr = intr.pinhole()
         self.R_cv_I = np.asarray(R_cv_I, float)
-        self._H_imu = np.zeros((7, 10))  # eqs. 6-7 on the columns IMU_COLS
-        self._H_imu[0:4, 0:4] = mm.H_ORIENTATION
-        self._H_imu[4:7, 4:10] = mm.H_ACCEL
-        self._R_imu = np.diag(np.repeat([params.sigma_orientation**2, params.sigma_accel**2],
-                                        [4, 3]))
         self.params = params
         self.features: list[MapFeature] = []
         self._next_id = 0
@@ -151,21 +169,23 @@ class SlamFilter:
 
     # ---- inertial updates ------------------------------------------------------------------
     def update_inertial(self, q_meas: np.ndarray | None = None,
-                        a_meas: np.ndarray | None = None) -> None:
-        """Fuse an orientation ``q_WI`` (eq. 6) and/or an acceleration in W (eq. 7)."""
-        if q_meas is None and a_meas is None:
+                        a_meas: np.ndarray | None = None,
+                        w_meas: np.ndarray | None = None) -> None:
+        """Fuse, in one update, an orientation ``q_WI`` (eq. 6), an acceleration in W (eq. 7)
+        and/or an angular velocity in I (``h = ω``, the form of the arm's eq. 15)."""
+        given = (q_meas is not None, a_meas is not None, w_meas is not None)
+        if not any(given):
             return
-        R_imu = self._orientation_noise()
-        if q_meas is not None and a_meas is not None:  # one joint update
-            cols, H, R = IMU_COLS, self._H_imu, R_imu
-            nu = np.concatenate([align_sign(q_meas, self.x[3:7]) - mm.h_orientation(self.x),
-                                 a_meas - mm.h_accel(self.x)])
-        elif q_meas is not None:
-            cols, H, R = mm.ORIENTATION_COLS, mm.H_ORIENTATION, R_imu[:4, :4]
-            nu = align_sign(q_meas, self.x[3:7]) - mm.h_orientation(self.x)
-        else:
-            cols, H, R = mm.ACCEL_COLS, mm.H_ACCEL, R_imu[4:, 4:]
-            nu = a_meas - mm.h_accel(self.x)
+        prm = self.params
+        cols, H, R0 = _inertial_model(given, prm.sigma_orientation, prm.sigma_accel,
+                                      prm.sigma_gyro)
+        z = [align_sign(q_meas, self.x[3:7])] if given[0] else []
+        z += [a for a in (a_meas, w_meas) if a is not None]
+        nu = np.concatenate(z) - H @ self.x[cols]  # all three models are linear: h = H x
+        R = R0
+        if given[0] and prm.orientation_tilt_yaw is not None:
+            R = R0.copy()
+            R[0:4, 0:4] = self._orientation_noise()
         PHt = up.dense_PHt(self.P, cols, H)
         S = up.dense_S(PHt, cols, H, R)
         try:
@@ -175,16 +195,15 @@ class SlamFilter:
         self._normalize_q()
 
     def _orientation_noise(self) -> np.ndarray:
-        """The 7x7 noise of (eq. 6, eq. 7) at the current orientation."""
-        ty = self.params.orientation_tilt_yaw
-        if ty is None:
-            return self._R_imu
-        R = self._R_imu.copy()
+        """The 4x4 noise of eq. 6 at the current orientation."""
+        prm = self.params
         q = self.x[3:7]
+        if prm.orientation_tilt_yaw is None:
+            return np.eye(4) * prm.sigma_orientation**2
         J = 0.5 * right(q)[:, 1:]  # d(q(δ) ⊗ q)/dδ for a small rotation δ in W
-        var = np.array([ty[0] ** 2, ty[1] ** 2, ty[0] ** 2])
-        R[0:4, 0:4] = (J * var) @ J.T + self.params.sigma_orientation**2 * np.outer(q, q)
-        return R
+        tilt, yaw = prm.orientation_tilt_yaw
+        var = np.array([tilt**2, yaw**2, tilt**2])
+        return (J * var) @ J.T + prm.sigma_orientation**2 * np.outer(q, q)
 
     # ---- features --------------------------------------------------------------------------
     def _groups(self, feats: list[MapFeature]) -> list[tuple[np.ndarray, np.ndarray, int]]:

@@ -14,7 +14,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from humimic.maths.stats import chi2_band, finite_or_none, nees, rmse
+from humimic.maths.trajectory import ape, rpe
 from humimic.motion import quat
+
+#: Relative pose error over this many frames (1 s at the head camera's 30 Hz).
+RPE_DELTA_FRAMES = 30
 
 
 @dataclass
@@ -59,8 +63,28 @@ def pose_errors(p: np.ndarray, q: np.ndarray, p_true: np.ndarray, R_true: np.nda
             "rotation": angle}
 
 
+def trajectory_scores(t: np.ndarray, p: np.ndarray, q: np.ndarray, p_true: np.ndarray,
+                      R_true: np.ndarray) -> dict:
+    """ATE after SE(3) and Sim(3) alignment (Umeyama) and the RPE over
+    :data:`RPE_DELTA_FRAMES` frames (:mod:`humimic.maths.trajectory`, evo's conventions)."""
+    T_est = np.zeros((len(t), 4, 4))
+    T_est[:, :3, :3], T_est[:, :3, 3], T_est[:, 3, 3] = quat.to_matrix(q), p, 1.0
+    T_ref = T_est.copy()
+    T_ref[:, :3, :3], T_ref[:, :3, 3] = R_true, p_true
+    out: dict = {}
+    if len(t) >= 3:
+        out["ate_se3_rmse_m"] = finite_or_none(ape(t, T_ref, t, T_est, "se3").rmse_m)
+        sim3 = ape(t, T_ref, t, T_est, "sim3")
+        out["ate_sim3_rmse_m"] = finite_or_none(sim3.rmse_m)
+        out["sim3_scale"] = finite_or_none(sim3.scale)
+    if len(t) > RPE_DELTA_FRAMES:
+        out["rpe_rmse_m"] = finite_or_none(rpe(t, T_ref, t, T_est, RPE_DELTA_FRAMES).rmse_m)
+        out["rpe_delta_frames"] = RPE_DELTA_FRAMES
+    return out
+
+
 def slam_metrics(arr: dict[str, np.ndarray], p_true: np.ndarray, R_true: np.ndarray,
-                 mode: str, trajectory_scores: dict | None = None) -> dict:
+                 mode: str) -> dict:
     """``slam.*`` scores (see :mod:`humimic.estimation.ekf.slam_stage` for each key)."""
     n = len(arr["t"])
     out: dict = {"mode": mode, "frames": n}
@@ -76,8 +100,7 @@ def slam_metrics(arr: dict[str, np.ndarray], p_true: np.ndarray, R_true: np.ndar
         "heading_rmse_deg": finite_or_none(math.degrees(rmse(e["heading"]))),
         "rotation_rmse_deg": finite_or_none(math.degrees(rmse(e["rotation"]))),
     })
-    if trajectory_scores:
-        out.update(trajectory_scores)
+    out.update(trajectory_scores(arr["t"], arr["p"], arr["q"], p_true, R_true))
     camera = mode != "inertial"
     measured = arr["measured"]
     out.update({

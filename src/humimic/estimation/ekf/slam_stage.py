@@ -12,8 +12,9 @@ head camera (frame I) in the paper's W:
 
 * ``ate_rmse_m`` -- position error, no alignment (the screen fixes the frame);
   ``horizontal_rmse_m`` (x, z: Table II's), ``vertical_rmse_m``, ``position_max_error_m``;
-* ``ate_se3_rmse_m``, ``ate_sim3_rmse_m`` -- the same after the best rigid (scaled) alignment,
-  ``rpe_rmse_m`` -- relative translation error over 1 s (:mod:`humimic.maths`);
+* ``ate_se3_rmse_m``, ``ate_sim3_rmse_m`` (and ``sim3_scale``) -- the same after the best rigid
+  (similarity) alignment; ``rpe_rmse_m`` -- relative translation error over
+  ``rpe_delta_frames`` frames (1 s) (:mod:`humimic.maths.trajectory`, evo's conventions);
 * ``heading_rmse_deg`` (the optical axis about W's vertical), ``rotation_rmse_deg``;
 * ``features_per_frame`` (measured), ``features_predicted_per_frame``,
   ``frames_without_features`` (and ``_fraction``), ``map_size_mean``, features added /
@@ -51,11 +52,13 @@ def settings_from_config(cfg) -> EstimatorSettings:
     orient = (None if nz.orientation_std_deg is None
               else tuple(np.radians(nz.orientation_std_deg)))
     slam = SlamParams(noise=mm.MotionNoise(nz.jerk, nz.angular_acc, nz.accel_bias_drift),
-                      sigma_accel=nz.accel, sigma_px=nz.pixel, orientation_tilt_yaw=orient,
+                      sigma_accel=nz.accel, sigma_gyro=nz.gyro, sigma_px=nz.pixel,
+                      orientation_tilt_yaw=orient,
                       rho0=1.0 / cfg.init_depth, sigma_rho=cfg.init_inverse_depth_std)
     fe = FrontendParams(patch=cfg.patch_px, n_sigma=cfg.search_sigma,
                         max_search_px=cfg.max_search_px, min_score=cfg.min_zncc)
     return EstimatorSettings(use_camera=cfg.mode != "inertial", use_accel=cfg.mode != "camera",
+                             use_gyro=cfg.use_gyro and cfg.mode != "camera",
                              use_orientation=cfg.use_orientation and cfg.mode != "camera",
                              target_features=cfg.target_features, max_map=cfg.max_map,
                              max_measured=cfg.max_measured, slam=slam, frontend=fe)
@@ -117,7 +120,7 @@ class SlamStage(Stage):
             self._last_R = msg.value.R_W_sensor
             return
         with self._timer.time(self.name):
-            self.slam.on_imu(msg.t, msg.value.accel, msg.value.R_W_sensor)
+            self.slam.on_imu(msg.t, msg.value.accel, msg.value.R_W_sensor, msg.value.gyro)
         self._publish(msg, -1)
 
     def _on_frame(self, topic: str, msg) -> None:
@@ -173,7 +176,8 @@ class SlamStage(Stage):
                              colors=[(230, 30, 30)])
 
     def trajectories(self) -> dict[str, np.ndarray]:
-        """Frame times and the estimated and true head positions and rotations in W."""
+        """Per frame: time, the estimated pose and its covariance, feature counts, cycle time,
+        and the true head position and rotation in W (what ``slam.npz`` holds)."""
         arr = self.record.arrays()
         gt = self.world.gt
         k = gt.index_of(arr["t"]) if len(arr["t"]) else np.zeros(0, int)
@@ -190,4 +194,5 @@ class SlamStage(Stage):
         tr = self.trajectories()
         if len(tr["t"]) == 0:
             return []
+        np.savez_compressed(out_dir / "slam.npz", **tr)
         return [plot_trajectory(out_dir / "slam_trajectory.png", tr)]

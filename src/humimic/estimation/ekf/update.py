@@ -28,10 +28,11 @@ def gain_update(x: np.ndarray, P: np.ndarray, PHt: np.ndarray, S: np.ndarray,
     """``K = P H^T S^-1``, ``x += K ν``, ``P -= K (P H^T)^T`` (= ``K S K^T``), in place.
 
     ``PHt (n, m)`` and ``S (m, m)`` (innovation covariance, ``R`` included) are from
-    :func:`dense_PHt` or :func:`features_PHt`. Raises ``LinAlgError`` if ``S`` is not
-    positive definite (the caller skips the update).
+    :func:`dense_PHt` or :func:`features_PHt`. Raises ``LinAlgError`` if ``S`` has a
+    non-positive diagonal or is singular (the caller skips the update).
     """
-    np.linalg.cholesky(S)  # raises LinAlgError unless S is positive definite
+    if not np.all(np.diagonal(S) > 0.0):  # a broken covariance: refuse rather than diverge
+        raise np.linalg.LinAlgError("innovation covariance is not positive definite")
     Kt = np.linalg.solve(S, PHt.T)  # (m, n) = S^-1 (P H^T)^T = K^T
     x += innovation @ Kt
     P -= Kt.T @ PHt.T
