@@ -123,3 +123,17 @@ def test_arm_on_slam_without_slam_exits_2(tmp_path, capsys):
     code = main([str(path), "--out", str(tmp_path / "out"), "--rerun", "off", "--quiet"])
     err = capsys.readouterr().err.strip()
     assert code == 2 and "arm.head_pose" in err and "oracle" in err, err
+
+
+def test_distortion_area_scale_is_the_jacobian_determinant():
+    """Against finite differences of the camera model's own distortion (OpenCV's k1, k2)."""
+    from humimic.estimation.ekf.arm_marker import distortion_area_scale
+
+    def distort(xy):
+        r2 = xy @ xy
+        return xy * (1 + K.k1 * r2 + K.k2 * r2 * r2)
+    for xy in (np.array([0.0, 0.0]), np.array([0.3, -0.2]), np.array([-0.5, 0.35])):
+        h = 1e-6
+        J = np.column_stack([(distort(xy + e) - distort(xy - e)) / (2 * h)
+                             for e in (np.array([h, 0.0]), np.array([0.0, h]))])
+        assert distortion_area_scale(xy, K) == pytest.approx(np.linalg.det(J), rel=1e-6)
