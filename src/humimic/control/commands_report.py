@@ -59,9 +59,9 @@ def commands_metrics(cmd_stage, follow) -> dict:
         return {"commands": out}
     truth = true_targets(gt, rec["t"], cmd_stage.p_eyes_base)
     done = {(c.kind, c.seq): t for t, c in follow.rec.done}
-    units = {"move": ("position_error_after_m", 1.0), "head": ("angle_error_after_deg",
-                                                                np.degrees(1.0)),
-             "arm": ("palm_error_after_m", 1.0)}
+    units = {"move": ("position_error_after", "m", 1.0),
+             "head": ("angle_error_after", "deg", np.degrees(1.0)),
+             "arm": ("palm_error_after", "m", 1.0)}
     for kind in cmd_stage.cfg.kinds:
         issued = [(ts, ti, c) for ts, ti, c in cmd_stage.issued if c.kind == kind]
         robot = _robot_state(rec, kind)
@@ -73,14 +73,15 @@ def commands_metrics(cmd_stage, follow) -> dict:
             execs.append(td - ti)
             i = min(int(np.searchsorted(rec["t"], td)), len(rec["t"]) - 1)
             errs.append(float(np.linalg.norm(robot[i] - truth[kind][i])))
-        name, scale = units[kind]
+        name, unit, scale = units[kind]
         out[kind] = {
             "count": len(issued),
             "finished": len(execs),
             "execution_s_mean": finite_or_none(np.mean(execs) if execs else np.nan),
-            f"{name}_mean": finite_or_none(scale * np.mean(errs) if errs else np.nan),
-            f"{name}_max": finite_or_none(scale * np.max(errs) if errs else np.nan),
-            "final_error": finite_or_none(scale * np.linalg.norm(robot[-1] - truth[kind][-1])),
+            f"{name}_{unit}_mean": finite_or_none(scale * np.mean(errs) if errs else np.nan),
+            f"{name}_{unit}_max": finite_or_none(scale * np.max(errs) if errs else np.nan),
+            f"final_error_{unit}": finite_or_none(scale * np.linalg.norm(robot[-1]
+                                                                         - truth[kind][-1])),
             "path_lag_s": finite_or_none(path_lag(rec["t"], robot, truth[kind])),
             "estimate_age_ms": finite_or_none(1e3 * np.mean([ti - ts for ts, ti, _ in issued])
                                               if issued else np.nan),
