@@ -55,7 +55,7 @@ def tex_coords(xy: np.ndarray) -> np.ndarray:
 @functools.lru_cache(maxsize=4)
 def _rays(intr: Intrinsics) -> np.ndarray:
     u, v = np.meshgrid(np.arange(intr.width, dtype=float), np.arange(intr.height, dtype=float))
-    xy = intr.undistort_normalized(np.stack([u, v], axis=-1), iterations=20)
+    xy = intr.undistort_normalized(np.stack([u, v], axis=-1))
     ray_cv = np.concatenate([xy, np.ones(xy.shape[:-1] + (1,))], axis=-1)
     return ray_cv @ R_CV_I  # rows: R_CV_I^T ray (the ray in I)
 

@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from humimic.estimation.ekf import motion_model as mm
+from humimic.estimation.ekf import quaternion as quat_jac  # noqa: F401 (tests use it)
 from humimic.estimation.ekf.slam import SlamFilter, SlamParams
 from humimic.motion import quat
 from humimic.sensors.camera_model import Intrinsics
@@ -61,8 +62,9 @@ class SynthRun:
 
 def run(seed: int = 0, duration: float = 3.0, imu_rate: float = 180.0, cam_every: int = 6,
         n_target: int = 12, known: bool = True, use_imu: bool = True,
-        use_camera: bool = True, params: SlamParams = SlamParams()) -> SynthRun:
+        use_camera: bool = True, params: SlamParams | None = None) -> SynthRun:
     """Run the filter over a sampled trajectory; returns truth and estimates at IMU times."""
+    params = params or SlamParams()
     rng = np.random.default_rng(seed)
     pts = np.vstack([SCREEN, world_points(rng)])
     x0 = mm.initial_state(p=[0.0, 0.0, -2.5])
@@ -112,8 +114,8 @@ def run(seed: int = 0, duration: float = 3.0, imu_rate: float = 180.0, cam_every
                     for fid, i in zip(f.add_features(uv_new), new, strict=True):
                         point_of[fid] = i
             out.frames.append(k)
-        out.est[k] = f.x[: mm.DIM]
-        out.cov[k] = f.P[: mm.DIM, : mm.DIM]
+        out.est[k] = f.interface
+        out.cov[k] = f.P_interface
     return out
 
 

@@ -55,7 +55,7 @@ def test_quaternion_jacobians(rng):
             qq[1:], np.cross(qq[1:], vv))
         np.testing.assert_allclose(rot(q), Rotation.from_quat(xyzw(q)).apply(v), atol=1e-12)
         np.testing.assert_allclose(qj.d_rotate_dq(q, v), numjac(rot, q), atol=1e-7)
-        rotT = lambda qq, vv=v: rot(np.r_[qq[0], -qq[1:]], vv)  # noqa: E731
+        rotT = lambda qq, vv=v, rot=rot: rot(np.r_[qq[0], -qq[1:]], vv)  # noqa: E731
         np.testing.assert_allclose(rotT(q), Rotation.from_quat(xyzw(q)).inv().apply(v),
                                    atol=1e-12)
         np.testing.assert_allclose(qj.d_rotate_T_dq(q, v), numjac(rotT, q), atol=1e-7)
@@ -181,13 +181,14 @@ def test_observe_against_opencv_and_numerical(rng):
             assert z[0] > 0
             np.testing.assert_allclose(h[0], uv_cv, atol=1e-8)
             pq = np.r_[p, q]
-            num_pq = numjac(lambda v, yy=yy: idp.observe(yy[None], v[:3], v[3:], intr, R_CV_I)[0][0],
-                            pq)
+            num_pq = numjac(lambda v, yy=yy: idp.observe(  # noqa: E731
+                yy[None], v[:3], v[3:], intr, R_CV_I)[0][0], pq)
             # q enters through R(q) for a unit q; compare along the sphere's tangent
             T = np.eye(7)
             T[3:, 3:] = qj.d_normalize(q)
             np.testing.assert_allclose(Hpq[0] @ T, num_pq @ T, rtol=1e-5, atol=1e-4)
-            num_y = numjac(lambda v: idp.observe(v[None], p, q, intr, R_CV_I)[0][0], yy)
+            num_y = numjac(lambda v, p=p, q=q: idp.observe(v[None], p, q, intr, R_CV_I)[0][0],
+                           yy)
             np.testing.assert_allclose(Hy[0], num_y, rtol=1e-5, atol=1e-4)
 
 
@@ -224,9 +225,11 @@ def test_initialise_back_projects_and_jacobians(rng):
     for i in range(3):
         T = np.eye(7)
         T[3:, 3:] = qj.d_normalize(q)
-        f = lambda v, i=i: idp.initialise(uv[i:i + 1], v[:3], v[3:], intr, R_CV_I, 0.4)[0][0]  # noqa: E731
+        f = lambda v, i=i: idp.initialise(  # noqa: E731
+            uv[i:i + 1], v[:3], v[3:], intr, R_CV_I, 0.4)[0][0]
         np.testing.assert_allclose(J_pq[i] @ T, numjac(f, np.r_[p, q]) @ T, atol=1e-6)
-        g = lambda z, i=i: idp.initialise(z[None, :2], p, q, intr, R_CV_I, z[2])[0][0]  # noqa: E731
+        g = lambda z, i=i, p=p, q=q: idp.initialise(  # noqa: E731
+            z[None, :2], p, q, intr, R_CV_I, z[2])[0][0]
         np.testing.assert_allclose(J_z[i], numjac(g, np.r_[uv[i], 0.4]), atol=1e-6)
 
 
@@ -235,5 +238,5 @@ def test_undistortion_maps_invert_the_distortion():
     for u, v in ((10, 12), (183, 119), (360, 230)):
         ray = np.array([(u - INTR.cx) / INTR.fx, (v - INTR.cy) / INTR.fy, 1.0])
         np.testing.assert_allclose([map_x[v, u], map_y[v, u]], INTR.project(ray), atol=1e-3)
-        back = INTR.undistort_normalized(np.array([map_x[v, u], map_y[v, u]], float), 20)
+        back = INTR.undistort_normalized(np.array([map_x[v, u], map_y[v, u]], float))
         np.testing.assert_allclose(back, ray[:2], atol=1e-5)

@@ -3,17 +3,17 @@ Kalman filter and unscented transform, NEES against the chi-square band, map man
 
 from __future__ import annotations
 
+import _synth_slam as synth
 import numpy as np
 import pytest
 from filterpy.kalman import KalmanFilter, MerweScaledSigmaPoints, unscented_transform
+from test_ekf_jacobians import sugiyama_eq3
 
-import _synth_slam as synth
 from humimic.estimation.ekf import inverse_depth as idp
 from humimic.estimation.ekf import motion_model as mm
 from humimic.estimation.ekf import update as up
 from humimic.estimation.ekf.slam import SlamFilter
 from humimic.maths.stats import chi2_band, nees, rmse
-from test_ekf_jacobians import sugiyama_eq3
 
 
 def _random_cov(rng, n):
@@ -30,7 +30,8 @@ def _filter_with_map(rng) -> SlamFilter:
     return f
 
 
-def test_feature_update_matches_filterpy(rng=np.random.default_rng(1)):
+def test_feature_update_matches_filterpy():
+    rng = np.random.default_rng(1)
     f = _filter_with_map(rng)
     pred = f.predict_features()
     assert len(pred.fids) == 7  # 4 corners + 3 new features, all in view
@@ -58,7 +59,8 @@ def test_feature_update_matches_filterpy(rng=np.random.default_rng(1)):
     np.testing.assert_allclose(f.x[0:3], kf.x[0:3], rtol=1e-8, atol=1e-10)
 
 
-def test_inertial_update_matches_filterpy(rng=np.random.default_rng(2)):
+def test_inertial_update_matches_filterpy():
+    rng = np.random.default_rng(2)
     f = _filter_with_map(rng)
     q_meas = f.x[3:7] + 1e-3 * rng.standard_normal(4)
     a_meas = rng.standard_normal(3)
@@ -79,7 +81,7 @@ def test_inertial_update_matches_filterpy(rng=np.random.default_rng(2)):
     assert not np.allclose(P_before, f.P)
 
 
-def test_prediction_matches_unscented_transform(rng=np.random.default_rng(3)):
+def test_prediction_matches_unscented_transform():
     """EKF ``F P F^T + G Q_n G^T`` against the unscented transform of the transcribed eq. 3
     on the state augmented with its noise (filterpy's sigma points)."""
     dt = 1 / 30
@@ -140,7 +142,8 @@ def test_slam_with_inverse_depth_features():
     assert np.mean(nees_means) < 12.0, nees_means  # measured 4.9
 
 
-def test_conversion_preserves_mean_and_covariance(rng=np.random.default_rng(4)):
+def test_conversion_preserves_mean_and_covariance():
+    rng = np.random.default_rng(4)
     f = _filter_with_map(rng)
     before_ids, before_pts, before_cov = f.feature_points()
     P_before = f.P.copy()
@@ -154,7 +157,8 @@ def test_conversion_preserves_mean_and_covariance(rng=np.random.default_rng(4)):
     assert len(f.x) == 19 + 7 * 3
 
 
-def test_delete_removes_rows_and_columns(rng=np.random.default_rng(5)):
+def test_delete_removes_rows_and_columns():
+    rng = np.random.default_rng(5)
     f = _filter_with_map(rng)
     ids = [ft.fid for ft in f.features]
     keep = f.feature(ids[5])
@@ -183,3 +187,60 @@ def test_gain_update_rejects_indefinite_innovation():
     x, P = np.zeros(3), np.eye(3)
     with pytest.raises(np.linalg.LinAlgError):
         up.gain_update(x, P, np.eye(3)[:, :2], -np.eye(2), np.ones(2))
+
+
+def test_compressed_imu_steps_equal_the_dense_filter():
+    """Six IMU steps on the interface block with the map's share deferred (Guivant & Nebot)
+    give the dense EKF's mean and covariance (filterpy, full-size F and H) exactly."""
+    rng = np.random.default_rng(6)
+    f = _filter_with_map(rng)
+    n = len(f.x)
+    kf = KalmanFilter(dim_x=n, dim_z=10)
+    kf.x, kf.P = f.x.copy(), f.P.copy()
+    t = 0.0
+    for _ in range(6):
+        t += 1 / 180
+        x_new, F, G = mm.predict(kf.x[:19], 1 / 180)
+        F_full = np.eye(n)
+        F_full[:19, :19] = F
+        Q_full = np.zeros((n, n))
+        Q_full[:19, :19] = mm.process_noise(G, f.params.noise)
+        kf.predict(F=F_full, Q=Q_full)
+        kf.x[:19] = x_new  # the nonlinear mean, as the EKF
+        q = synth.quat.normalize(x_new[3:7] + 1e-3 * rng.standard_normal(4))
+        a, w = rng.standard_normal(3), rng.standard_normal(3)
+        H = np.zeros((10, n))
+        H[0:4, 3:7] = np.eye(4)
+        H[4:7, 13:16] = H[4:7, 16:19] = np.eye(3)
+        H[7:10, 10:13] = np.eye(3)
+        R = np.diag(np.r_[np.full(4, 1e-6), np.full(3, 0.25), np.full(3, 1e-4)])
+        kf.update(np.r_[q, a, w], R=R, H=H)
+        f.predict(t)
+        f.update_inertial(q, a, w)
+        # the filter renormalises q: do the same to the reference
+        J = np.eye(n)
+        J[3:7, 3:7] = synth.quat_jac.d_normalize(kf.x[3:7])
+        kf.x[3:7] /= np.linalg.norm(kf.x[3:7])
+        kf.P = J @ kf.P @ J.T
+    np.testing.assert_allclose(f.x, kf.x, rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(f.P, kf.P, rtol=1e-7, atol=1e-12)
+
+
+def test_map_update_after_imu_steps_equals_the_dense_filter():
+    """IMU steps, then a feature update (which renormalises q over the whole state), then
+    more IMU steps: still the dense EKF's numbers (the covariance stays positive)."""
+    rng = np.random.default_rng(7)
+    f = _filter_with_map(rng)
+    g = _filter_with_map(np.random.default_rng(7))
+    for k in range(1, 4):
+        for filt, flush in ((f, False), (g, True)):
+            filt.predict(k / 90)
+            filt.update_inertial(filt.interface[3:7].copy(), np.ones(3), None)
+            if flush:
+                _ = filt.P  # the reference applies every step to the map at once
+        for filt in (f, g):
+            pred = filt.predict_features()
+            filt.update_features(pred, np.arange(len(pred.fids)), pred.uv + 0.5)
+    np.testing.assert_allclose(f.x, g.x, rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(f.P, g.P, rtol=1e-7, atol=1e-12)
+    assert np.linalg.eigvalsh(f.P).min() > -1e-12

@@ -100,3 +100,32 @@ def test_fig8_fusion_scores_and_head_pose(tmp_path):
     assert (tmp_path / "slam_trajectory.png").stat().st_size > 10_000
     m = json.loads((tmp_path / "metrics.json").read_text())
     assert m["slam"]["ate_rmse_m"] == s["ate_rmse_m"]
+
+
+@pytest.mark.slow
+def test_covered_head_camera_coasts_then_recovers(tmp_path, monkeypatch):
+    """A hand over the lens for 1 s in the paper's room: those frames measure nothing and are
+    counted, the head pose coasts on the IMU (never NaN) and the features come back."""
+    from dataclasses import replace
+
+    from humimic.world.world import World
+
+    capture = World.capture_headcam
+
+    def covered(self, t):
+        img = capture(self, t)
+        return replace(img, image=np.zeros_like(img.image)) if 1.0 <= t < 2.0 else img
+
+    monkeypatch.setattr(World, "capture_headcam", covered)
+    scenario = load_scenario(SCENARIOS_DIR / "sugiyama_fig8.yaml", duration=3.0)
+    metrics = run_one(scenario, tmp_path, rerun="off", progress=False)
+    s = metrics["slam"]
+    assert s["frames_without_features"] == 30  # 1 s at 30 Hz
+    tr = dict(np.load(tmp_path / "slam.npz"))
+    assert np.all(np.isfinite(tr["p"])) and np.all(np.isfinite(tr["P"]))
+    err = np.linalg.norm(tr["p"] - tr["p_true"], axis=1)
+    sd = np.sqrt(np.trace(tr["P"][:, :3, :3], axis1=1, axis2=2))
+    t = tr["t"]
+    assert sd[(t > 1.9) & (t < 2.0)].max() > 2 * sd[(t > 0.9) & (t < 1.0)].max()  # it grew
+    assert np.all(tr["measured"][t >= 2.3] > 10)  # found again
+    assert err[t >= 2.5].max() < 0.05, err[t >= 2.5].max()  # measured ~2 cm

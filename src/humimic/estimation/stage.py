@@ -19,10 +19,7 @@ import numpy as np
 from humimic.estimation.random_jerk import RandomJerkFilter
 from humimic.messages import Estimates, TargetEstimate
 from humimic.pipeline.stage import Stage
-from humimic.viz.rerun_log import BASE, EVENTS
-
-TARGET_COLORS = {"head": (255, 210, 0), "right_hand": (230, 40, 40),
-                 "left_hand": (40, 200, 60)}
+from humimic.viz.rerun_log import BASE, EVENTS, OTHER_COLOR, TARGET_COLORS
 
 
 @dataclass
@@ -67,11 +64,8 @@ class FilterStage(Stage):
         """Ground truth, only to draw the true positions beside the estimates in rerun."""
         self._gt_p = ({n: gt.p_base(n) for n in self.targets}
                       if gt is not None and rlog is not None and rlog.enabled else {})
-        self.filters = {t: RandomJerkFilter(cfg.b, cfg.init_vel_std**2, cfg.init_acc_std**2)
-                        for t in self.targets}
-        self._t_meas = dict.fromkeys(self.targets, -np.inf)
-        self._t_init = dict.fromkeys(self.targets, np.inf)
-        self.resets = dict.fromkeys(self.targets, 0)
+        self.filters = {t: RandomJerkFilter(cfg.b, cfg.init_vel_std**2, cfg.init_acc_std**2,
+                                            cfg.max_gap) for t in self.targets}
         self._bus = self._timer = None
 
     def attach(self, bus, timer) -> None:
@@ -95,24 +89,18 @@ class FilterStage(Stage):
         for i, name in enumerate(self.targets):
             kf = self.filters[name]
             m = meas.targets.get(name)
-            if m is None and kf.initialised and t - self._t_meas[name] > self.cfg.max_gap:
-                kf.reset()
-                self.resets[name] += 1
-                if self.rlog is not None:
-                    self.rlog.log_text(t, f"{EVENTS}/filter/{name}",
-                                       f"no measurement for {self.cfg.max_gap:g} s: reset",
-                                       "WARN")
+            resets = kf.resets
             if m is not None:
-                if not kf.initialised:
-                    self._t_init[name] = t
                 kf.step(t, m.p_base, m.R_base)
-                self._t_meas[name] = t
                 measured[i] = True
-            elif kf.initialised:
+            else:
                 kf.step(t)
+            if kf.resets != resets and self.rlog is not None:
+                self.rlog.log_text(t, f"{EVENTS}/filter/{name}",
+                                   f"no measurement for {self.cfg.max_gap:g} s: reset", "WARN")
             if kf.initialised:
                 x, Pi = kf.x, kf.P
-                valid[i], X[i], P[i], since[i] = True, x, Pi, t - self._t_init[name]
+                valid[i], X[i], P[i], since[i] = True, x, Pi, kf.since_init
                 out[name] = TargetEstimate(name, x[0:3], x[3:6], x[6:9], Pi)
         self.record.rows.append((t, valid, measured, X, P, since))
         return Estimates(out)
@@ -121,7 +109,7 @@ class FilterStage(Stage):
         names = list(est.targets)
         if not names:
             return
-        colors = [TARGET_COLORS.get(n, (200, 200, 200)) for n in names]
+        colors = [TARGET_COLORS.get(n, OTHER_COLOR) for n in names]
         self.rlog.log_ellipsoids_3d(
             t, f"{BASE}/tracking/estimates", np.array([est.targets[n].p_base for n in names]),
             np.array([est.targets[n].P[:3, :3] for n in names]), colors=colors, labels=names)
@@ -134,4 +122,5 @@ class FilterStage(Stage):
     def metrics(self) -> dict:
         return {"filter": {"kind": self.cfg.kind, "b": self.cfg.b,
                            "b_paper_mm_units": self.cfg.b * 1e3, "max_gap_s": self.cfg.max_gap,
-                           "resets": dict(self.resets), "latency_ms": 1e3 * self.cfg.latency}}
+                           "resets": {n: kf.resets for n, kf in self.filters.items()},
+                           "latency_ms": 1e3 * self.cfg.latency}}

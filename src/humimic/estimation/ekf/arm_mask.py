@@ -85,9 +85,11 @@ def body_colour_lut(body_rgb: tuple, chroma_tol: float, min_value: float) -> np.
     return out
 
 
-def marker_region(hsv: np.ndarray, prm: ArmMaskParams) -> np.ndarray | None:
+def marker_region(hsv: np.ndarray, prm: ArmMaskParams, scale: float = 1.0
+                  ) -> np.ndarray | None:
     """The marker (uint8 0/255) or None: hue extraction, labelling and the largest region
-    (Sugiyama sec. IV-B) among the round ones no larger than a marker can look."""
+    (Sugiyama sec. IV-B) among the round ones no larger than a marker can look. ``scale``:
+    the image's size relative to the camera's (pixel parameters are the camera's)."""
     lo, hi = prm.marker_hue_deg
     s, v = int(255 * prm.marker_min_saturation), int(255 * prm.marker_min_value)
     m = cv2.inRange(hsv, (max(0, int(lo // 2)), s, v), (int(hi // 2), 255, 255))
@@ -96,7 +98,8 @@ def marker_region(hsv: np.ndarray, prm: ArmMaskParams) -> np.ndarray | None:
     n, labels, stats, _ = cv2.connectedComponentsWithStats(m, connectivity=8)
     area = stats[1:, cv2.CC_STAT_AREA].astype(float)
     r = 0.5 * np.maximum(stats[1:, cv2.CC_STAT_WIDTH], stats[1:, cv2.CC_STAT_HEIGHT])
-    ok = ((area >= prm.marker_min_px) & (r <= prm.marker_max_radius_px)
+    ok = ((area >= max(prm.marker_min_px * scale * scale, 1.0))
+          & (r <= prm.marker_max_radius_px * scale)
           & (area >= prm.marker_min_fill * np.pi * r * r))
     if not ok.any():
         return None
@@ -119,34 +122,33 @@ def grow(mask: np.ndarray, radius: float) -> np.ndarray:
     return np.where(dist <= radius, 255, 0).astype(np.uint8)
 
 
-def arm_mask(rgb: np.ndarray, prm: ArmMaskParams = ArmMaskParams()) -> np.ndarray:
-    """Boolean mask of the wearer's arm and Wii remote in an RGB head-camera frame (colours
-    are classified at half resolution: the mask is grown by a margin anyway)."""
-    h, w = rgb.shape[:2]
-    marker = marker_region(cv2.cvtColor(rgb, cv2.COLOR_RGB2HSV), prm)
-    small = cv2.resize(rgb, (w // 2, h // 2), interpolation=cv2.INTER_AREA)
-    seed = np.zeros(small.shape[:2], np.uint8)
+def arm_mask(rgb: np.ndarray, prm: ArmMaskParams = ArmMaskParams(), scale: float = 1.0
+             ) -> np.ndarray:
+    """Boolean mask of the wearer's arm and Wii remote in an RGB head-camera image. ``scale``
+    is the image's size relative to the camera's: the mask is coarse (grown by a margin), so
+    it is computed on a half-size image (``scale=0.5``) and upsampled."""
+    hsv = cv2.cvtColor(rgb, cv2.COLOR_RGB2HSV)
+    marker = marker_region(hsv, prm, scale)
     if marker is not None:
         radius = np.sqrt(np.count_nonzero(marker) / np.pi)
-        seed = grow(cv2.resize(marker, (w // 2, h // 2), interpolation=cv2.INTER_NEAREST),
-                    prm.hand_scale * radius / 2)
+        seed = grow(marker, prm.hand_scale * radius)
     else:
+        seed = np.zeros(rgb.shape[:2], np.uint8)
         seed[-1, :] = 255  # the arm enters from below
-    body = body_coloured(small, prm)
+    body = body_coloured(rgb, prm)
     n, labels, stats, _ = cv2.connectedComponentsWithStats(body, connectivity=8)
     touching = np.unique(labels[(seed > 0) & (body > 0)])
     keep = [i for i in touching
-            if i > 0 and 4 * stats[i, cv2.CC_STAT_AREA] >= prm.min_region_px]
+            if i > 0 and stats[i, cv2.CC_STAT_AREA] >= prm.min_region_px * scale * scale]
     mask = seed if marker is not None else np.zeros_like(seed)
     if keep:
         arm = np.isin(labels, keep)
         if marker is not None:  # the cone below the hand
             ys, xs = np.nonzero(seed)
             x_m, y_top, half = xs.mean(), ys.min(), 0.5 * (xs.max() - xs.min())
-            yy, xx = np.mgrid[0:seed.shape[0], 0:seed.shape[1]]
+            yy, xx = np.ogrid[0:seed.shape[0], 0:seed.shape[1]]
             arm &= (yy >= y_top) & (np.abs(xx - x_m) <= half + prm.cone_slope * (yy - y_top))
         mask[arm] = 255
     if not mask.any():
-        return np.zeros((h, w), bool)
-    mask = grow(mask, prm.margin_px / 2)
-    return cv2.resize(mask, (w, h), interpolation=cv2.INTER_NEAREST) > 0
+        return np.zeros(rgb.shape[:2], bool)
+    return grow(mask, prm.margin_px * scale) > 0

@@ -113,16 +113,17 @@ class WearableSlam:
     # ---- camera ----------------------------------------------------------------------------
     def on_frame(self, t: float, image: np.ndarray, mask: np.ndarray | None = None,
                  known_uv: np.ndarray | None = None) -> FrameReport:
-        """One head-camera frame (distorted RGB as captured; ``mask``: pixels of the wearer's
-        arm in that image, never matched nor detected in; ``known_uv``: where the known
-        features are in this frame, if known -- see :meth:`_cut_known_patches`)."""
+        """One head-camera frame (distorted RGB as captured; ``mask``: the wearer's arm in the
+        *undistorted* image (bool, full size), never matched nor detected in; ``known_uv``:
+        where the known features are in this frame, if known -- see
+        :meth:`_cut_known_patches`)."""
         t0 = time.perf_counter()
         s, f, fe = self.settings, self.filter, self.frontend
         f.predict(t)
         if not s.use_camera:
             return self._report(t, t0)
         grey = fe.undistort(image)
-        umask = fe.undistort_mask(mask) if mask is not None else None
+        umask = mask
         pred = f.predict_features()
         self._cut_known_patches(grey, pred, known_uv)
         select = self._select(pred)

@@ -19,6 +19,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from humimic.estimation.ekf.arm_mask import ArmMaskParams, arm_mask
 from humimic.sensors.camera_model import Intrinsics
 
 #: Per-feature outcome of a frame, as the colours of the paper's Fig. 7.
@@ -83,6 +84,7 @@ class Frontend:
         self.params = params
         map_x, map_y = intr.undistortion_maps()
         self._maps = cv2.convertMaps(map_x, map_y, cv2.CV_16SC2)
+        self._half_maps = None
         self.patches: dict[int, np.ndarray] = {}
 
     # ---- images ----------------------------------------------------------------------------
@@ -91,9 +93,25 @@ class Frontend:
         grey = cv2.cvtColor(image, cv2.COLOR_RGB2GRAY) if image.ndim == 3 else image
         return cv2.remap(grey, *self._maps, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
 
-    def undistort_mask(self, mask: np.ndarray) -> np.ndarray:
-        """A mask of the distorted frame (bool) in the undistorted image (bool)."""
-        m = cv2.remap(mask.astype(np.uint8), *self._maps, cv2.INTER_NEAREST)
+    def undistort_half(self, image: np.ndarray) -> np.ndarray:
+        """A distorted frame -> its undistorted half-size version (what coarse masks use)."""
+        if self._half_maps is None:
+            intr = self.intr
+            u, v = np.meshgrid(2.0 * np.arange(intr.width // 2) + 0.5,
+                               2.0 * np.arange(intr.height // 2) + 0.5)
+            ray = np.stack([(u - intr.cx) / intr.fx, (v - intr.cy) / intr.fy, np.ones_like(u)],
+                           -1)
+            uv = intr.project(ray).astype(np.float32)
+            self._half_maps = cv2.convertMaps(uv[..., 0], uv[..., 1], cv2.CV_16SC2)
+        return cv2.remap(image, *self._half_maps, cv2.INTER_LINEAR,
+                         borderMode=cv2.BORDER_REPLICATE)
+
+    def arm_mask(self, image: np.ndarray, params: ArmMaskParams) -> np.ndarray:
+        """The wearer's arm (:func:`.arm_mask.arm_mask`) in the undistorted image (bool, full
+        size), computed on the undistorted half-size frame and upsampled."""
+        half = arm_mask(self.undistort_half(image), params, scale=0.5).astype(np.uint8)
+        m = cv2.resize(half, (self.intr.width, self.intr.height),
+                       interpolation=cv2.INTER_NEAREST)
         return m.astype(bool)
 
     # ---- patches ---------------------------------------------------------------------------

@@ -46,7 +46,8 @@ def d_direction(theta: np.ndarray, phi: np.ndarray) -> tuple[np.ndarray, np.ndar
 
 
 def angles(h: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Azimuth ``θ``, elevation ``φ`` of directions ``h (..., 3)`` and ``d(θ, φ)/dh (..., 2, 3)``."""
+    """Azimuth ``θ``, elevation ``φ`` of directions ``h (..., 3)`` and their Jacobian
+    ``d(θ, φ)/dh`` ``(..., 2, 3)``."""
     hx, hy, hz = h[..., 0], h[..., 1], h[..., 2]
     r2 = hx * hx + hz * hz
     r = np.sqrt(r2)

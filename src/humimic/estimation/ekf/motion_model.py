@@ -28,7 +28,6 @@ import numpy as np
 
 from humimic.estimation.ekf import quaternion as qj
 from humimic.maths.kinematics import ca_predict
-from humimic.motion import quat
 
 #: Slices of the 19-number interface state.
 P, Q, V, W, A, B = (slice(0, 3), slice(3, 7), slice(7, 10), slice(10, 13), slice(13, 16),
@@ -63,12 +62,6 @@ def initial_state(p=(0, 0, 0), q=(1, 0, 0, 0), v=(0, 0, 0), w=(0, 0, 0), a=(0, 0
     return np.concatenate([p, q, v, w, a, b]).astype(float)
 
 
-def _skew(v) -> np.ndarray:
-    """``[v]x`` of one 3-vector (a list or array; faster than the batched :func:`qj.skew`)."""
-    x, y, z = v
-    return np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
-
-
 def rotmat(q) -> np.ndarray:
     """``R(q)`` of one unit quaternion (the formula of :func:`humimic.motion.quat.to_matrix`,
     without its batching overhead)."""
@@ -78,21 +71,14 @@ def rotmat(q) -> np.ndarray:
                      [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
 
 
-def _d_rotate_dq(q, v) -> np.ndarray:
-    """:func:`qj.d_rotate_dq` for one vector, written out: ``d(R(q) v)/dq`` (3x4) with the
-    ``w`` column ``2 u x v`` and the ``u`` block ``2 (-w [v]x + (u.v) I + u v^T - 2 v u^T)``."""
-    w, a, b, c = q
-    x, y, z = v
-    s = a * x + b * y + c * z
-    return 2.0 * np.array([
-        [b * z - c * y, s - a * x, w * z + a * y - 2 * x * b, -w * y + a * z - 2 * x * c],
-        [c * x - a * z, -w * z + b * x - 2 * y * a, s - b * y, w * x + b * z - 2 * y * c],
-        [a * y - b * x, w * y + c * x - 2 * z * a, -w * x + c * y - 2 * z * b, s - c * z]])
+def _cross(a, b) -> tuple[float, float, float]:
+    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
 
 
 @functools.lru_cache(maxsize=16)
-def _skeleton(dt: float) -> tuple[np.ndarray, np.ndarray]:
-    """The constant blocks of ``F`` and ``G`` for a step ``dt`` (read-only; copied per call)."""
+def _layout(dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """For a step ``dt``: the constant parts of ``F`` and ``G`` and, for the entries that
+    depend on the state, their flat indices and constant parts (read-only)."""
     dt2, dt3 = dt * dt / 2.0, dt**3 / 6.0
     I3 = np.eye(3)
     F = np.eye(DIM)
@@ -100,76 +86,97 @@ def _skeleton(dt: float) -> tuple[np.ndarray, np.ndarray]:
     G = np.zeros((DIM, 9))
     G[P, 0:3], G[V, 0:3], G[A, 0:3] = dt3 * I3, dt2 * I3, dt * I3
     G[W, 3:6], G[B, 6:9] = dt * I3, dt * I3
-    F.flags.writeable = G.flags.writeable = False
-    return F, G
+    # variable entries of F, in the order predict() lists them: rows p, v, a (3 each) x
+    # columns q (4), ω (3), a (3); then rows q x columns q (4) and ω (3)
+    rf = [(r0 + i, c) for r0 in (0, 7, 13) for i in range(3)
+          for c in (*range(3, 7), *range(10, 16))]
+    rf += [(r, c) for r in range(3, 7) for c in (*range(3, 7), *range(10, 13))]
+    idx_f = np.array([r * DIM + c for r, c in rf])
+    F_const = F.flat[idx_f].copy()
+    F_const[90:][[k * 7 + k for k in range(4)]] = 0.0  # F[q, q] is replaced, not added to
+    # variable entries of G: rows p, v, a, q x the α columns 3..5
+    rg = [(r, c) for r in (*range(0, 3), *range(7, 10), *range(13, 16), *range(3, 7))
+          for c in range(3, 6)]
+    idx_g = np.array([r * 9 + c for r, c in rg])
+    out = F, G, idx_f, F_const, idx_g
+    for arr in out:
+        arr.flags.writeable = False
+    return out
 
 
-def _quat_increment(theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``q(θ)`` and ``dq(θ)/dθ`` for one rotation vector (scalar arithmetic: IMU rate)."""
-    tx, ty, tz = theta.tolist()
+def _quat_increment(tx: float, ty: float, tz: float) -> tuple[tuple, list]:
+    """``q(θ)`` and ``dq(θ)/dθ`` (4x3, rows) for one rotation vector θ (rad): ``q(θ) =
+    (cos(t/2), s(t) θ)``, ``s(t) = sin(t/2)/t``, ``t = |θ|``; near zero ``s ≈ 1/2 - t^2/48``."""
     t = math.sqrt(tx * tx + ty * ty + tz * tz)
     if t < 1e-6:
-        s, c, ds_over_t = 0.5 - t * t / 48.0, 1.0 - t * t / 8.0, -1.0 / 24.0
+        s, c, k = 0.5 - t * t / 48.0, 1.0 - t * t / 8.0, -1.0 / 24.0
     else:
         s, c = math.sin(t / 2) / t, math.cos(t / 2)
-        ds_over_t = (0.5 * c * t - math.sin(t / 2)) / t**3
-    dq = np.array([c, s * tx, s * ty, s * tz])
-    J = np.empty((4, 3))
-    J[0] = -0.5 * s * theta
-    J[1:] = ds_over_t * np.outer(theta, theta)
-    J[1, 0] += s
-    J[2, 1] += s
-    J[3, 2] += s
-    return dq, J
+        k = (0.5 * c * t - math.sin(t / 2)) / t**3  # s'(t) / t
+    th = (tx, ty, tz)
+    J = [[-0.5 * s * v for v in th]]
+    J += [[k * th[i] * th[j] + (s if i == j else 0.0) for j in range(3)] for i in range(3)]
+    return (c, s * tx, s * ty, s * tz), J
 
 
 def predict(x: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Propagate the interface state by ``dt`` (s) with zero noise.  # Sugiyama eqs. 3-4
 
     Returns ``(x', F, G)``: the predicted state, ``F = dx'/dx`` (19x19) and ``G = dx'/dn``
-    (19x9) for the noise ``n = (j, α, b̄)``; the process noise is ``G Q_n G^T``. (Written for
-    one state with small-array arithmetic: it runs at the IMU rate.)
+    (19x9) for the noise ``n = (j, α, b̄)``; the process noise is ``G Q_n G^T``. It runs at
+    the IMU rate, so the small Jacobian blocks are computed with scalars and scattered into
+    ``F`` and ``G`` in one step each (checked against finite differences of a direct
+    transcription of eqs. 3-4 in ``tests/test_ekf_jacobians.py``).
     """
-    q = x[Q].tolist()
-    v, w, a = x[V], x[W], x[A]
+    qw, qx, qy, qz = q = x[Q].tolist()
+    v, w, a = x[V].tolist(), x[W].tolist(), x[A].tolist()
     dt2, dt3 = dt * dt / 2.0, dt**3 / 6.0
-    Rq = rotmat(q)
-    w_W = Rq @ w
-    Sa = _skew(a.tolist())
-    da = -(Sa @ w_W)  # (R(q) ω) × a, eq. 4 mean
-    dq, dq_dtheta = _quat_increment(w * dt)  # eq. 3: q(ω Δt + Δt^2/2 α), mean
+    R = rotmat(q).tolist()
+    Rc = list(zip(*R, strict=True))  # columns of R
+    wW = [R[i][0] * w[0] + R[i][1] * w[1] + R[i][2] * w[2] for i in range(3)]
+    da = _cross(wW, a)  # eq. 4's mean: a' = (R(q) ω) × a
+    dq, Jth = _quat_increment(w[0] * dt, w[1] * dt, w[2] * dt)  # eq. 3: q ⊗ q(ω Δt)
     Lq = qj.left(q)
-    dq_dtheta = Lq @ dq_dtheta
-    p_ca, v_ca, _ = ca_predict(x[P], v, a, dt)
+    p_ca, v_ca, _ = ca_predict(x[P], x[V], x[A], dt)
 
     out = np.empty(DIM)
-    out[P] = p_ca + dt3 * da
+    out[P] = p_ca + dt3 * np.array(da)
     out[Q] = Lq @ dq
-    out[V] = v_ca + dt2 * da
-    out[W] = w
-    out[A] = a + dt * da
+    out[V] = v_ca + dt2 * np.array(da)
+    out[W] = x[W]
+    out[A] = x[A] + dt * np.array(da)
     out[B] = x[B]
 
-    F0, G0 = _skeleton(float(dt))
-    F, G = F0.copy(), G0.copy()
-    # d(da)/d(q, ω, a) with da = -[a]x R(q) ω, entering p, v, a with dt^3/6, dt^2/2, dt
-    dda = np.empty((3, 13))  # columns as the state's 3..15: q (4), v (3, zero), ω (3), a (3)
-    dda[:, 0:4] = -Sa @ _d_rotate_dq(q, w.tolist())
-    dda[:, 4:7] = 0.0
-    dda[:, 7:10] = -Sa @ Rq
-    dda[:, 10:13] = _skew(w_W.tolist())
-    F[0:3, 3:16] += dt3 * dda
-    F[7:10, 3:16] += dt2 * dda
-    F[13:16, 3:16] += dt * dda
-    F[Q, Q] = qj.right(dq)
-    F[Q, W] = dq_dtheta * dt
+    # d(a')/dq = d((R ω) × a)/dq: column j is (dRω/dq_j) × a, with dRω/dq from
+    # R(q) ω = ω + 2 qw (u × ω) + 2 u × (u × ω), u = (qx, qy, qz)
+    s_uw = qx * w[0] + qy * w[1] + qz * w[2]
+    u_x_w = _cross((qx, qy, qz), w)
+    d_rw = [  # columns of d(R ω)/dq: w, x, y, z
+        tuple(2.0 * c for c in u_x_w),
+        (2 * s_uw - 2 * qx * w[0], 2 * (-qw * w[2] + qy * w[0] - 2 * w[1] * qx),
+         2 * (qw * w[1] + qz * w[0] - 2 * w[2] * qx)),
+        (2 * (qw * w[2] + qx * w[1] - 2 * w[0] * qy), 2 * s_uw - 2 * qy * w[1],
+         2 * (-qw * w[0] + qz * w[1] - 2 * w[2] * qy)),
+        (2 * (-qw * w[1] + qx * w[2] - 2 * w[0] * qz),
+         2 * (qw * w[0] + qy * w[2] - 2 * w[1] * qz), 2 * s_uw - 2 * qz * w[2]),
+    ]
+    dda_q = [_cross(col, a) for col in d_rw]  # per q column
+    dda_w = [_cross(col, a) for col in Rc]  # d(a')/dω: column j is R[:, j] × a
+    # d(a')/da = [R ω]x: column j is (R ω) × e_j
+    dda_a = [(0.0, wW[2], -wW[1]), (-wW[2], 0.0, wW[0]), (wW[1], -wW[0], 0.0)]
+    cols = dda_q + dda_w + dda_a  # 10 columns (3-vectors) for q, ω, a
+    block = np.array(cols).T  # (3, 10): d(a')/d(q, ω, a)
+    dqw = Lq @ np.array(Jth)  # d(q ⊗ q(θ))/dθ (4x3)
+    vals = np.concatenate([np.multiply.outer(np.array([dt3, dt2, dt]), block).ravel(),
+                           np.hstack([qj.right(dq), dt * dqw]).ravel()])  # d(q ⊗ dq)/dq
 
-    # Noise: a' = j + (R α) × v + ...; θ += α Δt^2/2; ω += α Δt; b += b̄ Δt.
-    dda_dalpha = -_skew(v.tolist()) @ Rq
-    G[P, 3:6] = dt3 * dda_dalpha
-    G[V, 3:6] = dt2 * dda_dalpha
-    G[A, 3:6] = dt * dda_dalpha
-    G[Q, 3:6] = dq_dtheta * dt2
+    F0, G0, idx_f, F_const, idx_g = _layout(float(dt))
+    F, G = F0.copy(), G0.copy()
+    F.flat[idx_f] = F_const + vals
+    # noise α enters a' as (R α) × v: d(a')/dα has the columns R[:, j] × v
+    dal = np.array([_cross(col, v) for col in Rc]).T  # (3, 3)
+    G.flat[idx_g] = np.concatenate([np.multiply.outer(np.array([dt3, dt2, dt]), dal).ravel(),
+                                    (dt2 * dqw).ravel()])  # θ += α Δt^2/2
     return out, F, G
 
 

@@ -11,8 +11,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-import numpy as np
-
 from humimic.pipeline.bus import Bus
 from humimic.pipeline.stage import Stage, StageTimer
 from humimic.rngs import Rngs

@@ -33,20 +33,19 @@ Q_COLS = np.arange(3, 7)
 
 @functools.lru_cache(maxsize=32)
 def _inertial_model(given: tuple[bool, bool, bool], s_q: float, s_a: float, s_w: float
-                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """State columns, ``H`` and the (isotropic) noise of the inertial measurements ``given``
-    (q, a, ω): eq. 6 ``h = q``, eq. 7 ``h = a + b``, and ``h = ω``."""
+                    ) -> tuple[np.ndarray, np.ndarray]:
+    """``H`` on the 19 interface columns and the (isotropic) noise of the inertial
+    measurements ``given`` (q, a, ω): eq. 6 ``h = q``, eq. 7 ``h = a + b``, and ``h = ω``."""
     blocks = [(mm.ORIENTATION_COLS, mm.H_ORIENTATION, s_q), (mm.ACCEL_COLS, mm.H_ACCEL, s_a),
               (np.arange(10, 13), np.eye(3), s_w)]
     chosen = [b for b, g in zip(blocks, given, strict=True) if g]
-    cols = np.concatenate([c for c, _, _ in chosen])
-    H = np.zeros((sum(len(h) for _, h, _ in chosen), len(cols)))
+    H = np.zeros((sum(len(h) for _, h, _ in chosen), mm.DIM))
+    r = 0
+    for cols, h, _ in chosen:
+        H[r:r + h.shape[0], cols] = h
+        r += h.shape[0]
     var = np.concatenate([np.full(len(h), s * s) for _, h, s in chosen])
-    r = c = 0
-    for cc, h, _ in chosen:
-        H[r:r + h.shape[0], c:c + len(cc)] = h
-        r, c = r + h.shape[0], c + len(cc)
-    out = cols, H, np.diag(var)
+    out = H, np.diag(var)
     for a in out:
         a.flags.writeable = False
     return out
@@ -118,8 +117,14 @@ class SlamFilter:
         (its undistorted image is what :meth:`predict_features` predicts); ``R_cv_I`` the
         rotation from the interface frame I to the camera's OpenCV axes."""
         self.t = float(t0)
-        self.x = np.array(x0, float)
-        self.P = np.array(P0, float)
+        self._x = np.array(x0, float)
+        self._P = np.array(P0, float)
+        # Compressed filter (Guivant & Nebot 2001): the IMU steps touch only the interface;
+        # their effect on the map's mean and covariance is accumulated here and applied once,
+        # before anything reads or changes the map (``_flush``).
+        self._phi: np.ndarray | None = None  # P_ab = phi P_ab0
+        self._psi = np.zeros((mm.DIM, mm.DIM))  # P_bb = P_bb0 - P_ab0^T psi P_ab0
+        self._beta = np.zeros(mm.DIM)  # x_b = x_b0 + P_ab0^T beta
         self.intr = intr.pinhole()
         self.R_cv_I = np.asarray(R_cv_I, float)
         self.params = params
@@ -128,8 +133,36 @@ class SlamFilter:
 
     # ---- state views -----------------------------------------------------------------------
     @property
+    def x(self) -> np.ndarray:
+        """The whole state (interface, then the map)."""
+        self._flush()
+        return self._x
+
+    @x.setter
+    def x(self, value) -> None:
+        self._flush()
+        self._x = np.array(value, float)
+
+    @property
+    def P(self) -> np.ndarray:
+        """The whole covariance."""
+        self._flush()
+        return self._P
+
+    @P.setter
+    def P(self, value) -> None:
+        self._flush()
+        self._P = np.array(value, float)
+
+    @property
     def interface(self) -> np.ndarray:
-        return self.x[: mm.DIM]
+        """The interface state (19,), current at every step (no flush)."""
+        return self._x[: mm.DIM]
+
+    @property
+    def P_interface(self) -> np.ndarray:
+        """The interface's covariance (19, 19), current at every step (no flush)."""
+        return self._P[: mm.DIM, : mm.DIM]
 
     @property
     def n_features(self) -> int:
@@ -143,10 +176,11 @@ class SlamFilter:
 
     def feature_points(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Ids ``(k,)``, XYZ points in W ``(k, 3)`` and their covariances ``(k, 3, 3)``."""
+        self._flush()
         ids, pts, covs = [], [], []
         for f in self.features:
             blk = slice(f.offset, f.offset + f.dim)
-            y, Pyy = self.x[blk], self.P[blk, blk]
+            y, Pyy = self._x[blk], self._P[blk, blk]
             if f.dim == idp.ID_DIM:
                 pt, J = idp.to_xyz(y[None])
                 pt, Pyy = pt[0], J[0] @ Pyy @ J[0].T
@@ -159,12 +193,18 @@ class SlamFilter:
 
     # ---- time update -----------------------------------------------------------------------
     def predict(self, t: float) -> None:
-        """Advance to time ``t`` (no-op if ``t`` is not later).  # Sugiyama eqs. 3-4"""
+        """Advance to time ``t`` (no-op if ``t`` is not later).  # Sugiyama eqs. 3-4
+
+        Only the interface moves: ``P_aa = F P_aa F^T + Q`` now, the cross-covariance with the
+        map (``F P_ab``) when the map is next read."""
         dt = t - self.t
         if dt <= 0.0:
             return
-        x_new, F, G = mm.predict(self.x[: mm.DIM], dt)
-        up.predict_block(self.x, self.P, x_new, F, mm.process_noise(G, self.params.noise))
+        x_new, F, G = mm.predict(self._x[: mm.DIM], dt)
+        self._x[: mm.DIM] = x_new
+        Paa = self._P[: mm.DIM, : mm.DIM]
+        Paa[...] = F @ Paa @ F.T + mm.process_noise(G, self.params.noise)
+        self._phi = F if self._phi is None else F @ self._phi
         self.t = float(t)
 
     # ---- inertial updates ------------------------------------------------------------------
@@ -172,32 +212,50 @@ class SlamFilter:
                         a_meas: np.ndarray | None = None,
                         w_meas: np.ndarray | None = None) -> None:
         """Fuse, in one update, an orientation ``q_WI`` (eq. 6), an acceleration in W (eq. 7)
-        and/or an angular velocity in I (``h = ω``, the form of the arm's eq. 15)."""
+        and/or an angular velocity in I (``h = ω``, the form of the arm's eq. 15).
+
+        These read the interface only: the update is done on its 19x19 block and its effect on
+        the map is accumulated (Guivant & Nebot's compressed filter, exact): with ``Φ`` the
+        interface's transition since the last flush, ``Ψ += Φ^T H^T S^-1 H Φ``,
+        ``β += Φ^T H^T S^-1 ν`` and ``Φ = (I - K H) Φ``."""
         given = (q_meas is not None, a_meas is not None, w_meas is not None)
         if not any(given):
             return
         prm = self.params
-        cols, H, R0 = _inertial_model(given, prm.sigma_orientation, prm.sigma_accel,
-                                      prm.sigma_gyro)
-        z = [align_sign(q_meas, self.x[3:7])] if given[0] else []
+        H, R0 = _inertial_model(given, prm.sigma_orientation, prm.sigma_accel, prm.sigma_gyro)
+        xa = self._x[: mm.DIM]
+        z = [align_sign(q_meas, xa[3:7])] if given[0] else []
         z += [a for a in (a_meas, w_meas) if a is not None]
-        nu = np.concatenate(z) - H @ self.x[cols]  # all three models are linear: h = H x
+        nu = np.concatenate(z) - H @ xa  # all three models are linear: h = H x
         R = R0
         if given[0] and prm.orientation_tilt_yaw is not None:
             R = R0.copy()
             R[0:4, 0:4] = self._orientation_noise()
-        PHt = up.dense_PHt(self.P, cols, H)
-        S = up.dense_S(PHt, cols, H, R)
+        Paa = self._P[: mm.DIM, : mm.DIM]
+        PHt = Paa @ H.T
+        S = H @ PHt + R
+        if not np.all(np.diagonal(S) > 0.0):
+            return
         try:
-            up.gain_update(self.x, self.P, PHt, S, nu)
+            S_inv = np.linalg.inv(S)
         except np.linalg.LinAlgError:
             return
+        phi = np.eye(mm.DIM) if self._phi is None else self._phi
+        HPhi = H @ phi
+        SiHPhi = S_inv @ HPhi
+        self._psi += HPhi.T @ SiHPhi
+        self._beta += SiHPhi.T @ nu
+        K = PHt @ S_inv
+        xa += K @ nu
+        Paa -= K @ PHt.T
+        up.symmetrize(Paa)  # rounding would otherwise grow while no feature is seen
+        self._phi = phi - K @ HPhi
         self._normalize_q()
 
     def _orientation_noise(self) -> np.ndarray:
         """The 4x4 noise of eq. 6 at the current orientation."""
         prm = self.params
-        q = self.x[3:7]
+        q = self._x[3:7]
         if prm.orientation_tilt_yaw is None:
             return np.eye(4) * prm.sigma_orientation**2
         J = 0.5 * right(q)[:, 1:]  # d(q(δ) ⊗ q)/dδ for a small rotation δ in W
@@ -219,7 +277,8 @@ class SlamFilter:
 
     def predict_features(self, max_features: int | None = None) -> FeaturePrediction:
         """Predicted pixels and innovation covariances of the map features in view."""
-        p, q = self.x[0:3], self.x[3:7]
+        self._flush()
+        p, q = self._x[0:3], self._x[3:7]
         feats = self.features
         k = len(feats)
         uv = np.full((k, 2), np.nan)
@@ -227,7 +286,7 @@ class SlamFilter:
         H_f: list[np.ndarray | None] = [None] * 2
         groups = self._groups(feats)
         for g, (rows, offs, d) in enumerate(groups):
-            y = self.x[offs[:, None] + np.arange(d)]
+            y = self._x[offs[:, None] + np.arange(d)]
             h, Hpq, Hy, z = idp.observe(y, p, q, self.intr, self.R_cv_I)
             h[z <= 1e-6] = np.nan
             uv[rows], H_pq[rows], H_f[g] = h, Hpq, Hy
@@ -243,7 +302,7 @@ class SlamFilter:
 
     def _prediction(self, feats, sel, uv, H_pq, groups, H_f) -> FeaturePrediction:
         k = len(sel)
-        n = len(self.x)
+        n = len(self._x)
         if k == 0:
             return FeaturePrediction(np.zeros(0, int), np.zeros((0, 2)), np.zeros((0, 2, 2)),
                                      np.zeros((n, 0)), np.zeros((0, 0)))
@@ -255,7 +314,7 @@ class SlamFilter:
             if keep.any():
                 sub.append((where[rows[keep]], offs[keep], H_f[g][keep]))
         Hp = H_pq[sel].reshape(2 * k, 7)
-        PHt = up.features_PHt(self.P, POSE_COLS, Hp, sub)
+        PHt = up.features_PHt(self._P, POSE_COLS, Hp, sub)
         S = up.features_S(PHt, POSE_COLS, Hp, sub, self.params.sigma_px)
         blocks = S.reshape(k, 2, k, 2)[np.arange(k), :, np.arange(k), :]
         fids = np.array([feats[i].fid for i in sel], int)
@@ -266,6 +325,7 @@ class SlamFilter:
         """Fuse the measured pixels ``z (m, 2)`` of the predicted features ``matched`` (indices
         into ``pred``); every other predicted feature counts as a failed attempt.
         # Sugiyama eqs. 8-9; one batch update, as Davison's MonoSLAM."""
+        self._flush()  # (nothing pending between a prediction and its update)
         matched = np.asarray(matched, int)
         by_id = {f.fid: f for f in self.features}
         hit = np.zeros(len(pred.fids), bool)
@@ -280,35 +340,37 @@ class SlamFilter:
         rows = (2 * matched[:, None] + np.arange(2)).ravel()
         nu = (np.asarray(z, float) - pred.uv[matched]).ravel()
         try:
-            up.gain_update(self.x, self.P, pred.PHt[:, rows], pred.S_full[np.ix_(rows, rows)],
+            up.gain_update(self._x, self._P, pred.PHt[:, rows], pred.S_full[np.ix_(rows, rows)],
                            nu)
         except np.linalg.LinAlgError:
             return False
         self._normalize_q()
-        up.symmetrize(self.P)
+        up.symmetrize(self._P)
         return True
 
     # ---- map management --------------------------------------------------------------------
     def add_known(self, points_W: np.ndarray, sigma: float = 0.0) -> list[int]:
         """Prior known XYZ features (the screen corners), with isotropic std ``sigma`` (m)."""
+        self._flush()
         pts = np.atleast_2d(np.asarray(points_W, float))
         k = len(pts)
         Pyy = np.kron(np.eye(k), sigma**2 * np.eye(3))
-        return self._append(pts.ravel(), np.zeros((3 * k, len(self.x))), Pyy,
+        return self._append(pts.ravel(), np.zeros((3 * k, len(self._x))), Pyy,
                             [idp.XYZ_DIM] * k, known=True)
 
     def add_features(self, uv: np.ndarray) -> list[int]:
         """New inverse-depth features at undistorted pixels ``uv (k, 2)``.
         # Civera et al. (2008) sec. III-C"""
+        self._flush()
         uv = np.atleast_2d(np.asarray(uv, float))
         if len(uv) == 0:
             return []
         prm = self.params
-        y, J_pq, J_z = idp.initialise(uv, self.x[0:3], self.x[3:7], self.intr, self.R_cv_I,
+        y, J_pq, J_z = idp.initialise(uv, self._x[0:3], self._x[3:7], self.intr, self.R_cv_I,
                                       prm.rho0)
         k = len(y)
         Jpq = J_pq.reshape(6 * k, 7)
-        cross = Jpq @ self.P[POSE_COLS]  # (6k, n): new rows against the whole state
+        cross = Jpq @ self._P[POSE_COLS]  # (6k, n): new rows against the whole state
         Rz = np.diag([prm.sigma_px**2, prm.sigma_px**2, prm.sigma_rho**2])
         Pyy = cross[:, POSE_COLS] @ Jpq.T
         for i in range(k):
@@ -318,14 +380,14 @@ class SlamFilter:
 
     def _append(self, y: np.ndarray, cross: np.ndarray, Pyy: np.ndarray, dims: list[int],
                 known: bool) -> list[int]:
-        n, m = len(self.x), len(y)
+        n, m = len(self._x), len(y)
         P = np.empty((n + m, n + m))
-        P[:n, :n] = self.P
+        P[:n, :n] = self._P
         P[n:, :n] = cross
         P[:n, n:] = cross.T
         P[n:, n:] = Pyy
-        self.x = np.concatenate([self.x, y])
-        self.P = P
+        self._x = np.concatenate([self._x, y])
+        self._P = P
         ids, off = [], n
         for d in dims:
             self.features.append(MapFeature(self._next_id, d, off, known=known))
@@ -336,6 +398,7 @@ class SlamFilter:
 
     def delete(self, fids) -> None:
         """Remove features (their rows and columns) from the state."""
+        self._flush()
         drop = set(int(i) for i in fids)
         if not drop:
             return
@@ -347,8 +410,8 @@ class SlamFilter:
             keep_cols.append(np.arange(f.offset, f.offset + f.dim))
             kept.append(f)
         cols = np.concatenate(keep_cols)
-        self.x = self.x[cols]
-        self.P = self.P[np.ix_(cols, cols)]
+        self._x = self._x[cols]
+        self._P = self._P[np.ix_(cols, cols)]
         self.features = kept
         self._reindex()
 
@@ -365,13 +428,14 @@ class SlamFilter:
     def convert_linear(self, threshold: float = idp.LINEARITY_THRESHOLD) -> list[int]:
         """Convert inverse-depth features whose linearity index is below ``threshold`` to XYZ
         (Civera et al. 2008 sec. V). Returns the converted ids."""
+        self._flush()
         inv = [f for f in self.features if f.dim == idp.ID_DIM]
         if not inv:
             return []
         offs = np.array([f.offset for f in inv])
-        y = self.x[offs[:, None] + np.arange(6)]
-        s_rho = np.sqrt(np.maximum(self.P[offs + 5, offs + 5], 0.0))
-        L = idp.linearity_index(y, s_rho, self.x[0:3])
+        y = self._x[offs[:, None] + np.arange(6)]
+        s_rho = np.sqrt(np.maximum(self._P[offs + 5, offs + 5], 0.0))
+        L = idp.linearity_index(y, s_rho, self._x[0:3])
         conv = [f for f, li in zip(inv, L, strict=True) if li < threshold]
         if not conv:
             return []
@@ -379,7 +443,7 @@ class SlamFilter:
         # block-diagonal J applied to rows, then to columns (O(n^2), no dense J).
         conv_ids = {f.fid for f in conv}
         src = np.array([f.offset for f in conv])[:, None] + np.arange(6)  # (c, 6) old cols
-        pts, Js = idp.to_xyz(self.x[src])
+        pts, Js = idp.to_xyz(self._x[src])
         plain_old, plain_new, conv_new = [np.arange(mm.DIM)], [np.arange(mm.DIM)], []
         r = mm.DIM
         for f in self.features:
@@ -392,14 +456,14 @@ class SlamFilter:
             r += f.dim
         po, pn, cn = np.concatenate(plain_old), np.concatenate(plain_new), np.stack(conv_new)
         x_new = np.empty(r)
-        x_new[pn], x_new[cn] = self.x[po], pts
-        rows = np.empty((r, len(self.x)))
-        rows[pn] = self.P[po]
-        rows[cn] = np.einsum("kij,kjn->kin", Js, self.P[src])
+        x_new[pn], x_new[cn] = self._x[po], pts
+        rows = np.empty((r, len(self._x)))
+        rows[pn] = self._P[po]
+        rows[cn] = np.einsum("kij,kjn->kin", Js, self._P[src])
         P_new = np.empty((r, r))
         P_new[:, pn] = rows[:, po]
         P_new[:, cn] = np.einsum("nkj,kij->nki", rows[:, src], Js)
-        self.x, self.P = x_new, P_new
+        self._x, self._P = x_new, P_new
         self._reindex()
         return sorted(conv_ids)
 
@@ -410,9 +474,32 @@ class SlamFilter:
             off += f.dim
 
     def _normalize_q(self) -> None:
-        """Renormalise ``q`` after an update; ``P`` through the normalisation's Jacobian."""
-        q = self.x[3:7]
+        """Renormalise ``q`` after an update; the covariance through the normalisation's
+        Jacobian: all of it after a map update, the interface block and the pending
+        cross-covariance transform ``Φ`` after an inertial one."""
+        q = self._x[3:7]
         J = d_normalize(q)
-        self.x[3:7] = q / math.sqrt(float(q @ q))
-        self.P[3:7, :] = J @ self.P[3:7, :]
-        self.P[:, 3:7] = self.P[:, 3:7] @ J.T
+        self._x[3:7] = q / math.sqrt(float(q @ q))
+        if self._phi is None:
+            up.transform_rows(self._P, slice(3, 7), J)
+        else:
+            up.transform_rows(self._P[: mm.DIM, : mm.DIM], slice(3, 7), J)
+            self._phi[3:7] = J @ self._phi[3:7]
+
+    def _flush(self) -> None:
+        """Apply the IMU steps' accumulated effect to the map's mean, covariance and
+        cross-covariance (``P_ab = Φ P_ab0``, ``P_bb -= P_ab0^T Ψ P_ab0``,
+        ``x_b += P_ab0^T β``)."""
+        if self._phi is None:
+            return
+        d = mm.DIM
+        if len(self._x) > d:
+            Pab0 = self._P[:d, d:].copy()
+            self._x[d:] += Pab0.T @ self._beta
+            up.symmetrize(self._psi)
+            self._P[d:, d:] -= Pab0.T @ (self._psi @ Pab0)
+            self._P[:d, d:] = self._phi @ Pab0
+            self._P[d:, :d] = self._P[:d, d:].T
+        self._phi = None
+        self._psi[...] = 0.0
+        self._beta[...] = 0.0

@@ -33,7 +33,7 @@ class SlamNoise(Section):
     """sigma of the accelerometer-bias variation (m/s^3): 1e-3."""
     accel: float = Field(mm.SIGMA_ACCEL, gt=0.0, le=100.0)
     """sigma of the acceleration measurement (m/s^2), eq. 7: 0.5."""
-    orientation_std_deg: tuple[float, float] | None = (1.0, 30.0)
+    orientation_std_deg: tuple[float, float] | None = (1.0, 10.0)
     """sigma of the measured orientation's tilt (pitch, roll) and yaw (deg), as small rotations
     about W's axes. The InertiaCube3's errors (Table I: 0.25 deg tilt, 1 deg yaw RMS) vary
     slowly (seconds to a minute), so as white noise at 180 Hz they must count for far less

@@ -43,3 +43,28 @@ def plot_trajectory(path: Path, tr: dict, title: str = "Head camera (frame I) in
     fig.savefig(path, dpi=110)
     plt.close(fig)
     return Path(path)
+
+
+def plot_table2(path: Path, rows) -> Path:
+    """Sugiyama & Miura's Table II beside this run's numbers, as an image for the report."""
+    import matplotlib.pyplot as plt
+
+    def xz(v):
+        return f"({v[0]:+.2f}, {v[1]:+.2f})"
+
+    cells = [[xz(r.user), xz(r.paper_est), f"{r.paper_err:.2f}", xz(r.head), xz(r.est),
+              f"{100 * r.err_head:.1f}", f"{100 * r.err_user:.1f}"] for r in rows]
+    cols = ["user (x, z) m", "paper: estimated", "paper: error m", "true head",
+            "estimated head", "error cm", "error vs user cm"]
+    fig, ax = plt.subplots(figsize=(11, 0.45 * len(rows) + 0.9))
+    ax.axis("off")
+    table = ax.table(cellText=cells, colLabels=cols, loc="center", cellLoc="center")
+    table.auto_set_font_size(False)
+    table.set_fontsize(9)
+    table.scale(1.0, 1.3)
+    ax.set_title("Table II: the user's position and the estimated interface position in W "
+                 "(ours averaged over each stand)", fontsize=10)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return Path(path)

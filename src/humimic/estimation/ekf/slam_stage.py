@@ -18,19 +18,23 @@ head camera (frame I) in the paper's W:
 * ``heading_rmse_deg`` (the optical axis about W's vertical), ``rotation_rmse_deg``;
 * ``features_per_frame`` (measured), ``features_predicted_per_frame``,
   ``frames_without_features`` (and ``_fraction``), ``map_size_mean``, features added /
-  deleted / converted to XYZ;
+  deleted / converted to XYZ, ``features_added_on_arm`` (initialised inside the arm mask,
+  which is computed whether or not ``mask_arm`` uses it: 0 when it does);
 * ``cycle_ms`` -- the mean estimator cycle per frame: the IMU updates since the previous frame,
-  undistortion, active search, the EKF update, map management and detection (rendering and the
-  recording excluded; wall time, so it includes whatever else the machine does);
+  the arm mask, undistortion, active search, the EKF update, map management and detection
+  (rendering and the recording excluded; wall time, so it includes whatever else the machine
+  does);
 * ``position_nees_mean`` and its fraction in the 95 % chi-square band (3 dof).
 """
 
 from __future__ import annotations
 
+import time
+
 import numpy as np
 
 from humimic.estimation.ekf import motion_model as mm
-from humimic.estimation.ekf.arm_mask import ArmMaskParams, arm_mask
+from humimic.estimation.ekf.arm_mask import ArmMaskParams
 from humimic.estimation.ekf.estimator import EstimatorSettings, FrameReport, WearableSlam
 from humimic.estimation.ekf.frontend import FAILED, MEASURED, NOT_SELECTED, FrontendParams
 from humimic.estimation.ekf.slam import SlamParams
@@ -129,12 +133,22 @@ class SlamStage(Stage):
         if self.slam is None:
             self._start(msg.t, image.camera.intrinsics, getattr(self, "_last_R", None))
             known_uv = self._start_calibration(msg.t, image.camera.intrinsics)
+        camera = self.cfg.mode != "inertial"
         with self._timer.time(self.name):
-            mask = (arm_mask(image.image, self.mask_params) if self.cfg.mask_arm
-                    and self.cfg.mode != "inertial" else None)
-            report = self.slam.on_frame(msg.t, image.image, mask, known_uv)
+            t0 = time.perf_counter()
+            mask = self.slam.frontend.arm_mask(image.image, self.mask_params) if camera else None
+            mask_s = time.perf_counter() - t0
+            report = self.slam.on_frame(msg.t, image.image,
+                                        mask if self.cfg.mask_arm else None, known_uv)
+            if self.cfg.mask_arm:
+                report.cycle_s += mask_s  # masking is part of the estimator's cycle
+        on_arm = 0
+        if mask is not None and len(report.new_uv):  # how many new features sit on the arm
+            u, v = np.rint(report.new_uv).astype(int).T
+            on_arm = int(np.sum(mask[v.clip(0, mask.shape[0] - 1),
+                                     u.clip(0, mask.shape[1] - 1)]))
         f = self.slam.filter
-        self.record.add(msg.t, f.x, f.P, report)
+        self.record.add(msg.t, f.interface, f.P_interface, report, on_arm)
         self._publish(msg, report.n_measured)
         if self.rlog is not None and self.rlog.enabled:
             with self._timer.time("slam_viz"):
@@ -143,9 +157,9 @@ class SlamStage(Stage):
 
     def _publish(self, msg, measured: int) -> None:
         f = self.slam.filter
-        x = f.x
+        x = f.interface
         pose = HeadPose(x[0:3].copy(), x[3:7].copy(), x[7:10].copy(), x[10:13].copy(),
-                        x[13:16].copy(), f.P[:mm.DIM, :mm.DIM].copy(), f.n_features, measured)
+                        x[13:16].copy(), f.P_interface.copy(), f.n_features, measured)
         self._bus.publish("head_pose", msg.then(pose, self.cfg.latency))
 
     # ---- recording -------------------------------------------------------------------------
@@ -153,8 +167,9 @@ class SlamStage(Stage):
         rl, f = self.rlog, self.slam.filter
         if self._frames == 0:
             rl.log_transform(t, "world/W", self.world.T_world_W, static=True)
-        R_W_I = mm.rotmat(f.x[3:7])
-        T_W_cam = make_transform(R_W_I @ R_CV_I.T, f.x[0:3])
+        x = f.interface
+        R_W_I = mm.rotmat(x[3:7])
+        T_W_cam = make_transform(R_W_I @ R_CV_I.T, x[0:3])
         if self.image_every and self._frames % self.image_every == 0:
             grey = self.slam.frontend.undistort(image.image)
             cam = CameraModel("slam", f.intr, T_W_cam, T_W_cam)
@@ -167,13 +182,18 @@ class SlamStage(Stage):
             rl.log_transform(t, f"{SLAM}/camera", T_W_cam)
         ids, pts, covs = f.feature_points()
         if len(ids):
-            rl.log_ellipsoids_3d(t, f"{SLAM}/map", pts, covs, n_sigma=2.0,
+            known = np.isin(ids, self.slam.known)
+            rl.log_ellipsoids_3d(t, f"{SLAM}/map/uncertainty", pts, covs, n_sigma=2.0,
                                  colors=[(255, 160, 0)] * len(ids))
+            rl.log_points(t, f"{SLAM}/map/features", pts, radii=0.015,
+                          colors=np.where(known[:, None], (20, 20, 20), (255, 120, 0)))
+        if self._frames % 15 == 0:  # the paths so far (the last 30 s, decimated)
+            self._log_paths(rl, t, self.trajectories(), last=900, step=3)
         k = self.world.gt.index_of(t)
         rl.log_points(t, f"{SLAM}/truth/head", self.world.gt.position("headcam", "W")[k],
                       colors=[40, 200, 40], radii=0.02)
-        rl.log_ellipsoids_3d(t, f"{SLAM}/estimate/head", f.x[None, 0:3], f.P[None, 0:3, 0:3],
-                             colors=[(230, 30, 30)])
+        rl.log_ellipsoids_3d(t, f"{SLAM}/estimate/head", x[None, 0:3],
+                             f.P_interface[None, 0:3, 0:3], colors=[(230, 30, 30)])
 
     def trajectories(self) -> dict[str, np.ndarray]:
         """Per frame: time, the estimated pose and its covariance, feature counts, cycle time,
@@ -188,11 +208,50 @@ class SlamStage(Stage):
         tr = self.trajectories()
         return {"slam": slam_metrics(tr, tr["p_true"], tr["R_true"], self.cfg.mode)}
 
-    def plots(self, out_dir) -> list:
-        from humimic.estimation.ekf.slam_plots import plot_trajectory
+    @staticmethod
+    def _log_paths(rl, t: float, tr: dict, last: int, step: int) -> None:
+        keep = slice(max(0, len(tr["t"]) - last), None, step)
+        rl.log_lines_3d(t, f"{SLAM}/trajectory", [tr["p"][keep], tr["p_true"][keep]],
+                        colors=[(230, 30, 30), (40, 200, 40)], radii=0.008,
+                        labels=["estimated", "true"])
 
+    def log(self, rlog) -> None:
+        """The whole estimated and true paths, and the errors and feature counts as series."""
+        tr = self.trajectories()
+        if rlog is None or not rlog.enabled or len(tr["t"]) == 0:
+            return
+        from humimic.estimation.ekf.slam_record import pose_errors
+        from humimic.viz.rerun_log import SERIES
+
+        self._log_paths(rlog, float(tr["t"][-1]), tr, last=len(tr["t"]), step=1)
+        e = pose_errors(tr["p"], tr["q"], tr["p_true"], tr["R_true"])
+        rlog.log_series(f"{SERIES}/slam/error", tr["t"],
+                        np.c_[100 * np.linalg.norm(e["position"], axis=1),
+                              np.degrees(np.abs(e["heading"]))],
+                        names=["position error (cm)", "|heading error| (deg)"])
+        rlog.log_series(f"{SERIES}/slam/features", tr["t"],
+                        np.c_[tr["measured"], tr["predicted"], tr["map_size"]],
+                        names=["measured", "predicted in view", "map"])
+
+    def archive(self, out_dir) -> list:
         tr = self.trajectories()
         if len(tr["t"]) == 0:
             return []
         np.savez_compressed(out_dir / "slam.npz", **tr)
-        return [plot_trajectory(out_dir / "slam_trajectory.png", tr)]
+        return [out_dir / "slam.npz"]
+
+    def plots(self, out_dir) -> list:
+        from humimic.estimation.ekf.slam_plots import plot_table2, plot_trajectory
+        from humimic.estimation.ekf.sugiyama_tables import standing_intervals, table2
+
+        tr = self.trajectories()
+        if len(tr["t"]) == 0:
+            return []
+        out = [plot_trajectory(out_dir / "slam_trajectory.png", tr)]
+        motion = self.world.scenario.human.motion
+        waypoints = [(w.t, w.at) for w in getattr(motion, "waypoints", None) or []]
+        if getattr(motion, "frame", None) == "W" and waypoints:  # the paper's Table II
+            rows = table2(tr, standing_intervals(waypoints))
+            if rows:
+                out.append(plot_table2(out_dir / "slam_table2.png", rows))
+        return out

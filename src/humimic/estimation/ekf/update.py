@@ -1,10 +1,10 @@
 """EKF steps on a large state whose models touch few columns (pure, in place, allocation-light).
 
-The SLAM state is the 19-number interface followed by the map. A prediction changes only the
-interface rows; an inertial measurement reads a few interface columns; a feature reads the
-camera pose ``(p, q)`` and its own 3 or 6 columns. These functions exploit that: the cost of
-an update is the unavoidable ``P -= K (P H^T)^T`` (``n^2 m``) plus ``O(n m)`` for the rest,
-never a product with a dense ``n x n`` Jacobian.
+The SLAM state is the 19-number interface followed by the map. A feature reads the camera pose
+``(p, q)`` and its own 3 or 6 columns: the cost of its update is the unavoidable
+``P -= K (P H^T)^T`` (``n^2 m``) plus ``O(n m)`` for the rest, never a product with a dense
+``n x n`` Jacobian. (The predictions and the inertial updates touch the interface alone; the
+filter handles them on its 19x19 block, :class:`~humimic.estimation.ekf.slam.SlamFilter`.)
 """
 
 from __future__ import annotations
@@ -12,15 +12,13 @@ from __future__ import annotations
 import numpy as np
 
 
-def predict_block(x: np.ndarray, P: np.ndarray, x_block: np.ndarray, F: np.ndarray,
-                  Q: np.ndarray) -> None:
-    """EKF prediction of the leading block ``b = len(x_block)`` of the state (the rest static):
-    ``x[:b] = x_block``, ``P[:b, :] = F P[:b, :]``, ``P[:, :b] = P[:, :b] F^T``, ``+ Q``."""
-    b = len(x_block)
-    x[:b] = x_block
-    P[:b, :] = F @ P[:b, :]
-    P[:, :b] = P[:, :b] @ F.T
-    P[:b, :b] += Q
+def transform_rows(P: np.ndarray, rows: slice, J: np.ndarray) -> None:
+    """``P = T P T^T`` in place for ``T`` the identity except ``J`` on ``rows`` (a slice),
+    ``P`` symmetric (e.g. renormalising the quaternion)."""
+    P[rows, :] = J @ P[rows, :]
+    P[rows, rows] = P[rows, rows] @ J.T
+    P[:rows.start, rows] = P[rows, :rows.start].T
+    P[rows.stop:, rows] = P[rows, rows.stop:].T
 
 
 def gain_update(x: np.ndarray, P: np.ndarray, PHt: np.ndarray, S: np.ndarray,
