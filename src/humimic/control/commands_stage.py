@@ -110,13 +110,9 @@ class CommandStage(Stage):
 
     # ---- results --------------------------------------------------------------------------
     def metrics(self) -> dict:
-        """The scores; the paths go to the recording here (the last hook before it closes)."""
         from humimic.control.commands_report import commands_metrics
 
-        if self.follower is None:
-            return {}
-        self._log_paths()
-        return commands_metrics(self, self.follower)
+        return commands_metrics(self, self.follower) if self.follower is not None else {}
 
     def plots(self, out_dir) -> list:
         from humimic.control.commands_report import commands_plot
@@ -125,10 +121,12 @@ class CommandStage(Stage):
             return []
         return commands_plot(self, self.follower, out_dir / "commands.png")
 
-    def _log_paths(self) -> None:
+    def log(self, rlog) -> None:
         """The robot's base path, its move targets and the wearer's path (world, on the
         floor) in the rerun recording."""
-        rl = self.rlog
+        rl = rlog
+        if self.follower is None:
+            return
         rec = self.follower.rec.arrays()
         if rl is None or not rl.enabled or len(rec["t"]) == 0:
             return

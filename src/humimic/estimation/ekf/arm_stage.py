@@ -20,7 +20,13 @@ import numpy as np
 
 from humimic.estimation.ekf.arm import ArmEKF, Marker
 from humimic.estimation.ekf.arm_marker import MarkerBlob, marker_candidates
-from humimic.estimation.ekf.arm_record import ArmRecord, arm_errors, arm_metrics, arm_plot
+from humimic.estimation.ekf.arm_record import (
+    ArmRecord,
+    arm_errors,
+    arm_metrics,
+    arm_plot,
+    truth_in_head,
+)
 from humimic.estimation.ekf.head_track import OracleHeadTrack, SlamHeadTrack
 from humimic.messages import ArmPose
 from humimic.pipeline.stage import Stage
@@ -173,17 +179,27 @@ class ArmStage(Stage):
                                colors=[[255, 255, 0]])
 
     def metrics(self) -> dict:
-        """The scores; the whole trajectories go to the recording here (the last hook before
-        it closes)."""
-        self._log_trajectories()
         return arm_metrics(self.rec, self.world.gt, self.K, self.ekf)
 
     def plots(self, out_dir) -> list:
         return arm_plot(self.rec, self.world.gt, out_dir / "arm_position.png")
 
-    def _log_trajectories(self) -> None:
+    def archive(self, out_dir) -> list:
+        """``arm.npz``: per frame the state, its position covariance, whether the marker was
+        taken, the chosen centroid, and the truth (marker centre in I, ``R_I_A``)."""
+        a = self.rec.arrays()
+        if len(a["t"]) == 0:
+            return []
+        p_true, R_true = truth_in_head(self.world.gt, a["t"])
+        path = out_dir / "arm.npz"
+        np.savez_compressed(path, t=a["t"], x=a["x"], P_p=a["P_p"], measured=a["measured"],
+                            candidates=a["candidates"], uv=a["uv"], p_I_true=p_true,
+                            R_I_A_true=R_true)
+        return [path]
+
+    def log(self, rlog) -> None:
         """Whole estimated and true Wii-remote trajectories (world), and the error series."""
-        rl = self.rlog
+        rl = rlog
         a = self.rec.arrays()
         if rl is None or not rl.enabled or len(a["t"]) == 0:
             return
