@@ -244,3 +244,26 @@ def test_map_update_after_imu_steps_equals_the_dense_filter():
     np.testing.assert_allclose(f.x, g.x, rtol=1e-9, atol=1e-12)
     np.testing.assert_allclose(f.P, g.P, rtol=1e-7, atol=1e-12)
     assert np.linalg.eigvalsh(f.P).min() > -1e-12
+
+
+def test_state_blocks_convert_is_the_dense_jacobian_product():
+    """``state_blocks.convert`` equals ``J P J^T`` with the dense block-diagonal Jacobian."""
+    from humimic.estimation.ekf import state_blocks as sb
+
+    rng = np.random.default_rng(8)
+    n = 19 + 6 + 3 + 6
+    x, P = rng.standard_normal(n), _random_cov(rng, n)
+    src = np.array([np.arange(19, 25), np.arange(28, 34)])  # two 6-blocks become 3-blocks
+    J = rng.standard_normal((2, 3, 6))
+    values = rng.standard_normal((2, 3))
+    dst = np.array([np.arange(19, 22), np.arange(25, 28)])
+    old = np.r_[np.arange(19), np.arange(25, 28)]
+    new = np.r_[np.arange(19), np.arange(22, 25)]
+    x_new, P_new = sb.convert(x, P, old, new, src, dst, values, J)
+    T = np.zeros((28, n))
+    T[new, old] = 1.0
+    for i in range(2):
+        T[np.ix_(dst[i], src[i])] = J[i]
+    np.testing.assert_allclose(P_new, T @ P @ T.T, atol=1e-12)
+    np.testing.assert_allclose(x_new[new], x[old])
+    np.testing.assert_allclose(x_new[dst.ravel()], values.ravel())

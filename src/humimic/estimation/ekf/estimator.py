@@ -66,6 +66,8 @@ class FrameReport:
     deleted: int = 0
     converted: int = 0
     cycle_s: float = 0.0
+    cycle_cpu_s: float = 0.0
+    """The same in this thread's CPU time (less disturbed by other processes on the machine)."""
     """Wall time of this frame's estimation, the IMU updates since the last frame included."""
     map_size: int = 0
     new_uv: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
@@ -88,6 +90,7 @@ class WearableSlam:
         self.known = (self.filter.add_known(known_W) if known_W is not None and len(known_W)
                       else [])
         self._pending_s = 0.0  # IMU work since the last frame (part of the next cycle)
+        self._pending_cpu = 0.0
 
     @property
     def x(self) -> np.ndarray:
@@ -98,7 +101,7 @@ class WearableSlam:
                gyro_I: np.ndarray | None = None) -> None:
         """One head-IMU sample: specific force in I, the sensor's orientation in W and its
         angular rate in I (each fused if given and enabled)."""
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.thread_time()
         s = self.settings
         self.filter.predict(t)
         q_meas = a_W = w = None
@@ -109,6 +112,7 @@ class WearableSlam:
             w = np.asarray(gyro_I, float)
         self.filter.update_inertial(q_meas, a_W, w)
         self._pending_s += time.perf_counter() - t0
+        self._pending_cpu += time.thread_time() - c0
 
     # ---- camera ----------------------------------------------------------------------------
     def on_frame(self, t: float, image: np.ndarray, mask: np.ndarray | None = None,
@@ -117,11 +121,11 @@ class WearableSlam:
         *undistorted* image (bool, full size), never matched nor detected in; ``known_uv``:
         where the known features are in this frame, if known -- see
         :meth:`_cut_known_patches`)."""
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.thread_time()
         s, f, fe = self.settings, self.filter, self.frontend
         f.predict(t)
         if not s.use_camera:
-            return self._report(t, t0)
+            return self._report(t, t0, c0)
         grey = fe.undistort(image)
         umask = mask
         pred = f.predict_features()
@@ -138,16 +142,18 @@ class WearableSlam:
         report = FrameReport(t, pred.fids, pred.uv, pred.S, m.status, m.uv,
                              deleted=len(deleted), converted=len(converted))
         self._add_features(grey, umask, report)
-        return self._report(t, t0, report)
+        return self._report(t, t0, c0, report)
 
-    def _report(self, t: float, t0: float, report: FrameReport | None = None) -> FrameReport:
+    def _report(self, t: float, t0: float, c0: float, report: FrameReport | None = None
+                ) -> FrameReport:
         if report is None:
             e = np.zeros((0,))
             report = FrameReport(t, e.astype(int), np.zeros((0, 2)), np.zeros((0, 2, 2)),
                                  e.astype(int), np.zeros((0, 2)))
         report.cycle_s = self._pending_s + time.perf_counter() - t0
+        report.cycle_cpu_s = self._pending_cpu + time.thread_time() - c0
         report.map_size = self.filter.n_features
-        self._pending_s = 0.0
+        self._pending_s = self._pending_cpu = 0.0
         return report
 
     def _select(self, pred) -> np.ndarray | None:

@@ -235,3 +235,33 @@ def quat_from_matrix(R: np.ndarray) -> np.ndarray:
     out = np.array(q)
     out /= math.copysign(math.sqrt(float(out @ out)), out[0])
     return out
+
+
+@functools.lru_cache(maxsize=32)
+def inertial_model(given: tuple[bool, bool, bool], s_q: float, s_a: float, s_w: float
+                   ) -> tuple[np.ndarray, np.ndarray]:
+    """``H`` on the 19 state columns and the (isotropic) noise of the inertial measurements
+    ``given`` (q, a, ω) stacked in that order: eq. 6 ``h = q``, eq. 7 ``h = a + b`` and the
+    angular rate ``h = ω`` (the form of the arm's eq. 15); standard deviations ``s_*``."""
+    blocks = [(ORIENTATION_COLS, H_ORIENTATION, s_q), (ACCEL_COLS, H_ACCEL, s_a),
+              (np.arange(10, 13), np.eye(3), s_w)]
+    chosen = [b for b, g in zip(blocks, given, strict=True) if g]
+    H = np.zeros((sum(len(h) for _, h, _ in chosen), DIM))
+    r = 0
+    for cols, h, _ in chosen:
+        H[r:r + h.shape[0], cols] = h
+        r += h.shape[0]
+    var = np.concatenate([np.full(len(h), s * s) for _, h, s in chosen])
+    out = H, np.diag(var)
+    for a in out:
+        a.flags.writeable = False
+    return out
+
+
+def orientation_noise(q: np.ndarray, tilt: float, yaw: float, s_q: float) -> np.ndarray:
+    """The 4x4 noise of eq. 6 for an orientation error of small rotations about W's
+    horizontal axes (std ``tilt``, rad) and its vertical y (``yaw``): ``J diag(tilt^2, yaw^2,
+    tilt^2) J^T`` with ``J = d(q(δ) ⊗ q)/dδ``, plus ``s_q^2`` along ``q`` itself."""
+    J = 0.5 * qj.right(q)[:, 1:]
+    var = np.array([tilt * tilt, yaw * yaw, tilt * tilt])
+    return (J * var) @ J.T + s_q * s_q * np.outer(q, q)

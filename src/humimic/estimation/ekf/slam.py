@@ -15,7 +15,6 @@ where each map feature should appear and how uncertain that is (the search ellip
 
 from __future__ import annotations
 
-import functools
 import math
 from dataclasses import dataclass, field
 
@@ -23,32 +22,13 @@ import numpy as np
 
 from humimic.estimation.ekf import inverse_depth as idp
 from humimic.estimation.ekf import motion_model as mm
+from humimic.estimation.ekf import state_blocks as sb
 from humimic.estimation.ekf import update as up
-from humimic.estimation.ekf.quaternion import align_sign, d_normalize, right
+from humimic.estimation.ekf.compressed import Deferred
+from humimic.estimation.ekf.quaternion import align_sign, d_normalize
 from humimic.sensors.camera_model import Intrinsics
 
 POSE_COLS = np.arange(0, 7)
-Q_COLS = np.arange(3, 7)
-
-
-@functools.lru_cache(maxsize=32)
-def _inertial_model(given: tuple[bool, bool, bool], s_q: float, s_a: float, s_w: float
-                    ) -> tuple[np.ndarray, np.ndarray]:
-    """``H`` on the 19 interface columns and the (isotropic) noise of the inertial
-    measurements ``given`` (q, a, ω): eq. 6 ``h = q``, eq. 7 ``h = a + b``, and ``h = ω``."""
-    blocks = [(mm.ORIENTATION_COLS, mm.H_ORIENTATION, s_q), (mm.ACCEL_COLS, mm.H_ACCEL, s_a),
-              (np.arange(10, 13), np.eye(3), s_w)]
-    chosen = [b for b, g in zip(blocks, given, strict=True) if g]
-    H = np.zeros((sum(len(h) for _, h, _ in chosen), mm.DIM))
-    r = 0
-    for cols, h, _ in chosen:
-        H[r:r + h.shape[0], cols] = h
-        r += h.shape[0]
-    var = np.concatenate([np.full(len(h), s * s) for _, h, s in chosen])
-    out = H, np.diag(var)
-    for a in out:
-        a.flags.writeable = False
-    return out
 
 
 @dataclass
@@ -119,12 +99,9 @@ class SlamFilter:
         self.t = float(t0)
         self._x = np.array(x0, float)
         self._P = np.array(P0, float)
-        # Compressed filter (Guivant & Nebot 2001): the IMU steps touch only the interface;
-        # their effect on the map's mean and covariance is accumulated here and applied once,
-        # before anything reads or changes the map (``_flush``).
-        self._phi: np.ndarray | None = None  # P_ab = phi P_ab0
-        self._psi = np.zeros((mm.DIM, mm.DIM))  # P_bb = P_bb0 - P_ab0^T psi P_ab0
-        self._beta = np.zeros(mm.DIM)  # x_b = x_b0 + P_ab0^T beta
+        # The IMU steps touch only the interface; their effect on the map is deferred and
+        # applied before anything reads or changes the map (:mod:`.compressed`).
+        self._deferred = Deferred(mm.DIM)
         self.intr = intr.pinhole()
         self.R_cv_I = np.asarray(R_cv_I, float)
         self.params = params
@@ -137,11 +114,6 @@ class SlamFilter:
         """The whole state (interface, then the map)."""
         self._flush()
         return self._x
-
-    @x.setter
-    def x(self, value) -> None:
-        self._flush()
-        self._x = np.array(value, float)
 
     @property
     def P(self) -> np.ndarray:
@@ -204,7 +176,7 @@ class SlamFilter:
         self._x[: mm.DIM] = x_new
         Paa = self._P[: mm.DIM, : mm.DIM]
         Paa[...] = F @ Paa @ F.T + mm.process_noise(G, self.params.noise)
-        self._phi = F if self._phi is None else F @ self._phi
+        self._deferred.transition(F)
         self.t = float(t)
 
     # ---- inertial updates ------------------------------------------------------------------
@@ -222,7 +194,8 @@ class SlamFilter:
         if not any(given):
             return
         prm = self.params
-        H, R0 = _inertial_model(given, prm.sigma_orientation, prm.sigma_accel, prm.sigma_gyro)
+        H, R0 = mm.inertial_model(given, prm.sigma_orientation, prm.sigma_accel,
+                                  prm.sigma_gyro)
         xa = self._x[: mm.DIM]
         z = [align_sign(q_meas, xa[3:7])] if given[0] else []
         z += [a for a in (a_meas, w_meas) if a is not None]
@@ -230,7 +203,8 @@ class SlamFilter:
         R = R0
         if given[0] and prm.orientation_tilt_yaw is not None:
             R = R0.copy()
-            R[0:4, 0:4] = self._orientation_noise()
+            R[0:4, 0:4] = mm.orientation_noise(xa[3:7], *prm.orientation_tilt_yaw,
+                                               prm.sigma_orientation)
         Paa = self._P[: mm.DIM, : mm.DIM]
         PHt = Paa @ H.T
         S = H @ PHt + R
@@ -240,28 +214,12 @@ class SlamFilter:
             S_inv = np.linalg.inv(S)
         except np.linalg.LinAlgError:
             return
-        phi = np.eye(mm.DIM) if self._phi is None else self._phi
-        HPhi = H @ phi
-        SiHPhi = S_inv @ HPhi
-        self._psi += HPhi.T @ SiHPhi
-        self._beta += SiHPhi.T @ nu
         K = PHt @ S_inv
+        self._deferred.measurement(H, S_inv, nu, K)
         xa += K @ nu
         Paa -= K @ PHt.T
         up.symmetrize(Paa)  # rounding would otherwise grow while no feature is seen
-        self._phi = phi - K @ HPhi
         self._normalize_q()
-
-    def _orientation_noise(self) -> np.ndarray:
-        """The 4x4 noise of eq. 6 at the current orientation."""
-        prm = self.params
-        q = self._x[3:7]
-        if prm.orientation_tilt_yaw is None:
-            return np.eye(4) * prm.sigma_orientation**2
-        J = 0.5 * right(q)[:, 1:]  # d(q(δ) ⊗ q)/dδ for a small rotation δ in W
-        tilt, yaw = prm.orientation_tilt_yaw
-        var = np.array([tilt**2, yaw**2, tilt**2])
-        return (J * var) @ J.T + prm.sigma_orientation**2 * np.outer(q, q)
 
     # ---- features --------------------------------------------------------------------------
     def _groups(self, feats: list[MapFeature]) -> list[tuple[np.ndarray, np.ndarray, int]]:
@@ -380,15 +338,9 @@ class SlamFilter:
 
     def _append(self, y: np.ndarray, cross: np.ndarray, Pyy: np.ndarray, dims: list[int],
                 known: bool) -> list[int]:
-        n, m = len(self._x), len(y)
-        P = np.empty((n + m, n + m))
-        P[:n, :n] = self._P
-        P[n:, :n] = cross
-        P[:n, n:] = cross.T
-        P[n:, n:] = Pyy
-        self._x = np.concatenate([self._x, y])
-        self._P = P
-        ids, off = [], n
+        off = len(self._x)
+        self._x, self._P = sb.append(self._x, self._P, y, cross, Pyy)
+        ids = []
         for d in dims:
             self.features.append(MapFeature(self._next_id, d, off, known=known))
             ids.append(self._next_id)
@@ -402,16 +354,10 @@ class SlamFilter:
         drop = set(int(i) for i in fids)
         if not drop:
             return
-        keep_cols = [np.arange(mm.DIM)]
-        kept = []
-        for f in self.features:
-            if f.fid in drop:
-                continue
-            keep_cols.append(np.arange(f.offset, f.offset + f.dim))
-            kept.append(f)
-        cols = np.concatenate(keep_cols)
-        self._x = self._x[cols]
-        self._P = self._P[np.ix_(cols, cols)]
+        kept = [f for f in self.features if f.fid not in drop]
+        cols = np.concatenate([np.arange(mm.DIM)]
+                              + [np.arange(f.offset, f.offset + f.dim) for f in kept])
+        self._x, self._P = sb.select(self._x, self._P, cols)
         self.features = kept
         self._reindex()
 
@@ -439,31 +385,21 @@ class SlamFilter:
         conv = [f for f, li in zip(inv, L, strict=True) if li < threshold]
         if not conv:
             return []
-        # x' = T(x): identity except each converted 6-block -> 3; P' = J P J^T with the
-        # block-diagonal J applied to rows, then to columns (O(n^2), no dense J).
         conv_ids = {f.fid for f in conv}
         src = np.array([f.offset for f in conv])[:, None] + np.arange(6)  # (c, 6) old cols
         pts, Js = idp.to_xyz(self._x[src])
-        plain_old, plain_new, conv_new = [np.arange(mm.DIM)], [np.arange(mm.DIM)], []
+        old, new, dst = [np.arange(mm.DIM)], [np.arange(mm.DIM)], []
         r = mm.DIM
         for f in self.features:
             if f.fid in conv_ids:
-                conv_new.append(np.arange(r, r + 3))
+                dst.append(np.arange(r, r + 3))
                 f.dim = idp.XYZ_DIM
             else:
-                plain_old.append(np.arange(f.offset, f.offset + f.dim))
-                plain_new.append(np.arange(r, r + f.dim))
+                old.append(np.arange(f.offset, f.offset + f.dim))
+                new.append(np.arange(r, r + f.dim))
             r += f.dim
-        po, pn, cn = np.concatenate(plain_old), np.concatenate(plain_new), np.stack(conv_new)
-        x_new = np.empty(r)
-        x_new[pn], x_new[cn] = self._x[po], pts
-        rows = np.empty((r, len(self._x)))
-        rows[pn] = self._P[po]
-        rows[cn] = np.einsum("kij,kjn->kin", Js, self._P[src])
-        P_new = np.empty((r, r))
-        P_new[:, pn] = rows[:, po]
-        P_new[:, cn] = np.einsum("nkj,kij->nki", rows[:, src], Js)
-        self._x, self._P = x_new, P_new
+        self._x, self._P = sb.convert(self._x, self._P, np.concatenate(old),
+                                      np.concatenate(new), src, np.stack(dst), pts, Js)
         self._reindex()
         return sorted(conv_ids)
 
@@ -475,31 +411,19 @@ class SlamFilter:
 
     def _normalize_q(self) -> None:
         """Renormalise ``q`` after an update; the covariance through the normalisation's
-        Jacobian: all of it after a map update, the interface block and the pending
-        cross-covariance transform ``Φ`` after an inertial one."""
+        Jacobian: all of it after a map update, the interface block (and the deferred
+        cross-covariance) after an inertial one."""
         q = self._x[3:7]
         J = d_normalize(q)
         self._x[3:7] = q / math.sqrt(float(q @ q))
-        if self._phi is None:
+        if not self._deferred.pending:
             up.transform_rows(self._P, slice(3, 7), J)
         else:
             up.transform_rows(self._P[: mm.DIM, : mm.DIM], slice(3, 7), J)
-            self._phi[3:7] = J @ self._phi[3:7]
+            T = np.eye(mm.DIM)
+            T[3:7, 3:7] = J
+            self._deferred.transition(T)
 
     def _flush(self) -> None:
-        """Apply the IMU steps' accumulated effect to the map's mean, covariance and
-        cross-covariance (``P_ab = Φ P_ab0``, ``P_bb -= P_ab0^T Ψ P_ab0``,
-        ``x_b += P_ab0^T β``)."""
-        if self._phi is None:
-            return
-        d = mm.DIM
-        if len(self._x) > d:
-            Pab0 = self._P[:d, d:].copy()
-            self._x[d:] += Pab0.T @ self._beta
-            up.symmetrize(self._psi)
-            self._P[d:, d:] -= Pab0.T @ (self._psi @ Pab0)
-            self._P[:d, d:] = self._phi @ Pab0
-            self._P[d:, :d] = self._P[:d, d:].T
-        self._phi = None
-        self._psi[...] = 0.0
-        self._beta[...] = 0.0
+        """Apply the deferred effect of the IMU steps to the map."""
+        self._deferred.apply(self._x, self._P)
