@@ -10,6 +10,8 @@ topic          value                                       producer -> consumer
 ``imu``        :class:`InertialReading` (+ orientation)    world -> wearable stages
 ``wiimote``    :class:`InertialReading`                    world -> wearable stages
 ``head_pose``  :class:`HeadPose` (paper's W, frame I)      slam -> arm EKF, commands
+``arm_pose``   :class:`ArmPose` (frame I, remote frame A)  arm EKF -> commands
+``commands``   :class:`RobotCommand`                       commands -> robot follower
 ``measurements`` :class:`Measurements` (robot base frame)  perception -> filter
 ``estimates``  :class:`Estimates` (robot base frame)       filter / oracle -> control
 =============  ==========================================  ===========================
@@ -114,3 +116,38 @@ class HeadPose:
         from humimic.motion import quat
 
         return quat.to_matrix(self.q_W_I)
+
+
+@dataclass(frozen=True)
+class ArmPose:
+    """The Wii remote in the head frame I, as the arm EKF estimates it (topic ``arm_pose``,
+    Sugiyama & Miura sec. IV). Published after every head-camera frame, stamped with its time."""
+
+    p_I: np.ndarray
+    """(3,) centre of the remote's marker in I (m)."""
+    q_I_A: np.ndarray
+    """(4,) orientation ``[w, x, y, z]`` of the remote's frame A in I: ``v_I = R(q) v_A``."""
+    v_I: np.ndarray
+    """(3,) velocity in I (m/s)."""
+    w_A: np.ndarray
+    """(3,) angular velocity relative to the head, in A (rad/s)."""
+    P: np.ndarray
+    """(19, 19) covariance of the state (p, q, v, w, a, b)."""
+    measured: bool
+    """The marker was seen and taken in this frame."""
+
+
+@dataclass(frozen=True)
+class RobotCommand:
+    """One command to the robot (topic ``commands``, Sugiyama & Miura sec. V-C)."""
+
+    kind: str
+    """``move`` (the mobile base), ``head`` (pan and tilt) or ``arm`` (the right hand)."""
+    target: np.ndarray
+    """``move``: (x, y) of the base in the robot's start frame R (m; x forward, y left);
+    ``head``: (pan, tilt) (rad; pan to the left, tilt down); ``arm``: (x, y, z) of the right
+    palm in the robot's base frame (m; x forward, y left, z up)."""
+    issued_t: float
+    """When it went out (s)."""
+    seq: int
+    """Its number among the commands of its kind (0, 1, ...)."""

@@ -33,3 +33,16 @@ def mimic_stages(scenario, world, rngs, rlog) -> list[Stage]:
         stages.append(OracleStage(world, cfg.targets, cfg.oracle, rngs["oracle"]))
     stages.append(MimicStage(world, cfg))
     return stages
+
+
+def commands_stages(scenario, world, rngs, rlog) -> list[Stage]:
+    """The command generator and the robot following it (Sugiyama sec. V-C)."""
+    from humimic.control.commands_config import check_commands
+    from humimic.control.commands_stage import CommandStage
+    from humimic.control.follow import FollowStage
+
+    check_commands(scenario)
+    cmd = CommandStage(world, scenario.commands, rlog)
+    follow = FollowStage(world, scenario.commands.follow)
+    cmd.follower = follow
+    return [cmd, follow]

@@ -22,6 +22,16 @@ def build_stages(scenario, world, rngs, rlog) -> list[Stage]:
         from humimic.estimation.ekf.build import slam_stages
 
         stages.extend(slam_stages(scenario, world, rngs, rlog))
+    if getattr(scenario, "arm", None) is not None:
+        from humimic.estimation.ekf.arm_config import check_arm
+        from humimic.estimation.ekf.arm_stage import ArmStage
+
+        check_arm(scenario)
+        stages.append(ArmStage(world, scenario.arm, rlog))
+    if getattr(scenario, "commands", None) is not None:
+        from humimic.control.build import commands_stages
+
+        stages.extend(commands_stages(scenario, world, rngs, rlog))
     if getattr(scenario, "mimic", None) is not None:
         from humimic.control.build import mimic_stages
 

@@ -11,8 +11,10 @@ from typing import Literal
 
 from pydantic import Field, model_validator
 
+from humimic.control.commands_config import CommandsConfig
 from humimic.control.config import MimicConfig
 from humimic.estimation.config import FilterConfig
+from humimic.estimation.ekf.arm_config import ArmConfig
 from humimic.estimation.ekf.slam_config import SlamConfig
 from humimic.perception.blobs.config import PerceptionConfig
 from humimic.scenario.base import Section
@@ -50,6 +52,12 @@ class Scenario(Section):
     III, see :mod:`humimic.estimation.ekf.slam_config`); needs those sensors."""
     mimic: MimicConfig | None = None
     """Imitation by the robot (see :mod:`humimic.control.config`); absent: the robot holds."""
+    arm: ArmConfig | None = None
+    """The Wii remote's pose in the head frame, Sugiyama & Miura's arm EKF (see
+    :mod:`humimic.estimation.ekf.arm_config`); needs the head camera and the Wii remote."""
+    commands: CommandsConfig | None = None
+    """Robot commands from the wearer's motion and the robot following them (Sugiyama &
+    Miura sec. V-C, :mod:`humimic.control.commands_config`); excludes ``mimic``."""
 
     @model_validator(mode="after")
     def _placement_fits_the_room(self) -> Scenario:

@@ -64,7 +64,9 @@ def series_views(logged: set[str]) -> list[tuple[str, str]]:
               for r in roots(f"{SERIES}/mimicry", 3) if f"{r}/error_mm" in logged]
     views += [(e, name) for e, name in ((f"{SERIES}/slam/error", "SLAM: head position error "
                                          "(cm), heading error (deg)"),
-                                        (f"{SERIES}/slam/features", "SLAM: features"))
+                                        (f"{SERIES}/slam/features", "SLAM: features"),
+                                        (f"{SERIES}/arm/error_cm", "arm EKF: Wii remote error "
+                                         "in the head frame (cm)"))
               if e in logged]
     if not views and any(e.startswith(f"{SERIES}/ground_truth/") for e in logged):
         views.append((f"{SERIES}/ground_truth", "ground truth, base frame (m)"))

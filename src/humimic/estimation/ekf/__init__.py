@@ -8,5 +8,8 @@
 * :mod:`.slam` -- the movement EKF SLAM (sec. III), with :mod:`.compressed` (the IMU steps'
   deferred map update) and :mod:`.state_blocks` (growing and converting the map);
 * :mod:`.frontend`, :mod:`.arm_mask` -- its image side; :mod:`.estimator` -- the whole
-  estimator; :mod:`.slam_stage` -- the pipeline stage (``slam:``, ``head_pose``, ``slam.*``).
+  estimator; :mod:`.slam_stage` -- the pipeline stage (``slam:``, ``head_pose``, ``slam.*``);
+* :mod:`.arm` -- the Wii-remote arm EKF (sec. IV), its measurement models (:mod:`.arm_model`),
+  the marker in the image (:mod:`.arm_marker`), the head pose it reads (:mod:`.head_track`) and
+  its stage (:mod:`.arm_stage`: ``arm:``, ``arm_pose``, ``arm.*``).
 """
