@@ -10,9 +10,14 @@ import pytest
 
 from humimic.control.ik import build_robot_model
 from humimic.control.mapping import (
+    ReachShell,
+    ScaleFit,
+    arm_length,
+    auto_scale,
     clamp_to_shell,
     map_displacement,
     mapping_matrix,
+    ray_to_shell,
     reach_shell,
 )
 
@@ -74,3 +79,58 @@ def test_reach_shell_matches_the_arm_geometry(robot):
     np.testing.assert_allclose(shell.center, d.body("R_upper_arm").xpos - T[:3, 3], atol=1e-12)
     elbow = reach_shell(m, q, "L_elbow", T)
     assert elbow.r_min == pytest.approx(a) and elbow.r_max == pytest.approx(a)
+
+
+# ---- scale: auto from arm lengths, fitted to the reach ------------------------------------------
+def _ray_by_bisection(a, u, c, r_min, r_max, far=5.0):
+    """First distance along ``a + l u`` at which the point leaves the shell (dense sampling then
+    bisection: independent of the closed form)."""
+    def inside(lam):
+        r = np.linalg.norm(a + lam * u - c)
+        return r_min <= r <= r_max
+    lams = np.linspace(0.0, far, 20001)
+    out = next(lam for lam in lams if not inside(lam))
+    lo, hi = out - lams[1], out
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if inside(mid) else (lo, mid)
+    return lo
+
+
+def test_ray_to_shell_matches_bisection():
+    rng = np.random.default_rng(3)
+    c, r_min, r_max = np.array([0.0, -0.19, 0.53]), 0.2, 0.68
+    for _ in range(40):
+        u = rng.normal(size=3)
+        u /= np.linalg.norm(u)
+        r = rng.uniform(r_min + 0.01, r_max - 0.01)
+        w = rng.normal(size=3)
+        a = c + r * w / np.linalg.norm(w)
+        assert ray_to_shell(a, u, c, r_min, r_max) == pytest.approx(
+            _ray_by_bisection(a, u, c, r_min, r_max), abs=1e-9)
+    assert ray_to_shell(c + np.array([2.0, 0, 0]), np.array([1.0, 0, 0]), c, r_min, r_max) == 0
+
+
+def test_arm_length_and_auto_scale(robot):
+    m, _ = robot
+    a, b = 0.344, 0.27 + 0.08  # the MJCF's segment offsets
+    assert arm_length(m, "R_palm") == pytest.approx(a + b, abs=1e-9)
+    assert arm_length(m, "L_elbow") == pytest.approx(a, abs=1e-9)
+    assert auto_scale(a + b, 0.3, 0.3, "R_palm") == pytest.approx((a + b) / 0.6)
+    assert auto_scale(a, 0.3, 0.3, "R_elbow") == pytest.approx(a / 0.3)
+
+
+def test_scale_fit_shrinks_to_keep_the_motion_inside_and_never_grows():
+    shell = ReachShell(np.zeros(3), 0.1, 0.7)
+    anchor = np.array([0.4, 0.0, 0.0])
+    fit = ScaleFit(1.0, shell, anchor, margin=0.0, time_constant=0.0, dt=1 / 420)
+    assert fit.update(np.array([0.2, 0.0, 0.0])) == 1.0       # 0.6 < 0.7: fits
+    assert fit.update(np.array([0.6, 0.0, 0.0])) == pytest.approx(0.5)  # 0.4 + 0.5 * 0.6
+    assert fit.update(np.array([0.1, 0.0, 0.0])) == pytest.approx(0.5)  # never grows back
+    # inward, the inner sphere bounds it: from 0.4 to 0.1 is 0.3 of room
+    assert fit.update(np.array([-1.0, 0.0, 0.0])) == pytest.approx(0.3)
+    slow = ScaleFit(1.0, shell, anchor, margin=0.05, time_constant=0.1, dt=0.01)
+    s = [slow.update(np.array([0.6, 0.0, 0.0])) for _ in range(100)]
+    bound = (0.65 - 0.4) / 0.6
+    assert s[0] == pytest.approx(1.0 - 0.1 * (1.0 - bound))  # first-order decay, gain dt/tau
+    assert s[-1] == pytest.approx(bound, rel=1e-3) and np.all(np.diff(s) <= 0)

@@ -5,7 +5,8 @@ Example (every key optional except what differs from the defaults)::
     mimic:
       map: {right_hand: R_palm}     # human target -> robot site it drives
       mode: relative                # relative (paper) | mirrored | follow (Fig. 4)
-      scale: 1.0
+      scale: auto                   # auto (robot arm / person's arm) | a number
+      fit: {enabled: true, margin: 0.03, time_constant: 0.3}
       start: 0.0                    # s: the first estimate at/after this time starts mimicry
       perception: oracle            # oracle (ground truth + noise) | tracked (perception+filter)
       oracle: {noise_std: 0.0, latency: 0.0}
@@ -18,7 +19,7 @@ Units: m, s, rad, Hz. Robot sites and human targets are the names in
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import Annotated, Literal
 
 from pydantic import Field, field_validator, model_validator
 
@@ -76,6 +77,21 @@ class OracleConfig(Section):
     """Photon-to-estimate latency (s), added to the cameras' transfer latency."""
     require_in_view: bool = True
     """Report a target only while it projects inside every eye camera's image."""
+
+
+class FitConfig(Section):
+    """Fit the person's motion range into the robot's reach by shrinking the scale (see
+    :mod:`humimic.control.mapping`): when a mapped displacement would leave the driven site's
+    reachable shell, the scale decays towards the largest one that keeps it inside; it never
+    grows back."""
+
+    enabled: bool = True
+    margin: float = Field(0.03, ge=0.0, le=0.2)
+    """Distance (m) the fitted motion keeps inside the reachable shell (room for the PD's
+    overshoot and the IK's joint limits)."""
+    time_constant: float = Field(0.3, ge=0.0, le=10.0)
+    """Time constant (s) of the scale's decay: 0 jumps at once; longer ignores brief outliers
+    (a mis-tracked frame) but clamps longer while the scale settles."""
 
 
 class InterpolationConfig(Section):
@@ -154,8 +170,11 @@ class MimicConfig(Section):
     """relative: the robot site's displacement equals the human part's (robot base frame, the
     paper); mirrored: as a mirror image across the space between them (depth reversed);
     follow: a robot hand follows the person's head (Fig. 4)."""
-    scale: float = Field(1.0, gt=0.0, le=5.0)
-    """Displacement scale."""
+    scale: Annotated[float, Field(gt=0.0, le=5.0)] | Literal["auto"] = "auto"
+    """Displacement scale at the start: a number, or ``auto``: the driven robot arm's length
+    over the person's (shoulder to palm; shoulder to elbow for an elbow site). ``fit`` may
+    shrink it; ``mimicry.<site>.scale`` reports the one in use at the end."""
+    fit: FitConfig = Field(default_factory=FitConfig)
     relative_to: str | None = None
     """Human target whose motion is subtracted first (e.g. ``pelvis``): the mapped motion is
     then the part's motion relative to the body, not the whole body's travel."""
@@ -172,7 +191,8 @@ class MimicConfig(Section):
     servo: ServoConfig = Field(default_factory=ServoConfig)
     gaze: GazeConfig = Field(default_factory=GazeConfig)
     clamp_workspace: bool = True
-    """Clamp commands into each driven site's reachable shell (reported in the metrics)."""
+    """Clamp commands into each driven site's reachable shell (reported in the metrics); off
+    also turns ``fit`` off (it fits into that shell)."""
 
     @field_validator("map")
     @classmethod

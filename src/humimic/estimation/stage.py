@@ -8,6 +8,13 @@ first measurement initialises its filter (Ude: p and its covariance from the mea
 filter reset) until it is measured again: extrapolating a hand for seconds is no estimate.
 ``estimates`` (every initialised target) is published for every frame, time-stamped with the
 photon time and ready ``latency`` after the measurements were.
+
+Coasting: a frame without a target's measurement (missed detection, covered or frozen camera,
+see :mod:`humimic.sensors.faults`) is a prediction only, so the covariance grows with the time
+since the last measurement; a lost frame is simply absent and the next prediction spans the gap.
+``filter.coasted_frames`` counts the estimates published on prediction alone,
+``filter.longest_coast_s`` the longest such stretch, and ``filter.nonfinite_estimates`` any
+estimate that was not finite (always 0 unless something is broken).
 """
 
 from __future__ import annotations
@@ -72,6 +79,9 @@ class FilterStage(Stage):
         self._t_meas = dict.fromkeys(self.targets, -np.inf)
         self._t_init = dict.fromkeys(self.targets, np.inf)
         self.resets = dict.fromkeys(self.targets, 0)
+        self.coasted = dict.fromkeys(self.targets, 0)
+        self.longest_coast = dict.fromkeys(self.targets, 0.0)
+        self.nonfinite = 0
         self._bus = self._timer = None
 
     def attach(self, bus, timer) -> None:
@@ -110,8 +120,12 @@ class FilterStage(Stage):
                 measured[i] = True
             elif kf.initialised:
                 kf.step(t)
+                self.coasted[name] += 1
+                self.longest_coast[name] = max(self.longest_coast[name], t - self._t_meas[name])
             if kf.initialised:
                 x, Pi = kf.x, kf.P
+                if not (np.all(np.isfinite(x)) and np.all(np.isfinite(Pi))):
+                    self.nonfinite += 1
                 valid[i], X[i], P[i], since[i] = True, x, Pi, t - self._t_init[name]
                 out[name] = TargetEstimate(name, x[0:3], x[3:6], x[6:9], Pi)
         self.record.rows.append((t, valid, measured, X, P, since))
@@ -134,4 +148,7 @@ class FilterStage(Stage):
     def metrics(self) -> dict:
         return {"filter": {"kind": self.cfg.kind, "b": self.cfg.b,
                            "b_paper_mm_units": self.cfg.b * 1e3, "max_gap_s": self.cfg.max_gap,
-                           "resets": dict(self.resets), "latency_ms": 1e3 * self.cfg.latency}}
+                           "resets": dict(self.resets), "coasted_frames": dict(self.coasted),
+                           "longest_coast_s": dict(self.longest_coast),
+                           "nonfinite_estimates": self.nonfinite,
+                           "latency_ms": 1e3 * self.cfg.latency}}

@@ -8,11 +8,15 @@ an arm or torso joint target sits on the IK's limit band; ``joint_limit_hits_by_
 them per joint), ``clamped_fraction``,
 ``error_budget_mm`` (see :func:`humimic.metrics.mimicry.error_terms`; ``perception`` and
 ``filtering`` are the raw measurement's and the estimate's errors at their photon times),
-``interpolation`` (hold vs extrapolate commands against the truth). ``mimicry.head_still``,
+``interpolation`` (hold vs extrapolate commands against the truth), ``scale`` (in use at the end;
+``scale_initial`` at the start: the mapped truth is scaled by the scale in use at each tick).
+``mimicry.head_still``,
 ``mimicry.gaze``, ``mimicry.ik`` and ``latency_ms`` complete it.
 """
 
 from __future__ import annotations
+
+from functools import partial
 
 import numpy as np
 
@@ -89,12 +93,13 @@ def _site_series(stage, i: int, ch):
     if ch.ref is not None:
         P = P - world.gt.p_base(ch.ref)
     N = len(P)
-    S, p0r = ch.S, ch.p0_robot
+    M, p0r = ch.M, ch.p0_robot
+    scale = rec.scale[k0:n - 1, i, None]
     origin = P[_idx(ch.t0, rate, N)]
     t = rec.t[k0 + 1:n]
-    true_now = (P[_idx(t, rate, N)] - origin) @ S.T
+    true_now = scale * ((P[_idx(t, rate, N)] - origin) @ M.T)
     t_ph = rec.t_est[k0:n - 1, i]
-    true_ph = (P[_idx(t_ph, rate, N)] - origin) @ S.T
+    true_ph = scale * ((P[_idx(t_ph, rate, N)] - origin) @ M.T)
     s = {
         "t": t,
         "true_now": true_now,
@@ -109,17 +114,30 @@ def _site_series(stage, i: int, ch):
     return k0, s
 
 
-def _event_error(arrivals, P: np.ndarray, S: np.ndarray, rate: float,
+def _scale_at(stage, i: int, ch, t: np.ndarray) -> np.ndarray:
+    """``(N, 1)`` mapping scale of site ``i`` in use at times ``t`` (its first before it
+    started)."""
+    rec = stage.rec
+    active = rec.active[:rec.n, i]
+    ts, ss = rec.t[:rec.n][active], rec.scale[:rec.n, i][active]
+    if len(ts) == 0:
+        return np.full((len(t), 1), ch.scale)
+    return np.interp(t, ts, ss)[:, None]
+
+
+def _event_error(arrivals, P: np.ndarray, M: np.ndarray, scale_at, rate: float,
                  t_start: float) -> float | None:
-    """RMS (mm, mapped space) of the values that arrived on a topic, photon times from
-    ``t_start`` on, against the truth at their photon times (None if there are none)."""
+    """RMS (mm, mapped space: reflection ``M``, the scale at each photon time from
+    ``scale_at(t)``) of the values that arrived on a topic, photon times from ``t_start`` on,
+    against the truth at their photon times (None if there are none)."""
     if arrivals is None or not arrivals.t:
         return None
     t, _, p = arrivals.arrays()
     keep = t >= t_start - 1e-9
     if not np.any(keep):
         return None
-    return _mm(rmse(p[keep] @ S.T, P[_idx(t[keep], rate, len(P))] @ S.T))
+    s = scale_at(t[keep])
+    return _mm(rmse(s * (p[keep] @ M.T), s * (P[_idx(t[keep], rate, len(P))] @ M.T)))
 
 
 def _limit_hits(stage, site: str, k0: int) -> tuple[int, dict[str, int]]:
@@ -151,8 +169,11 @@ def site_metrics(stage, i: int, ch) -> tuple[dict, dict]:
                         s["ik"], s["robot"])
     rate = world.scenario.timing.physics_rate
     P = world.gt.p_base(ch.target)
-    budget = {"perception": _event_error(rec.measurements.get(ch.target), P, ch.S, rate, ch.t0),
-              "filtering": _event_error(rec.estimates.get(ch.target), P, ch.S, rate, ch.t0)}
+    scale_at = partial(_scale_at, stage, i, ch)
+    budget = {"perception": _event_error(rec.measurements.get(ch.target), P, ch.M, scale_at,
+                                         rate, ch.t0),
+              "filtering": _event_error(rec.estimates.get(ch.target), P, ch.M, scale_at, rate,
+                                        ch.t0)}
     if budget["perception"] is None and cfg.perception == "oracle":
         budget["perception"] = budget["filtering"]  # the oracle's noise is its perception
     for name in (*TERMS, "total"):
@@ -178,6 +199,8 @@ def site_metrics(stage, i: int, ch) -> tuple[dict, dict]:
         "joint_limit_hits": hits,
         "joint_limit_hits_by_joint": hits_by_joint,
         "clamped_fraction": float(rec.clamped[k0:rec.n, i].mean()),
+        "scale": ch.scale,
+        "scale_initial": ch.scale_initial,
         "lost_fraction": float(rec.lost[k0:rec.n, i].mean()),
         "started_s": float(rec.t[k0]),
         "ticks": int(n_active),
@@ -258,7 +281,8 @@ def mimic_metrics(stage) -> dict:
     ik_ms = 1e3 * rec.ik_s[:n]
     out = {
         **sites,
-        "mode": cfg.mode, "scale": cfg.scale, "perception": cfg.perception,
+        "mode": cfg.mode, "scale_setting": cfg.scale, "fit": cfg.fit.enabled,
+        "perception": cfg.perception,
         "interpolation_mode": cfg.interpolation.mode,
         "head_still": {"max_displacement_mm": 1e3 * dp, "max_rotation_deg": float(np.degrees(dr))},
         "joints": {"limit_violations": int(np.sum(excess > 0.0)),

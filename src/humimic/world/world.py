@@ -14,6 +14,7 @@ import numpy as np
 from humimic.motion import MotionContext, compute_ground_truth, make_motion
 from humimic.sensors.cameras import CameraRig, CameraSpec
 from humimic.sensors.clock import Clock, Schedule
+from humimic.sensors.faults import SensorFaults
 from humimic.sensors.inertial import simulate_inertial
 from humimic.world.gaze import pan_tilt_to
 from humimic.world.names import EYE_CAMERAS, ROBOT_JOINTS, ROBOT_PREFIX
@@ -70,6 +71,8 @@ class World:
                          if hc.enabled else None)
         self.imu = self._inertial("head_imu", scenario.sensors.imu, rngs["imu"])
         self.wiimote = self._inertial("wiimote", scenario.sensors.wiimote, rngs["wiimote"])
+        self.faults = SensorFaults(scenario, self.eye_cameras, rngs)
+        """Lost, frozen and covered frames, lost inertial samples (applied when published)."""
 
     # ---- the person ------------------------------------------------------------------------
     def apply_human(self, tick: int) -> None:

@@ -1,0 +1,155 @@
+"""Sensor faults (lost, frozen and covered frames, lost inertial samples): the injector on
+synthetic frames, then whole runs in which the filter coasts through them and tracking resumes.
+"""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from humimic.paths import SCENARIOS_DIR
+from humimic.pipeline.build import build_stages
+from humimic.pipeline.simulation import simulate
+from humimic.pipeline.stage import Stage
+from humimic.rngs import Rngs
+from humimic.scenario import ScenarioError, load_scenario
+from humimic.sensors.camera_model import CameraImage
+from humimic.sensors.faults import FrameFaults, keep_samples
+from humimic.viz.rerun_log import RerunLog
+from humimic.world.world import World
+
+CAMS = ["L_wide", "R_wide"]
+RATE = 60.0
+
+
+def _frames(n: int):
+    """``n`` stereo frame sets of tiny images, every image unique (its frame index in it)."""
+    for k in range(n):
+        t = k / RATE
+        yield t, {c: CameraImage(t, None, np.full((4, 6, 3), (k + 7 * i) % 256, np.uint8))
+                  for i, c in enumerate(CAMS)}
+
+
+def _run(faults: FrameFaults, n: int):
+    return [(t, faults.apply(t, images), images) for t, images in _frames(n)]
+
+
+def _binomial_ok(count: int, n: int, p: float) -> bool:
+    return abs(count - n * p) <= 4.0 * np.sqrt(n * p * (1 - p))
+
+
+def test_dropped_frames_are_lost_whole_at_the_rate():
+    f = FrameFaults(CAMS, drop_rate=0.2, rng=np.random.default_rng(1))
+    out = _run(f, 3000)
+    lost = [t for t, o, _ in out if o is None]
+    assert len(lost) == f.dropped and _binomial_ok(f.dropped, 3000, 0.2)
+    delivered = [o for _, o, _ in out if o is not None]
+    assert all(set(o) == set(CAMS) for o in delivered)
+    again = FrameFaults(CAMS, drop_rate=0.2, rng=np.random.default_rng(1))
+    assert [t for t, o, _ in _run(again, 3000) if o is None] == lost  # same seed, same losses
+
+
+def test_a_frozen_camera_repeats_its_previous_image_under_the_new_time():
+    f = FrameFaults(CAMS, freeze_rate=0.1, rng=np.random.default_rng(2))
+    out = _run(f, 2000)
+    prev: dict[str, np.ndarray] = {}
+    frozen = dict.fromkeys(CAMS, 0)
+    for t, o, fresh in out:
+        for c in CAMS:
+            st = f.status(t, c)
+            if st is not None and st.frozen:
+                frozen[c] += 1
+                assert np.array_equal(o[c].image, prev[c]) and o[c].t == t
+                assert st.t_content < t
+            else:
+                assert o[c].image is fresh[c].image
+            prev[c] = o[c].image
+    assert frozen == f.frozen
+    assert all(_binomial_ok(v, 2000, 0.1) for v in frozen.values())
+    assert f.status(0.0, "L_wide") is None  # the first frame has nothing to repeat
+
+
+def test_a_covered_camera_is_black_in_its_window_only():
+    f = FrameFaults(CAMS, covered={"L_wide": [(0.5, 1.0)]})
+    for t, o, fresh in _run(f, 120):
+        if 0.5 <= t < 1.0:
+            assert not o["L_wide"].image.any() and f.status(t, "L_wide").covered
+        else:
+            assert o["L_wide"].image is fresh["L_wide"].image
+        assert o["R_wide"].image is fresh["R_wide"].image
+    assert f.blacked == {"L_wide": 30, "R_wide": 0} and f.dropped == 0
+
+
+def test_one_fault_rate_does_not_shift_another_faults_pattern():
+    def frozen_times(drop):
+        f = FrameFaults(CAMS, drop_rate=drop, freeze_rate=0.1, rng=np.random.default_rng(5))
+        return [t for t, _, _ in _run(f, 500) if f.status(t, "R_wide")]
+    assert frozen_times(0.0) == frozen_times(0.3)
+
+
+def test_inertial_dropouts_at_the_rate():
+    keep = keep_samples(5000, 0.05, np.random.default_rng(4))
+    assert _binomial_ok(int((~keep).sum()), 5000, 0.05)
+    assert keep_samples(10, 0.0, None).all()
+
+
+def test_a_covered_camera_the_scenario_lacks_is_a_scenario_error():
+    sc = load_scenario(SCENARIOS_DIR / "static.yaml",
+                       ["cameras.eyes=left", "cameras.covered=[{camera: right, start: 0, end: 1}]"])
+    with pytest.raises(ScenarioError, match="cameras.covered.0.camera"):
+        World(sc, Rngs(0))
+
+
+# ---- whole runs ---------------------------------------------------------------------------------
+class Counter(Stage):
+    """Counts what arrives on the sensor topics."""
+
+    name = "counter"
+
+    def __init__(self):
+        self.n = {"frames": 0, "imu": 0, "wiimote": 0}
+
+    def attach(self, bus, timer) -> None:
+        for topic in self.n:
+            bus.subscribe(topic, self._count)
+
+    def _count(self, topic, msg) -> None:
+        self.n[topic] += 1
+
+
+def _simulate(name: str, overrides: list[str], duration: float):
+    sc = load_scenario(SCENARIOS_DIR / f"{name}.yaml",
+                       ['output.rerun="off"', "output.plots=false", *overrides],
+                       duration=duration)
+    rngs = Rngs(sc.seed)
+    world = World(sc, rngs)
+    rlog = RerunLog(world.scene, "off", None, "test")
+    counter = Counter()
+    stages = [*build_stages(sc, world, rngs, rlog), counter]
+    try:
+        simulate(world, stages, rlog, progress=False)
+        metrics = world.faults.metrics()
+        for stage in stages:
+            metrics.update(stage.metrics())
+    finally:
+        for stage in stages:
+            stage.close()
+        world.close()
+    json.dumps(metrics, allow_nan=False)  # never a NaN
+    return metrics, {s.name: s for s in stages}, counter.n
+
+
+@pytest.mark.slow
+def test_inertial_samples_are_lost_at_their_rates():
+    m, _, n = _simulate("static", ["sensors.imu.drop_rate=0.1", "sensors.wiimote.drop_rate=0.3",
+                                   "sensors.wiimote.rate=100", "cameras.resolution=[32, 24]"],
+                        2.0)
+    f = m["faults"]
+    assert f["imu_samples"] == 360 and f["wiimote_samples"] == 200  # 180 Hz, 100 Hz
+    assert n["imu"] == 360 - f["imu_samples_dropped"]
+    assert n["wiimote"] == 200 - f["wiimote_samples_dropped"]
+    assert _binomial_ok(f["imu_samples_dropped"], 360, 0.1)
+    assert _binomial_ok(f["wiimote_samples_dropped"], 200, 0.3)
+    assert n["frames"] == f["frames"] == 120 and f["frames_dropped"] == 0
