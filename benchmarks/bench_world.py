@@ -11,6 +11,7 @@ import argparse
 import json
 import platform
 import statistics
+import tempfile
 from pathlib import Path
 
 import humimic  # noqa: F401  (headless GL before mujoco)
@@ -54,8 +55,8 @@ def bench_world_loop(repeats: int, duration: float = 3.0) -> list[float]:
     })
     out = []
     for i in range(repeats):
-        metrics = run_one(scenario, out_dir=Path("/tmp") / f"humimic-bench-{i}", rerun="off",
-                          progress=False)
+        out_dir = Path(tempfile.gettempdir()) / f"humimic-bench-{i}"
+        metrics = run_one(scenario, out_dir=out_dir, rerun="off", progress=False)
         out.append(metrics["realtime_factor"])
     return out
 
