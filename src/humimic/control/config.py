@@ -6,7 +6,7 @@ Example (every key optional except what differs from the defaults)::
       map: {right_hand: R_palm}     # human target -> robot site it drives
       mode: relative                # relative (paper) | mirrored | follow (Fig. 4)
       scale: auto                   # auto (robot arm / person's arm) | a number
-      fit: {enabled: true, margin: 0.03, time_constant: 0.3}
+      fit: {enabled: true, margin: 0.03, time_constant: 0.3, strain_rate: 0.5}
       start: 0.0                    # s: the first estimate at/after this time starts mimicry
       perception: oracle            # oracle (ground truth + noise) | tracked (perception+filter)
       oracle: {noise_std: 0.0, latency: 0.0}
@@ -82,7 +82,8 @@ class OracleConfig(Section):
 class FitConfig(Section):
     """Fit the person's motion range into the robot's reach by shrinking the scale (see
     :mod:`humimic.control.mapping`): when a mapped displacement would leave the driven site's
-    reachable shell, the scale decays towards the largest one that keeps it inside; it never
+    reachable shell, the scale decays towards the largest one that keeps it inside, and while
+    the arm is strained (IK miss, a joint on its limit band) it shrinks steadily; it never
     grows back."""
 
     enabled: bool = True
@@ -92,6 +93,12 @@ class FitConfig(Section):
     time_constant: float = Field(0.3, ge=0.0, le=10.0)
     """Time constant (s) of the scale's decay: 0 jumps at once; longer ignores brief outliers
     (a mis-tracked frame) but clamps longer while the scale settles."""
+    strain_rate: float = Field(0.5, ge=0.0, le=20.0)
+    """Relative rate (1/s) at which the scale shrinks while the arm is strained: the IK misses
+    the command by more than ``tolerance`` or a shoulder or elbow joint sits on its limit band
+    (0: the IK is not listened to)."""
+    tolerance: float = Field(0.005, gt=0.0, le=0.1)
+    """IK miss (m) beyond which the arm counts as strained."""
 
 
 class InterpolationConfig(Section):

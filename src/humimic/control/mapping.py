@@ -26,9 +26,12 @@ joint limits then bite, its Sec. 5). Two parts, both per driven site:
   displacement ``s M d`` stays inside while ``s <= rho(M d / |d|) / |d|``; when the person moves
   further than that, the scale decays towards this bound with a time constant (a single wild
   estimate barely moves it; an arm raised for a second does) and never grows back: once the
-  person has shown their range, the whole of it maps inside (:class:`ScaleFit`). Clamping then
-  only acts while the scale is still shrinking, and the error is scored against the target at
-  the scale in use.
+  person has shown their range, the whole of it maps inside (:class:`ScaleFit`). The shell
+  knows the arm's length but not its joint limits or its body, so the fit also listens to the
+  IK: while the arm is strained (the IK misses the command, or a shoulder or elbow joint sits
+  on its limit band, where DB "becomes more jerky", Ude & Atkeson Sec. 5) the scale shrinks at
+  a fixed relative rate. Clamping then only acts while the scale is still shrinking, and the
+  error is scored against the target at the scale in use.
 """
 
 from __future__ import annotations
@@ -127,11 +130,14 @@ def auto_scale(robot_arm: float, human_upper_arm: float, human_lower_arm: float,
 class ScaleFit:
     """The scale in use for one site (see the module docstring): starts at ``scale`` and decays
     towards the largest scale that keeps each mapped displacement inside the shell (about its
-    shoulder) shrunk by ``margin``, with time constant ``time_constant`` (s); never grows."""
+    shoulder) shrunk by ``margin``, with time constant ``time_constant`` (s), and by
+    ``strain_rate`` (1/s, relative) while the arm is strained; never grows."""
 
     def __init__(self, scale: float, shell: ReachShell, anchor: np.ndarray, margin: float,
-                 time_constant: float, dt: float):
+                 time_constant: float, dt: float, strain_rate: float = 0.0):
         self.scale = self.initial = float(scale)
+        self.strain_gain = min(1.0, strain_rate * dt)
+        self.strained_ticks = 0
         self.shell, self.anchor = shell, np.asarray(anchor, float)
         r_min, r_max = shell.r_min + margin, shell.r_max - margin
         r0 = float(np.linalg.norm(self.anchor - shell.center))
@@ -152,6 +158,12 @@ class ScaleFit:
         if bound < self.scale:
             self.scale += self.gain * (bound - self.scale)
         return self.scale
+
+    def strain(self, strained: bool) -> None:
+        """After the IK step: shrink the scale by ``strain_rate dt`` if the arm was strained."""
+        if strained:
+            self.strained_ticks += 1
+            self.scale *= 1.0 - self.strain_gain
 
 
 @dataclass(frozen=True)

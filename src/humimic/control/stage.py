@@ -22,7 +22,7 @@ import time
 import numpy as np
 
 from humimic.control.gaze import Gaze
-from humimic.control.ik import MimicIK, build_robot_model
+from humimic.control.ik import MimicIK, build_robot_model, on_limit_band
 from humimic.control.interpolation import CartesianInterpolator
 from humimic.control.mapping import (
     REFLECTIONS,
@@ -42,6 +42,8 @@ from humimic.world.names import HUMAN_PREFIX, ROBOT_JOINTS
 #: An estimate older than this (s) counts as lost: the command stops where it was.
 MAX_AGE = 0.25
 EYES = np.array([ROBOT_JOINTS.index(j) for j in ("L_EP", "L_ET", "R_EP", "R_ET")])
+#: Joints of a driven arm whose limit band strains it (the wrists hardly move a palm).
+STRAIN_JOINTS = ("SFE", "SAA", "HR", "EB")
 
 
 class Channel:
@@ -123,6 +125,10 @@ class MimicStage(Stage):
         phys_every = int(round(sc.timing.physics_rate / base_rate))
         n = world.n_ticks // (phys_every * self.every) + 2
         self.rec = MimicRecord(n, self.sites, len(ROBOT_JOINTS), self.dt)
+        #: per channel: the shoulder and elbow joints whose limit bands count as strain
+        self._strain_joints = [np.array([ROBOT_JOINTS.index(f"{s[0]}_{j}")
+                                         for j in STRAIN_JOINTS]) for s in self.sites]
+        self._strain_ranges = [self.ik_model.jnt_range[j] for j in self._strain_joints]
         self.latest: dict[str, tuple] = {}
         self.v_prev = np.zeros(len(ROBOT_JOINTS))
         self._calls = 0
@@ -138,8 +144,8 @@ class MimicStage(Stage):
         shell = (reach_shell(self.ik_model, self.ik.q, site, self.scene.T_world_base)
                  if cfg.clamp_workspace else None)
         f = cfg.fit
-        fit = (ScaleFit(scale, shell, p0_base, f.margin, f.time_constant, self.dt)
-               if f.enabled and shell is not None else None)
+        fit = (ScaleFit(scale, shell, p0_base, f.margin, f.time_constant, self.dt,
+                        f.strain_rate) if f.enabled and shell is not None else None)
         return Channel(target, cfg.relative_to, site, p0_base, REFLECTIONS[cfg.mode], scale,
                        shell, fit)
 
@@ -270,6 +276,7 @@ class MimicStage(Stage):
         rec.ctrl[k] = self.servo_out.command(q_d, v_d, a)
         rec.q_ik[k], rec.qdot_ik[k] = q_d, v_d
         rec.p_ik[k] = self.to_base(self.ik.site_positions())
+        self._strain(k, q)
         rec.p_robot[k] = self.to_base(d.site_xpos[self.scene_sites])
         rec.q_robot[k] = d.qpos[scene.robot_qpos]
         rec.p_head[k] = d.site_xpos[self.head_site]
@@ -277,6 +284,17 @@ class MimicStage(Stage):
         rec.cam_pos[k] = d.cam_xpos[self.cams]
         rec.cam_mat[k] = d.cam_xmat[self.cams]
         rec.n = k + 1
+
+    def _strain(self, k: int, q: np.ndarray) -> None:
+        """Tell each fitted channel whether its arm was strained this tick: the IK missed the
+        command by more than ``fit.tolerance`` or a shoulder or elbow joint is on its band."""
+        rec, f = self.rec, self.cfg.fit
+        miss = np.linalg.norm(rec.p_ik[k] - rec.p_cmd[k], axis=1)
+        for i, ch in enumerate(self.channels):
+            if ch.fit is not None and rec.active[k, i]:
+                j = self._strain_joints[i]
+                ch.fit.strain(bool(miss[i] > f.tolerance or np.any(on_limit_band(
+                    q[j], self._strain_ranges[i], self.cfg.ik.limit_margin))))
 
     # ---- results --------------------------------------------------------------------------
     def metrics(self) -> dict:

@@ -20,6 +20,7 @@ from functools import partial
 
 import numpy as np
 
+from humimic.control.ik import on_limit_band
 from humimic.metrics.mimicry import (
     TERMS,
     error_terms,
@@ -38,7 +39,6 @@ ARM_JOINTS = {
     "R": ("R_SFE", "R_SAA", "R_HR", "R_EB", "R_WR", "R_WFE", "R_WAA"),
     "L": ("L_SFE", "L_SAA", "L_HR", "L_EB", "L_WR", "L_WFE", "L_WAA"),
 }
-LIMIT_TOL = 2e-3  # rad
 #: Fewest servo ticks of mimicry worth scoring.
 MIN_TICKS = 30
 
@@ -146,10 +146,8 @@ def _limit_hits(stage, site: str, k0: int) -> tuple[int, dict[str, int]]:
     rec = stage.rec
     names = ARM_JOINTS[site[0]] + TORSO_JOINTS
     j = np.array([ROBOT_JOINTS.index(x) for x in names])
-    band = stage.cfg.ik.limit_margin + LIMIT_TOL
-    rng = stage.ik_model.jnt_range[j]
-    q = rec.q_ik[k0:rec.n, j]
-    hit = (q <= rng[:, 0] + band) | (q >= rng[:, 1] - band)
+    hit = on_limit_band(rec.q_ik[k0:rec.n, j], stage.ik_model.jnt_range[j],
+                        stage.cfg.ik.limit_margin)
     per_joint = {name: int(n) for name, n in zip(names, hit.sum(axis=0), strict=True) if n}
     return int(np.any(hit, axis=1).sum()), per_joint
 

@@ -7,17 +7,22 @@ as a transfer link or a lens cover would:
 * ``cameras.drop_rate``: a stereo frame set is lost in transfer with this probability (the
   capture is synchronised, so both images go). Nothing is published: downstream stages see a
   gap in the frame times, and the filter predicts across it at the next frame.
-* ``cameras.freeze_rate``: with this probability, per camera and frame, a camera delivers its
-  previous image again (stale pixels under a new time stamp, as a frame grabber that missed a
-  buffer swap does). The eyes' pose is the current one: the system cannot tell.
-* ``cameras.covered``: a camera's image is black during a time window (a hand over the lens).
+* ``cameras.freeze_rate``: with this probability, per camera and frame, a camera delivers the
+  image it delivered last again (stale pixels under a new time stamp, as a frame grabber that
+  missed a buffer swap does), with the eyes' current pose.
+* ``cameras.covered``: a camera's image is black during a time window (a hand over the lens),
+  bar the camera's own pixel noise (a sensor's dark noise; the negative half clips at 0).
 * ``sensors.imu.drop_rate`` / ``sensors.wiimote.drop_rate``: an inertial sample is lost.
+
+A receiver can tell a frozen frame when the camera has pixel noise: a fresh noisy image never
+repeats its predecessor bit for bit (:class:`RepeatDetector`; perception then skips the frame
+set as if it were lost). Without noise a still scene repeats legitimately and nothing is flagged.
 
 Every frame draws the same random numbers whatever happens to it (one for the drop, one per
 camera for the freeze), so one fault's rate never shifts another's pattern. The counts seen are
-reported under ``faults`` (``frames_dropped``, ``frames_frozen``, ``frames_covered``,
-``<sensor>_samples_dropped``); :meth:`FrameFaults.status` tells ground-truth stages (the oracle)
-what happened to a frame.
+reported under ``faults`` (``frames_dropped``; ``frames_frozen`` and ``frames_covered`` among
+the frames delivered; ``<sensor>_samples_dropped``); :meth:`FrameFaults.status` tells
+ground-truth stages (the oracle) what happened to a frame.
 """
 
 from __future__ import annotations
@@ -59,24 +64,35 @@ def keep_samples(n: int, drop_rate: float, rng: np.random.Generator) -> np.ndarr
 class FrameFaults:
     """Faults of a camera rig's published frames (see the module docstring).
 
-    ``covered`` maps a camera name to its black windows ``[(start, end), ...]`` (s).
+    ``covered`` maps a camera name to its black windows ``[(start, end), ...]`` (s);
+    ``noise_std`` is the cameras' pixel noise (grey levels), drawn from ``dark_rng`` into a
+    covered image (the other faults' draws never depend on it).
     """
 
     def __init__(self, cameras: list[str], drop_rate: float = 0.0, freeze_rate: float = 0.0,
                  covered: dict[str, list[tuple[float, float]]] | None = None,
-                 rng: np.random.Generator | None = None):
+                 rng: np.random.Generator | None = None, noise_std: float = 0.0,
+                 dark_rng: np.random.Generator | None = None):
         self.cameras = list(cameras)
         self.drop_rate, self.freeze_rate = float(drop_rate), float(freeze_rate)
         self.covered = {c: list(w) for c, w in (covered or {}).items() if w}
-        self.rng = rng
+        self.rng, self.noise_std, self.dark_rng = rng, float(noise_std), dark_rng
         if (self.drop_rate > 0.0 or self.freeze_rate > 0.0) and rng is None:
             raise ValueError("random faults need a random generator")
+        if self.noise_std > 0.0 and self.covered and dark_rng is None:
+            raise ValueError("dark noise needs a random generator")
         self._last: dict[str, tuple[np.ndarray, float]] = {}
-        self._status: dict[float, dict[str, FrameStatus]] = {}
+        self.faulted: dict[float, dict[str, FrameStatus]] = {}
+        """Frame time (s) -> the cameras frozen or covered in that frame set."""
         self.frames = 0
-        self.dropped = 0
+        self.lost: list[float] = []
+        """Times (s) of the frame sets lost."""
         self.frozen = dict.fromkeys(self.cameras, 0)
         self.blacked = dict.fromkeys(self.cameras, 0)
+
+    @property
+    def dropped(self) -> int:
+        return len(self.lost)
 
     @property
     def active(self) -> bool:
@@ -89,13 +105,16 @@ class FrameFaults:
             return images
         u = (self.rng.random(1 + len(self.cameras)) if self.rng is not None
              else np.ones(1 + len(self.cameras)))
+        if u[0] < self.drop_rate:
+            self.lost.append(t)
+            return None
         out, status = {}, {}
         for i, name in enumerate(self.cameras):
             img = images[name]
             pixels, t_content = img.image, img.t
             frozen = covered = False
             if in_window(t, self.covered.get(name, ())):
-                pixels, covered = np.zeros_like(img.image), True
+                pixels, covered = self._dark(img.image.shape), True
                 self.blacked[name] += 1
             elif u[1 + i] < self.freeze_rate and name in self._last:
                 (pixels, t_content), frozen = self._last[name], True
@@ -105,19 +124,42 @@ class FrameFaults:
             if frozen or covered:
                 status[name] = FrameStatus(frozen, covered, t_content)
         if status:
-            self._status[t] = status
-        if u[0] < self.drop_rate:
-            self.dropped += 1
-            return None
+            self.faulted[t] = status
         return out
+
+    def _dark(self, shape: tuple[int, ...]) -> np.ndarray:
+        """A covered camera's image: black plus its pixel noise, clipped at 0."""
+        if self.noise_std <= 0.0:
+            return np.zeros(shape, np.uint8)
+        noise = self.dark_rng.normal(0.0, self.noise_std, shape)
+        return np.clip(np.rint(noise), 0, 255).astype(np.uint8)
 
     def status(self, t: float, camera: str) -> FrameStatus | None:
         """What happened to ``camera``'s frame at time ``t`` (None: delivered as captured)."""
-        return self._status.get(t, {}).get(camera)
+        return self.faulted.get(t, {}).get(camera)
 
     def metrics(self) -> dict:
         return {"frames": self.frames, "frames_dropped": self.dropped,
                 "frames_frozen": dict(self.frozen), "frames_covered": dict(self.blacked)}
+
+
+class RepeatDetector:
+    """Flags a frame set in which a camera repeats its previous image bit for bit (stale), when
+    ``enabled`` (the cameras have pixel noise; see the module docstring)."""
+
+    def __init__(self, enabled: bool):
+        self.enabled = enabled
+        self._prev: dict[str, np.ndarray] = {}
+        self.stale_frames = 0
+
+    def stale(self, images: dict[str, CameraImage]) -> bool:
+        if not self.enabled:
+            return False
+        out = any(name in self._prev and np.array_equal(self._prev[name], img.image)
+                  for name, img in images.items())
+        self._prev = {name: img.image for name, img in images.items()}
+        self.stale_frames += out
+        return out
 
 
 class SensorFaults:
@@ -138,7 +180,8 @@ class SensorFaults:
                 covered.setdefault(name, []).append((w.start, w.end))
         random = c.drop_rate > 0.0 or c.freeze_rate > 0.0
         self.frames = FrameFaults(eye_cameras, c.drop_rate, c.freeze_rate, covered,
-                                  rngs["faults.cameras"] if random else None)
+                                  rngs["faults.cameras"] if random else None, c.noise_std,
+                                  rngs["faults.dark"] if covered else None)
         self._inertial = {topic: (getattr(scenario.sensors, key).drop_rate, rngs,
                                   f"faults.{topic}")
                           for topic, key in INERTIAL.items()}
