@@ -239,3 +239,20 @@ def test_lost_and_frozen_frames_are_skipped_and_pipelining_changes_nothing():
     hand = m["tracking"]["right_hand"]
     assert hand["filtered_rmse_mm"] <= 15.0  # measured: 6.3 mm (7.4 mm without faults)
     assert m["filter"]["nonfinite_estimates"] == 0
+
+
+@pytest.mark.slow
+def test_the_oracle_sees_what_the_faulty_cameras_show():
+    """Oracle perception gets no estimate from a lost frame or a covered camera, and a stale one
+    (the truth at the repeated image's capture time) from a frozen camera."""
+    m, stages, _, world = _simulate("mimic_wave", [
+        "cameras.resolution=[80, 60]", "cameras.drop_rate=0.1", "cameras.freeze_rate=0.1",
+        "cameras.covered=[{camera: right, start: 0.5, end: 1.0}]"], 2.0)
+    o, f = m["oracle"], m["faults"]
+    faulted = world.faults.frames.faulted.values()
+    assert o["frames"] == f["frames"] - f["frames_dropped"]
+    assert o["blind_frames"] == f["frames_covered"]["R_wide"] > 20
+    assert o["stale_frames"] == sum(not any(s.covered for s in st.values()) for st in faulted) > 5
+    palm = m["mimicry"]["R_palm"]
+    assert palm["status"] == "ok" and palm["lost_fraction"] > 0.05  # held while blind
+    assert m["mimicry"]["joints"]["finite"]
