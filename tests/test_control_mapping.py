@@ -17,7 +17,7 @@ from humimic.control.mapping import (
     clamp_to_shell,
     map_displacement,
     mapping_matrix,
-    ray_to_shell,
+    reach_along_ray,
     reach_shell,
 )
 
@@ -82,33 +82,38 @@ def test_reach_shell_matches_the_arm_geometry(robot):
 
 
 # ---- scale: auto from arm lengths, fitted to the reach ------------------------------------------
-def _ray_by_bisection(a, u, c, r_min, r_max, far=5.0):
-    """First distance along ``a + l u`` at which the point leaves the shell (dense sampling then
-    bisection: independent of the closed form)."""
-    def inside(lam):
-        r = np.linalg.norm(a + lam * u - c)
-        return r_min <= r <= r_max
-    lams = np.linspace(0.0, far, 20001)
-    out = next(lam for lam in lams if not inside(lam))
-    lo, hi = out - lams[1], out
+def _reach_by_sampling(a, u, lam, c, r_min, r_max):
+    """The largest l <= lam with a + l u in the shell, by dense sampling down from lam and
+    bisection (independent of the closed form)."""
+    def inside(x):
+        return r_min <= np.linalg.norm(a + x * u - c) <= r_max
+    if inside(lam):
+        return lam
+    ls = np.linspace(lam, 0.0, 40001)
+    hi = next(x for x in ls if inside(x))  # the first feasible point coming back
+    lo_out = hi + ls[0] - ls[1]
+    lo, out = hi, lo_out
     for _ in range(60):
-        mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if inside(mid) else (lo, mid)
+        mid = 0.5 * (lo + out)
+        lo, out = (mid, out) if inside(mid) else (lo, mid)
     return lo
 
 
-def test_ray_to_shell_matches_bisection():
+def test_reach_along_ray_matches_sampling():
     rng = np.random.default_rng(3)
     c, r_min, r_max = np.array([0.0, -0.19, 0.53]), 0.2, 0.68
-    for _ in range(40):
+    for _ in range(60):
         u = rng.normal(size=3)
         u /= np.linalg.norm(u)
-        r = rng.uniform(r_min + 0.01, r_max - 0.01)
         w = rng.normal(size=3)
-        a = c + r * w / np.linalg.norm(w)
-        assert ray_to_shell(a, u, c, r_min, r_max) == pytest.approx(
-            _ray_by_bisection(a, u, c, r_min, r_max), abs=1e-9)
-    assert ray_to_shell(c + np.array([2.0, 0, 0]), np.array([1.0, 0, 0]), c, r_min, r_max) == 0
+        a = c + rng.uniform(r_min + 0.01, r_max - 0.01) * w / np.linalg.norm(w)
+        lam = rng.uniform(0.0, 1.5)
+        assert reach_along_ray(a, u, lam, c, r_min, r_max) == pytest.approx(
+            _reach_by_sampling(a, u, lam, c, r_min, r_max), abs=1e-9)
+    # through the inner sphere and out again: the end is in the shell, nothing to give up
+    a = c + np.array([0.4, 0.0, 0.0])
+    assert reach_along_ray(a, np.array([-1.0, 0, 0]), 0.7, c, r_min, r_max) == 0.7
+    assert reach_along_ray(a, np.array([-1.0, 0, 0]), 0.4, c, r_min, r_max) == pytest.approx(0.2)
 
 
 def test_arm_length_and_auto_scale(robot):
@@ -127,8 +132,10 @@ def test_scale_fit_shrinks_to_keep_the_motion_inside_and_never_grows():
     assert fit.update(np.array([0.2, 0.0, 0.0])) == 1.0       # 0.6 < 0.7: fits
     assert fit.update(np.array([0.6, 0.0, 0.0])) == pytest.approx(0.5)  # 0.4 + 0.5 * 0.6
     assert fit.update(np.array([0.1, 0.0, 0.0])) == pytest.approx(0.5)  # never grows back
-    # inward, the inner sphere bounds it: from 0.4 to 0.1 is 0.3 of room
-    assert fit.update(np.array([-1.0, 0.0, 0.0])) == pytest.approx(0.3)
+    # inward, ending inside the inner sphere: from 0.4 to 0.1 is 0.3 of room
+    assert fit.update(np.array([-0.8, 0.0, 0.0])) == pytest.approx(0.3 / 0.8)
+    # through the inner sphere and out on the other side: in the shell, nothing to shrink
+    assert fit.update(np.array([-1.8, 0.0, 0.0])) == pytest.approx(0.3 / 0.8)
     slow = ScaleFit(1.0, shell, anchor, margin=0.05, time_constant=0.1, dt=0.01)
     s = [slow.update(np.array([0.6, 0.0, 0.0])) for _ in range(100)]
     bound = (0.65 - 0.4) / 0.6

@@ -21,10 +21,11 @@ joint limits then bite, its Sec. 5). Two parts, both per driven site:
 * the initial scale ``s0`` (``mimic.scale``): a number, or ``auto``: the robot arm's length over
   the person's (:func:`auto_scale`; shoulder to palm, or shoulder to elbow for an elbow site) -
   a short-armed person's wave becomes the robot's full wave;
-* the fit (``mimic.fit``): the anchor ``p_robot(t0)`` has a distance ``rho(u)`` to the boundary
-  of the site's reachable shell in each direction ``u`` (:func:`ray_to_shell`). A mapped
-  displacement ``s M d`` stays inside while ``s <= rho(M d / |d|) / |d|``; when the person moves
-  further than that, the scale decays towards this bound with a time constant (a single wild
+* the fit (``mimic.fit``): a mapped displacement ``s M d`` from the anchor ``p_robot(t0)`` must
+  end in the site's reachable shell (a margin inside it). When the person moves further, the
+  largest scale below the current one that ends in the shell follows from where the ray from
+  the anchor along ``M d`` leaves the outer sphere or enters the inner one
+  (:func:`reach_along_ray`); the scale decays towards it with a time constant (a single wild
   estimate barely moves it; an arm raised for a second does) and never grows back: once the
   person has shown their range, the whole of it maps inside (:class:`ScaleFit`). The shell
   knows the arm's length but not its joint limits or its body, so the fit also listens to the
@@ -85,24 +86,21 @@ def clamp_to_shell(p: np.ndarray, center: np.ndarray, r_min: float,
     return center + d * (min(max(r, r_min), r_max) / r), True
 
 
-def ray_to_shell(a: np.ndarray, u: np.ndarray, center: np.ndarray, r_min: float,
-                 r_max: float) -> float:
-    """Distance from ``a`` (inside the shell ``r_min <= |p - c| <= r_max``) along the unit
-    direction ``u`` to the shell's boundary: the outer sphere's exit, or the inner sphere's
-    entry if the ray meets it first (ray-sphere intersection, ``|w + l u|^2 = r^2`` with
-    ``w = a - c``). A point outside the shell gives 0."""
+def reach_along_ray(a: np.ndarray, u: np.ndarray, lam: float, center: np.ndarray,
+                    r_min: float, r_max: float) -> float:
+    """How far (at most ``lam``) one may go from ``a`` (in the shell ``r_min <= |p - c| <=
+    r_max``) along the unit direction ``u`` and be in the shell: ``lam`` if ``a + lam u`` is in
+    it; else, for a point beyond the outer sphere, where the ray leaves it; for a point inside
+    the inner sphere, where the ray enters it (ray-sphere intersection ``|w + l u|^2 = r^2``,
+    ``w = a - c``). A ray that crosses the inner sphere and comes out again keeps its end."""
     w = np.asarray(a, float) - center
-    b = float(u @ w)
-    ww = float(w @ w)
-    if ww > r_max * r_max or ww < r_min * r_min:
-        return 0.0
-    out = -b + np.sqrt(max(b * b - ww + r_max * r_max, 0.0))
-    disc = b * b - ww + r_min * r_min
-    if r_min > 0.0 and disc > 0.0:
-        near = -b - np.sqrt(disc)
-        if near >= 0.0:
-            return float(min(out, near))
-    return float(out)
+    b, ww = float(u @ w), float(w @ w)
+    r2 = ww + 2.0 * lam * b + lam * lam  # |a + lam u - c|^2
+    if r2 > r_max * r_max:
+        return float(min(lam, max(-b + np.sqrt(max(b * b - ww + r_max * r_max, 0.0)), 0.0)))
+    if r2 < r_min * r_min:
+        return float(min(lam, max(-b - np.sqrt(max(b * b - ww + r_min * r_min, 0.0)), 0.0)))
+    return float(lam)
 
 
 def arm_length(model: mujoco.MjModel, site: str) -> float:
@@ -146,11 +144,13 @@ class ScaleFit:
         self.gain = min(1.0, dt / time_constant) if time_constant > 0.0 else 1.0
 
     def bound(self, d: np.ndarray) -> float:
-        """Largest scale that keeps ``anchor + s d`` inside (``d`` the reflected displacement)."""
+        """Largest scale up to the current one that puts ``anchor + s d`` in the shell (``d``
+        the reflected displacement)."""
         n = float(np.linalg.norm(d))
         if n < 1e-9:
-            return np.inf
-        return ray_to_shell(self.anchor, d / n, self.shell.center, self.r_min, self.r_max) / n
+            return self.scale
+        return reach_along_ray(self.anchor, d / n, self.scale * n, self.shell.center,
+                               self.r_min, self.r_max) / n
 
     def update(self, d: np.ndarray) -> float:
         """The scale for the reflected human displacement ``d = M (p - p0)`` of this tick."""
