@@ -1,4 +1,5 @@
-"""World benchmarks: physics step, eye-camera rendering, the world loop's real-time factor.
+"""World benchmarks: physics step, eye- and head-camera rendering, the world loops' real-time
+factors (Ude's stereo robot, Sugiyama's wearer).
 
 Run: ``python benchmarks/bench_world.py [--repeats N] [--json PATH]``. Prints a table of
 median and spread (interquartile range) over repeats, and writes JSON.
@@ -61,6 +62,31 @@ def bench_world_loop(repeats: int, duration: float = 3.0) -> list[float]:
     return out
 
 
+def bench_headcam(repeats: int) -> list[float]:
+    """The wearable head camera in its room: 368x240, radial distortion, pixel noise."""
+    scene = build_scene(SceneOptions(room="sugiyama", show_wiimote=True))
+    mujoco.mj_forward(scene.model, scene.data)
+    rig = CameraRig(scene, [CameraSpec("headcam", 368, 240, 2.0, -0.15, 0.02)],
+                    np.random.default_rng(0), show_wiimote=True)
+    try:
+        return per_call(lambda: rig.capture(0.0), repeats, 50)
+    finally:
+        rig.close()
+
+
+def bench_wearable_loop(repeats: int, duration: float = 4.0) -> list[float]:
+    """Real-time factor of the wearable world alone (scenarios/wearable_walk.yaml, its first
+    ``duration`` s: head camera 30 Hz with the corner-counting probe, IMU 180 Hz, Wii 100 Hz)."""
+    from humimic.paths import SCENARIOS_DIR
+    from humimic.run import run_one
+    from humimic.scenario import load_scenario
+
+    scenario = load_scenario(SCENARIOS_DIR / "wearable_walk.yaml", duration=duration,
+                             overrides=["output.plots=false"])
+    return [run_one(scenario, out_dir=Path("/tmp") / f"humimic-bench-wearable-{i}",
+                    rerun="off", progress=False)["realtime_factor"] for i in range(repeats)]
+
+
 def _row(name: str, values: list[float], unit: str, scale: float = 1.0) -> dict:
     v = sorted(x * scale for x in values)
     q = statistics.quantiles(v, n=4) if len(v) >= 2 else [v[0], v[0], v[0]]
@@ -85,6 +111,10 @@ def main() -> None:
              1e3),
         _row("world loop, wide stereo 60 Hz 320x240", bench_world_loop(max(3, r // 2)),
              "x real time"),
+        _row("render head camera 368x240 (wearable room, distortion, noise)",
+             bench_headcam(r), "ms", 1e3),
+        _row("world loop, wearable walk (head camera 30 Hz, IMU, Wii)",
+             bench_wearable_loop(max(3, r // 2)), "x real time"),
     ]
     table = Table(title=f"humimic world benchmarks ({platform.processor() or platform.machine()},"
                         f" {__import__('os').cpu_count()} cores)")

@@ -38,7 +38,8 @@ def test_model_file_steps_without_warnings(name):
     SceneOptions(distance=0.8, lateral=0.3, interocular=0.09, eye_resolution=(640, 480)),
     SceneOptions(distance=2.5, eye_resolution=(640, 360), shadows=True, msaa=True,
                  show_wiimote=True, skin=(0.45, 0.3, 0.22)),
-], ids=["default", "near-wide-eyes", "far-16x9-shadows"])
+    SceneOptions(room="sugiyama", base="planar", show_wiimote=True),
+], ids=["default", "near-wide-eyes", "far-16x9-shadows", "wearable-room-planar-base"])
 def test_scene_steps_without_warnings(opts):
     scene = build_scene(opts)
     _step_without_warnings(scene.model, scene.data)

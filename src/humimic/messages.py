@@ -6,15 +6,19 @@ Topics on the bus and what they carry:
 topic          value                                       producer -> consumer
 =============  ==========================================  ===========================
 ``frames``     ``dict[str, CameraImage]`` (eye cameras)    world -> perception
-``headcam``    ``CameraImage``                             world -> wearable stages
-``imu``        ``(accel (3,), gyro (3,))`` sensor frame    world -> wearable stages
-``wiimote``    ``(accel (3,), gyro (3,))`` sensor frame    world -> wearable stages
+``headcam``    ``CameraImage`` (pose withheld: NaN)        world -> wearable stages
+``imu``        :class:`InertialReading` (+ orientation)    world -> wearable stages
+``wiimote``    :class:`InertialReading`                    world -> wearable stages
 ``measurements`` :class:`Measurements` (robot base frame)  perception -> filter
 ``estimates``  :class:`Estimates` (robot base frame)       filter / oracle -> control
 =============  ==========================================  ===========================
 
-All positions are in the robot base frame (m), velocities m/s, accelerations m/s^2. The
-``Stamped.t`` of a measurement or estimate is the *photon* time of the frame it came from.
+Perception's positions are in the robot base frame (m), velocities m/s, accelerations m/s^2.
+The wearable sensors' values are in their own frames (:mod:`humimic.world.frames`): the head
+camera and head IMU in the paper's interface frame I (x left, y up, z optical axis; the image's
+``CameraModel`` uses OpenCV's axes, ``p_cv = R_CV_I p_I``), the Wii remote in its frame A, the
+head IMU's orientation in the paper's world frame W. The ``Stamped.t`` of a measurement or
+estimate is the *photon* (sample) time of the frame or sample it came from.
 """
 
 from __future__ import annotations
@@ -68,3 +72,18 @@ class TargetEstimate:
 @dataclass(frozen=True)
 class Estimates:
     targets: dict[str, TargetEstimate]
+
+
+@dataclass(frozen=True)
+class InertialReading:
+    """One sample of a worn inertial sensor (topics ``imu`` and ``wiimote``)."""
+
+    accel: np.ndarray
+    """(3,) specific force in the sensor frame (m/s^2): ``R^T (a - g)``, gravity included, so
+    a sensor at rest reads +9.81 along its up axis."""
+    gyro: np.ndarray
+    """(3,) angular velocity in the sensor frame (rad/s)."""
+    R_W_sensor: np.ndarray | None = None
+    """(3, 3) measured orientation: the sensor frame in the paper's W (the head IMU, an
+    InertiaCube3; its frame is I). ``None`` for a sensor without orientation output (the Wii
+    remote). ``scipy.spatial.transform.Rotation.from_matrix`` gives a quaternion (xyzw)."""

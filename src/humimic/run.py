@@ -49,7 +49,8 @@ def run_one(scenario: Scenario, out_dir: str | Path | None = None, rerun: str | 
     t0 = time.perf_counter()
     world = World(scenario, rngs)
     setup_s = time.perf_counter() - t0
-    blueprint = default_blueprint([camera_entity(n) for n in world.eye_cameras], SERIES_ROOTS)
+    cameras = world.eye_cameras + (["headcam"] if world.head_rig is not None else [])
+    blueprint = default_blueprint([camera_entity(n) for n in cameras], SERIES_ROOTS)
     stages: list = []
     try:
         with RerunLog(world.scene, mode, out / "run.rrd",

@@ -235,8 +235,115 @@ class BVHMotion(Section):
         return joint_map
 
 
+# ---- locomotion (Sugiyama & Miura's wearer) ----------------------------------------------------
+Frame = Literal["W", "avatar"]
+
+
+def _increasing(name: str, times: list[float]) -> None:
+    for i in range(1, len(times)):
+        if times[i] <= times[i - 1]:
+            raise ValueError(f"{name} times must increase: {name}[{i}].t = {times[i]} is not "
+                             f"after {name}[{i - 1}].t = {times[i - 1]}")
+
+
+class Waypoint(Section):
+    """Where the person stands (the point between the feet) at time ``t``."""
+
+    t: float = Field(ge=0.0)
+    at: tuple[float, float]
+    """``(x, z)`` in the paper's frame W (m), or ``(x, y)`` in the avatar frame with
+    ``frame: avatar``."""
+    heading_deg: float | None = None
+    """Facing direction (deg): 0 = W's +z, towards the screen (the avatar's +x with ``frame:
+    avatar``), positive turning left. Default: the previous waypoint's (the first's: 0)."""
+
+
+class HandKey(Section):
+    """A palm target at time ``t`` in the walking body's frame: the avatar frame carried along
+    by the body (x forward, y left, z up from the floor; it bobs and sways with the walk)."""
+
+    t: float = Field(ge=0.0)
+    p: Vec3
+
+
+class LookKey(Section):
+    """Head orientation relative to the body at time ``t`` (neck)."""
+
+    t: float = Field(ge=0.0)
+    yaw_deg: float = Field(0.0, ge=-80.0, le=80.0)
+    """Turn to the left (+) or right (-)."""
+    pitch_deg: float = Field(0.0, ge=-60.0, le=45.0)
+    """Look up (+) or down (-)."""
+
+
+class WalkMotion(Section):
+    """Walk through timed waypoints: the root follows them (minimum jerk: at rest at each, or a
+    spline through them), turns to each heading, and bobs, sways and swings legs and arms at
+    the step frequency while it moves (:mod:`humimic.motion.gait`). Hands may follow keyframes
+    in the body frame (the right hand holds the Wii remote pointing forward); the head may look
+    around (``look``)."""
+
+    kind: Literal["walk"] = "walk"
+    frame: Frame = "W"
+    """Frame of the waypoints: the paper's W (``(x, z)``) or the avatar frame (``(x, y)``)."""
+    waypoints: list[Waypoint] = Field(min_length=1)
+    interpolation: Literal["min_jerk", "spline"] = "min_jerk"
+    step_frequency: float = Field(2.0, gt=0.0, le=4.0)
+    """Steps per second (Hz); a stride is two steps."""
+    bob: float = Field(0.04, ge=0.0, le=0.1)
+    """Vertical excursion of the body, peak to peak, while walking (m)."""
+    sway: float = Field(0.04, ge=0.0, le=0.15)
+    """Lateral excursion of the body, peak to peak, while walking (m)."""
+    nominal_speed: float = Field(0.5, gt=0.0, le=3.0)
+    """Speed (m/s) at which the gait reaches 76 % of its amplitudes (``tanh(v / v_n)``)."""
+    right_hand: list[HandKey] | None = None
+    """Right palm keyframes (body frame, minimum jerk between keys); default: arm swing."""
+    left_hand: list[HandKey] | None = None
+    look: list[LookKey] = Field(default_factory=list)
+    """Head keyframes (minimum jerk between keys); default: looking straight ahead."""
+
+    @model_validator(mode="after")
+    def _times(self) -> WalkMotion:
+        _increasing("waypoints", [w.t for w in self.waypoints])
+        for key in ("right_hand", "left_hand", "look"):
+            _increasing(key, [k.t for k in getattr(self, key) or []])
+        return self
+
+
+class JumpMotion(Section):
+    """Jump in place (Sugiyama & Miura, Fig. 8): crouch, push off, a ballistic flight of
+    ``height``, land, rise (:func:`humimic.motion.gait.jump_profile`); arms hang."""
+
+    kind: Literal["jump"] = "jump"
+    frame: Frame = "W"
+    at: tuple[float, float] | None = None
+    """Where (``(x, z)`` in W or ``(x, y)`` in the avatar frame); default: where the room puts
+    the person."""
+    heading_deg: float = 0.0
+    """Facing direction (deg), as a waypoint's."""
+    start: float = Field(1.0, ge=0.0)
+    """Time (s) the first jump begins (its crouch)."""
+    count: int = Field(1, ge=1, le=100)
+    period: float = Field(3.0, gt=0.0)
+    """Time (s) between the starts of consecutive jumps (at least one jump's duration)."""
+    height: float = Field(0.2, gt=0.0, le=0.8)
+    """Rise of the body in flight (m)."""
+    crouch: float = Field(0.15, gt=0.0, le=0.4)
+    """Depth of the crouch before take-off and after landing (m)."""
+
+    @model_validator(mode="after")
+    def _fits(self) -> JumpMotion:
+        from humimic.motion.gait import jump_duration
+
+        need = jump_duration(self.height)
+        if self.count > 1 and self.period < need:
+            raise ValueError(f"period {self.period} s is shorter than one jump "
+                             f"({need:.2f} s at height {self.height} m)")
+        return self
+
+
 MotionConfig = Annotated[
     StaticMotion | WaveMotion | AxesMotion | PointMotion | HeadSweepMotion | Figure8Motion
-    | KeyframesMotion | BVHMotion,
+    | KeyframesMotion | BVHMotion | WalkMotion | JumpMotion,
     Field(discriminator="kind"),
 ]

@@ -7,14 +7,17 @@ from humimic.motion.config import (
     BVHMotion,
     Figure8Motion,
     HeadSweepMotion,
+    JumpMotion,
     KeyframesMotion,
     MotionConfig,
     PointMotion,
     StaticMotion,
+    WalkMotion,
     WaveMotion,
 )
 from humimic.motion.context import HumanMotion, MotionContext
 from humimic.motion.keyframes import make_keyframes
+from humimic.motion.locomotion import make_jump, make_walk
 from humimic.motion.playback import make_bvh
 from humimic.motion.primitives import (
     make_axes,
@@ -35,6 +38,8 @@ _MAKERS = {
     Figure8Motion: make_figure8,
     KeyframesMotion: make_keyframes,
     BVHMotion: make_bvh,
+    WalkMotion: make_walk,
+    JumpMotion: make_jump,
 }
 
 

@@ -22,8 +22,11 @@ from humimic.motion.trajectory import JointTrajectory
 from humimic.world.names import HUMAN_PREFIX, HUMAN_TARGETS
 from humimic.world.scene import Scene
 
-#: Targets whose orientation is recorded (the worn IMUs).
-ORIENTED_TARGETS = ("head_imu", "wiimote")
+#: Targets whose orientation is recorded (the worn IMUs and the head camera's frame I).
+ORIENTED_TARGETS = ("head_imu", "wiimote", "headcam")
+#: Frames ground truth can be expressed in: the scene's world, the robot base (its pose at
+#: t = 0), and the paper's W (Sugiyama & Miura, Fig. 5; see :mod:`humimic.world.frames`).
+FRAMES = ("world", "base", "W")
 SENSORS = ("head_acc", "head_gyro", "head_quat", "wiimote_acc", "wiimote_gyro")
 
 
@@ -45,12 +48,18 @@ class GroundTruth:
     """(N, K, 3) site linear velocities, world (m/s)."""
     acc: np.ndarray
     """(N, K, 3) site linear accelerations, world, gravity excluded (m/s^2)."""
+    angvel: np.ndarray
+    """(N, K, 3) angular velocities of the sites' bodies, world axes (rad/s)."""
     R_imu: np.ndarray
-    """(N, len(ORIENTED_TARGETS), 3, 3) world <- site rotations of the worn IMU sites."""
+    """(N, len(ORIENTED_TARGETS), 3, 3) world <- site rotations of the oriented sites."""
     sensors: dict[str, np.ndarray]
     """Noise-free sensor readings by name (``head_acc`` ... ), (N, dim), site frames."""
     T_world_base: np.ndarray
-    """4x4 robot-base pose (constant: the robot is fixed at its pelvis)."""
+    """4x4 robot-base pose at t = 0 (the base frame of every ``_base`` accessor)."""
+    T_world_W: np.ndarray
+    """4x4 pose of the paper's frame W in the world (:func:`humimic.world.frames.paper_frame`)."""
+    gravity: np.ndarray
+    """(3,) gravity in the world (m/s^2)."""
 
     def _k(self, name: str) -> int:
         try:
@@ -78,7 +87,7 @@ class GroundTruth:
         return self.acc[:, self._k(name)]
 
     def R_world(self, name: str) -> np.ndarray:
-        """(N, 3, 3) orientation of a worn IMU site (``head_imu`` or ``wiimote``)."""
+        """(N, 3, 3) orientation of an oriented site (:data:`ORIENTED_TARGETS`)."""
         return self.R_imu[:, ORIENTED_TARGETS.index(name)]
 
     # ---- robot base frame (T_world_base is constant) ----
@@ -97,6 +106,52 @@ class GroundTruth:
 
     def sensor(self, name: str) -> np.ndarray:
         return self.sensors[name]
+
+    # ---- any frame: ``frame`` is ``world``, ``base`` or ``W`` ----
+    def T_world_frame(self, frame: str) -> np.ndarray:
+        """4x4 pose of ``frame`` in the world."""
+        if frame not in FRAMES:
+            raise KeyError(f"unknown frame {frame!r}; frames are {FRAMES}")
+        return {"world": np.eye(4), "base": self.T_world_base, "W": self.T_world_W}[frame]
+
+    def position(self, name: str, frame: str = "world") -> np.ndarray:
+        """(N, 3) site position in ``frame`` (m)."""
+        T = self.T_world_frame(frame)
+        return (self.p_world(name) - T[:3, 3]) @ T[:3, :3]
+
+    def velocity(self, name: str, frame: str = "world") -> np.ndarray:
+        """(N, 3) site linear velocity (m/s), ``frame`` axes."""
+        return self.v_world(name) @ self.T_world_frame(frame)[:3, :3]
+
+    def acceleration(self, name: str, frame: str = "world") -> np.ndarray:
+        """(N, 3) site linear acceleration, gravity excluded (m/s^2), ``frame`` axes."""
+        return self.a_world(name) @ self.T_world_frame(frame)[:3, :3]
+
+    def angular_velocity(self, name: str, frame: str = "world") -> np.ndarray:
+        """(N, 3) angular velocity (rad/s) in ``frame`` axes, or ``"site"`` (what a gyro on the
+        site reads; oriented targets only)."""
+        w = self.angvel[:, self._k(name)]
+        if frame == "site":
+            return np.einsum("nji,nj->ni", self.R_world(name), w)
+        return w @ self.T_world_frame(frame)[:3, :3]
+
+    def rotation(self, name: str, frame: str = "world") -> np.ndarray:
+        """(N, 3, 3) ``R_frame_site`` of an oriented target (:data:`ORIENTED_TARGETS`)."""
+        return self.T_world_frame(frame)[:3, :3].T @ self.R_world(name)
+
+    def pose(self, name: str, frame: str = "world") -> np.ndarray:
+        """(N, 4, 4) ``T_frame_site`` of an oriented target (:data:`ORIENTED_TARGETS`):
+        ``pose("headcam", "W")`` is the paper's interface pose (p_I, q_I) in W."""
+        T = np.zeros((len(self.t), 4, 4))
+        T[:, :3, :3] = self.rotation(name, frame)
+        T[:, :3, 3] = self.position(name, frame)
+        T[:, 3, 3] = 1.0
+        return T
+
+    def specific_force(self, name: str) -> np.ndarray:
+        """(N, 3) ``R_world_site^T (a - g)`` in the site frame (m/s^2): what an accelerometer
+        on an oriented target reads (at rest: 9.81 m/s^2 along the site's up)."""
+        return np.einsum("nji,nj->ni", self.R_world(name), self.a_world(name) - self.gravity)
 
     def inertial(self, which: str) -> tuple[np.ndarray, np.ndarray]:
         """True ``(specific force (N, 3) m/s^2, angular velocity (N, 3) rad/s)`` in the site
@@ -139,7 +194,7 @@ def _chunk(m: mujoco.MjModel, d: mujoco.MjData, sq: slice, sv: slice, sites: np.
     r = p - com
     v = cvel[..., 3:] + np.cross(cvel[..., :3], r)
     a = cacc[..., 3:] + np.cross(cacc[..., :3], r) + np.cross(cvel[..., :3], v) + m.opt.gravity
-    return p, v, a, xmat.reshape(n, len(oriented), 3, 3), sensordata
+    return p, v, a, cvel[..., :3], xmat.reshape(n, len(oriented), 3, 3), sensordata
 
 
 def compute_ground_truth(scene: Scene, trajectory: JointTrajectory | HumanMotion,
@@ -161,13 +216,13 @@ def compute_ground_truth(scene: Scene, trajectory: JointTrajectory | HumanMotion
     oriented = sites[[targets.index(k) for k in ORIENTED_TARGETS]]
 
     qpos, qvel = np.empty((n, trajectory.nq)), np.empty((n, trajectory.nv))
-    pos, vel, acc = (np.empty((n, len(sites), 3)) for _ in range(3))
+    pos, vel, acc, angvel = (np.empty((n, len(sites), 3)) for _ in range(4))
     R_imu = np.empty((n, len(oriented), 3, 3))
     sensordata = np.empty((n, m.nsensordata))
     for start in range(0, n, CHUNK):
         c = slice(start, min(n, start + CHUNK))
         qpos[c], qvel[c], qacc = trajectory.evaluate(times[c])
-        pos[c], vel[c], acc[c], R_imu[c], sensordata[c] = _chunk(
+        pos[c], vel[c], acc[c], angvel[c], R_imu[c], sensordata[c] = _chunk(
             m, d, scene.human_qpos, scene.human_dof, sites, oriented, qpos[c], qvel[c], qacc)
 
     sensors = {}
@@ -176,5 +231,6 @@ def compute_ground_truth(scene: Scene, trajectory: JointTrajectory | HumanMotion
         adr, dim = m.sensor_adr[sid], m.sensor_dim[sid]
         sensors[name] = sensordata[:, adr:adr + dim].copy()
     return GroundTruth(t=times.copy(), qpos=qpos, qvel=qvel, targets=targets, pos=pos,
-                       vel=vel, acc=acc, R_imu=R_imu, sensors=sensors,
-                       T_world_base=scene.T_world_base.copy())
+                       vel=vel, acc=acc, angvel=angvel, R_imu=R_imu, sensors=sensors,
+                       T_world_base=scene.T_world_base.copy(), T_world_W=scene.T_world_W.copy(),
+                       gravity=m.opt.gravity.copy())

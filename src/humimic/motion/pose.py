@@ -33,13 +33,14 @@ class PoseTargets:
 
 
 def solve_pose(n: int, targets: PoseTargets, g: AvatarGeometry, head_lean: float = 0.25,
-               palm_dir: np.ndarray | None = None
+               palm_dir: np.ndarray | dict[str, np.ndarray] | None = None
                ) -> tuple[np.ndarray, dict[str, ArmIKResult]]:
     """``(N, 51)`` configuration meeting ``targets`` and the arm IK results per hand target.
 
     Order: explicit joint values; the head target (torso lean + body shift); the palm targets by
     arm IK on the resulting chest pose. Arms without a target keep their joint values (zero:
-    hanging).
+    hanging). ``palm_dir`` (avatar frame, (3,) or (N, 3)) is where the palms face, or a dict
+    ``{"right_hand": ..., "left_hand": ...}`` per hand.
     """
     q = zero_qpos(n)
     for name, value in targets.joints.items():
@@ -56,7 +57,8 @@ def solve_pose(n: int, targets: PoseTargets, g: AvatarGeometry, head_lean: float
         p = getattr(targets, key)
         if p is None:
             continue
-        res = solve_arm(side, np.broadcast_to(p, (n, 3)), R_c, p_c, g, palm_dir)
+        d = palm_dir.get(key) if isinstance(palm_dir, dict) else palm_dir
+        res = solve_arm(side, np.broadcast_to(p, (n, 3)), R_c, p_c, g, d)
         q[:, QPOS_SLICES[f"{side}_shoulder"]] = res.q_shoulder
         q[:, QPOS_SLICES[f"{side}_elbow"].start] = res.elbow
         q[:, QPOS_SLICES[f"{side}_wrist"]] = res.q_wrist

@@ -6,8 +6,13 @@ from humimic.pipeline.stage import Stage
 
 
 def build_stages(scenario, world, rngs, rlog) -> list[Stage]:
-    """One stage per optional scenario section that is present (perception, filter, mimic)."""
+    """One stage per optional scenario section that is present (perception, filter, mimic),
+    after the wearable probe when the head camera is on."""
     stages: list[Stage] = []
+    if scenario.sensors.head_camera.enabled:  # what the wearable sensors see (wearable.*)
+        from humimic.world.wearable_probe import WearableProbe
+
+        stages.append(WearableProbe(world))
     if (getattr(scenario, "perception", None) is not None
             or getattr(scenario, "filter", None) is not None):
         from humimic.perception.blobs.build import perception_stages

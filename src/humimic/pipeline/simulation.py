@@ -6,7 +6,8 @@ Per physics tick ``k`` (time ``t = k / physics_rate``):
 2. sample the sensors that are due (eye cameras, IMU, Wii remote) and publish them, minus the
    configured faults (:mod:`humimic.sensors.faults`);
 3. deliver every bus value that is ready at ``t`` (stages run here, in causal order);
-4. at servo ticks, let control stages write actuator targets;
+4. at servo ticks, let control stages write actuator targets, then step the planar base's
+   controller (``world.base``) towards its target;
 5. log poses to rerun at ``output.pose_rate``; ``mj_step2`` integrates to ``t + dt``.
 
 A Ctrl-C stops the loop cleanly: the caller still gets the metrics so far.
@@ -15,12 +16,13 @@ A Ctrl-C stops the loop cleanly: the caller still gets the metrics so far.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import mujoco
 import numpy as np
 from tqdm import tqdm
 
+from humimic.messages import InertialReading
 from humimic.pipeline.bus import Bus
 from humimic.pipeline.stage import Stage, StageTimer
 from humimic.sensors.clock import Schedule
@@ -51,7 +53,8 @@ def simulate(world, stages: list[Stage], rlog, bus: Bus | None = None,
     for stage in stages:
         stage.attach(bus, timer)
 
-    cam_sched = Schedule(scenario.cameras.rate, phys_rate)
+    cam_sched = (Schedule(scenario.cameras.rate, phys_rate)
+                 if world.eye_rig is not None else None)
     head_sched = (Schedule(scenario.sensors.head_camera.rate, phys_rate)
                   if world.head_rig is not None else None)
     pose_sched = Schedule(min(scenario.output.pose_rate, phys_rate), phys_rate)
@@ -72,7 +75,7 @@ def simulate(world, stages: list[Stage], rlog, bus: Bus | None = None,
     n_servo = (world.n_ticks + servo_every - 1) // servo_every
     robot_qpos = np.zeros((n_servo, len(world.scene.robot_qpos)))
     servo_t = np.zeros(n_servo)
-    frames = 0
+    frames = head_frames = 0
     tick = 0
     interrupted = False
     bar = tqdm(total=round(scenario.duration, 3), unit="sim s", disable=not progress,
@@ -87,7 +90,7 @@ def simulate(world, stages: list[Stage], rlog, bus: Bus | None = None,
             mujoco.mj_step1(m, d)
             t_phys = time.perf_counter() - t0
 
-            if cam_sched.due(tick):
+            if cam_sched is not None and cam_sched.due(tick):
                 with timer.time("render"):
                     images = world.faults.frames.apply(t, world.eye_rig.capture(t))
                 if images is not None:
@@ -98,12 +101,18 @@ def simulate(world, stages: list[Stage], rlog, bus: Bus | None = None,
                     frames += 1
             if head_sched is not None and head_sched.due(tick):
                 with timer.time("render_headcam"):
-                    images = world.head_rig.capture(t)
-                bus.publish("headcam", Stamped(t, images["headcam"]))
+                    image = world.capture_headcam(t)
+                bus.publish("headcam", Stamped(t, image))
+                if image_every and head_frames % image_every == 0:  # shown at its true pose
+                    true = replace(image, camera=world.head_rig.camera_model("headcam"))
+                    rlog.log_camera_image(t, "world/cameras/headcam", true, quality)
+                head_frames += 1
             for topic, data, index in inertial:
                 i = index.get(tick)
                 if i is not None:
-                    bus.publish(topic, Stamped(t, (data.accel[i], data.gyro[i])))
+                    R = data.orientation.R[i] if data.orientation is not None else None
+                    bus.publish(topic, Stamped(t, InertialReading(data.accel[i], data.gyro[i],
+                                                                  R)))
 
             bus.deliver(t)
             if tick % servo_every == 0:
@@ -112,6 +121,8 @@ def simulate(world, stages: list[Stage], rlog, bus: Bus | None = None,
                 servo_t[k] = t
                 for stage in stages:
                     stage.servo(t, bus)
+                if world.base is not None:  # after the stages: they may set its target
+                    world.base.step(servo_every / phys_rate)
             if pose_sched.due(tick):
                 with timer.time("viz"):
                     rlog.log_poses(t)

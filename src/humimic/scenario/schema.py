@@ -7,7 +7,9 @@ that stage.
 
 from __future__ import annotations
 
-from pydantic import Field
+from typing import Literal
+
+from pydantic import Field, model_validator
 
 from humimic.control.config import MimicConfig
 from humimic.estimation.config import FilterConfig
@@ -26,6 +28,10 @@ class Scenario(Section):
     duration: float = Field(8.0, gt=0.0, le=600.0)
     """Simulated seconds."""
     seed: int = Field(0, ge=0)
+    room: Literal["lab", "sugiyama"] = "lab"
+    """The room (``models/``): ``lab``, Ude & Atkeson's, the person ``human.distance`` in front
+    of the robot; ``sugiyama``, Sugiyama & Miura's wearable room (Fig. 5), the person starting
+    at the paper's W (0, -2.5) facing the screen, the robot 2 m to their right."""
     human: Human = Field(default_factory=Human)
     robot: Robot = Field(default_factory=Robot)
     cameras: Cameras = Field(default_factory=Cameras)
@@ -40,3 +46,12 @@ class Scenario(Section):
     :mod:`humimic.estimation.config`); needs ``perception``."""
     mimic: MimicConfig | None = None
     """Imitation by the robot (see :mod:`humimic.control.config`); absent: the robot holds."""
+
+    @model_validator(mode="after")
+    def _placement_fits_the_room(self) -> Scenario:
+        if self.room != "lab":
+            given = [k for k in ("distance", "lateral") if k in self.human.model_fields_set]
+            if given:
+                raise ValueError(f"human.{given[0]} does not apply in room {self.room!r}: the "
+                                 "room places the person (move them with human.motion)")
+        return self

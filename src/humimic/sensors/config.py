@@ -26,6 +26,8 @@ class CoveredWindow(Section):
 class Cameras(Section):
     """The robot's eye cameras (both eyes: stereo)."""
 
+    enabled: bool = True
+    """Render the robot's eyes (a wearable scenario without robot vision turns them off)."""
     which: Literal["wide", "foveal"] = "wide"
     """Wide: 100 deg horizontal field of view; foveal: 24 deg."""
     eyes: Literal["stereo", "left", "right"] = "stereo"
@@ -58,12 +60,17 @@ class Cameras(Section):
 
 
 class HeadCamera(Section):
-    """The camera worn on the person's forehead."""
+    """The camera worn on the person's forehead; defaults as Sugiyama & Miura's (368 x 240 at
+    30 Hz). Its frame is the paper's I (:mod:`humimic.world.frames`); its images carry the
+    intrinsics (with distortion) but not its pose, which a wearable system must estimate."""
 
     enabled: bool = False
-    resolution: tuple[int, int] = (320, 240)
+    resolution: tuple[int, int] = (368, 240)
     rate: float = Field(30.0, gt=0.0, le=240.0)
-    hfov_deg: float = Field(60.0, gt=5.0, lt=170.0)
+    hfov_deg: float = Field(70.0, gt=5.0, lt=170.0)
+    """Horizontal field of view of the pinhole part (before distortion), degrees."""
+    distortion: tuple[float, float] = (-0.15, 0.02)
+    """Radial distortion k1, k2 (OpenCV convention, :mod:`humimic.sensors.camera_model`)."""
     noise_std: float = Field(0.0, ge=0.0, le=50.0)
 
 
@@ -85,16 +92,45 @@ class Inertial(Section):
     """Probability that a sample is lost (never published); see :mod:`humimic.sensors.faults`."""
 
 
+class HeadInertial(Inertial):
+    """The head-worn orientation sensor (an InertiaCube3, Sugiyama & Miura Table I): specific
+    force and angular rate as :class:`Inertial`, plus its orientation in the paper's frame W
+    (yaw about W's vertical, then pitch, then roll; errors slowly varying, as a sensor whose
+    gravity and magnetometer corrections bound them)."""
+
+    orientation: bool = True
+    """Also output the orientation (the sensor's frame in W)."""
+    yaw_rms_deg: float = Field(1.0, ge=0.0, le=45.0)
+    """RMS yaw error (Table I: 1 deg)."""
+    tilt_rms_deg: float = Field(0.25, ge=0.0, le=45.0)
+    """RMS pitch and roll error (Table I: 0.25 deg)."""
+    resolution_deg: float = Field(0.03, ge=0.0, le=5.0)
+    """White (sample-to-sample) part of the error, per axis (Table I: RMS resolution 0.03 deg);
+    included in the RMS values above."""
+    yaw_tau_s: float = Field(60.0, gt=0.0)
+    """Correlation time of the yaw error (s): its slow drift."""
+    tilt_tau_s: float = Field(5.0, gt=0.0)
+    """Correlation time of the pitch and roll errors (s)."""
+
+    @model_validator(mode="after")
+    def _resolution_within_rms(self) -> HeadInertial:
+        if self.resolution_deg > min(self.yaw_rms_deg, self.tilt_rms_deg):
+            raise ValueError(f"resolution_deg {self.resolution_deg} must not exceed the RMS "
+                             f"errors (yaw {self.yaw_rms_deg}, tilt {self.tilt_rms_deg})")
+        return self
+
+
 def _wiimote_default() -> Inertial:
     return Inertial(rate=100.0, accel_noise_density=2.7e-3, accel_bias_walk=5e-3,
                     gyro_noise_density=5e-4, gyro_bias_walk=5e-5)
 
 
 class Sensors(Section):
-    imu: Inertial = Field(default_factory=Inertial)
-    """The IMU on the person's forehead."""
+    imu: HeadInertial = Field(default_factory=HeadInertial)
+    """The IMU on the person's forehead (at the head camera, axes of its frame I), 180 Hz."""
     wiimote: Inertial = Field(default_factory=_wiimote_default)
-    """The Wii remote in the person's right hand."""
+    """The Wii remote's accelerometer and gyroscope (Motion Plus) in the person's right hand,
+    100 Hz, axes of the remote's frame A."""
     head_camera: HeadCamera = Field(default_factory=HeadCamera)
 
 

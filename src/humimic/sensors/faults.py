@@ -174,9 +174,9 @@ class SensorFaults:
                 name = EYE_CAMERAS[(eye, c.which)]
                 if name not in eye_cameras:
                     raise ScenarioError(f"scenario {scenario.name!r}", f"cameras.covered.{i}."
-                                        "camera", f"the {eye} eye has no camera in this "
-                                        f"scenario (cameras.eyes: {c.eyes})", w.camera,
-                                        "a camera the scenario has")
+                                        "camera", f"the {eye} eye's camera is not rendered "
+                                        f"(cameras.enabled: {c.enabled}, cameras.eyes: "
+                                        f"{c.eyes})", w.camera, "a camera the scenario renders")
                 covered.setdefault(name, []).append((w.start, w.end))
         random = c.drop_rate > 0.0 or c.freeze_rate > 0.0
         self.frames = FrameFaults(eye_cameras, c.drop_rate, c.freeze_rate, covered,

@@ -1,4 +1,5 @@
-"""Accelerometer and gyroscope noise: white noise plus a bias random walk, seeded.
+"""Inertial sensors: accelerometer and gyroscope noise (white noise plus a bias random walk) and
+an orientation sensor's errors (an InertiaCube3, Sugiyama & Miura Table I), seeded.
 
 The continuous-time model (IEEE Std 952 / Kalibr convention) for one axis is
 ``y(t) = x(t) + b(t) + n(t)`` with white noise ``n`` of density ``sigma_n`` (unit/sqrt(Hz)) and
@@ -11,6 +12,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.signal import lfilter
+from scipy.spatial.transform import Rotation
 
 
 def add_white_and_walk(true: np.ndarray, times: np.ndarray, noise_density: float,
@@ -43,6 +46,8 @@ class InertialSamples:
     gyro_true: np.ndarray
     accel_bias: np.ndarray
     gyro_bias: np.ndarray
+    orientation: OrientationSamples | None = None
+    """The orientation output (an InertiaCube3), when the sensor has one."""
 
 
 def simulate_inertial(t: np.ndarray, accel_true: np.ndarray, gyro_true: np.ndarray, cfg,
@@ -52,3 +57,62 @@ def simulate_inertial(t: np.ndarray, accel_true: np.ndarray, gyro_true: np.ndarr
                                     cfg.accel_bias_walk, rng)
     gyro, b_g = add_white_and_walk(gyro_true, t, cfg.gyro_noise_density, cfg.gyro_bias_walk, rng)
     return InertialSamples(t, accel, gyro, accel_true, gyro_true, b_a, b_g)
+
+
+# ---- orientation (an InertiaCube3-like sensor) -------------------------------------------------
+#: Euler sequence of the orientation errors: intrinsic yaw about the reference frame's up axis
+#: (y, as in the paper's W), then pitch about the sensor's x (left), then roll about its z.
+EULER = "YXZ"
+
+
+def gauss_markov(n: int, dt: float, sigma: np.ndarray, tau: np.ndarray,
+                 rng: np.random.Generator) -> np.ndarray:
+    """``(n, D)`` first-order Gauss-Markov processes, stationary from the first sample:
+    ``e_k = phi e_{k-1} + sqrt(1 - phi^2) sigma w_k``, ``phi = exp(-dt / tau)``, so every
+    sample has standard deviation ``sigma`` and the correlation time is ``tau`` (s)."""
+    sigma = np.asarray(sigma, float)
+    phi = np.exp(-dt / np.asarray(tau, float))
+    w = rng.standard_normal((n, len(sigma))) * sigma * np.sqrt(1.0 - phi**2)
+    if n:
+        w[0] = rng.standard_normal(len(sigma)) * sigma  # e_0 from the stationary law
+    return np.stack([lfilter([1.0], [1.0, -phi[i]], w[:, i]) for i in range(len(sigma))],
+                    axis=1).reshape(n, len(sigma))
+
+
+def orientation_errors(n: int, dt: float, cfg, rng: np.random.Generator) -> np.ndarray:
+    """``(n, 3)`` yaw, pitch, roll errors (rad) of an orientation sensor configured by ``cfg``
+    (a ``sensors.config.HeadInertial``): slowly varying errors of RMS ``yaw_rms_deg`` and
+    ``tilt_rms_deg`` (Sugiyama & Miura, Table I), correlation times ``yaw_tau_s`` (the slow
+    yaw drift) and ``tilt_tau_s``, plus white noise of ``resolution_deg`` per axis."""
+    rms = np.radians([cfg.yaw_rms_deg, cfg.tilt_rms_deg, cfg.tilt_rms_deg])
+    res = np.radians(cfg.resolution_deg)
+    # the slow part carries rms^2 - res^2 so the total RMS per axis is the configured one
+    slow = np.sqrt(np.maximum(rms**2 - res**2, 0.0))
+    tau = np.array([cfg.yaw_tau_s, cfg.tilt_tau_s, cfg.tilt_tau_s])
+    return gauss_markov(n, dt, slow, tau, rng) + rng.standard_normal((n, 3)) * res
+
+
+def perturb_orientation(R_ref_sensor: np.ndarray, errors: np.ndarray) -> np.ndarray:
+    """``(N, 3, 3)`` orientations whose yaw/pitch/roll (:data:`EULER`) are those of
+    ``R_ref_sensor`` plus ``errors`` ``(N, 3)`` (rad)."""
+    ypr = Rotation.from_matrix(R_ref_sensor).as_euler(EULER)
+    return Rotation.from_euler(EULER, ypr + errors).as_matrix()
+
+
+@dataclass(frozen=True)
+class OrientationSamples:
+    """A whole run of an orientation sensor: measured and true ``R_ref_sensor`` (N, 3, 3) and
+    the yaw/pitch/roll errors (rad, :data:`EULER`)."""
+
+    t: np.ndarray
+    R: np.ndarray
+    R_true: np.ndarray
+    errors: np.ndarray
+
+
+def simulate_orientation(t: np.ndarray, R_ref_sensor: np.ndarray, cfg,
+                         rng: np.random.Generator) -> OrientationSamples:
+    """Measured orientations at ``t`` for true ones ``R_ref_sensor`` (N, 3, 3)."""
+    dt = float(np.mean(np.diff(t))) if len(t) > 1 else 1.0 / cfg.rate
+    err = orientation_errors(len(t), dt, cfg, rng)
+    return OrientationSamples(t, perturb_orientation(R_ref_sensor, err), R_ref_sensor, err)

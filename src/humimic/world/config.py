@@ -31,6 +31,10 @@ class Robot(Section):
 
     interocular: float = Field(0.07, gt=0.02, le=0.2)
     """Distance between the eyes (m)."""
+    base: Literal["fixed", "planar"] = "fixed"
+    """``fixed``: welded at the pelvis (DB); ``planar``: a wheeled base (x, y, yaw joints with
+    velocity actuators, driven by :class:`humimic.control.base.BaseController`, at most
+    0.4 m/s as Sugiyama & Miura's robot)."""
     pose: Literal["ready", "zero"] | dict[Literal[ROBOT_JOINTS], float] = "ready"
     """Initial joint configuration: a named pose or ``{joint: angle_rad}`` over the ready pose."""
     look_at: Literal[tuple(HUMAN_TARGETS)] | Vec3 | None = None

@@ -15,6 +15,10 @@ ROBOT_JOINTS: tuple[str, ...] = (
     "R_HFE", "R_HAA", "R_KFE",
     "L_HFE", "L_HAA", "L_KFE",
 )
+#: The mobile base's joints (``robot.base: planar``), in qpos / actuator order: slides along
+#: the world's x and y, then a turn about the vertical; all 0 at the start pose, so their
+#: values are the base's pose in the robot's start frame (Sugiyama & Miura's R, Fig. 6).
+BASE_JOINTS = ("base_x", "base_y", "base_yaw")
 EYE_JOINTS = ("L_EP", "L_ET", "R_EP", "R_ET")
 HEAD_JOINTS = ("B_HR", "B_HN", "B_HT")
 TORSO_JOINTS = ("B_TR", "B_TAA", "B_TFE")
@@ -52,4 +56,5 @@ HUMAN_TARGETS = {
     "head_imu": "head_imu",
     "wiimote": "wiimote_imu",
     "wiimote_marker": "wiimote_marker",
+    "headcam": "headcam",
 }

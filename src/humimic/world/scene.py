@@ -18,7 +18,9 @@ from dm_control import mjcf
 
 from humimic.paths import MODELS_DIR
 from humimic.sensors.camera_model import fovy_from_hfov, make_transform
+from humimic.world.frames import paper_frame_of
 from humimic.world.names import (
+    BASE_JOINTS,
     EYE_CAMERAS,
     HUMAN_JOINTS,
     HUMAN_PREFIX,
@@ -27,6 +29,10 @@ from humimic.world.names import (
     ROBOT_PREFIX,
 )
 
+#: Room name -> MJCF file in ``models/``.
+ROOMS = {"lab": "room.xml", "sugiyama": "room_sugiyama.xml"}
+#: Room site at which the person's (avatar) frame is placed, when the room has one.
+PERSON_START_SITE = "person_start"
 WIDE_HFOV_DEG = 100.0
 FOVEAL_HFOV_DEG = 24.0
 #: MuJoCo geom group of the Wii remote (hidden unless the scenario shows it).
@@ -50,13 +56,20 @@ class SceneOptions:
     """Width, height of the eye cameras (sets MuJoCo's vertical fovy for the aspect ratio)."""
     wide_hfov_deg: float = WIDE_HFOV_DEG
     foveal_hfov_deg: float = FOVEAL_HFOV_DEG
-    headcam_resolution: tuple[int, int] = (320, 240)
-    headcam_hfov_deg: float = 60.0
+    headcam_resolution: tuple[int, int] = (368, 240)
+    headcam_hfov_deg: float = 70.0
     ambient: float = 0.3
     diffuse: float = 0.55
     shadows: bool = False
     msaa: bool = False
     show_wiimote: bool = False
+    base: str = "fixed"
+    """The robot's base: ``fixed`` (welded at the pelvis, as DB) or ``planar`` (x, y, yaw
+    joints with velocity actuators: a wheeled base, see :func:`add_planar_base`)."""
+    room: str = "lab"
+    """Room model (:data:`ROOMS`): ``lab`` (Ude & Atkeson's; the person stands ``distance``
+    in front of the robot) or ``sugiyama`` (the wearable room; the person starts at its
+    ``person_start`` site and ``distance``/``lateral`` do not apply)."""
     max_render_size: tuple[int, int] = field(default=(1280, 960))
 
 
@@ -72,7 +85,7 @@ def _robot_eye_height_and_x() -> tuple[float, float]:
 
 def compose(opts: SceneOptions) -> mjcf.RootElement:
     """The scene's MJCF tree for ``opts`` (not yet compiled)."""
-    room = mjcf.from_path(str(MODELS_DIR / "room.xml"))
+    room = mjcf.from_path(str(MODELS_DIR / ROOMS[opts.room]))
     robot = mjcf.from_path(str(MODELS_DIR / "db_humanoid.xml"))
     human = mjcf.from_path(str(MODELS_DIR / "avatar.xml"))
 
@@ -87,6 +100,9 @@ def compose(opts: SceneOptions) -> mjcf.RootElement:
     hw, hh = opts.headcam_resolution
     human.find("camera", "headcam").fovy = math.degrees(
         fovy_from_hfov(math.radians(opts.headcam_hfov_deg), hw, hh))
+
+    if opts.base == "planar":
+        add_planar_base(robot)
 
     # Avatar colours.
     for name, rgb in (("skin", opts.skin), ("shirt", opts.shirt), ("trousers", opts.trousers)):
@@ -103,6 +119,12 @@ def compose(opts: SceneOptions) -> mjcf.RootElement:
     room.visual.get_children("global").offheight = max(opts.max_render_size[1], h, hh)
 
     room.attach(robot)
+    start = room.find("site", PERSON_START_SITE)
+    if start is not None:  # the room says where the person starts (a site on the world body)
+        frame = room.attach(human)  # after the robot: its keyframe's qpos stays first
+        frame.pos = start.pos
+        frame.quat = start.quat if start.quat is not None else [1.0, 0.0, 0.0, 0.0]
+        return room
     eye_x, _ = _EYE_X_Z
     head_x_in_avatar = 0.0  # the avatar's head centre is above its origin in the zero pose
     frame = room.attach(human)
@@ -112,6 +134,29 @@ def compose(opts: SceneOptions) -> mjcf.RootElement:
 
 
 _EYE_X_Z = _robot_eye_height_and_x()
+
+#: Velocity-actuator gains of the planar base: time constants of ~0.01 s for the robot's
+#: 80 kg and its ~4 kg m^2 about the vertical.
+BASE_KV = {"base_x": 8000.0, "base_y": 8000.0, "base_yaw": 400.0}
+
+
+def add_planar_base(robot: mjcf.RootElement) -> None:
+    """Give the robot's pelvis the joints of a wheeled base (:data:`BASE_JOINTS`: slides along
+    x and y, then a turn about z, in the parent's = world frame) and velocity actuators
+    (``ctrl`` = joint velocity, m/s and rad/s, driven by :mod:`humimic.control.base`). The
+    ``ready`` keyframe gets the base at its start pose."""
+    pelvis = robot.find("body", "pelvis")
+    axes = {"base_x": ("slide", [1, 0, 0]), "base_y": ("slide", [0, 1, 0]),
+            "base_yaw": ("hinge", [0, 0, 1])}
+    for i, name in enumerate(BASE_JOINTS):
+        kind, axis = axes[name]
+        pelvis.insert("joint", i, name=name, type=kind, axis=axis, damping=0.0,
+                      armature=0.0, limited=False)
+        robot.actuator.add("velocity", name=name, joint=name, kv=BASE_KV[name])
+    for key in robot.keyframe.key:
+        key.qpos = [0.0] * len(BASE_JOINTS) + list(key.qpos)
+        if key.ctrl is not None:
+            key.ctrl = list(key.ctrl) + [0.0] * len(BASE_JOINTS)
 
 
 class Scene:
@@ -133,6 +178,13 @@ class Scene:
         self.robot_dof = m.jnt_dofadr[self.robot_joint_ids]
         self.robot_actuators = np.array([m.actuator(ROBOT_PREFIX + j).id for j in ROBOT_JOINTS])
         self.robot_range = m.jnt_range[self.robot_joint_ids].copy()
+        has_base = opts.base == "planar"
+        self.base_joint_ids = np.array(
+            [m.joint(ROBOT_PREFIX + j).id for j in BASE_JOINTS] if has_base else [], int)
+        self.base_qpos = m.jnt_qposadr[self.base_joint_ids]
+        self.base_dof = m.jnt_dofadr[self.base_joint_ids]
+        self.base_actuators = np.array(
+            [m.actuator(ROBOT_PREFIX + j).id for j in BASE_JOINTS] if has_base else [], int)
 
         first = m.joint(HUMAN_PREFIX + HUMAN_JOINTS[0][0]).id
         last = m.joint(HUMAN_PREFIX + HUMAN_JOINTS[-1][0]).id
@@ -144,6 +196,8 @@ class Scene:
         self.human_qpos0 = m.qpos0[self.human_qpos].copy()
 
         self.T_world_base = self._body_pose(ROBOT_PREFIX + "pelvis", zero_pose=True)
+        self.T_world_W = paper_frame_of(m)
+        """Pose of the paper's frame W (Sugiyama & Miura; :mod:`humimic.world.frames`)."""
         frame_body = int(m.body(HUMAN_PREFIX + "pelvis").parentid[0])
         self.T_world_avatar = self._body_pose(frame_body, zero_pose=True)
 
@@ -176,6 +230,12 @@ class Scene:
 
     def robot_qpos_vector(self) -> np.ndarray:
         return self.data.qpos[self.robot_qpos].copy()
+
+    def T_world_base_now(self) -> np.ndarray:
+        """The robot base's pose at the scene's current kinematics (``T_world_base`` is its pose
+        at t = 0; they differ once a planar base has moved)."""
+        b = self.model.body(ROBOT_PREFIX + "pelvis").id
+        return make_transform(self.data.xmat[b].reshape(3, 3).copy(), self.data.xpos[b].copy())
 
 
 def build_scene(opts: SceneOptions | None = None) -> Scene:

@@ -8,14 +8,18 @@ once, vectorised; the loop only writes the avatar's state into the scene each st
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import mujoco
 import numpy as np
 
+from humimic.control.base import BaseController
 from humimic.motion import MotionContext, compute_ground_truth, make_motion
+from humimic.sensors.camera_model import CameraImage
 from humimic.sensors.cameras import CameraRig, CameraSpec
 from humimic.sensors.clock import Clock, Schedule
 from humimic.sensors.faults import SensorFaults
-from humimic.sensors.inertial import simulate_inertial
+from humimic.sensors.inertial import simulate_inertial, simulate_orientation
 from humimic.world.gaze import pan_tilt_to
 from humimic.world.names import EYE_CAMERAS, ROBOT_JOINTS, ROBOT_PREFIX
 from humimic.world.scene import SceneOptions, build_scene
@@ -31,7 +35,7 @@ def scene_options(scenario) -> SceneOptions:
         headcam_resolution=scenario.sensors.head_camera.resolution,
         headcam_hfov_deg=scenario.sensors.head_camera.hfov_deg,
         ambient=light.ambient, diffuse=light.diffuse, shadows=light.shadows, msaa=light.msaa,
-        show_wiimote=h.wiimote,
+        show_wiimote=h.wiimote, room=scenario.room, base=scenario.robot.base,
     )
 
 
@@ -57,22 +61,38 @@ class World:
         self.motion = make_motion(scenario.human.motion, ctx)
         self.gt = compute_ground_truth(self.scene, self.motion, self.times)
         self.set_robot_pose()
+        self.base = BaseController(self.scene) if scenario.robot.base == "planar" else None
+        """The planar base's controller (``robot.base: planar``), stepped by the simulation
+        at the servo rate; it holds the start pose until a stage calls ``set_target``."""
 
         c = scenario.cameras
-        self.eye_cameras = eye_camera_names(c)
+        self.eye_cameras = eye_camera_names(c) if c.enabled else []
         self.eye_rig = CameraRig(
             self.scene,
             [CameraSpec(n, *c.resolution, c.noise_std, *c.distortion) for n in self.eye_cameras],
-            rngs["cameras"], show_wiimote=scenario.human.wiimote)
+            rngs["cameras"], show_wiimote=scenario.human.wiimote) if c.enabled else None
         hc = scenario.sensors.head_camera
         self.head_rig = (CameraRig(self.scene, [CameraSpec("headcam", *hc.resolution,
-                                                           hc.noise_std)],
+                                                           hc.noise_std, *hc.distortion)],
                                    rngs["headcam"], show_wiimote=scenario.human.wiimote)
                          if hc.enabled else None)
         self.imu = self._inertial("head_imu", scenario.sensors.imu, rngs["imu"])
         self.wiimote = self._inertial("wiimote", scenario.sensors.wiimote, rngs["wiimote"])
         self.faults = SensorFaults(scenario, self.eye_cameras, rngs)
         """Lost, frozen and covered frames, lost inertial samples (applied when published)."""
+
+    @property
+    def T_world_W(self) -> np.ndarray:
+        """Pose of the paper's frame W in the world (:mod:`humimic.world.frames`)."""
+        return self.scene.T_world_W
+
+    def capture_headcam(self, t: float) -> CameraImage:
+        """The head camera's frame at ``t``: the image and its intrinsics (with distortion);
+        its pose is withheld (NaN) -- a wearable system estimates it. The true pose is
+        ``gt.pose("headcam", frame)`` (frame I; OpenCV axes are ``R_CV_I`` away)."""
+        image = self.head_rig.capture_one("headcam", t)
+        nan = np.full((4, 4), np.nan)
+        return replace(image, camera=replace(image.camera, T_base_cam=nan, T_world_cam=nan))
 
     # ---- the person ------------------------------------------------------------------------
     def apply_human(self, tick: int) -> None:
@@ -86,7 +106,12 @@ class World:
             return None
         ticks = np.array(Schedule(cfg.rate, self.clock.physics_rate).ticks(self.n_ticks))
         acc, gyro = self.gt.inertial(which)
-        return simulate_inertial(self.times[ticks], acc[ticks], gyro[ticks], cfg, rng), ticks
+        t = self.times[ticks]
+        samples = simulate_inertial(t, acc[ticks], gyro[ticks], cfg, rng)
+        if getattr(cfg, "orientation", False):
+            R_W_sensor = self.gt.rotation(which, "W")[ticks]
+            samples = replace(samples, orientation=simulate_orientation(t, R_W_sensor, cfg, rng))
+        return samples, ticks
 
     # ---- the robot -------------------------------------------------------------------------
     def set_robot_pose(self) -> None:
@@ -129,6 +154,7 @@ class World:
         mujoco.mj_forward(m, d)
 
     def close(self) -> None:
-        self.eye_rig.close()
+        if self.eye_rig is not None:
+            self.eye_rig.close()
         if self.head_rig is not None:
             self.head_rig.close()
