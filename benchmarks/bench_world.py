@@ -83,7 +83,7 @@ def bench_wearable_loop(repeats: int, duration: float = 4.0) -> list[float]:
 
     scenario = load_scenario(SCENARIOS_DIR / "wearable_walk.yaml", duration=duration,
                              overrides=["output.plots=false"])
-    return [run_one(scenario, out_dir=Path("/tmp") / f"humimic-bench-wearable-{i}",
+    return [run_one(scenario, out_dir=Path(tempfile.gettempdir()) / f"humimic-bench-wearable-{i}",
                     rerun="off", progress=False)["realtime_factor"] for i in range(repeats)]
 
 

@@ -101,10 +101,16 @@ def test_no_source_or_scenario_file_refers_to_a_path_outside_the_repository():
 
 
 def test_models_refer_only_to_files_beside_them():
+    """Every ``file=`` of an MJCF (resolved against its ``texturedir`` / ``meshdir`` /
+    ``assetdir``, as MuJoCo does) is a file in the repository."""
     for xml in sorted((ROOT / "models").rglob("*.xml")):
-        for ref in re.findall(r'\bfile="([^"]+)"', xml.read_text()):
-            target = xml.parent / ref
-            assert _inside(target) and target.is_file(), f"{xml.name}: file={ref}"
+        text = xml.read_text()
+        dirs = dict(re.findall(r'\b(texturedir|meshdir|assetdir)="([^"]+)"', text))
+        for tag, ref in re.findall(r'<(\w+)[^>]*\bfile="([^"]+)"', text):
+            sub = dirs.get({"texture": "texturedir", "mesh": "meshdir",
+                            "hfield": "meshdir"}.get(tag, ""), dirs.get("assetdir", ""))
+            target = xml.parent / sub / ref
+            assert _inside(target) and target.is_file(), f"{xml.name}: <{tag} file={ref}>"
 
 
 def test_every_shipped_file_is_under_version_control():
