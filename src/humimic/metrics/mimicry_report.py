@@ -9,7 +9,9 @@ them per joint), ``clamped_fraction``,
 ``error_budget_mm`` (see :func:`humimic.metrics.mimicry.error_terms`; ``perception`` and
 ``filtering`` are the raw measurement's and the estimate's errors at their photon times),
 ``interpolation`` (hold vs extrapolate commands against the truth), ``scale`` (in use at the end;
-``scale_initial`` at the start: the mapped truth is scaled by the scale in use at each tick).
+``scale_initial`` at the start: the mapped truth is scaled by the scale in use at each tick),
+``strained_fraction`` (servo ticks at which the fit found the arm strained, see
+:mod:`humimic.control.mapping`).
 ``mimicry.head_still``,
 ``mimicry.gaze``, ``mimicry.ik`` and ``latency_ms`` complete it.
 """
@@ -199,6 +201,8 @@ def site_metrics(stage, i: int, ch) -> tuple[dict, dict]:
         "clamped_fraction": float(rec.clamped[k0:rec.n, i].mean()),
         "scale": ch.scale,
         "scale_initial": ch.scale_initial,
+        "strained_fraction": (ch.fit.strained_ticks / n_active if ch.fit is not None
+                              else None),
         "lost_fraction": float(rec.lost[k0:rec.n, i].mean()),
         "started_s": float(rec.t[k0]),
         "ticks": int(n_active),
