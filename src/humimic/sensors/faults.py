@@ -35,8 +35,8 @@ from humimic.scenario.errors import ScenarioError
 from humimic.sensors.camera_model import CameraImage
 from humimic.world.names import EYE_CAMERAS
 
-#: Inertial sensors with a ``drop_rate`` (bus topic -> ``sensors`` key).
-INERTIAL = {"imu": "imu", "wiimote": "wiimote"}
+#: Inertial sensors with a ``drop_rate`` (their ``sensors`` key is their bus topic).
+INERTIAL = ("imu", "wiimote")
 
 
 @dataclass(frozen=True)
@@ -182,15 +182,15 @@ class SensorFaults:
         self.frames = FrameFaults(eye_cameras, c.drop_rate, c.freeze_rate, covered,
                                   rngs["faults.cameras"] if random else None, c.noise_std,
                                   rngs["faults.dark"] if covered else None)
-        self._inertial = {topic: (getattr(scenario.sensors, key).drop_rate, rngs,
-                                  f"faults.{topic}")
-                          for topic, key in INERTIAL.items()}
+        self._rngs = rngs
+        self._drop_rate = {topic: getattr(scenario.sensors, topic).drop_rate
+                           for topic in INERTIAL}
         self.samples: dict[str, tuple[int, int]] = {}
 
     def keep(self, topic: str, n: int) -> np.ndarray:
         """Which of the ``n`` samples of an inertial sensor are published (counted)."""
-        rate, rngs, name = self._inertial[topic]
-        keep = keep_samples(n, rate, rngs[name] if rate > 0.0 else None)
+        rate = self._drop_rate[topic]
+        keep = keep_samples(n, rate, self._rngs[f"faults.{topic}"] if rate > 0.0 else None)
         self.samples[topic] = (n, int(n - keep.sum()))
         return keep
 
