@@ -215,11 +215,11 @@ def test_the_filter_coasts_through_a_covered_camera_and_tracking_resumes():
     assert m["filter"]["coasted_frames"]["right_hand"] == coast.sum()
     # tracking resumes once the camera is uncovered, and is accurate again
     t_back = a.t[meas & (a.t >= 1.8)][0]
-    assert t_back <= 2.2  # measured: 1.85 s
+    assert t_back <= 2.2  # measured: 1.90 s
     late = valid & (a.t >= t_back + 0.3)
     err = np.linalg.norm(a.x[late, i, :3] - gt.p_base("right_hand")[
         [gt.index_of(t) for t in a.t[late]]], axis=1)
-    assert late.sum() >= 20 and np.sqrt(np.mean(err**2)) <= 0.015  # measured: 6 mm
+    assert late.sum() >= 20 and np.sqrt(np.mean(err**2)) <= 0.015  # measured: 6.5 mm
     assert m["filter"]["nonfinite_estimates"] == 0
 
 
