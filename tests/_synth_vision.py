@@ -50,7 +50,7 @@ class TexturedPlane:
     def render(self, cam: CameraModel) -> np.ndarray:
         intr = cam.intrinsics
         vv, uu = np.mgrid[0:intr.height, 0:intr.width].astype(float)
-        xn = intr.undistort_normalized(np.stack([uu, vv], -1), iterations=20)
+        xn = intr.undistort_normalized(np.stack([uu, vv], -1))
         d = np.concatenate([xn, np.ones(xn.shape[:-1] + (1,))], -1) @ cam.T_base_cam[:3, :3].T
         X = self.ray_hit(cam.T_base_cam[:3, 3], d) - self.O
         s = (X @ self.e1) / self.scale + self.size_m / (2 * self.scale)
@@ -60,7 +60,7 @@ class TexturedPlane:
 
 
 def point_on_plane_seen_at(plane: TexturedPlane, cam: CameraModel, uv) -> np.ndarray:
-    xn = cam.intrinsics.undistort_normalized(np.asarray(uv, float), iterations=30)
+    xn = cam.intrinsics.undistort_normalized(np.asarray(uv, float))
     d = cam.T_base_cam[:3, :3] @ np.array([xn[0], xn[1], 1.0])
     return plane.ray_hit(cam.T_base_cam[:3, 3], d)
 

@@ -136,3 +136,34 @@ def test_solve_equals_mink_solve_ik_with_collision_rows_active(model):
         _, h = ik.collision_limit.compute_qp_inequalities(ik.configuration, DT)
         n_rows.append(int(np.isfinite(h).sum()))
     assert max(n_rows) >= 2
+
+
+def test_collision_limit_is_minks_in_displacement_units():
+    """DisplacementCollisionLimit rewrites one method of mink 1.3's CollisionAvoidanceLimit: for
+    this mink release, its rows are mink's (same pairs found, same normal rows) and its bounds
+    mink's velocity bounds times dt outside the margin. A new mink fails here first."""
+    from importlib.metadata import version
+
+    from humimic.control.ik import MINK_VERSION, DisplacementCollisionLimit
+
+    assert version("mink").startswith(MINK_VERSION + "."), (
+        f"mink {version('mink')}: re-check DisplacementCollisionLimit against this release's "
+        "CollisionAvoidanceLimit.compute_qp_inequalities, then update MINK_VERSION")
+    model = build_robot_model()
+    ik = _ik(model, ("R_palm", "L_palm"), collision_margin=0.05)
+    target = ik.configuration.data.geom("thorax").xpos.copy()
+    kw = dict(geom_pairs=MimicIK.collision_pairs(), gain=0.5,
+              minimum_distance_from_collisions=0.05, collision_detection_distance=0.13)
+    ours, theirs = DisplacementCollisionLimit(model, **kw), mink.CollisionAvoidanceLimit(model,
+                                                                                          **kw)
+    rows = 0
+    for k in range(40):
+        ik.step(np.stack([target, target]) + 0.01 * np.sin(k))
+        G, h = ours.compute_qp_inequalities(ik.configuration, DT)
+        G_m, h_m = theirs.compute_qp_inequalities(ik.configuration, DT)
+        assert np.array_equal(np.isfinite(h), np.isfinite(h_m))
+        np.testing.assert_allclose(G, G_m, atol=1e-12)
+        outside = np.isfinite(h) & (h > 0)
+        np.testing.assert_allclose(h[outside], h_m[outside] * DT, rtol=1e-12)
+        rows += int(np.isfinite(h).sum())
+    assert rows > 0

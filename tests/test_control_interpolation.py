@@ -12,7 +12,6 @@ from humimic.control.interpolation import (
     pd_gains,
     pd_step,
     reference,
-    transition,
 )
 
 DT = 1.0 / 420.0
@@ -67,16 +66,6 @@ def test_pd_matches_scipy_on_a_held_ramp_reference():
                           *pd_discretize(kp, kd, DT))
     assert p[0] == pytest.approx(sol.sol(n * DT)[0], abs=1e-8)
     assert v[0] == pytest.approx(sol.sol(n * DT)[1], abs=1e-7)
-
-
-def test_transition_is_ude_eq_15():
-    """x(t) = A(t, s) x(s) with A = [[I, dt I, dt^2/2 I], [0, I, dt I], [0, 0, I]]."""
-    rng = np.random.default_rng(1)
-    x = rng.normal(size=9)
-    dt = 0.037
-    A = np.kron(np.array([[1, dt, dt * dt / 2], [0, 1, dt], [0, 0, 1]]), np.eye(3))
-    out = np.concatenate(transition(x[:3], x[3:6], x[6:], dt))
-    np.testing.assert_allclose(out, A @ x, atol=1e-15)
 
 
 def test_reference_modes_and_staleness():

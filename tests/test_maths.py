@@ -54,3 +54,18 @@ def test_ca_predict_is_the_exact_flow_of_the_constant_acceleration_model():
     dts = np.array([0.1, 0.2])
     P2, V2, _ = ca_predict(np.stack([p, p]), np.stack([v, v]), np.stack([a, a]), dts)
     np.testing.assert_allclose(P2[1], ca_predict(p, v, a, 0.2)[0])
+
+
+def test_chi2_band_of_window_means_holds_95_percent_of_consistent_windows():
+    """Monte Carlo: NEES of errors drawn from P, averaged over windows, fall inside the band
+    of the mean ~95 % of the time; a filter whose P is 4x too small falls outside."""
+    rng = np.random.default_rng(1)
+    n, window, dof = 21_000, 30, 9
+    A = rng.normal(size=(dof, dof))
+    P = A @ A.T + dof * np.eye(dof)
+    e = rng.multivariate_normal(np.zeros(dof), P, size=n)
+    lo, hi = chi2_band(dof, window)
+    means = nees(e, P).reshape(-1, window).mean(axis=1)
+    assert 0.93 < np.mean((means >= lo) & (means <= hi)) < 0.97
+    over = nees(e, P / 4).reshape(-1, window).mean(axis=1)
+    assert np.mean((over >= lo) & (over <= hi)) < 0.01

@@ -11,19 +11,14 @@ from humimic.metrics.mimicry import (
     error_terms,
     head_motion,
     image_offsets,
+    mse_shares,
     rms_jerk,
-    rmse,
     summary_stats,
     xcorr_lag,
 )
 from humimic.sensors.camera_model import Intrinsics
 
 DT = 1.0 / 420.0
-
-
-def test_rmse_closed_form_and_nan_rows():
-    a = np.array([[3.0, 4.0, 0.0], [0.0, 0.0, 0.0], [np.nan, 0, 0]])
-    assert rmse(a, np.zeros((3, 3))) == pytest.approx(np.sqrt(25 / 2))
 
 
 @pytest.mark.parametrize("delay", [0.0123, -0.0071, 0.0])
@@ -44,13 +39,32 @@ def test_rms_jerk_of_a_sine():
     assert rms_jerk(p, DT) == pytest.approx(A * w**3 / np.sqrt(2), rel=0.01)
 
 
-def test_error_terms_add_up_to_the_total():
+def test_error_terms_are_the_stage_differences():
+    """Each term is one stage's output minus its input (e.g. the IK's residual is the IK's
+    site minus the command), on the ground-truth time grid."""
     rng = np.random.default_rng(0)
-    x = [rng.normal(size=(50, 3)) for _ in range(7)]
-    terms = error_terms(*x)
-    assert set(TERMS) <= set(terms)
-    np.testing.assert_allclose(sum(terms[k] for k in TERMS), terms["total"], atol=1e-12)
-    np.testing.assert_allclose(terms["total"], x[6] - x[0])
+    true_now, true_photon, est, cmd_raw, cmd, ik, robot = (rng.normal(size=(50, 3))
+                                                           for _ in range(7))
+    terms = error_terms(true_now, true_photon, est, cmd_raw, cmd, ik, robot)
+    assert list(TERMS) == ["estimate", "latency", "interpolation", "workspace", "ik", "servo"]
+    np.testing.assert_array_equal(terms["ik"], ik - cmd)
+    np.testing.assert_array_equal(terms["latency"], true_photon - true_now)
+    np.testing.assert_array_equal(terms["total"], robot - true_now)
+
+
+def test_mse_shares_against_closed_forms():
+    """Orthogonal terms share the mean square by their own squares; a term that cancels
+    another gets a negative share."""
+    n = 40
+    z = np.zeros((n, 3))
+    a, b = z.copy(), z.copy()
+    a[:, 0], b[:, 1] = 1.0, 2.0
+    terms = {k: z for k in TERMS} | {"estimate": a, "servo": b, "total": a + b}
+    s = mse_shares(terms)
+    assert s["estimate"] == pytest.approx(1 / 5) and s["servo"] == pytest.approx(4 / 5)
+    terms = {k: z for k in TERMS} | {"latency": 2 * a, "interpolation": -a, "total": a}
+    s = mse_shares(terms)
+    assert s["latency"] == pytest.approx(2.0) and s["interpolation"] == pytest.approx(-1.0)
 
 
 def test_head_motion():

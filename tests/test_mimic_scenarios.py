@@ -1,10 +1,11 @@
-"""Mimicry end to end with oracle perception: the issue's accuracy thresholds.
-
-Thresholds are the issue's (measured values in brackets, for the margin): oracle wave at
-1.2 m RMSE <= 10 mm [4.6] and lag <= 15 ms [7.7, about half the 16.7 ms frame period: the
-paper's hold interpolation]; head still <= 1 cm and 1 deg [0.15 mm, 0.02 deg]; gaze keeps the
-head within 10 % of the wide image's width of its centre [<= 6 %, at the start].
-Small images (the oracle does not look at them) keep these runs fast.
+"""Mimicry end to end with oracle perception, thresholds set from the measured values with a
+2-3x margin (measured 2026-11-23, in brackets): oracle wave at 1.2 m RMSE <= 10 mm [4.5] and
+lag <= 15 ms [7.7, about half the 16.7 ms frame period: the paper's hold interpolation];
+extrapolation's lag |lag| <= 1 ms [0.34]; the head still within 0.4 mm and 0.05 deg [0.15 mm,
+0.016 deg] (gaze: 0.12 mm, 0.012 deg [0.039, 0.0042]); gaze keeps the head within 10 % of the
+wide image's width of its centre [6 %, at the start]. The paper's goals (RMSE <= 25 mm, lag
+<= 50 ms) are in the benchmark report (``benchmarks/bench_control.py --scenarios``). Small
+images (the oracle does not look at them) keep these runs fast.
 """
 
 from __future__ import annotations
@@ -41,14 +42,14 @@ def test_both_interpolation_modes_are_scored_and_extrapolation_cancels_the_lag(w
     interp = wave["mimicry"]["R_palm"]["interpolation"]
     assert set(interp) == {"hold", "extrapolate"}
     assert interp["extrapolate"]["rmse_mm"] < interp["hold"]["rmse_mm"]
-    assert abs(interp["extrapolate"]["lag_ms"]) < 2.0 < interp["hold"]["lag_ms"]
+    assert abs(interp["extrapolate"]["lag_ms"]) <= 1.0 and interp["hold"]["lag_ms"] >= 4.0
 
 
 def test_no_limit_no_nan_and_the_head_stays_still(wave):
     m = wave["mimicry"]
     assert m["joints"]["limit_violations"] == 0 and m["joints"]["finite"]
-    assert m["head_still"]["max_displacement_mm"] <= 10.0
-    assert m["head_still"]["max_rotation_deg"] <= 1.0
+    assert m["head_still"]["max_displacement_mm"] <= 0.4
+    assert m["head_still"]["max_rotation_deg"] <= 0.05
     assert m["ik"]["failures"] == 0
 
 
@@ -66,15 +67,27 @@ def test_joint_limit_hits_name_the_joints(root, tmp_path):
     assert max(by_joint.values()) <= palm["joint_limit_hits"] <= sum(by_joint.values())
 
 
-def test_error_budget_and_latencies_are_reported(wave):
-    b = wave["mimicry"]["R_palm"]["error_budget_mm"]
-    for key in ("perception", "filtering", "estimate", "latency", "interpolation", "workspace",
-                "ik", "servo", "total"):
-        assert b[key] is not None and b[key] >= 0.0, key
-    assert b["total"] <= sum(b[k] for k in ("estimate", "latency", "interpolation",
-                                            "workspace", "ik", "servo")) + 1e-9
-    lat = wave["latency_ms"]
-    assert lat["estimate"] == 0.0 and lat["end_to_end"] == wave["mimicry"]["R_palm"]["lag_ms"]
+def test_error_budget_splits_the_error_where_it_arises(wave):
+    """A noise-free oracle with no declared latency: what control receives is the truth at its
+    photon time (the estimate term vanishes: the series are aligned), and the hold between
+    frames -- the estimate's age -- makes most of the error."""
+    palm = wave["mimicry"]["R_palm"]
+    b, share = palm["error_budget_mm"], palm["error_budget_share"]
+    assert b["estimate"] < 1e-9
+    assert share["latency"] > 0.8  # measured 1.23 (the PD's lag cancels part: -0.15)
+    assert palm["measurements_rmse_mm"] is None  # the oracle measures nothing
+    assert palm["estimates_rmse_mm"] < 1e-9
+    assert wave["latency_ms"]["end_to_end"] == 0.0  # nothing declared: no delay
+    assert wave["lag_ms"]["end_to_end"] == palm["lag_ms"]
+
+
+def test_latency_is_the_delay_from_photon_to_joint_command(root, tmp_path):
+    """An oracle 30 ms late: each frame is first used by the servo tick at or after its ready
+    time, so photon to joint command is 30 ms plus less than one servo period (2.4 ms)."""
+    lat = _run(root, tmp_path, "mimic_wave", "mimic.oracle.latency=0.03",
+               duration=1.0)["latency_ms"]
+    assert lat["estimate"] == pytest.approx(30.0, abs=1e-6)
+    assert 30.0 <= lat["end_to_end"] <= lat["end_to_end_max"] < 30.0 + 1e3 / 420.0
 
 
 def test_gaze_keeps_the_sweeping_head_near_the_image_centre(root, tmp_path):
@@ -84,8 +97,8 @@ def test_gaze_keeps_the_sweeping_head_near_the_image_centre(root, tmp_path):
     assert gaze["max_offset_frac"] <= 0.10
     assert gaze["within_10pct_fraction"] == 1.0
     # The eyes move, the head does not.
-    assert m["head_still"]["max_displacement_mm"] <= 10.0
-    assert m["head_still"]["max_rotation_deg"] <= 1.0
+    assert m["head_still"]["max_displacement_mm"] <= 0.12
+    assert m["head_still"]["max_rotation_deg"] <= 0.012
 
 
 def test_a_target_never_seen_leaves_the_robot_holding_its_pose(root, tmp_path):

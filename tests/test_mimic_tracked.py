@@ -1,11 +1,12 @@
 """Mimicry through the tracked perception pipeline (blob tracker + stereo + random-jerk Kalman
-filter at 60 Hz, wide cameras, 320x240): the issue's thresholds RMSE <= 25 mm, lag <= 50 ms,
-end-to-end latency <= 50 ms.
+filter at 60 Hz, wide cameras, 320x240), thresholds from the measured values with a 2-3x
+margin; the paper's goals (RMSE <= 25 mm, lag <= 50 ms) are in the benchmark report.
 
-Measured on 2026-11-22 (perception still being tuned): RMSE 19.9 mm, lag 6.3 ms, end-to-end
-6.3 ms (perception and filter declare no processing latency by default). Detection starts at
-once (``detection.period: 0``) and mimicry 0.5 s later, once the filter's velocity has
-converged. Skipped while the perception and filter sections are not in the schema.
+Measured on 2026-11-23 (calibrated measurement noise): RMSE 15.5 mm, lag 20.9 ms (a
+cross-correlation lag: the hold PD adds ~half a frame to the latency), photon-to-joint latency
+16.7 ms (perception declares one frame; the estimate is used at the servo tick it is ready),
+measurements 9.3 mm and estimates 8.1 mm RMS. Detection starts at once (``detection.period:
+0``) and mimicry 0.5 s later, once the filter's velocity has converged.
 """
 
 from __future__ import annotations
@@ -13,25 +14,24 @@ from __future__ import annotations
 import pytest
 
 from humimic.run import run_one
-from humimic.scenario import Scenario, load_scenario
+from humimic.scenario import load_scenario
 
 TRACKED = ["mimic.perception=tracked", "mimic.start=0.5", "filter={}",
            "perception={targets: [head, right_hand], detection: {period: 0.0}}",
            "output.plots=false", 'output.rerun="off"']
 
-pytestmark = pytest.mark.skipif(
-    not {"perception", "filter"} <= set(Scenario.model_fields),
-    reason="tracked perception (perception + filter stages) is not in the scenario schema yet")
-
 
 @pytest.mark.slow
-def test_tracked_wave_meets_the_accuracy_goals(root, tmp_path):
+def test_tracked_wave_accuracy_and_latency(root, tmp_path):
     sc = load_scenario(root / "scenarios" / "mimic_wave.yaml", TRACKED, duration=4.0)
     m = run_one(sc, tmp_path, rerun="off", progress=False)
     palm = m["mimicry"]["R_palm"]
     assert palm["status"] == "ok", palm
-    assert palm["rmse_mm"] <= 25.0
-    assert palm["lag_ms"] <= 50.0
-    assert m["latency_ms"]["end_to_end"] <= 50.0
+    assert palm["rmse_mm"] <= 35.0
+    assert 0.0 < palm["lag_ms"] <= 45.0
+    frame_ms, servo_ms = 1e3 / 60.0, 1e3 / 420.0
+    lat = m["latency_ms"]
+    assert lat["perception"] == pytest.approx(frame_ms) and lat["filter"] == 0.0
+    assert frame_ms <= lat["end_to_end"] <= lat["end_to_end_max"] < frame_ms + servo_ms
     assert m["mimicry"]["joints"]["limit_violations"] == 0
-    assert palm["error_budget_mm"]["perception"] is not None
+    assert palm["estimates_rmse_mm"] < palm["measurements_rmse_mm"] <= 20.0  # the filter helps

@@ -3,8 +3,6 @@ gravity-free accelerations vs the accelerometer, frame changes, and speed."""
 
 from __future__ import annotations
 
-import time
-
 import mujoco
 import numpy as np
 import pytest
@@ -113,20 +111,16 @@ def test_base_frame_and_indexing(scene, motion_gt):
     assert gt.qpos.shape == (len(t), 51) and gt.qvel.shape == (len(t), 40)
 
 
-def test_speed_and_scene_data_untouched(scene):
+def test_chunks_agree_and_scene_data_untouched(scene):
     ctx = MotionContext.from_scene(scene, 10.0, np.random.default_rng(0))
     traj = JointTrajectory.from_motion(make_motion(WaveMotion(), ctx), 10.0)
     qpos_before = scene.data.qpos.copy()
     t = np.arange(8400) / 840.0
-    start = time.perf_counter()
     gt = compute_ground_truth(scene, traj, t)
-    elapsed = time.perf_counter() - start
     np.testing.assert_array_equal(scene.data.qpos, qpos_before)
     assert gt.pos.shape == (8400, len(HUMAN_TARGETS), 3)
     # samples past the first chunk agree with a separate computation at those times
     few = compute_ground_truth(scene, traj, t[[5000, 8399]])
     np.testing.assert_array_equal(few.acc, gt.acc[[5000, 8399]])
     np.testing.assert_array_equal(few.sensor("wiimote_acc"), gt.sensor("wiimote_acc")[[5000, 8399]])
-    # the goal is >= 20,000 samples/s (measured ~35,000 on the 2-core machine); the assertion
-    # keeps a 4x margin for a loaded machine.
-    assert len(t) / elapsed > 5_000, f"{len(t) / elapsed:.0f} samples/s"
+    # the speed goal (>= 20,000 samples/s) is benchmarks/bench_world.py's, not a timed test

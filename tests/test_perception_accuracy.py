@@ -61,15 +61,16 @@ def static_hand():
 def test_static_hand_wide_filter_smooths_depth(static_hand):
     t = static_hand[0]["tracking"]["right_hand"]
     raw, filt = t["raw_std_mm"], t["filtered_std_mm"]
-    # base x is the depth. measured (seeds 1-3): raw 0.61-0.67 mm, filtered/raw 0.39-0.42
-    assert filt[0] <= 8.0
-    assert filt[0] <= 0.5 * raw[0]
+    # base x is the depth. measured (seed 1, calibrated R): raw 0.67 mm, filtered 0.35 mm
+    # (filtered/raw 0.53; the paper's Table 3: 0.48)
+    assert filt[0] <= 0.9
+    assert filt[0] <= 0.65 * raw[0]
     assert t["detection_rate"] == 1.0 and t["scored_estimates"] > 300
     for key in ("vel", "acc"):  # true value 0: the means are well inside their spread
         for mean, std in zip(t[f"{key}_bias_mm_s" if key == "vel" else "acc_bias_mm_s2"],
                              t[f"{key}_std_mm_s" if key == "vel" else "acc_std_mm_s2"],
                              strict=True):
-            assert abs(mean) <= std
+            assert abs(mean) <= 0.25 * std  # measured <= 0.04 std
 
 
 def test_table2_propagated_matches_empirical_covariance(static_hand):
@@ -79,25 +80,29 @@ def test_table2_propagated_matches_empirical_covariance(static_hand):
     pa = static_hand[1]["tracking"].arrays()[0]
     t2 = table2(pa, "right_hand", skip_s=0.0, frame="base")
     ratio = np.diag(t2.propagated_following) / np.diag(t2.empirical)
-    assert np.all(np.abs(ratio - 1.0) <= 0.30), ratio  # measured [1.00, 0.99, 0.88]
+    assert np.all(np.abs(ratio - 1.0) <= 0.4), ratio  # measured [1.17, 1.00, 0.81]
     # the paper's own model (independent left and right points) overstates depth here
-    assert t2.propagated_independent[0, 0] / t2.empirical[0, 0] > 3.0  # measured ~40
+    assert t2.propagated_independent[0, 0] / t2.empirical[0, 0] > 60.0  # measured 159
 
 
 # ---- foveal -----------------------------------------------------------------------------------
 def test_static_hand_foveal_depth_sigma():
     m = run("ude_static_hand_foveal", duration=3.0)[0]["tracking"]["right_hand"]
     assert m["scored_estimates"] > 100
-    assert m["filtered_std_mm"][0] <= 2.0  # measured 0.33 mm (raw 0.57 mm)
+    assert m["filtered_std_mm"][0] <= 0.8  # measured 0.34 mm (raw 0.57 mm)
 
 
 # ---- wave -------------------------------------------------------------------------------------
 def test_wave_detection_rate_and_filtered_rmse():
     m = run("ude_wave_tracking", ["perception.detection.period=0.5"], duration=4.5)[0]
-    hand = m["tracking"]["right_hand"]
+    hand, head = m["tracking"]["right_hand"], m["tracking"]["head"]
     assert hand["detection_rate"] >= 0.98  # measured 1.0
-    assert hand["filtered_rmse_mm"] <= 25.0  # measured 6.4 mm (raw 8.3 mm)
-    assert m["tracking"]["head"]["detection_rate"] >= 0.98
+    assert hand["filtered_rmse_mm"] <= 15.0  # measured 6.9 mm (raw 8.3 mm)
+    # a consistent filter: ~95 % of frames inside the band (measured 0.90)
+    assert hand["filtered_nees_pos3_in_band"] >= 0.7 and not hand["biased"]
+    # the head's stereo surface lies ~20 mm before its centre: flagged, and out of the band
+    assert head["detection_rate"] >= 0.98
+    assert head["biased"] and head["filtered_nees_pos3_in_band"] < 0.2
 
 
 # ---- hidden for ~1 s --------------------------------------------------------------------------
@@ -133,7 +138,7 @@ def test_hidden_target_is_reacquired_within_half_a_second():
     t_back = vis[hidden[-1] + 1, 0]  # visible again
     assert not ok[pa.t >= vis[hidden[0], 0]][: len(hidden)].all()  # it really was lost
     t_re = pa.t[(pa.t >= t_back) & ok][0]
-    assert t_re - t_back <= 0.5  # measured 0.13-0.22 s (seeds 1-4)
+    assert t_re - t_back <= 0.45  # measured 0.13-0.22 s (seeds 1-4)
     assert metrics["tracking"]["right_hand"]["reacquisitions"] >= 1
 
 
@@ -167,12 +172,12 @@ def test_head_and_eye_motion_is_compensated():
     eye_motion = np.linalg.norm(pa.T_base_cam[f, 0, :3, 2] - pa.T_base_cam[f[0], 0, :3, 2], axis=1)
     assert eye_motion.max() > 0.1  # the left eye's axis really turned (> 6 deg)
     assert moving["detection_rate"] >= 0.98
-    # measured (seeds 1-3): still 8.5 mm, moving 15.0-15.4 mm (filtered 3-D RMSE; the blobs
-    # move in the images, the EM centre lags a little)
-    assert moving["filtered_rmse_mm"] <= 2.0 * still["filtered_rmse_mm"] + 5.0
+    # measured (seed 1): still 8.5 mm, moving 14.8 mm (filtered 3-D RMSE; the blobs move in
+    # the images, the EM centre lags a little)
+    assert still["filtered_rmse_mm"] <= 17.0 and moving["filtered_rmse_mm"] <= 30.0
     # the same correspondences triangulated with the eyes' pose at the first frame
     truth = stages["tracking"].truth(pa.t[f], "right_hand")[0]
     stale = StereoRig(pa.camera(f[0], 0), pa.camera(f[0], 1))
     p_stale, _ = stale.triangulate(pa.uv_match[f, i, 0], pa.uv_match[f, i, 1])
     stale_rmse = 1e3 * np.sqrt(np.mean(np.sum((p_stale - truth) ** 2, axis=1)))
-    assert stale_rmse > 5.0 * moving["raw_rmse_mm"]  # measured ~13 m vs 15 mm
+    assert stale_rmse > 300.0 * moving["raw_rmse_mm"]  # measured 13.4 m vs 14.7 mm: 915x

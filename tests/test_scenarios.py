@@ -7,6 +7,7 @@ import json
 
 import pytest
 
+from humimic.metrics.tracking import FILTER_SETTLE_S
 from humimic.paths import SCENARIOS_DIR
 from humimic.run import main, run_one
 from humimic.scenario import load_scenario
@@ -23,18 +24,47 @@ def test_there_are_scenarios_for_every_motion_kind():
 
 @pytest.mark.parametrize("name", SCENARIOS)
 def test_scenario_validates(name):
-    scenario = load_scenario(SCENARIOS_DIR / name)
-    assert scenario.name and scenario.duration > 0
+    load_scenario(SCENARIOS_DIR / name)  # raises on anything the schema rejects
+
+
+def smoke_duration(scenario) -> float:
+    """Simulated seconds a scenario needs before each of its stages scores something: the
+    detection phase, a few frames to settle a blob, the filter's settle time and a margin;
+    mimicry's start and enough servo ticks. Never longer than the scenario."""
+    need = 0.5
+    if scenario.perception is not None:
+        need = max(need, scenario.perception.detection.period + 0.3
+                   + (FILTER_SETTLE_S + 0.4 if scenario.filter is not None else 0.0))
+    if scenario.mimic is not None:
+        need = max(need, scenario.mimic.start + 0.3)
+    return min(need, scenario.duration)
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("name", SCENARIOS)
-def test_scenario_runs_end_to_end(name, tmp_path):
-    scenario = load_scenario(SCENARIOS_DIR / name, duration=0.5)
+def test_scenario_runs_end_to_end_and_every_stage_scores(name, tmp_path):
+    scenario = load_scenario(SCENARIOS_DIR / name, ["output.plots=false"])
+    duration = smoke_duration(scenario)
+    scenario = load_scenario(SCENARIOS_DIR / name, ["output.plots=false"], duration=duration)
     metrics = run_one(scenario, tmp_path, rerun="off", progress=False)
-    assert metrics["sim_time_s"] == pytest.approx(0.5, abs=1e-6)
+    assert metrics["sim_time_s"] == pytest.approx(duration, abs=1e-6)
     assert not metrics["interrupted"] and not metrics["mujoco_warnings"]
     assert (tmp_path / "metrics.json").is_file()
+    if scenario.cameras.enabled:
+        assert metrics["frames"] > 0
+    if scenario.sensors.head_camera.enabled:
+        assert metrics["wearable"]["headcam_frames"] > 0
+    if scenario.perception is not None:
+        tracking = metrics["tracking"]
+        assert any(t["raw_rmse_mm"] is not None for t in tracking.values()), tracking
+        assert (tmp_path / "tracking.npz").is_file()  # archived without plots
+        if scenario.filter is not None:
+            assert any(t.get("filtered_rmse_mm") is not None for t in tracking.values())
+    if scenario.mimic is not None:
+        for site in scenario.mimic.map.values():
+            palm = metrics["mimicry"][site]
+            assert palm["status"] == "ok" and palm["rmse_mm"] is not None, palm
+        assert metrics["latency_ms"]["end_to_end"] is not None
 
 
 def test_cli_run_writes_outputs(tmp_path):

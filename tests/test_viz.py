@@ -20,7 +20,7 @@ from scipy.spatial.transform import Rotation
 
 from humimic.sensors.cameras import CameraRig, CameraSpec
 from humimic.viz import RerunLog, camera_entity, default_blueprint, image_entity
-from humimic.viz.plots import plot_errors, plot_stacked_bar, plot_trajectories
+from humimic.viz.plots import plot_error_budget, plot_errors, plot_trajectories
 from humimic.viz.rerun_log import ellipse_points, ellipsoid_axes
 from humimic.world.scene import build_scene
 
@@ -42,7 +42,7 @@ def recorded(scene, tmp_path_factory):
     m, d = scene.model, scene.data
     path = tmp_path_factory.mktemp("rrd") / "run.rrd"
     rig = CameraRig(scene, [CameraSpec("L_wide", 320, 240)], np.random.default_rng(0))
-    blueprint = default_blueprint([camera_entity("L_wide")], ["series"])
+    blueprint = default_blueprint([camera_entity("L_wide")], [("series", "series")])
     truth: dict[float, dict[str, np.ndarray]] = {}
     shoulder = m.jnt_qposadr[m.joint("human/r_shoulder").id]
     with RerunLog(scene, "save", path, recording_id="test-run", blueprint=blueprint) as rlog:
@@ -261,10 +261,67 @@ def test_plots_write_readable_pngs(tmp_path):
                            title="Head, robot base frame")
     p2 = plot_errors(tmp_path / "err.png", t, {"x": 0.01 * np.sin(5 * t)},
                      band={"x": np.full_like(t, 0.006)}, title="Filter error", ylabel="m")
-    p3 = plot_stacked_bar(tmp_path / "budget.png", ["R_palm", "L_palm"],
-                          {"perception": [8.0, 9.0], "filter": [3.0, 2.5], "servo": [1.0, 1.2]},
-                          title="Error budget")
-    for path, size in ((p1, (880, 715)), (p2, (880, 440)), (p3, (715, 495))):
+    p3 = plot_error_budget(tmp_path / "budget.png", ["R_palm", "L_palm"],
+                           {"estimate": [5.0, 6.0], "latency": [16.0, 15.0], "servo": [2.0, 1.0]},
+                           {"estimate": [0.1, 0.2], "latency": [0.95, 0.9], "servo": [-0.05, -0.1]},
+                           [15.0, 14.0])
+    for path, size in ((p1, (880, 715)), (p2, (880, 440)), (p3, (1100, 682))):
         got_size, n_colours, ink = _png_stats(path)
         assert got_size == size, path.name
         assert n_colours > 50 and 0.02 < ink < 0.6, path.name
+
+
+def test_blob_labels_never_overlap_and_sit_above_their_ellipses():
+    """Two targets side by side in the image (a hand before the face): their names are
+    stacked, not drawn over each other ('right_hanhead')."""
+    from humimic.viz.geometry import label_anchors
+
+    names = ["right_hand", "head", "left_hand"]
+    c = np.array([[100.0, 80.0], [104.0, 78.0], [300.0, 40.0]])
+    cov = np.array([np.diag([25.0, 36.0]), np.diag([49.0, 64.0]), np.diag([4.0, 4.0])])
+    pos = label_anchors(c, cov, 2.0, names, char_px=7.0, line_px=12.0)
+    for i in range(3):
+        assert pos[i, 1] < c[i, 1] - 2.0 * np.sqrt(cov[i, 1, 1])  # above its ellipse
+        for j in range(i):
+            overlap_x = abs(pos[i, 0] - pos[j, 0]) < 3.5 * (len(names[i]) + len(names[j]))
+            overlap_y = abs(pos[i, 1] - pos[j, 1]) < 12.0
+            assert not (overlap_x and overlap_y), (names[i], names[j])
+    assert pos[2, 1] == pytest.approx(40.0 - 4.0 - 3.0 - 6.0)  # alone: right above its blob
+
+
+def layout_views(path: Path) -> list[tuple[str, str]]:
+    """``(view class, origin)`` of every view in the ``.rrd``'s stored layout."""
+    reader = RrdReader(path)
+    views = []
+    for store in reader.blueprints():
+        for chunk in reader.store(store=store).stream():
+            rb = chunk.to_record_batch()
+            if "ViewBlueprint:space_origin" in rb.schema.names:
+                views += zip((c[0] for c in rb.column("ViewBlueprint:class_identifier")
+                              .to_pylist()),
+                             (o[0] for o in rb.column("ViewBlueprint:space_origin").to_pylist()),
+                             strict=True)
+    return views
+
+
+@pytest.mark.slow
+def test_every_view_of_a_runs_layout_has_data(tmp_path):
+    """The layout stored with a closed-loop run: every view's origin holds logged data (the
+    mimicry panel once pointed at series/mimicry while the data was under series/mimic)."""
+    from humimic.paths import SCENARIOS_DIR
+    from humimic.run import run_one
+    from humimic.scenario import load_scenario
+
+    scenario = load_scenario(SCENARIOS_DIR / "mimic_tracked_wave.yaml", ["output.plots=false"],
+                             duration=1.2)
+    run_one(scenario, tmp_path, rerun="save", progress=False)
+    views = layout_views(tmp_path / "run.rrd")
+    data = {e.lstrip("/") for e, chunks in read_rrd(tmp_path / "run.rrd").items()
+            if any(not static for static, _ in chunks)}
+    kinds = {}
+    for kind, origin in views:
+        kinds.setdefault(kind, []).append(origin)
+        assert any(e == origin or e.startswith(origin + "/") for e in data), (kind, origin)
+    assert sorted(kinds["TimeSeries"]) == ["series/mimicry/R_palm/error_mm",
+                                           "series/tracking/head", "series/tracking/right_hand"]
+    assert len(kinds["2D"]) == 2 and kinds["3D"] == ["world"] and kinds["TextLog"] == ["events"]

@@ -61,12 +61,8 @@ class TargetEstimate:
     v_base: np.ndarray
     a_base: np.ndarray
     P: np.ndarray | None = None
-    """(9, 9) covariance of (p, v, a), when the estimator has one."""
-
-    def extrapolate(self, dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Constant-acceleration prediction ``dt`` seconds ahead: (p, v, a)."""
-        p = self.p_base + self.v_base * dt + 0.5 * self.a_base * dt * dt
-        return p, self.v_base + self.a_base * dt, self.a_base
+    """(9, 9) covariance of (p, v, a), when the estimator has one. Predict ahead with
+    :func:`humimic.maths.kinematics.ca_predict`."""
 
 
 @dataclass(frozen=True)

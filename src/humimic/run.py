@@ -21,15 +21,13 @@ from humimic.pipeline.simulation import simulate
 from humimic.report import write_report
 from humimic.rngs import Rngs
 from humimic.scenario import Scenario, dump_scenario, load_scenario
-from humimic.viz.blueprint import default_blueprint
+from humimic.viz.blueprint import run_layout
 from humimic.viz.plots import plot_trajectories
 from humimic.viz.rerun_log import SERIES, TRUTH, RerunLog, camera_entity
 from humimic.world.world import World
 
 #: Targets whose ground truth is always plotted and logged.
 GT_TARGETS = ("head", "right_hand", "left_hand")
-#: Time-series subtrees shown in the default rerun layout.
-SERIES_ROOTS = [f"{SERIES}/ground_truth", f"{SERIES}/tracking", f"{SERIES}/mimicry"]
 
 
 def default_out_dir(scenario: Scenario) -> Path:
@@ -49,24 +47,29 @@ def run_one(scenario: Scenario, out_dir: str | Path | None = None, rerun: str | 
     t0 = time.perf_counter()
     world = World(scenario, rngs)
     setup_s = time.perf_counter() - t0
-    cameras = world.eye_cameras + (["headcam"] if world.head_rig is not None else [])
-    blueprint = default_blueprint([camera_entity(n) for n in cameras], SERIES_ROOTS)
+    cameras = [camera_entity(n) for n in world.eye_cameras
+               + (["headcam"] if world.head_rig is not None else [])]
     stages: list = []
-    try:
+    try:  # a live viewer gets the layout at once; the file, with the views that got data
         with RerunLog(world.scene, mode, out / "run.rrd",
                       recording_id=f"{scenario.name}-{scenario.seed}",
-                      blueprint=blueprint) as rlog:
+                      blueprint=run_layout(set(), []) if mode == "spawn" else None) as rlog:
             rlog.log_static_scene(groups=(0, 1, 2, 3) if scenario.human.wiimote else (0, 1, 2))
             stages = build_stages(scenario, world, rngs, rlog)
             result = simulate(world, stages, rlog, progress=progress)
             metrics = _metrics(scenario, world, stages, result, setup_s, wall0)
+            for stage in stages:
+                stage.log(rlog)
             _log_ground_truth(rlog, world, result.ticks_done)
+            rlog.send_blueprint(run_layout(rlog.logged, cameras))
     finally:
         for stage in stages:
             stage.close()
         world.close()
     metrics["wall_time_s"] = time.perf_counter() - wall0
     (out / "metrics.json").write_text(json.dumps(metrics, indent=2, allow_nan=False))
+    for stage in stages:
+        stage.archive(out)
     if scenario.output.plots:
         _plots(out, world, stages, result.ticks_done)
     return metrics
@@ -114,8 +117,8 @@ def _log_ground_truth(rlog, world, ticks: int) -> None:
     t = world.times[:ticks]
     for target in GT_TARGETS:
         rlog.log_series(f"{SERIES}/ground_truth/{target}", t, world.gt.p_base(target)[:ticks],
-                        names=["x", "y", "z"])
-    # Every ground-truth site as labelled points in the 3-D view, at the pose rate.
+                        names=[f"{target} {a} (m)" for a in "xyz"])
+    # Every ground-truth site as points in the 3-D view (names on hover), at the pose rate.
     gt = world.gt
     step = max(1, round(world.scenario.timing.physics_rate / world.scenario.output.pose_rate))
     for k in range(0, ticks, step):

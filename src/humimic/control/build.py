@@ -31,5 +31,5 @@ def mimic_stages(scenario, world, rngs, rlog) -> list[Stage]:
     stages: list[Stage] = []
     if cfg.perception == "oracle":
         stages.append(OracleStage(world, cfg.targets, cfg.oracle, rngs["oracle"]))
-    stages.append(MimicStage(world, cfg, rlog))
+    stages.append(MimicStage(world, cfg))
     return stages

@@ -17,6 +17,7 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
+from humimic.sensors.camera_model import R_MJCAM_CV
 from humimic.world.gaze import pan_tilt_to
 from humimic.world.names import ROBOT_JOINTS, ROBOT_PREFIX
 
@@ -74,5 +75,4 @@ def camera_frame_point(data: mujoco.MjData, cam_id: int, p_world: np.ndarray) ->
     """A world point in a MuJoCo camera's frame converted to OpenCV axes (x right, y down,
     z forward)."""
     R = data.cam_xmat[cam_id].reshape(3, 3)
-    p = R.T @ (p_world - data.cam_xpos[cam_id])
-    return np.array([p[0], -p[1], -p[2]])
+    return R_MJCAM_CV @ (R.T @ (p_world - data.cam_xpos[cam_id]))

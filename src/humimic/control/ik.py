@@ -19,6 +19,12 @@ with the tasks (``e_i`` task errors, ``c_i`` costs):
 * a posture task pulling every joint towards the rest pose (light on arms and head, heavier
   on the torso, stiff on legs and eyes - the eyes belong to gaze, the legs to nobody).
 
+How it is solved: ``mink.build_ik`` assembles the QP from the tasks, the damping and the
+collision limit (:class:`DisplacementCollisionLimit`); the joint and speed limits (mink's
+``ConfigurationLimit`` and ``VelocityLimit``) go to daqp as simple bounds on ``dq`` rather than
+as inequality rows, and collision rows out of range are dropped. That is the QP
+``mink.solve_ik(..., "daqp", limits=...)`` solves, 3-4x faster (the test compares the two).
+
 The IK runs on the robot alone (``models/db_humanoid.xml``, compiled with the scene's eye
 spacing), whose world frame is the scene's (the robot is attached at the scene's origin), so
 its frames are the scene's robot frames. Its state is the kinematic reference the servos track.
@@ -82,6 +88,11 @@ def speed_limits(max_speed: float) -> dict[str, float]:
     return out
 
 
+#: The mink release whose ``CollisionAvoidanceLimit`` semantics :class:`DisplacementCollisionLimit`
+#: replaces (checked by a test: re-read its ``compute_qp_inequalities`` before upgrading).
+MINK_VERSION = "1.3"
+
+
 class DisplacementCollisionLimit(mink.CollisionAvoidanceLimit):
     """mink's arm-body distance limit as a velocity damper in displacement units.
 
@@ -93,11 +104,21 @@ class DisplacementCollisionLimit(mink.CollisionAvoidanceLimit):
 
     mink 1.3 bounds ``-n dq`` by ``gain (d - d_min) / dt`` (a velocity, ~360 times too loose
     at 420 Hz) and by 0 inside the margin, so a hand pulled into the chest slides in along
-    the surface a little each step (to linearisation error) and never comes back out."""
+    the surface a little each step (to linearisation error) and never comes back out.
+
+    Only mink's public interface is used (its pairs, distances and the public
+    ``compute_contact_normal_jacobian``); the broad phase is a bounding-sphere test
+    (``geom_rbound``), conservative, so the rows are those of testing every pair."""
 
     def __init__(self, *args, max_recovery: float = 0.002, **kwargs):
         super().__init__(*args, **kwargs)
         self.max_recovery = max_recovery
+        pairs = np.array(self.geom_id_pairs, dtype=int).reshape(-1, 2)
+        self._g1, self._g2 = pairs[:, 0], pairs[:, 1]
+        self._reach = self.model.geom_rbound[self._g1] + self.model.geom_rbound[self._g2] \
+            + self.collision_detection_distance
+        nv = self.model.nv
+        self._buf = (np.empty(6), np.empty(3), np.empty((3, nv)), np.empty((3, nv)))
 
     def compute_qp_inequalities(self, configuration, dt):
         model, data = self.model, configuration.data
@@ -105,38 +126,20 @@ class DisplacementCollisionLimit(mink.CollisionAvoidanceLimit):
         G = np.zeros((n, model.nv))
         h = np.full(n, np.inf)
         distmax = self.collision_detection_distance
-        if self.broadphase and n >= self.broadphase_min_pairs:
-            indices = self._broadphase_survivors(data)
-        else:
-            indices = range(n)
-        for idx in indices:
-            g1, g2 = self.geom_id_pairs[idx]
-            dist = mujoco.mj_geomDistance(model, data, g1, g2, distmax, self._fromto)
+        fromto, normal, jac1, jac2 = self._buf
+        gap = data.geom_xpos[self._g1] - data.geom_xpos[self._g2]
+        near = np.einsum("ij,ij->i", gap, gap) <= self._reach * self._reach
+        for idx in np.flatnonzero(near).tolist():
+            g1, g2 = int(self._g1[idx]), int(self._g2[idx])
+            dist = mujoco.mj_geomDistance(model, data, g1, g2, distmax, fromto)
             if abs(dist - distmax) < 1e-12:
                 continue
-            row = compute_contact_normal_jacobian(model, data, g1, g2, self._fromto,
-                                                  self._normal, self._jac1, self._jac2)
+            row = compute_contact_normal_jacobian(model, data, g1, g2, fromto, normal, jac1,
+                                                  jac2)
             G[idx] = -row if dist >= 0 else row
             h[idx] = max(self.gain * (dist - self.minimum_distance_from_collisions),
                          -self.max_recovery)
         return mink.limits.Constraint(G=G, h=h)
-
-
-def qp_objective(configuration: mink.Configuration, tasks, damping: float
-                 ) -> tuple[np.ndarray, np.ndarray]:
-    """``(H, c)`` of ``1/2 dq^T H dq + c^T dq``: the sum of the tasks' weighted least squares
-    ``||W_i (J_i dq + alpha_i e_i)||^2 / 2`` plus Levenberg-Marquardt damping, as mink builds
-    it."""
-    W, e, mu = [], [], 0.0
-    for task in tasks:
-        WJ, We, m = task.compute_qp_residual(configuration)
-        W.append(WJ)
-        e.append(We)
-        mu += m
-    W = np.vstack(W)
-    H = W.T @ W
-    H.flat[:: H.shape[0] + 1] += damping + mu
-    return H, -(np.concatenate(e) @ W)
 
 
 def box_bounds(q: np.ndarray, lower: np.ndarray, upper: np.ndarray, gain: float,
@@ -215,16 +218,15 @@ class MimicIK:
     def solve(self) -> np.ndarray:
         """Joint velocity of the IK step at the current configuration (zero if the QP fails).
 
-        The same QP as ``mink.solve_ik(configuration, tasks, dt, "daqp", damping, limits)``
-        with the joint and speed limits passed to daqp as simple bounds and the collision rows
-        that are out of range dropped (3-4x faster; the test compares the two)."""
+        The QP of ``mink.solve_ik(configuration, tasks, dt, "daqp", damping, limits)``, built
+        by ``mink.build_ik``, with the joint and speed limits passed to daqp as simple bounds
+        and the collision rows that are out of range dropped (see the module docstring)."""
         cfg = self.configuration
-        H, c = qp_objective(cfg, self.tasks, self.damping)
+        qp = mink.build_ik(cfg, self.tasks, self.dt, self.damping, [self.collision_limit])
         lb, ub = box_bounds(cfg.q, self._lower, self._upper, self._gain, self._vmax, self.dt)
-        G, h = self.collision_limit.compute_qp_inequalities(cfg, self.dt)
-        keep = np.isfinite(h)
-        G, h = (G[keep], h[keep]) if keep.any() else (self._empty_G, h[:0])
-        dq = solve_qp(H, c, lb, ub, G, h)
+        keep = np.isfinite(qp.h)
+        G, h = (qp.G[keep], qp.h[keep]) if keep.any() else (self._empty_G, qp.h[:0])
+        dq = solve_qp(qp.P, qp.q, lb, ub, G, h)
         if dq is None:
             self.failures += 1
             return np.zeros(self.model.nv)

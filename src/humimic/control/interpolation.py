@@ -17,8 +17,9 @@ The reference is the latest filtered estimate ``(p, v, a)`` of photon time ``t_i
 
 * ``hold`` (the paper): as received;
 * ``extrapolate``: predicted to the current time ``t`` with the random-jerk model's state
-  transition, Ude eq. (15), ``x(t) = A(t, t_i) x(t_i)`` - this cancels the vision latency and the
-  hold between frames.
+  transition, Ude eq. (15), ``x(t) = A(t, t_i) x(t_i)``
+  (:func:`humimic.maths.kinematics.ca_predict`) - this cancels the vision latency and the hold
+  between frames.
 
 An estimate older than ``max_age`` is treated as lost: the reference stops where it was last
 seen (position only), so a stale velocity is never extrapolated far.
@@ -28,6 +29,8 @@ from __future__ import annotations
 
 import numpy as np
 from scipy.linalg import expm
+
+from humimic.maths.kinematics import ca_predict
 
 
 def pd_gains(omega: float, zeta: float) -> tuple[float, float]:
@@ -63,22 +66,16 @@ def pd_step(p: np.ndarray, v: np.ndarray, p_ref: np.ndarray, v_ref: np.ndarray,
     return f00 * p + f01 * v + g0 * u, f10 * p + f11 * v + g1 * u, a
 
 
-def transition(p: np.ndarray, v: np.ndarray, a: np.ndarray,
-               dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Ude eq. (15): the random-jerk state ``(p, v, a)`` propagated by ``dt`` (no noise)."""
-    return p + v * dt + 0.5 * a * dt * dt, v + a * dt, a
-
-
 def reference(p: np.ndarray, v: np.ndarray, a: np.ndarray, age: float, mode: str,
               max_age: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The PD's reference from an estimate ``age`` seconds old (see the module docstring)."""
     if age > max_age:
         zero = np.zeros(3)
         if mode == "extrapolate":
-            p, _, _ = transition(p, v, a, max_age)
+            p, _, _ = ca_predict(p, v, a, max_age)
         return p, zero, zero
     if mode == "extrapolate":
-        return transition(p, v, a, age)
+        return ca_predict(p, v, a, age)
     return p, v, a
 
 

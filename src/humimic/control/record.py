@@ -64,8 +64,8 @@ class MimicRecord:
         self.ik_s = np.zeros(n)
         self.estimates: dict[str, Arrivals] = defaultdict(Arrivals)
         self.measurements: dict[str, Arrivals] = defaultdict(Arrivals)
-        self.first_use: dict[str, list[tuple[float, float]]] = defaultdict(list)
-        """Per target: (t_ready, servo time of first use) of each estimate."""
+        self.first_use: dict[str, list[tuple[float, float, float]]] = defaultdict(list)
+        """Per target: (photon time, t_ready, servo time of first use) of each estimate."""
 
     def trimmed(self, name: str) -> np.ndarray:
         """The first ``n`` rows of an array attribute."""

@@ -84,9 +84,9 @@ class MimicStage(Stage):
 
     name = "mimic"
 
-    def __init__(self, world, cfg, rlog=None):
+    def __init__(self, world, cfg):
         sc, scene = world.scenario, world.scene
-        self.world, self.cfg, self.rlog, self.scene = world, cfg, rlog, scene
+        self.world, self.cfg, self.scene = world, cfg, scene
         base_rate = sc.timing.servo_rate
         rate = cfg.servo_rate or base_rate
         self.every = int(round(base_rate / rate))
@@ -238,7 +238,7 @@ class MimicStage(Stage):
             rec.active[k, i] = True
             if ch.last_used is not est:
                 ch.last_used = est
-                rec.first_use[ch.target].append((t_ready, t))
+                rec.first_use[ch.target].append((t_est, t_ready, t))
         rec.p_cmd[k] = p_base
         return p_base
 
@@ -302,7 +302,12 @@ class MimicStage(Stage):
 
         return mimic_metrics(self)
 
+    def log(self, rlog) -> None:
+        from humimic.viz.mimicry import log_mimicry
+
+        log_mimicry(self, rlog)
+
     def plots(self, out_dir) -> list:
-        from humimic.metrics.mimicry_report import mimic_plots
+        from humimic.viz.mimicry import mimic_plots
 
         return mimic_plots(self, out_dir)

@@ -38,7 +38,10 @@ H = np.hstack([_I3, np.zeros((3, 6))])
 
 
 def transition(dt: float) -> np.ndarray:
-    """State transition ``A(t + dt, t)`` (9x9).  # Ude eq. 15"""
+    """State transition ``A(t + dt, t)`` (9x9).  # Ude eq. 15
+
+    The matrix form of :func:`humimic.maths.kinematics.ca_predict` (``A x`` is its
+    prediction; tested): the filter needs the matrix to propagate the covariance."""
     A = np.eye(DIM)
     A[0:3, 3:6] = dt * _I3
     A[0:3, 6:9] = 0.5 * dt * dt * _I3
@@ -118,40 +121,37 @@ def initial_state(
     return x, P
 
 
-def nees(x_est: np.ndarray, P: np.ndarray, x_true: np.ndarray) -> np.ndarray:
-    """Normalised estimation error squared ``e^T P^-1 e`` (broadcasts over leading dims).
-
-    For a consistent filter it is chi-square distributed with ``x.shape[-1]`` degrees of freedom.
-    Pass sub-vectors/sub-blocks (e.g. ``x[..., :3]``, ``P[..., :3, :3]``) for the position NEES.
-    """
-    e = np.asarray(x_true, dtype=float) - np.asarray(x_est, dtype=float)
-    sol = np.linalg.solve(np.asarray(P, dtype=float), e[..., None])[..., 0]
-    return np.einsum("...i,...i->...", e, sol)
-
-
 class RandomJerkFilter:
     """One target's random-jerk Kalman filter with timestamps (s) and prediction-only gaps.
 
     ``step(t, z, R)`` advances to time ``t`` and, if ``z`` is given, fuses it; the first measurement
     initialises the state (Ude: position and its covariance from the measurement, ``v = a = 0``
     with :data:`INIT_VEL_VAR`, :data:`INIT_ACC_VAR`). ``z=None`` is a missed frame (prediction
-    only). Times must not go backwards.
+    only); a missed frame more than ``max_gap`` seconds after the last measurement resets the
+    filter instead (counted in :attr:`resets`), to be re-initialised by the next measurement:
+    extrapolating a hand for seconds is no estimate. Times must not go backwards.
     """
 
     def __init__(
-        self, b: float = B_PAPER_SI, vel_var: float = INIT_VEL_VAR, acc_var: float = INIT_ACC_VAR
+        self, b: float = B_PAPER_SI, vel_var: float = INIT_VEL_VAR, acc_var: float = INIT_ACC_VAR,
+        max_gap: float = np.inf,
     ) -> None:
         if not (b > 0.0 and np.isfinite(b)):
             raise ValueError(f"spectral amplitude b must be positive and finite, got {b!r}")
         self.b = float(b)
         self.vel_var = float(vel_var)
         self.acc_var = float(acc_var)
+        self.max_gap = float(max_gap)
+        self.resets = 0
+        """Resets after a gap longer than ``max_gap``."""
         self.reset()
 
     def reset(self) -> None:
         self._x: np.ndarray | None = None
         self._P: np.ndarray | None = None
         self._t: float | None = None
+        self._t_meas = -np.inf
+        self._t_init = np.inf
 
     @property
     def initialised(self) -> bool:
@@ -161,6 +161,11 @@ class RandomJerkFilter:
     def t(self) -> float | None:
         """Time (s) the current state refers to, or None before the first measurement."""
         return self._t
+
+    @property
+    def since_init(self) -> float:
+        """Seconds from the (re)initialisation to the current time (inf before it)."""
+        return np.inf if self._t is None else self._t - self._t_init
 
     @property
     def x(self) -> np.ndarray:
@@ -207,11 +212,14 @@ class RandomJerkFilter:
             R = np.asarray(R, dtype=float).reshape(3, 3)
             if not (np.isfinite(z).all() and np.isfinite(R).all()):
                 raise ValueError("measurement z and covariance R must be finite")
+        if z is None and self._x is not None and t - self._t_meas > self.max_gap:
+            self.reset()
+            self.resets += 1
         if self._x is None:
             if z is None:
                 return None
             self._x, self._P = initial_state(z, R, self.vel_var, self.acc_var)
-            self._t = float(t)
+            self._t = self._t_init = self._t_meas = float(t)
             return self._x.copy()
         dt = self._check_time(t)
         if dt > 0.0:
@@ -219,6 +227,7 @@ class RandomJerkFilter:
         self._t = float(t)
         if z is not None:
             self._x, self._P = update(self._x, self._P, z, R)
+            self._t_meas = self._t
         return self._x.copy()
 
     def predict_at(self, t: float) -> tuple[np.ndarray, np.ndarray]:

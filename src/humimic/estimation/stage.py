@@ -26,10 +26,7 @@ import numpy as np
 from humimic.estimation.random_jerk import RandomJerkFilter
 from humimic.messages import Estimates, TargetEstimate
 from humimic.pipeline.stage import Stage
-from humimic.viz.rerun_log import BASE, EVENTS
-
-TARGET_COLORS = {"head": (255, 210, 0), "right_hand": (230, 40, 40),
-                 "left_hand": (40, 200, 60)}
+from humimic.viz.rerun_log import BASE, EVENTS, OTHER_COLOR, TARGET_COLORS
 
 
 @dataclass
@@ -74,11 +71,9 @@ class FilterStage(Stage):
         """Ground truth, only to draw the true positions beside the estimates in rerun."""
         self._gt_p = ({n: gt.p_base(n) for n in self.targets}
                       if gt is not None and rlog is not None and rlog.enabled else {})
-        self.filters = {t: RandomJerkFilter(cfg.b, cfg.init_vel_std**2, cfg.init_acc_std**2)
-                        for t in self.targets}
+        self.filters = {t: RandomJerkFilter(cfg.b, cfg.init_vel_std**2, cfg.init_acc_std**2,
+                                            cfg.max_gap) for t in self.targets}
         self._t_meas = dict.fromkeys(self.targets, -np.inf)
-        self._t_init = dict.fromkeys(self.targets, np.inf)
-        self.resets = dict.fromkeys(self.targets, 0)
         self.coasted = dict.fromkeys(self.targets, 0)
         self.longest_coast = dict.fromkeys(self.targets, 0.0)
         self.nonfinite = 0
@@ -105,28 +100,25 @@ class FilterStage(Stage):
         for i, name in enumerate(self.targets):
             kf = self.filters[name]
             m = meas.targets.get(name)
-            if m is None and kf.initialised and t - self._t_meas[name] > self.cfg.max_gap:
-                kf.reset()
-                self.resets[name] += 1
-                if self.rlog is not None:
-                    self.rlog.log_text(t, f"{EVENTS}/filter/{name}",
-                                       f"no measurement for {self.cfg.max_gap:g} s: reset",
-                                       "WARN")
+            resets = kf.resets
             if m is not None:
-                if not kf.initialised:
-                    self._t_init[name] = t
                 kf.step(t, m.p_base, m.R_base)
-                self._t_meas[name] = t
                 measured[i] = True
-            elif kf.initialised:
+                self._t_meas[name] = t
+            else:
                 kf.step(t)
-                self.coasted[name] += 1
-                self.longest_coast[name] = max(self.longest_coast[name], t - self._t_meas[name])
+                if kf.initialised:  # a prediction, not a reset
+                    self.coasted[name] += 1
+                    self.longest_coast[name] = max(self.longest_coast[name],
+                                                   t - self._t_meas[name])
+            if kf.resets != resets and self.rlog is not None:
+                self.rlog.log_text(t, f"{EVENTS}/filter/{name}",
+                                   f"no measurement for {self.cfg.max_gap:g} s: reset", "WARN")
             if kf.initialised:
                 x, Pi = kf.x, kf.P
                 if not (np.all(np.isfinite(x)) and np.all(np.isfinite(Pi))):
                     self.nonfinite += 1
-                valid[i], X[i], P[i], since[i] = True, x, Pi, t - self._t_init[name]
+                valid[i], X[i], P[i], since[i] = True, x, Pi, kf.since_init
                 out[name] = TargetEstimate(name, x[0:3], x[3:6], x[6:9], Pi)
         self.record.rows.append((t, valid, measured, X, P, since))
         return Estimates(out)
@@ -135,7 +127,7 @@ class FilterStage(Stage):
         names = list(est.targets)
         if not names:
             return
-        colors = [TARGET_COLORS.get(n, (200, 200, 200)) for n in names]
+        colors = [TARGET_COLORS.get(n, OTHER_COLOR) for n in names]
         self.rlog.log_ellipsoids_3d(
             t, f"{BASE}/tracking/estimates", np.array([est.targets[n].p_base for n in names]),
             np.array([est.targets[n].P[:3, :3] for n in names]), colors=colors, labels=names)
@@ -148,7 +140,8 @@ class FilterStage(Stage):
     def metrics(self) -> dict:
         return {"filter": {"kind": self.cfg.kind, "b": self.cfg.b,
                            "b_paper_mm_units": self.cfg.b * 1e3, "max_gap_s": self.cfg.max_gap,
-                           "resets": dict(self.resets), "coasted_frames": dict(self.coasted),
+                           "resets": {n: kf.resets for n, kf in self.filters.items()},
+                           "coasted_frames": dict(self.coasted),
                            "longest_coast_s": dict(self.longest_coast),
                            "nonfinite_estimates": self.nonfinite,
                            "latency_ms": 1e3 * self.cfg.latency}}

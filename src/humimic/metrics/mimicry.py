@@ -1,11 +1,12 @@
-"""Scores of mimicry against ground truth (pure functions on arrays; SI units).
+"""Scores of mimicry against ground truth (pure functions on arrays; SI units). RMSE is
+:func:`humimic.maths.stats.rmse`.
 
-* :func:`rmse` - root mean square of the Euclidean error.
 * :func:`xcorr_lag` - the delay of a signal behind a reference at the peak of their
   cross-correlation (summed over axes), refined by a parabola through the peak.
 * :func:`rms_jerk` - RMS of the third time derivative, estimated with a Savitzky-Golay filter
   (a local polynomial fit; plain third differences would amplify noise by ``1/dt^3``).
-* :func:`error_terms` - the telescoping decomposition of the total error into stage terms.
+* :func:`error_terms` - the total error split into stage terms that add up to it (vectors);
+* :func:`mse_shares` - each term's share of the total's mean square (shares add up to 1).
 * :func:`head_motion` - how far the eyes' base moved and turned.
 * :func:`image_offsets` - where a target appears relative to an image's centre.
 """
@@ -14,16 +15,6 @@ from __future__ import annotations
 
 import numpy as np
 from scipy.signal import correlate, savgol_filter
-
-
-def rmse(a: np.ndarray, b: np.ndarray) -> float:
-    """RMS of ``|a - b|`` over rows (``(N, 3)`` or ``(N,)``); NaN rows are skipped."""
-    e = np.asarray(a, float) - np.asarray(b, float)
-    e = e.reshape(len(e), -1)
-    ok = np.all(np.isfinite(e), axis=1)
-    if not np.any(ok):
-        return float("nan")
-    return float(np.sqrt(np.mean(np.sum(e[ok] ** 2, axis=1))))
 
 
 def xcorr_lag(reference: np.ndarray, signal: np.ndarray, dt: float,
@@ -90,7 +81,9 @@ def error_terms(true_now: np.ndarray, true_photon: np.ndarray, est: np.ndarray,
         ik            = ik - cmd                the IK's residual (limits, collisions, head task)
         servo         = robot - ik              joint servo tracking
 
-    ``total`` is ``robot - true_now``.
+    ``total`` is ``robot - true_now``. The terms add up to it at every instant, as vectors;
+    their RMS values do not add up (terms partly cancel, e.g. the PD's lag against the
+    latency): see :func:`mse_shares` for a split that does.
     """
     return {
         "estimate": est - true_photon,
@@ -101,6 +94,21 @@ def error_terms(true_now: np.ndarray, true_photon: np.ndarray, est: np.ndarray,
         "servo": robot - ik,
         "total": robot - true_now,
     }
+
+
+def mse_shares(terms: dict[str, np.ndarray]) -> dict[str, float]:
+    """Each term's share of the total's mean square, ``mean(term . total) / mean(|total|^2)``
+    (over rows where every term is finite). Because the terms add up to the total, the shares
+    add up to 1 exactly; a negative share is a term that cancels others. NaN when the total is
+    zero or there are no rows."""
+    total = np.asarray(terms["total"], float)
+    ok = np.all(np.isfinite(total), axis=1)
+    for name in TERMS:
+        ok &= np.all(np.isfinite(terms[name]), axis=1)
+    ms = float(np.sum(total[ok] ** 2))
+    if not ok.any() or ms == 0.0:
+        return dict.fromkeys(TERMS, float("nan"))
+    return {name: float(np.sum(terms[name][ok] * total[ok])) / ms for name in TERMS}
 
 
 def rotation_angle(R: np.ndarray) -> np.ndarray:

@@ -1,19 +1,28 @@
-"""The mimic stage's ``metrics.json`` sections, plots and rerun series, from its record and the
-ground truth.
+"""The mimic stage's ``metrics.json`` sections, from its record and the ground truth.
 
 ``mimicry.<robot_site>``: ``rmse_mm`` between the site's displacement and the human part's true
-displacement after the mapping, ``lag_ms`` (cross-correlation peak), ``jerk`` (RMS third
-derivative, m/s^3; ``jerk_human`` for the mapped truth), ``joint_limit_hits`` (servo ticks at which
-an arm or torso joint target sits on the IK's limit band; ``joint_limit_hits_by_joint`` counts
-them per joint), ``clamped_fraction``,
-``error_budget_mm`` (see :func:`humimic.metrics.mimicry.error_terms`; ``perception`` and
-``filtering`` are the raw measurement's and the estimate's errors at their photon times),
-``interpolation`` (hold vs extrapolate commands against the truth), ``scale`` (in use at the end;
-``scale_initial`` at the start: the mapped truth is scaled by the scale in use at each tick),
-``strained_fraction`` (servo ticks at which the fit found the arm strained, see
-:mod:`humimic.control.mapping`).
-``mimicry.head_still``,
-``mimicry.gaze``, ``mimicry.ik`` and ``latency_ms`` complete it.
+displacement after the mapping, ``lag_ms`` (cross-correlation peak: a lag, not a delay),
+``jerk`` (RMS third derivative, m/s^3; ``jerk_human`` for the mapped truth), ``joint_limit_hits``
+(servo ticks at which an arm or torso joint target sits on the IK's limit band;
+``joint_limit_hits_by_joint`` counts them per joint), ``clamped_fraction``;
+
+* ``error_budget_mm``: the RMS of each stage term of :func:`~humimic.metrics.mimicry.error_terms`
+  (``estimate``, ``latency``, ``interpolation``, ``workspace``, ``ik``, ``servo``) and of their
+  sum, ``total`` (= ``rmse_mm``). The terms add up to the total as vectors, at every instant;
+  their RMS values do not (they partly cancel). ``error_budget_share``: each term's share of
+  the total's mean square (:func:`~humimic.metrics.mimicry.mse_shares`; adds up to 1);
+* ``measurements_rmse_mm`` / ``estimates_rmse_mm``: separate RMS errors, not budget terms, of
+  the raw 3-D measurements (tracked perception only; None with the oracle, which measures
+  nothing) and of the estimates that arrived, each against the truth at its photon time;
+* ``interpolation``: hold vs extrapolate commands against the truth;
+* ``scale``: the mapping's scale in use at the end (``scale_initial`` at the start; the mapped
+  truth is scaled by the scale in use at each tick), ``strained_fraction``: servo ticks at
+  which the fit found the arm strained (:mod:`humimic.control.mapping`).
+
+``mimicry.head_still``, ``mimicry.gaze`` and ``mimicry.ik`` complete it; ``latency_ms`` holds
+true delays in simulated time (photon to the first servo tick that used a frame) and
+``lag_ms`` the cross-correlation lags behind the truth (:func:`latency_metrics`,
+:func:`lag_metrics`).
 """
 
 from __future__ import annotations
@@ -23,17 +32,20 @@ from functools import partial
 import numpy as np
 
 from humimic.control.ik import on_limit_band
+from humimic.maths.stats import finite_or_none as _num
+from humimic.maths.stats import rmse
+from humimic.metrics import mm as _mm
 from humimic.metrics.mimicry import (
     TERMS,
     error_terms,
     head_motion,
     image_offsets,
+    mse_shares,
     rms_jerk,
-    rmse,
     summary_stats,
     xcorr_lag,
 )
-from humimic.sensors.camera_model import Intrinsics
+from humimic.sensors.camera_model import R_MJCAM_CV, Intrinsics
 from humimic.world.names import ROBOT_JOINTS, TORSO_JOINTS
 
 #: Joints whose limits matter for a site (its arm and the torso).
@@ -43,20 +55,6 @@ ARM_JOINTS = {
 }
 #: Fewest servo ticks of mimicry worth scoring.
 MIN_TICKS = 30
-
-
-def _num(x: float | None) -> float | None:
-    """A JSON-safe float (NaN and inf become None)."""
-    return None if x is None or not np.isfinite(x) else float(x)
-
-
-def _mm(x: float | None) -> float | None:
-    x = _num(x)
-    return None if x is None else 1e3 * x
-
-
-def _rms(x: np.ndarray) -> float:
-    return rmse(x, np.zeros_like(x))
 
 
 def _idx(times: np.ndarray, rate: float, n: int) -> np.ndarray:
@@ -84,7 +82,7 @@ def _never_started(stage, ch) -> dict:
             "lag_ms": None, "held_pose": True, "robot_max_displacement_mm": 1e3 * moved}
 
 
-def _site_series(stage, i: int, ch):
+def site_series(stage, i: int, ch):
     """Aligned displacement series of site ``i`` from the tick after it started: the robot at
     ``t[k]`` with the command, IK and estimate computed for ``t[k-1] + dt = t[k]``."""
     rec, world = stage.rec, stage.world
@@ -138,8 +136,7 @@ def _event_error(arrivals, P: np.ndarray, M: np.ndarray, scale_at, rate: float,
     keep = t >= t_start - 1e-9
     if not np.any(keep):
         return None
-    s = scale_at(t[keep])
-    return _mm(rmse(s * (p[keep] @ M.T), s * (P[_idx(t[keep], rate, len(P))] @ M.T)))
+    return _mm(rmse(scale_at(t[keep]) * ((p[keep] - P[_idx(t[keep], rate, len(P))]) @ M.T)))
 
 
 def _limit_hits(stage, site: str, k0: int) -> tuple[int, dict[str, int]]:
@@ -159,7 +156,7 @@ def site_metrics(stage, i: int, ch) -> tuple[dict, dict]:
     if not ch.started:
         return {}, _never_started(stage, ch)
     rec, world, cfg = stage.rec, stage.world, stage.cfg
-    k0, s = _site_series(stage, i, ch)
+    k0, s = site_series(stage, i, ch)
     if len(s["t"]) < MIN_TICKS:
         return {}, {"status": "too_short", "target": ch.target, "rmse_mm": None,
                     "lag_ms": None, "reason": f"mimicry ran {len(s['t'])} servo ticks; scores "
@@ -170,19 +167,12 @@ def site_metrics(stage, i: int, ch) -> tuple[dict, dict]:
     rate = world.scenario.timing.physics_rate
     P = world.gt.p_base(ch.target)
     scale_at = partial(_scale_at, stage, i, ch)
-    budget = {"perception": _event_error(rec.measurements.get(ch.target), P, ch.M, scale_at,
-                                         rate, ch.t0),
-              "filtering": _event_error(rec.estimates.get(ch.target), P, ch.M, scale_at, rate,
-                                        ch.t0)}
-    if budget["perception"] is None and cfg.perception == "oracle":
-        budget["perception"] = budget["filtering"]  # the oracle's noise is its perception
-    for name in (*TERMS, "total"):
-        budget[name] = _mm(_rms(terms[name]))
+    budget = {name: _mm(rmse(terms[name])) for name in (*TERMS, "total")}
     primary, other = cfg.interpolation.mode, ("extrapolate" if cfg.interpolation.mode == "hold"
                                               else "hold")
     interp = {}
     for mode, key in ((primary, "cmd"), (other, "cmd_alt")):
-        interp[mode] = {"rmse_mm": _mm(rmse(s[key], s["true_now"])),
+        interp[mode] = {"rmse_mm": _mm(rmse(s[key] - s["true_now"])),
                         "lag_ms": _mm(xcorr_lag(s["true_now"], s[key], dt))}
     n_active = rec.n - k0
     hits, hits_by_joint = _limit_hits(stage, ch.site, k0)
@@ -207,6 +197,11 @@ def site_metrics(stage, i: int, ch) -> tuple[dict, dict]:
         "started_s": float(rec.t[k0]),
         "ticks": int(n_active),
         "error_budget_mm": budget,
+        "error_budget_share": {k: _num(v) for k, v in mse_shares(terms).items()},
+        "measurements_rmse_mm": _event_error(rec.measurements.get(ch.target), P, ch.M,
+                                             scale_at, rate, ch.t0),
+        "estimates_rmse_mm": _event_error(rec.estimates.get(ch.target), P, ch.M, scale_at,
+                                          rate, ch.t0),
         "interpolation": interp,
     }
 
@@ -233,7 +228,7 @@ def gaze_metrics(stage) -> dict | None:
         cid = scene.camera(f"{eye}_{cfg.camera}")
         intr = Intrinsics.from_fovy(np.radians(m.cam_fovy[cid]), w, h)
         R = rec.cam_mat[k0:n, e].reshape(-1, 3, 3)
-        p_cam = np.einsum("nji,nj->ni", R, p - rec.cam_pos[k0:n, e]) * np.array([1, -1, -1])
+        p_cam = np.einsum("nji,nj->ni", R, p - rec.cam_pos[k0:n, e]) @ R_MJCAM_CV.T
         off = image_offsets(p_cam, intr.fx, intr.fy, w, h)
         out[f"{eye}_offset_frac"] = summary_stats(off)
         worst = np.maximum(worst, off)
@@ -243,29 +238,46 @@ def gaze_metrics(stage) -> dict | None:
     return out
 
 
-def latency_metrics(stage, sites: dict, lags: dict) -> dict:
-    """Photon-to-stage latencies (ms): message ages for perception and the estimates, the wait
-    for the next servo tick, and cross-correlation lags behind the truth of the command, the IK
-    and the robot (``end_to_end``), averaged over the driven sites."""
+def latency_metrics(stage) -> dict:
+    """True delays (ms of simulated time), means over the values that arrived:
+
+    * ``perception``: photon time -> measurement ready (tracked perception only);
+    * ``filter``: measurement ready -> estimate ready (tracked perception only);
+    * ``estimate``: photon time -> estimate ready (the oracle: its frame's ready time plus
+      its declared latency);
+    * ``servo_pickup``: estimate ready -> the first servo tick whose command used it;
+    * ``end_to_end``: photon time -> that servo tick, where the joint targets that used the
+      frame are written (``end_to_end_max``: the longest). The stages add up to it.
+    """
     rec = stage.rec
-    meas = [np.array(a.t_ready) - np.array(a.t) for a in rec.measurements.values() if a.t]
-    est = [np.array(a.t_ready) - np.array(a.t) for a in rec.estimates.values() if a.t]
-    use = [np.array([u - r for r, u in v]) for v in rec.first_use.values() if v]
 
-    def mean_ms(chunks):
-        return _mm(float(np.mean(np.concatenate(chunks)))) if chunks else None
+    def ages(arrivals) -> list[np.ndarray]:
+        return [np.array(a.t_ready) - np.array(a.t) for a in arrivals.values() if a.t]
 
+    def ms(chunks, fn=np.mean) -> float | None:
+        return _mm(float(fn(np.concatenate(chunks)))) if chunks else None
+
+    use = [np.array(v) for v in rec.first_use.values() if v]  # (photon, ready, servo tick)
+    perception, estimate = ms(ages(rec.measurements)), ms(ages(rec.estimates))
+    return {"perception": perception,
+            "filter": None if perception is None or estimate is None else estimate - perception,
+            "estimate": estimate, "servo_pickup": ms([u[:, 2] - u[:, 1] for u in use]),
+            "end_to_end": ms([u[:, 2] - u[:, 0] for u in use]),
+            "end_to_end_max": ms([u[:, 2] - u[:, 0] for u in use], np.max)}
+
+
+def lag_metrics(sites: dict, lags: dict) -> dict:
+    """Cross-correlation lags (ms) behind the mapped truth, means over the driven sites: of the
+    commands (``interpolation``), of the IK's solution (``ik``) and of the robot
+    (``end_to_end``). Lags, not delays: the hold PD lags by about half a frame more than the
+    latency, extrapolation cancels the latency (a lag near 0 or negative)."""
     def mean_of(values):
         values = [v for v in values if v is not None]
         return float(np.mean(values)) if values else None
 
-    out = {"perception": mean_ms(meas), "estimate": mean_ms(est), "servo_pickup": mean_ms(use)}
-    out["filter"] = (out["estimate"] - out["perception"]
-                     if out["estimate"] is not None and out["perception"] is not None else None)
-    out["interpolation"] = mean_of([v.get("interpolation") for v in lags.values()])
-    out["ik"] = mean_of([v.get("ik") for v in lags.values()])
-    out["end_to_end"] = mean_of([v.get("lag_ms") for v in sites.values()])
-    return out
+    return {"interpolation": mean_of([v.get("interpolation") for v in lags.values()]),
+            "ik": mean_of([v.get("ik") for v in lags.values()]),
+            "end_to_end": mean_of([v.get("lag_ms") for v in sites.values()])}
 
 
 def mimic_metrics(stage) -> dict:
@@ -274,7 +286,7 @@ def mimic_metrics(stage) -> dict:
     sites, lags = {}, {}
     for i, ch in enumerate(stage.channels):
         lags[ch.site], sites[ch.site] = site_metrics(stage, i, ch)
-    latency = latency_metrics(stage, sites, lags)
+    latency, lag = latency_metrics(stage), lag_metrics(sites, lags)
     p_head, R_head = rec.p_head[:n], rec.R_head[:n].reshape(-1, 3, 3)
     dp, dr = head_motion(p_head, R_head)
     rng = stage.scene.robot_range
@@ -297,65 +309,4 @@ def mimic_metrics(stage) -> dict:
     gaze = gaze_metrics(stage)
     if gaze is not None:
         out["gaze"] = gaze
-    log_rerun(stage)
-    return {"mimicry": out, "latency_ms": latency}
-
-
-def mimic_plots(stage, out_dir) -> list:
-    from humimic.viz.plots import plot_stacked_bar, plot_trajectories
-
-    paths, budgets, names = [], {}, []
-    for i, ch in enumerate(stage.channels):
-        if not ch.started:
-            continue
-        _, s = _site_series(stage, i, ch)
-        if len(s["t"]) < MIN_TICKS:
-            continue
-        paths.append(plot_trajectories(
-            f"{out_dir}/mimic_{ch.site}.png", s["t"],
-            {f"{ch.target} true (mapped)": s["true_now"], f"{ch.target} estimate": s["est"],
-             f"{ch.site} commanded": s["cmd"], f"{ch.site} robot": s["robot"]},
-            title=f"{ch.target} -> {ch.site}: displacement, robot base frame", ylabel="m"))
-        terms = error_terms(s["true_now"], s["true_photon"], s["est"], s["cmd_raw"], s["cmd"],
-                            s["ik"], s["robot"])
-        total = 1e3 * _rms(terms["total"])
-        names.append(f"{ch.site}\n(total {total:.3g} mm)")
-        for term in TERMS:
-            budgets.setdefault(term, []).append(1e3 * _rms(terms[term]))
-    if names:
-        paths.append(plot_stacked_bar(
-            f"{out_dir}/mimic_error_budget.png", names, budgets,
-            title="Error budget: RMS of each stage's term\n(terms add as vectors: the stack "
-                  "bounds the total from above)",
-            ylabel="mm"))
-    return paths
-
-
-def log_rerun(stage) -> None:
-    """Joint targets vs actual, commanded vs reached sites and the gaze, as rerun series."""
-    rlog = stage.rlog
-    if rlog is None or not getattr(rlog, "enabled", False):
-        return
-    rec = stage.rec
-    n = rec.n
-    t = rec.t[:n]
-    for j, name in enumerate(ROBOT_JOINTS):
-        rlog.log_series(f"series/mimic/joints/{name}", t,
-                        np.stack([rec.q_ik[:n, j], rec.q_robot[:n, j]], axis=1),
-                        names=["target", "actual"])
-    for i, site in enumerate(stage.sites):
-        for a, axis in enumerate("xyz"):
-            rlog.log_series(f"series/mimic/{site}/{axis}", t,
-                            np.stack([rec.p_cmd[:n, i, a], rec.p_ik[:n, i, a],
-                                      rec.p_robot[:n, i, a]], axis=1),
-                            names=["commanded", "IK", "robot"])
-    step = max(1, int(round(1.0 / (30.0 * rec.dt))))
-    for k in range(0, n, step):
-        cmd = stage.to_world(rec.p_cmd[k])
-        rlog.log_points(t[k], "world/mimic/commanded", cmd, colors=[255, 160, 0], radii=0.015)
-        rlog.log_points(t[k], "world/mimic/reached", stage.to_world(rec.p_robot[k]),
-                        colors=[0, 200, 255], radii=0.012)
-        if stage.gaze is not None:
-            axes = rec.cam_mat[k].reshape(2, 3, 3)[:, :, 2] * -1.5  # camera -z, 1.5 m
-            rlog.log_arrow(t[k], "world/mimic/gaze", rec.cam_pos[k], axes,
-                           colors=[[255, 0, 255], [255, 0, 255]])
+    return {"mimicry": out, "latency_ms": latency, "lag_ms": lag}

@@ -7,6 +7,8 @@ from pathlib import Path
 from rich.console import Console
 from rich.table import Table
 
+from humimic.metrics.flatten import flatten_metrics
+
 
 def _fmt(value) -> str:
     if isinstance(value, float):
@@ -22,14 +24,9 @@ def summary_rows(metrics: dict) -> list[tuple[str, str]]:
                                             "realtime_factor", "interrupted") if k in metrics]
     for name, st in metrics.get("stages", {}).items():
         rows.append((f"stages.{name}", f"{st['mean_ms']:.3f} ms x {st['calls']}"))
-    for section in ("tracking", "mimicry", "latency_ms"):
-        for target, scores in metrics.get(section, {}).items():
-            if isinstance(scores, dict):
-                for key, value in scores.items():
-                    if not isinstance(value, (dict, list)):
-                        rows.append((f"{section}.{target}.{key}", _fmt(value)))
-            else:
-                rows.append((f"{section}.{target}", _fmt(scores)))
+    for section in ("tracking", "mimicry", "latency_ms", "lag_ms"):
+        flat = flatten_metrics({section: metrics.get(section, {})}, max_depth=3, lists=False)
+        rows.extend((key, _fmt(value)) for key, value in flat.items())
     if metrics.get("mujoco_warnings"):
         rows.append(("mujoco_warnings", _fmt(metrics["mujoco_warnings"])))
     return rows

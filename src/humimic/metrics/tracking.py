@@ -15,48 +15,60 @@ Undefined scores (no measurement, no estimate) are ``None`` (JSON null), never N
 * ``pixel_rmse``: blob centre vs the projected true position, both eyes pooled, over the frames
   the blob carried the target's name with a sure identity (px);
 * ``raw_rmse_mm``, ``raw_bias_mm`` and ``raw_std_mm`` (per axis x, y, z: mean and standard
-  deviation of the error; for a static target the std is that of the measurements), and
-  ``raw_nees`` (mean of e^T R^-1 e, 3 when R is right);
-* ``filtered_rmse_mm``, ``filtered_bias_mm``, ``filtered_std_mm``, ``filtered_nees``,
-  ``vel_rmse_mm_s``, ``vel_bias_mm_s``, ``vel_std_mm_s``, ``acc_rmse_mm_s2``,
-  ``acc_bias_mm_s2``, ``acc_std_mm_s2``: the filter's estimates at the frames it fused a
-  measurement, at least ``filter_settle_s`` after its (re)initialisation (its start-up
-  transient, when v and a start from 0 with huge variances, is left out);
+  deviation of the error; for a static target the std is that of the measurements);
+  ``raw_bias_share``: the bias's share of the mean square error (``|mean|^2 / RMSE^2``) and
+  ``biased``: true when it exceeds :data:`BIAS_SHARE` (e.g. the head: stereo sees its front
+  surface, the truth is its centre);
+* NEES (normalised estimation error squared, ``e^T P^-1 e``: the squared error in units of
+  the covariance the stage reported; chi-square with as many degrees of freedom as the key says
+  when the covariance is right): ``raw_nees_pos3`` (measurement vs its R, 3 dof; mean over
+  frames), ``raw_nees_pos3_in_band`` (fraction of frames inside the two-sided 95 % chi-square
+  band), ``raw_nees_pos3_debiased_in_band`` (the same with the mean error removed: whether R
+  describes the noise, bias aside);
+* ``filtered_rmse_mm``, ``filtered_bias_mm``, ``filtered_std_mm``, ``vel_rmse_mm_s``,
+  ``vel_bias_mm_s``, ``vel_std_mm_s``, ``acc_rmse_mm_s2``, ``acc_bias_mm_s2``,
+  ``acc_std_mm_s2``, ``filtered_nees_pos3`` / ``filtered_nees_pos3_in_band`` (position
+  block of P) and ``filtered_nees_pva9`` / ``filtered_nees_pva9_in_band`` (the whole state):
+  the filter's estimates at the frames it fused a measurement, at least ``filter_settle_s``
+  after its (re)initialisation (its start-up transient, when v and a start from 0 with huge
+  variances, is left out);
 * ``predicted_frames``, ``predicted_rmse_mm``: the estimates published for frames without a
   measurement (prediction only, up to the filter's ``max_gap``).
 """
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
+from humimic.maths.stats import finite_or_none, fraction_in_band, nees, rmse
+from humimic.metrics import mm
 from humimic.perception.blobs.record import STATE_CODE
 
 MM = 1e3
-#: Start-up transient of the filter excluded from its scores (s).
+#: Start-up transient of the filter excluded from its scores (s); the report page uses it too.
 FILTER_SETTLE_S = 0.5
-
-
-def num(x) -> float | None:
-    """A finite float, or None."""
-    if x is None:
-        return None
-    x = float(x)
-    return x if math.isfinite(x) else None
+#: A target is ``biased`` when its mean error makes up more than this share of its mean square
+#: error (the bias outweighs the noise).
+BIAS_SHARE = 0.5
 
 
 def nums(a) -> list[float | None]:
-    return [num(v) for v in np.asarray(a, float).ravel()]
+    return [finite_or_none(v) for v in np.asarray(a, float).ravel()]
 
 
-def rmse(err: np.ndarray) -> float | None:
-    """Root mean squared norm of error vectors ``(N, d)`` (None for N = 0)."""
-    err = np.asarray(err, float)
-    if len(err) == 0:
-        return None
-    return num(np.sqrt(np.mean(np.sum(err * err, axis=-1))))
+def nees_scores(prefix: str, err: np.ndarray, cov: np.ndarray, debiased: bool = False
+                ) -> dict:
+    """``<prefix>`` (mean NEES) and ``<prefix>_in_band`` (fraction of samples inside the 95 %
+    chi-square band, dof = ``err.shape[1]``); with ``debiased`` also ``<prefix>_debiased_in_band``
+    (the mean error removed first). None when there are no samples."""
+    dof = err.shape[1]
+    values = nees(err, cov) if len(err) else np.zeros(0)
+    out = {prefix: finite_or_none(np.nanmean(values)) if len(values) else None,
+           f"{prefix}_in_band": finite_or_none(fraction_in_band(values, dof))}
+    if debiased:
+        d = nees(err - err.mean(axis=0), cov) if len(err) else np.zeros(0)
+        out[f"{prefix}_debiased_in_band"] = finite_or_none(fraction_in_band(d, dof))
+    return out
 
 
 def axis_stats(err: np.ndarray, scale: float = 1.0) -> tuple[list, list]:
@@ -65,14 +77,6 @@ def axis_stats(err: np.ndarray, scale: float = 1.0) -> tuple[list, list]:
     if len(err) == 0:
         return [None] * err.shape[-1], [None] * err.shape[-1]
     return nums(scale * err.mean(axis=0)), nums(scale * err.std(axis=0))
-
-
-def mean_nees(err: np.ndarray, cov: np.ndarray) -> float | None:
-    """Mean of ``e^T C^-1 e`` over samples (None if none)."""
-    if len(err) == 0:
-        return None
-    sol = np.linalg.solve(cov, err[..., None])[..., 0]
-    return num(np.mean(np.einsum("ni,ni->n", err, sol)))
 
 
 def detection_stats(t: np.ndarray, ok: np.ndarray, state: np.ndarray) -> dict:
@@ -86,7 +90,7 @@ def detection_stats(t: np.ndarray, ok: np.ndarray, state: np.ndarray) -> dict:
         "measured_frames": int(ok.sum()),
         "detection_rate": 0.0 if first is None else float(ok[first:].mean()),
         "detection_rate_all": float(ok.mean()) if n else 0.0,
-        "time_to_first_detection_s": None if first is None else num(t[first] - t[0]),
+        "time_to_first_detection_s": None if first is None else finite_or_none(t[first] - t[0]),
         "losses": int(np.sum((prev == tracking) & (cur == lost))),
         "reacquisitions": int(np.sum((prev == lost) & (cur == tracking))),
     }
@@ -110,10 +114,12 @@ def raw_scores(pa, i: int, p_true: np.ndarray) -> dict:
     err = pa.p_base[ok, i] - p_true[ok]
     bias, std = axis_stats(err, MM)
     r = rmse(err)
-    px = rmse(pixel_errors(pa, i, p_true))
-    return {"raw_rmse_mm": None if r is None else r * MM, "raw_bias_mm": bias,
-            "raw_std_mm": std, "raw_nees": mean_nees(err, pa.R_base[ok, i]),
-            "pixel_rmse": px}
+    share = finite_or_none(np.sum(err.mean(axis=0) ** 2) / r**2) if len(err) and r > 0 \
+        else None
+    return {"raw_rmse_mm": mm(r), "raw_bias_mm": bias, "raw_std_mm": std,
+            "raw_bias_share": share, "biased": share is not None and share > BIAS_SHARE,
+            **nees_scores("raw_nees_pos3", err, pa.R_base[ok, i], debiased=True),
+            "pixel_rmse": finite_or_none(rmse(pixel_errors(pa, i, p_true)))}
 
 
 def filtered_scores(fa, j: int, p_true, v_true, a_true, settle_s: float = FILTER_SETTLE_S
@@ -122,20 +128,20 @@ def filtered_scores(fa, j: int, p_true, v_true, a_true, settle_s: float = FILTER
     use = fa.valid[:, j] & fa.measured[:, j] & (fa.since_init[:, j] >= settle_s)
     x = fa.x[use, j]
     pred = fa.valid[:, j] & ~fa.measured[:, j]
-    r = rmse(fa.x[pred, j, 0:3] - p_true[pred])
     out: dict = {"filter_settle_s": settle_s, "estimated_frames": int(fa.valid[:, j].sum()),
                  "scored_estimates": int(use.sum()), "predicted_frames": int(pred.sum()),
-                 "predicted_rmse_mm": None if r is None else r * MM}
+                 "predicted_rmse_mm": mm(rmse(fa.x[pred, j, 0:3] - p_true[pred]))}
     for key, sl, truth, unit in (("filtered", slice(0, 3), p_true, ""),
                                  ("vel", slice(3, 6), v_true, "_s"),
                                  ("acc", slice(6, 9), a_true, "_s2")):
         err = x[:, sl] - truth[use]
         bias, std = axis_stats(err, MM)
-        r = rmse(err)
-        out[f"{key}_rmse_mm{unit}"] = None if r is None else r * MM
+        out[f"{key}_rmse_mm{unit}"] = mm(rmse(err))
         out[f"{key}_bias_mm{unit}"] = bias
         out[f"{key}_std_mm{unit}"] = std
-    out["filtered_nees"] = mean_nees(x[:, 0:3] - p_true[use], fa.P[use, j, 0:3, 0:3])
+    err = x - np.concatenate([p_true[use], v_true[use], a_true[use]], axis=1)
+    out.update(nees_scores("filtered_nees_pos3", err[:, 0:3], fa.P[use, j, 0:3, 0:3]))
+    out.update(nees_scores("filtered_nees_pva9", err, fa.P[use, j]))
     return out
 
 

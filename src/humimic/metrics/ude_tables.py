@@ -21,7 +21,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from humimic.estimation.random_jerk import RandomJerkFilter
-from humimic.perception.blobs.stereo import StereoRig, following_covariance
+from humimic.metrics.tracking import FILTER_SETTLE_S
+from humimic.perception.blobs.stereo import (
+    StereoRig,
+    epipolar_direction,
+    following_covariance,
+)
 from humimic.sensors.camera_model import invert_transform
 
 MM = 1e3
@@ -69,28 +74,20 @@ def _used(pa, target: str, skip_s: float) -> tuple[int, np.ndarray]:
     return i, np.flatnonzero(ok & (pa.t >= t0 + skip_s))
 
 
-def _epipolar_direction(cam_left, cam_right, p_base: np.ndarray) -> np.ndarray:
-    """Raw-pixel direction in the right image of moving ``p_base`` along the left eye's ray."""
-    ray = p_base - cam_left.T_base_cam[:3, 3]
-    ray = ray / np.linalg.norm(ray)
-    t = cam_right.project_base(p_base + 0.01 * ray) - cam_right.project_base(p_base)
-    return t / np.linalg.norm(t)
-
-
 def _to_camera(pa, frames: np.ndarray):
     """Rotation base -> left camera (OpenCV axes) at the first used frame, and its origin."""
     T = invert_transform(pa.T_base_cam[frames[0], 0])
     return T[:3, :3], T[:3, 3]
 
 
-def table2(pa, target: str, skip_s: float = 0.5, frame: str = "camera") -> Table2:
+def table2(pa, target: str, skip_s: float = FILTER_SETTLE_S, frame: str = "camera") -> Table2:
     """Table 2 from a static target's measurements (``skip_s`` after its first one)."""
     i, frames = _used(pa, target, skip_s)
     uv = pa.uv_match[frames, i].reshape(-1, 4)
     C4 = np.cov(uv.T)
     Cl, Cr = C4[:2, :2], C4[2:, 2:]
     cams = [(pa.camera(f, 0), pa.camera(f, 1)) for f in frames]
-    t_dir = np.array([_epipolar_direction(cl, cr, p)
+    t_dir = np.array([epipolar_direction(cl, cr, p)
                       for (cl, cr), p in zip(cams, pa.p_base[frames, i], strict=True)])
     match_std = float(np.std(np.einsum("ni,ni->n", uv[:, 2:] - uv[:, :2], t_dir)))
     R_f, R_i = [], []
@@ -114,26 +111,18 @@ def refilter(t: np.ndarray, ok: np.ndarray, z: np.ndarray, R: np.ndarray, b: flo
     Returns the states ``(F, 9)`` (NaN before the first measurement or after a reset) and the
     seconds since (re)initialisation ``(F,)``.
     """
-    kf = RandomJerkFilter(b)
+    kf = RandomJerkFilter(b, max_gap=max_gap)
     x = np.full((len(t), 9), np.nan)
     since = np.full(len(t), np.inf)
-    t_meas = t_init = -np.inf
     for k in range(len(t)):
-        if not ok[k] and kf.initialised and t[k] - t_meas > max_gap:
-            kf.reset()
-        if ok[k]:
-            if not kf.initialised:
-                t_init = t[k]
-            kf.step(t[k], z[k], R[k])
-            t_meas = t[k]
-        elif kf.initialised:
-            kf.step(t[k])
+        kf.step(t[k], z[k] if ok[k] else None, R[k] if ok[k] else None)
         if kf.initialised:
-            x[k], since[k] = kf.x, t[k] - t_init
+            x[k], since[k] = kf.x, kf.since_init
     return x, since
 
 
-def table3(pa, target: str, x_filtered: np.ndarray, since: np.ndarray, skip_s: float = 0.5,
+def table3(pa, target: str, x_filtered: np.ndarray, since: np.ndarray,
+           skip_s: float = FILTER_SETTLE_S,
            frame: str = "camera") -> dict[str, np.ndarray]:
     """Table 3's rows (mm, mm/s, mm/s^2 per axis) from raw measurements and filter states
     ``(F, 9)`` aligned with the perception frames; frames ``skip_s`` after the filter started."""
@@ -149,6 +138,21 @@ def table3(pa, target: str, x_filtered: np.ndarray, since: np.ndarray, skip_s: f
         out[f"{key}_mean"] = MM * v.mean(axis=0)
         out[f"{key}_std"] = MM * v.std(axis=0)
     return out
+
+
+def filter_white_noise(raw_std_mm, b: float, rate: float = 60.0, n: int = 3000,
+                       seed: int = 0, skip_s: float = 1.0) -> dict[str, np.ndarray]:
+    """Table 3's filter rows for a still target measured with white noise of standard
+    deviation ``raw_std_mm`` (mm per axis; R the same): the filter (amplitude ``b``, m s^-2.5)
+    run at ``rate`` Hz for ``n`` frames; spreads (mm, mm/s, mm/s^2) after ``skip_s``. This is
+    how the paper's Table 3 pins down its effective b: its filtered/raw ratio and its v and a
+    spreads follow from b and the raw spread alone."""
+    sigma = 1e-3 * np.asarray(raw_std_mm, float)
+    z = np.random.default_rng(seed).normal(size=(n, 3)) * sigma
+    kf, R = RandomJerkFilter(b), np.diag(sigma**2)
+    x = np.array([kf.step(k / rate, z[k], R) for k in range(n)])[int(skip_s * rate):]
+    return {"filtered_std": MM * x[:, 0:3].std(axis=0), "vel_std": MM * x[:, 3:6].std(axis=0),
+            "acc_std": MM * x[:, 6:9].std(axis=0)}
 
 
 def fig1_rmse(x: np.ndarray, valid: np.ndarray, p: np.ndarray, v: np.ndarray, a: np.ndarray

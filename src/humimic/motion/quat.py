@@ -1,18 +1,28 @@
-"""Vectorised rotation helpers in MuJoCo's conventions.
+"""Rotation helpers in MuJoCo's conventions, on scipy's :class:`Rotation`.
 
 Quaternions are ``[w, x, y, z]`` (scalar first, as MuJoCo's ``qpos`` of a ball joint), unit,
 Hamilton product. Every function broadcasts over leading dimensions: ``q`` is ``(..., 4)``, a
 rotation matrix ``(..., 3, 3)``, a vector ``(..., 3)``. ``R @ v`` maps child to parent
-coordinates, like MuJoCo's ``xmat``.
+coordinates, like MuJoCo's ``xmat``. Conversions are scipy's (``scalar_first=True``); what
+scipy does not offer stays here: the product of non-unit quaternions (:func:`mul`, for
+quaternion derivatives), the swing between two vectors, a frame from two axes and sign
+continuity along a trajectory.
 """
 
 from __future__ import annotations
 
 import numpy as np
+from scipy.spatial.transform import Rotation
+
+
+def _rot(q: np.ndarray) -> tuple[Rotation, tuple[int, ...]]:
+    q = np.array(q, float)  # scipy needs a writable array
+    return Rotation.from_quat(q.reshape(-1, 4), scalar_first=True), q.shape[:-1]
 
 
 def mul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Hamilton product ``a ⊗ b``."""
+    """Hamilton product ``a ⊗ b`` of any quaternions (also derivatives, which are not
+    rotations: scipy's ``Rotation`` would normalise them)."""
     aw, ax, ay, az = np.moveaxis(np.asarray(a, float), -1, 0)
     bw, bx, by, bz = np.moveaxis(np.asarray(b, float), -1, 0)
     return np.stack(
@@ -40,107 +50,60 @@ def normalize(v: np.ndarray, eps: float = 1e-12) -> np.ndarray:
 
 
 def to_matrix(q: np.ndarray) -> np.ndarray:
-    """Rotation matrix of a unit quaternion."""
-    w, x, y, z = np.moveaxis(normalize(q), -1, 0)
-    return np.stack(
-        [
-            np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
-            np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
-            np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1),
-        ],
-        axis=-2,
-    )
+    """Rotation matrix of a quaternion (normalised first)."""
+    r, shape = _rot(q)
+    return r.as_matrix().reshape(shape + (3, 3))
 
 
 def from_matrix(R: np.ndarray) -> np.ndarray:
-    """Unit quaternion (``w >= 0``) of a rotation matrix (Shepperd's method, batch-safe)."""
-    R = np.asarray(R, float)
-    m00, m11, m22 = R[..., 0, 0], R[..., 1, 1], R[..., 2, 2]
-    # Four candidate solutions; pick per element the one with the largest pivot.
-    cand = np.stack(
-        [
-            np.stack([1 + m00 + m11 + m22, R[..., 2, 1] - R[..., 1, 2],
-                      R[..., 0, 2] - R[..., 2, 0], R[..., 1, 0] - R[..., 0, 1]], -1),
-            np.stack([R[..., 2, 1] - R[..., 1, 2], 1 + m00 - m11 - m22,
-                      R[..., 0, 1] + R[..., 1, 0], R[..., 0, 2] + R[..., 2, 0]], -1),
-            np.stack([R[..., 0, 2] - R[..., 2, 0], R[..., 0, 1] + R[..., 1, 0],
-                      1 - m00 + m11 - m22, R[..., 1, 2] + R[..., 2, 1]], -1),
-            np.stack([R[..., 1, 0] - R[..., 0, 1], R[..., 0, 2] + R[..., 2, 0],
-                      R[..., 1, 2] + R[..., 2, 1], 1 - m00 - m11 + m22], -1),
-        ],
-        axis=-2,
-    )  # (..., 4 candidates, 4)
-    pivots = np.stack([1 + m00 + m11 + m22, 1 + m00 - m11 - m22,
-                       1 - m00 + m11 - m22, 1 - m00 - m11 + m22], -1)
-    best = np.argmax(pivots, axis=-1)
-    q = np.take_along_axis(cand, best[..., None, None], axis=-2)[..., 0, :]
-    q = normalize(q)
-    return np.where(q[..., :1] < 0, -q, q)
+    """Unit quaternion (``w >= 0``) of a rotation matrix."""
+    R = np.array(R, float)
+    q = Rotation.from_matrix(R.reshape(-1, 3, 3)).as_quat(canonical=True, scalar_first=True)
+    return q.reshape(R.shape[:-2] + (4,))
+
+
+def from_rotvec(r: np.ndarray) -> np.ndarray:
+    """Quaternion of a rotation vector (axis * angle, rad)."""
+    r = np.array(r, float)  # scipy needs a writable array
+    return Rotation.from_rotvec(r.reshape(-1, 3)).as_quat(scalar_first=True).reshape(
+        r.shape[:-1] + (4,))
+
+
+def to_rotvec(q: np.ndarray) -> np.ndarray:
+    """Rotation vector (axis * angle, angle in [0, pi]) of a quaternion."""
+    r, shape = _rot(q)
+    return r.as_rotvec().reshape(shape + (3,))
 
 
 def from_axis_angle(axis: np.ndarray, angle: np.ndarray) -> np.ndarray:
     """Quaternion of a rotation by ``angle`` (rad) about the unit ``axis``."""
-    angle = np.asarray(angle, float)[..., None]
-    axis = normalize(axis)
-    return np.concatenate([np.cos(angle / 2), np.sin(angle / 2) * axis], axis=-1)
-
-
-def from_rotvec(r: np.ndarray) -> np.ndarray:
-    """Quaternion of a rotation vector (axis * angle, rad); smooth through zero."""
-    r = np.asarray(r, float)
-    th = np.linalg.norm(r, axis=-1, keepdims=True)
-    # sin(th/2)/th, with its Taylor series near zero.
-    k = np.where(th > 1e-8, np.sin(th / 2) / np.where(th > 1e-8, th, 1.0), 0.5 - th**2 / 48)
-    return np.concatenate([np.cos(th / 2), k * r], axis=-1)
-
-
-def to_rotvec(q: np.ndarray) -> np.ndarray:
-    """Rotation vector (axis * angle, angle in [0, pi]) of a unit quaternion."""
-    q = normalize(q)
-    q = np.where(q[..., :1] < 0, -q, q)
-    s = np.linalg.norm(q[..., 1:], axis=-1, keepdims=True)
-    th = 2 * np.arctan2(s, q[..., :1])
-    k = np.where(s > 1e-12, th / np.where(s > 1e-12, s, 1.0), 2.0)
-    return k * q[..., 1:]
+    return from_rotvec(normalize(axis) * np.asarray(angle, float)[..., None])
 
 
 def angle(q: np.ndarray) -> np.ndarray:
-    """Rotation angle in [0, pi] of a unit quaternion (what MuJoCo's ball-joint range limits)."""
-    q = normalize(q)
-    return 2 * np.arctan2(np.linalg.norm(q[..., 1:], axis=-1), np.abs(q[..., 0]))
-
-
-def rotate(q: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """``R(q) v``."""
-    return np.einsum("...ij,...j->...i", to_matrix(q), v)
+    """Rotation angle in [0, pi] of a quaternion (what MuJoCo's ball-joint range limits)."""
+    r, shape = _rot(q)
+    return r.magnitude().reshape(shape)
 
 
 def rot_x(a: np.ndarray) -> np.ndarray:
     """Rotation matrices about x by angles ``a`` (rad)."""
-    return _elementary(a, 0)
+    return _elementary(a, "x")
 
 
 def rot_y(a: np.ndarray) -> np.ndarray:
     """Rotation matrices about y by angles ``a`` (rad)."""
-    return _elementary(a, 1)
+    return _elementary(a, "y")
 
 
 def rot_z(a: np.ndarray) -> np.ndarray:
     """Rotation matrices about z by angles ``a`` (rad)."""
-    return _elementary(a, 2)
+    return _elementary(a, "z")
 
 
-def _elementary(a: np.ndarray, axis: int) -> np.ndarray:
-    a = np.asarray(a, float)
-    c, s = np.cos(a), np.sin(a)
-    R = np.zeros(a.shape + (3, 3))
-    i, j = (axis + 1) % 3, (axis + 2) % 3  # cyclic: x->(y,z), y->(z,x), z->(x,y)
-    R[..., axis, axis] = 1.0
-    R[..., i, i] = c
-    R[..., j, j] = c
-    R[..., i, j] = -s
-    R[..., j, i] = s
-    return R
+def _elementary(a: np.ndarray, axis: str) -> np.ndarray:
+    a = np.array(a, float)
+    return Rotation.from_euler(axis, a.reshape(-1, 1)).as_matrix().reshape(a.shape + (3, 3))
 
 
 def swing(a: np.ndarray, b: np.ndarray) -> np.ndarray:

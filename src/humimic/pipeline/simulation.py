@@ -10,7 +10,8 @@ Per physics tick ``k`` (time ``t = k / physics_rate``):
    controller (``world.base``) towards its target;
 5. log poses to rerun at ``output.pose_rate``; ``mj_step2`` integrates to ``t + dt``.
 
-A Ctrl-C stops the loop cleanly: the caller still gets the metrics so far.
+A Ctrl-C stops the loop cleanly: the caller still gets the metrics so far. Every stage's
+:meth:`~humimic.pipeline.stage.Stage.finish` runs when the loop ends.
 """
 
 from __future__ import annotations
@@ -78,7 +79,9 @@ def simulate(world, stages: list[Stage], rlog, bus: Bus | None = None,
     frames = head_frames = 0
     tick = 0
     interrupted = False
-    bar = tqdm(total=round(scenario.duration, 3), unit="sim s", disable=not progress,
+    # disable=None: tqdm draws only when stderr is a terminal (a log file gets no bar)
+    bar = tqdm(total=round(scenario.duration, 3), unit="sim s",
+               disable=None if progress else True,
                bar_format="{l_bar}{bar}| {n:.2f}/{total:.2f} sim s [{elapsed}<{remaining}]")
     update_every = max(1, int(phys_rate // 10))
     wall0 = time.perf_counter()
@@ -140,6 +143,8 @@ def simulate(world, stages: list[Stage], rlog, bus: Bus | None = None,
     finally:
         bar.n = round(tick / phys_rate, 3)
         bar.close()
+    for stage in stages:
+        stage.finish()
     wall = time.perf_counter() - wall0
     n_done = (tick + servo_every - 1) // servo_every
     return SimResult(tick, tick / phys_rate, wall, interrupted, timer, frames,

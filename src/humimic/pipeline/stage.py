@@ -2,6 +2,11 @@
 
 A stage is built from its scenario section, subscribes to the topics it consumes, publishes
 what it produces, and reports its scores at the end. Stages never call each other.
+
+After the loop the runner calls, in this order and each with one job: :meth:`Stage.finish`
+(complete pending work), :meth:`Stage.metrics` (scores only, no side effects),
+:meth:`Stage.log` (end-of-run series to rerun), :meth:`Stage.archive` (data files, written
+whether or not plots are on) and, when plots are on, :meth:`Stage.plots` (PNG files only).
 """
 
 from __future__ import annotations
@@ -22,12 +27,26 @@ class Stage:
     def servo(self, t: float, bus) -> None:
         """Called at the servo rate (control stages)."""
 
+    def finish(self) -> None:
+        """Called once when the loop ends (also after Ctrl-C): complete pending work, e.g. a
+        frame still being processed in a worker."""
+
     def metrics(self) -> dict:
-        """Scores for ``metrics.json`` (merged at the top level), computed after the run."""
+        """Scores for ``metrics.json`` (merged at the top level), computed after the run.
+        No side effects: nothing logged, nothing written."""
         return {}
 
+    def log(self, rlog) -> None:
+        """Log end-of-run results (error series, commanded vs reached) to the recording
+        ``rlog`` (a :class:`~humimic.viz.rerun_log.RerunLog`, possibly disabled)."""
+
+    def archive(self, out_dir) -> list:
+        """Write the stage's data files into ``out_dir`` (always, plots or not); return their
+        paths."""
+        return []
+
     def plots(self, out_dir) -> list:
-        """Write PNG plots into ``out_dir``; return their paths."""
+        """Write PNG plots into ``out_dir`` (nothing else); return their paths."""
         return []
 
     def close(self) -> None:

@@ -1,9 +1,11 @@
-"""Compose a run's one-page report: a verdict table, tracking errors with the filter's ±2σ band,
-filter NEES with chi-square bounds, and the run's own plots (mimicry, error budget, ground
-truth), as ``report.png`` and ``report.html`` in the run directory.
+"""Compose a run's one-page report, ``report.png`` and ``report.html`` in the run directory:
+verdicts, each beside its stated threshold; per tracked target its filtered error with the
+filter's ±2σ band and its NEES against the chi-square band; then the run's own plots (mimicry,
+error budget, ground truth), each under a heading saying what it shows.
 
-Verdict thresholds are the accuracy goals of the issues (e.g. detection rate ≥ 0.98, filtered
-RMSE ≤ 25 mm, mimicry RMSE ≤ 25 mm and lag ≤ 50 ms): they are guides for a glance, not tests.
+Verdict thresholds (:data:`THRESHOLDS`) are the accuracy goals of the issues (e.g. detection
+rate ≥ 0.98, filtered RMSE ≤ 25 mm, mimicry RMSE ≤ 25 mm and lag ≤ 50 ms): guides for a
+glance, not tests. Figures are drawn on explicit Agg canvases (no pyplot, no global backend).
 """
 
 from __future__ import annotations
@@ -13,23 +15,43 @@ import json
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import matplotlib
+import matplotlib.image as mpimg
+import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+from scipy.ndimage import uniform_filter1d
 
-matplotlib.use("Agg")
-import matplotlib.image as mpimg  # noqa: E402
-import numpy as np  # noqa: E402
-from matplotlib.backends.backend_agg import FigureCanvasAgg  # noqa: E402
-from matplotlib.figure import Figure  # noqa: E402
-
-from humimic.errors import InputError  # noqa: E402
-from humimic.report.nees import chi2_bounds, moving_mean, nees  # noqa: E402
+from humimic.errors import InputError
+from humimic.maths.stats import chi2_band, nees
+from humimic.metrics.flatten import flatten_metrics
+from humimic.metrics.tracking import FILTER_SETTLE_S
 
 #: Frames averaged for the NEES window (0.5 s at 60 Hz).
 NEES_WINDOW = 30
-#: Seconds after a filter (re)start that are left out of the NEES plot (huge initial P).
-SETTLE_S = 0.5
-#: Embedded plots, in order, when the run wrote them.
-EMBED = ("mimic_*.png", "ground_truth.png")
+#: Position NEES: 3 degrees of freedom.
+NEES_DOF = 3
+#: What NEES is, in one line, on the page.
+NEES_LINE = ("NEES = eᵀP⁻¹e, the squared error measured in the filter's own covariance P: "
+             f"a consistent filter averages {NEES_DOF} for a position ({NEES_DOF} dof) and "
+             "stays inside the 95 % χ² band; above it the filter is over-confident, below it "
+             "too cautious.")
+#: (ok, warn, higher_is_better) per verdict: ok at or past the first value, warn up to the
+#: second, bad beyond.
+THRESHOLDS = {
+    "detection_rate": (0.98, 0.90, True),
+    "rmse_mm": (25.0, 50.0, False),
+    "nees_in_band": (0.80, 0.50, True),
+    "mimic_rmse_mm": (25.0, 50.0, False),
+    "lag_ms": (50.0, 100.0, False),
+    "latency_ms": (50.0, 100.0, False),
+}
+#: Run plots embedded in the page, in order: file pattern and its section heading.
+EMBED = (("mimic_error_budget.png", "Mimicry error budget: which stage the robot's error "
+                                    "comes from"),
+         ("mimic_*.png", "Mimicry of {name}: the robot site's displacement vs the person's "
+                         "(mapped), the estimate and the command"),
+         ("ground_truth.png", "Ground truth: the person's head and hands in the robot's base "
+                              "frame"))
 STATUS_COLOUR = {"ok": "#2e7d32", "warn": "#f9a825", "bad": "#c62828", "info": "#546e7a"}
 
 
@@ -42,6 +64,8 @@ class Verdict:
     label: str
     value: str
     status: str  # ok | warn | bad | info
+    threshold: str = ""
+    """The rule the status comes from, shown beside the value."""
 
 
 @dataclass
@@ -49,7 +73,8 @@ class Run:
     path: Path
     metrics: dict
     archive: object | None = None
-    images: list[Path] = field(default_factory=list)
+    images: list[tuple[Path, str]] = field(default_factory=list)
+    """Embedded plots and their section headings."""
 
 
 def load_run(run_dir: str | Path) -> Run:
@@ -70,61 +95,95 @@ def load_run(run_dir: str | Path) -> Run:
         from humimic.perception.blobs.archive import load_archive
 
         archive = load_archive(path / "tracking.npz")
-    images = []
-    for pattern in EMBED:
-        images.extend(sorted(p for p in path.glob(pattern) if p.name != "report.png"))
+    images, seen = [], set()
+    for pattern, heading in EMBED:
+        for p in sorted(path.glob(pattern)):
+            if p not in seen:
+                seen.add(p)
+                images.append((p, heading.format(name=p.stem.split("_", 1)[-1])))
     return Run(path, metrics, archive, images)
 
 
 # ---- verdicts ------------------------------------------------------------------------------
-def _grade(value: float | None, good: float, bad: float, higher_is_better: bool = False) -> str:
+def grade(kind: str, value: float | None) -> tuple[str, str]:
+    """``(status, rule)`` of ``value`` under :data:`THRESHOLDS` ``[kind]``."""
+    ok, warn, higher = THRESHOLDS[kind]
+    cmp = "≥" if higher else "≤"
+    rule = f"ok {cmp} {ok:g}, warn {cmp} {warn:g}"
     if value is None:
-        return "bad"
-    if higher_is_better:
-        return "ok" if value >= good else ("warn" if value >= bad else "bad")
-    return "ok" if value <= good else ("warn" if value <= bad else "bad")
+        return "bad", rule
+    if higher:
+        return ("ok" if value >= ok else "warn" if value >= warn else "bad"), rule
+    return ("ok" if value <= ok else "warn" if value <= warn else "bad"), rule
+
+
+def _worst(*statuses: str) -> str:
+    return max(statuses, key=["info", "ok", "warn", "bad"].index)
+
+
+def _tracking_verdicts(target: str, s: dict) -> list[Verdict]:
+    rate = s.get("detection_rate")
+    never = rate is None or s.get("time_to_first_detection_s") is None
+    out = [Verdict(f"{target}: detection rate", "never detected" if never else f"{rate:.3f}",
+                   *grade("detection_rate", None if never else rate))]
+    f, raw = s.get("filtered_rmse_mm"), s.get("raw_rmse_mm")
+    if f is None and raw is None:
+        return out
+    status, rule = grade("rmse_mm", f if f is not None else raw)
+    value = (f"filtered {f:.1f} mm" if f is not None else "no filter") + (
+        f", raw {raw:.1f} mm" if raw is not None else "")
+    if f is not None and raw is not None and f >= raw:
+        status, value = _worst(status, "warn"), value + ": the filter does not improve on raw"
+    out.append(Verdict(f"{target}: 3-D RMSE", value, status, rule))
+    if s.get("biased"):
+        bias = np.linalg.norm([b or 0.0 for b in s.get("raw_bias_mm") or [0.0]])
+        share = s.get("raw_bias_share") or 0.0
+        out.append(Verdict(
+            f"{target}: biased", f"mean error {bias:.1f} mm, {100 * share:.0f} % of the mean "
+            "square (stereo sees the surface, the truth is the part's centre)", "warn",
+            "bias share ≤ 50 %"))
+    band = s.get("filtered_nees_pos3_in_band")
+    if band is not None:
+        raw_d = s.get("raw_nees_pos3_debiased_in_band")
+        extra = f"; raw, bias removed: {100 * raw_d:.0f} %" if raw_d is not None else ""
+        out.append(Verdict(f"{target}: filter consistency",
+                           f"{100 * band:.0f} % of frames inside the 95 % χ² band of position "
+                           f"NEES (3 dof){extra}", *grade("nees_in_band", band)))
+    return out
 
 
 def verdicts(metrics: dict) -> list[Verdict]:
-    """What went well and what did not, from ``metrics.json``."""
+    """What went well and what did not, from ``metrics.json``, each with its rule."""
     out = [Verdict("run", f"{metrics.get('sim_time_s', 0):.2f} s simulated, "
                           f"{metrics.get('realtime_factor', 0):.2f}x real time",
-                   "bad" if metrics.get("interrupted") else "info")]
+                   "bad" if metrics.get("interrupted") else "info",
+                   "interrupted" if metrics.get("interrupted") else "")]
     warnings = metrics.get("mujoco_warnings") or {}
     out.append(Verdict("MuJoCo warnings", ", ".join(f"{k}: {v}" for k, v in warnings.items())
-                       or "none", "bad" if warnings else "ok"))
+                       or "none", "bad" if warnings else "ok", "none"))
     for target, s in (metrics.get("tracking") or {}).items():
-        rate = s.get("detection_rate")
-        out.append(Verdict(f"{target}: detection rate", "never detected" if rate is None or
-                           s.get("time_to_first_detection_s") is None else f"{rate:.3f}",
-                           _grade(rate, 0.98, 0.9, higher_is_better=True)))
-        f = s.get("filtered_rmse_mm")
-        if f is not None or s.get("raw_rmse_mm") is not None:
-            raw = s.get("raw_rmse_mm")
-            value = (f"filtered {f:.1f} mm" if f is not None else "no filter") + (
-                f", raw {raw:.1f} mm" if raw is not None else "")
-            out.append(Verdict(f"{target}: 3-D RMSE", value, _grade(f if f is not None
-                                                                    else raw, 25.0, 50.0)))
+        out.extend(_tracking_verdicts(target, s))
     for site, s in (metrics.get("mimicry") or {}).items():
         if not isinstance(s, dict) or "rmse_mm" not in s:
             continue
         if s.get("status", "ok") != "ok":
             out.append(Verdict(f"mimicry {site}", s.get("reason", s["status"]), "bad"))
             continue
+        (st_r, rule_r), (st_l, rule_l) = (grade("mimic_rmse_mm", s["rmse_mm"]),
+                                          grade("lag_ms", abs(s.get("lag_ms") or 0.0)))
         out.append(Verdict(f"mimicry {site}: RMSE / lag",
                            f"{s['rmse_mm']:.1f} mm / {s.get('lag_ms', float('nan')):.0f} ms",
-                           max((_grade(s["rmse_mm"], 25.0, 50.0),
-                                _grade(abs(s.get("lag_ms") or 0.0), 50.0, 100.0)),
-                               key=["ok", "warn", "bad"].index)))
+                           _worst(st_r, st_l), f"RMSE {rule_r}; |lag| {rule_l}"))
     joints = (metrics.get("mimicry") or {}).get("joints")
     if joints:
         bad = joints.get("limit_violations", 0) or not joints.get("finite", True)
         out.append(Verdict("robot joints", "NaN!" if not joints.get("finite", True) else
                            f"{joints.get('limit_violations', 0)} limit violations",
-                           "bad" if bad else "ok"))
+                           "bad" if bad else "ok", "none"))
     e2e = (metrics.get("latency_ms") or {}).get("end_to_end")
     if e2e is not None:
-        out.append(Verdict("end-to-end latency", f"{e2e:.0f} ms", _grade(e2e, 50.0, 100.0)))
+        out.append(Verdict("latency, photon to joint command", f"{e2e:.1f} ms",
+                           *grade("latency_ms", e2e)))
     return out
 
 
@@ -137,134 +196,138 @@ def _filtered_targets(archive) -> list[str]:
             if fa.valid[:, i].any() and t in archive.filter_truth]
 
 
+def window_mean(x: np.ndarray, n: int) -> np.ndarray:
+    """Trailing mean over ``n`` samples ignoring NaN (shorter at the start; NaN where a window
+    holds none): sums and counts by :func:`scipy.ndimage.uniform_filter1d`."""
+    x = np.asarray(x, float)
+    ok = np.isfinite(x)
+    origin = (n - 1) // 2  # the window ends at the sample: a trailing mean
+    s = uniform_filter1d(np.where(ok, x, 0.0), n, mode="constant", origin=origin)
+    c = uniform_filter1d(ok.astype(float), n, mode="constant", origin=origin)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(c > 0.5 / n, s / c, np.nan)
+
+
 def tracking_series(archive, target: str) -> dict[str, np.ndarray]:
-    """Times, per-axis filtered error (m), its 1σ (m) and the state NEES (9 dof) of a target."""
+    """Times, per-axis filtered error (m), its 1σ (m) and the position NEES (3 dof, NaN in the
+    first :data:`~humimic.metrics.tracking.FILTER_SETTLE_S` after a (re)start) of a target."""
     fa = archive.filter
     i = fa.targets.index(target)
-    p, v, a = archive.filter_truth[target]
+    p = archive.filter_truth[target][0]
     keep = fa.valid[:, i]
-    x, P = fa.x[keep, i], fa.P[keep, i]
-    truth = np.concatenate([p, v, a], axis=1)[keep]
-    err = x - truth
-    settled = fa.since_init[keep, i] >= SETTLE_S
+    err = fa.x[keep, i, :3] - p[keep]
+    P = fa.P[keep, i, :3, :3]
     values = nees(err, P)
-    values[~settled] = np.nan
-    sigma = np.sqrt(np.clip(np.diagonal(P[:, :3, :3], axis1=1, axis2=2), 0.0, None))
-    return {"t": fa.t[keep], "err": err[:, :3], "sigma": sigma, "nees": values}
+    values[fa.since_init[keep, i] < FILTER_SETTLE_S] = np.nan
+    sigma = np.sqrt(np.clip(np.diagonal(P, axis1=1, axis2=2), 0.0, None))
+    return {"t": fa.t[keep], "err": err, "sigma": sigma, "nees": values}
 
 
-def _plot_tracking(fig: Figure, gs_row, archive, target: str) -> float | None:
+def _plot_tracking(sub, archive, target: str) -> None:
     s = tracking_series(archive, target)
-    ax_e = fig.add_subplot(gs_row[0])
+    ax_e, ax_n = sub.subplots(1, 2)
     for k, (axis, colour) in enumerate(zip("xyz", ("#1f77b4", "#ff7f0e", "#2ca02c"),
                                            strict=True)):
         ax_e.fill_between(s["t"], -2e3 * s["sigma"][:, k], 2e3 * s["sigma"][:, k],
                           color=colour, alpha=0.15, linewidth=0)
         ax_e.plot(s["t"], 1e3 * s["err"][:, k], color=colour, linewidth=0.9,
-                  label=f"{axis} error")
-    ax_e.set_title(f"{target}: filtered error, base frame (band: filter ±2σ)", fontsize=9)
-    ax_e.set_xlabel("time (s)")
-    ax_e.set_ylabel("mm")
-    ax_e.legend(fontsize=7, ncols=3, loc="upper right")
+                  label=f"{axis} error (band: ±2σ)")
+    ax_e.set_title("filtered error, robot base frame", fontsize=9)
+    ax_e.set_xlabel("time [s]")
+    ax_e.set_ylabel("error [mm]")
+    ax_e.legend(fontsize=7, ncols=3, loc="upper center", bbox_to_anchor=(0.5, -0.22))
     ax_e.grid(alpha=0.3)
 
-    ax_n = fig.add_subplot(gs_row[1])
-    lo, hi = chi2_bounds(9, NEES_WINDOW)
-    ax_n.semilogy(s["t"], s["nees"], ".", markersize=2, color="#90a4ae", label="NEES per frame")
-    mean = moving_mean(s["nees"], NEES_WINDOW)
-    ax_n.semilogy(s["t"], mean, color="#37474f", linewidth=1.2,
-                  label=f"mean over {NEES_WINDOW} frames")
-    ax_n.axhline(9.0, color="#2e7d32", linewidth=0.8, linestyle="--", label="expected (9)")
-    ax_n.axhspan(lo, hi, color="#2e7d32", alpha=0.12, label="95 % χ² bounds")
-    ax_n.set_title(f"{target}: NEES of (p, v, a), 9 dof", fontsize=9)
-    ax_n.set_xlabel("time (s)")
-    ax_n.legend(fontsize=7, loc="upper right")
+    lo, hi = chi2_band(NEES_DOF)
+    lo_w, hi_w = chi2_band(NEES_DOF, NEES_WINDOW)
+    ax_n.semilogy(s["t"], s["nees"], ".", markersize=2, color="#90a4ae", label="per frame")
+    ax_n.semilogy(s["t"], window_mean(s["nees"], NEES_WINDOW), color="#37474f", linewidth=1.2,
+                  label=f"mean of {NEES_WINDOW} frames")
+    ax_n.axhspan(lo, hi, color="#2e7d32", alpha=0.08, label="95 % band, one frame")
+    ax_n.axhspan(lo_w, hi_w, color="#2e7d32", alpha=0.2, label=f"95 % band, {NEES_WINDOW} frames")
+    ax_n.axhline(NEES_DOF, color="#2e7d32", linewidth=0.8, linestyle="--",
+                 label=f"expected ({NEES_DOF})")
+    ax_n.set_title(f"position NEES ({NEES_DOF} dof)", fontsize=9)
+    ax_n.set_xlabel("time [s]")
+    ax_n.set_ylabel("NEES")
+    ax_n.legend(fontsize=7, ncols=3, loc="upper center", bbox_to_anchor=(0.5, -0.22))
     ax_n.grid(alpha=0.3, which="both")
-    ok = np.isfinite(mean)
-    return float(np.mean((mean[ok] >= lo) & (mean[ok] <= hi))) if ok.any() else None
+    sub.suptitle(f"Tracking {target}: filtered error and filter consistency", fontsize=11,
+                 x=0.01, ha="left", fontweight="bold")
 
 
 # ---- the page ------------------------------------------------------------------------------
+def _draw_verdicts(sub, run: Run, items: list[Verdict]) -> None:
+    ax = sub.subplots()
+    ax.axis("off")
+    m = run.metrics
+    sub.suptitle(f"humimic run: {m.get('scenario')}  (seed {m.get('seed')})", fontsize=13,
+                 x=0.01, ha="left", fontweight="bold")
+    n = len(items) + 1
+    for k, v in enumerate(items):
+        y = 1.0 - (k + 0.5) / n
+        ax.text(0.0, y, "●", color=STATUS_COLOUR[v.status], fontsize=12, va="center",
+                transform=ax.transAxes)
+        ax.text(0.025, y, v.label, fontsize=9, va="center", transform=ax.transAxes)
+        ax.text(0.27, y, v.value, fontsize=9, va="center", transform=ax.transAxes)
+        ax.text(1.0, y, v.threshold, fontsize=8, va="center", ha="right", color="#546e7a",
+                transform=ax.transAxes)
+    ax.text(0.0, 0.5 / n, NEES_LINE, fontsize=8, va="center", style="italic",
+            color="#37474f", transform=ax.transAxes, wrap=True)
+
+
 def write_report(run_dir: str | Path) -> tuple[Path, Path]:
     """Write ``report.png`` and ``report.html`` into ``run_dir``; return their paths."""
     run = load_run(run_dir)
     items = verdicts(run.metrics)
     targets = _filtered_targets(run.archive)
-    images = [mpimg.imread(p) for p in run.images]
-    width = 11.0
-    heights = [0.3 * len(items) + 0.5] + [3.0] * len(targets) + [
-        0.9 * width * im.shape[0] / im.shape[1] for im in images]
-    total = sum(heights) + 0.6 * len(heights)
-    fig = Figure(figsize=(width, total), dpi=90)
+    images = [mpimg.imread(p) for p, _ in run.images]
+    width = 12.0
+    heights = [0.27 * (len(items) + 1) + 0.6] + [3.4] * len(targets) + [
+        0.9 * width * im.shape[0] / im.shape[1] + 0.4 for im in images]
+    fig = Figure(figsize=(width, sum(heights)), dpi=90, layout="constrained")
     FigureCanvasAgg(fig)
-    gs = fig.add_gridspec(len(heights), 2, height_ratios=heights, hspace=0.6 * len(heights)
-                          / sum(heights), wspace=0.18, top=1.0 - 0.5 / total,
-                          bottom=0.2 / total, left=0.06, right=0.98)
-
-    head = fig.add_subplot(gs[0, :])
-    head.axis("off")
-    m = run.metrics
-    head.set_title(f"humimic run: {m.get('scenario')}  (seed {m.get('seed')})",
-                   loc="left", fontsize=13, fontweight="bold")
-    for k, v in enumerate(items):
-        y = 1.0 - (k + 0.5) / len(items)
-        head.text(0.0, y, "●", color=STATUS_COLOUR[v.status], fontsize=12, va="center",
-                  transform=head.transAxes)
-        head.text(0.03, y, v.label, fontsize=10, va="center", transform=head.transAxes)
-        head.text(0.40, y, v.value, fontsize=10, va="center", transform=head.transAxes)
-
-    consistency = {}
-    for row, target in enumerate(targets, start=1):
-        consistency[target] = _plot_tracking(fig, gs[row, :].subgridspec(1, 2, wspace=0.2),
-                                             run.archive, target)
-    for row, (path, im) in enumerate(zip(run.images, images, strict=True),
-                                     start=1 + len(targets)):
-        ax = fig.add_subplot(gs[row, :])
+    subs = fig.subfigures(len(heights), 1, height_ratios=heights)
+    subs = np.atleast_1d(subs)
+    _draw_verdicts(subs[0], run, items)
+    for sub, target in zip(subs[1:], targets, strict=False):
+        _plot_tracking(sub, run.archive, target)
+    for sub, (_, heading), im in zip(subs[1 + len(targets):], run.images, images, strict=True):
+        ax = sub.subplots()
         ax.imshow(im)
         ax.axis("off")
-        ax.set_title(path.name, fontsize=8, loc="left", color="#546e7a")
+        sub.suptitle(heading, fontsize=11, x=0.01, ha="left", fontweight="bold")
     png = run.path / "report.png"
     fig.savefig(png)
     html_path = run.path / "report.html"
-    html_path.write_text(_html(run, items, consistency))
+    html_path.write_text(_html(run, items))
     return png, html_path
 
 
-def _flatten(d: dict, prefix: str = "") -> list[tuple[str, str]]:
-    rows = []
-    for k, v in d.items():
-        key = f"{prefix}{k}"
-        if isinstance(v, dict):
-            rows.extend(_flatten(v, key + "."))
-        elif isinstance(v, float):
-            rows.append((key, f"{v:.4g}"))
-        else:
-            rows.append((key, str(v)))
-    return rows
+def _fmt(value) -> str:
+    return f"{value:.4g}" if isinstance(value, float) else str(value)
 
 
-def _html(run: Run, items: list[Verdict], consistency: dict[str, float | None]) -> str:
+def _html(run: Run, items: list[Verdict]) -> str:
     m = run.metrics
     verdict_rows = "".join(
         f"<tr><td style='color:{STATUS_COLOUR[v.status]}'>●</td><td>{html.escape(v.label)}"
-        f"</td><td>{html.escape(v.value)}</td></tr>" for v in items)
-    nees_rows = "".join(
-        f"<li>{html.escape(t)}: {'-' if f is None else f'{100 * f:.0f} %'} of "
-        f"{NEES_WINDOW}-frame windows inside the 95 % χ² bounds</li>"
-        for t, f in consistency.items())
-    metric_rows = "".join(f"<tr><td>{html.escape(k)}</td><td>{html.escape(v)}</td></tr>"
-                          for k, v in _flatten(m) if not k.startswith("stages."))
+        f"</td><td>{html.escape(v.value)}</td><td style='color:#546e7a'>"
+        f"{html.escape(v.threshold)}</td></tr>" for v in items)
+    metric_rows = "".join(
+        f"<tr><td>{html.escape(k)}</td><td>{html.escape(_fmt(v))}</td></tr>"
+        for k, v in flatten_metrics({k: v for k, v in m.items() if k != "stages"}).items())
     stage_rows = "".join(
         f"<tr><td>{html.escape(k)}</td><td>{v['mean_ms']:.3f} ms x {v['calls']}</td></tr>"
         for k, v in (m.get("stages") or {}).items())
     return f"""<!doctype html>
 <html><head><meta charset="utf-8"><title>humimic: {html.escape(str(m.get('scenario')))}</title>
-<style>body{{font-family:sans-serif;max-width:1000px;margin:auto}}
+<style>body{{font-family:sans-serif;max-width:1100px;margin:auto}}
 table{{border-collapse:collapse}}td{{padding:2px 10px;border-bottom:1px solid #eee}}</style>
 </head><body>
 <h1>{html.escape(str(m.get('scenario')))} <small>seed {m.get('seed')}</small></h1>
-<table>{verdict_rows}</table>
-<ul>{nees_rows}</ul>
+<h2>Verdicts</h2><table>{verdict_rows}</table>
+<p><i>{html.escape(NEES_LINE)}</i></p>
 <p><img src="report.png" style="width:100%"></p>
 <h2>Stage costs</h2><table>{stage_rows}</table>
 <h2>All metrics</h2><table>{metric_rows}</table>

@@ -6,7 +6,7 @@ Conventions (used everywhere in humimic):
   pixel ``(i, j)`` (column ``i``, row ``j``) at integer coordinates. The principal point of an
   undistorted MuJoCo camera is therefore ``((W-1)/2, (H-1)/2)``.
 * Camera frames are OpenCV's: x right, y down, z forward (along the optical axis). MuJoCo
-  cameras look along their -z with +y up; :func:`R_mjcam_to_cv` converts.
+  cameras look along their -z with +y up; :data:`R_MJCAM_CV` converts (the one place).
 * Distortion is radial, OpenCV's first two coefficients: ``x_d = x (1 + k1 r^2 + k2 r^4)`` on
   normalised coordinates, so ``cv2.projectPoints`` with ``dist=[k1, k2, 0, 0]`` agrees.
 * Units: metres and radians; pixels for image coordinates.
@@ -17,10 +17,17 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+import cv2
 import numpy as np
 
-#: Rotation from a MuJoCo camera frame (x right, y up, z back) to OpenCV's (x right, y down, z fwd).
+#: Rotation from a MuJoCo camera frame (x right, y up, z back) to OpenCV's (x right, y down,
+#: z forward): ``p_cv = R_MJCAM_CV @ p_mjcam``, ``R_world_cv = R_world_mjcam @ R_MJCAM_CV``.
 R_MJCAM_CV = np.diag([1.0, -1.0, -1.0])
+
+
+#: OpenCV's iterative undistortion run to convergence (our former 8-step fixed point left up
+#: to 0.003 px at k1 = -0.05 in the wide camera's corners; this leaves 1e-8 px).
+UNDISTORT_CRITERIA = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 50, 1e-14)
 
 
 def fovy_from_hfov(hfov_rad: float, width: int, height: int) -> float:
@@ -61,6 +68,18 @@ class Intrinsics:
     def hfov(self) -> float:
         return 2.0 * math.atan((self.width / 2.0) / self.fx)
 
+    @property
+    def distorted(self) -> bool:
+        return self.k1 != 0.0 or self.k2 != 0.0
+
+    def distort(self, x, y) -> tuple[np.ndarray, np.ndarray]:
+        """Undistorted normalised coordinates (arrays of any shape) to raw pixels ``(u, v)``."""
+        if not self.distorted:  # s == 1 exactly
+            return self.fx * x + self.cx, self.fy * y + self.cy
+        r2 = x * x + y * y
+        s = 1.0 + r2 * (self.k1 + self.k2 * r2)
+        return self.fx * x * s + self.cx, self.fy * y * s + self.cy
+
     def project(self, p_cam: np.ndarray) -> np.ndarray:
         """Project camera-frame points ``(..., 3)`` (OpenCV axes, z forward) to pixels ``(..., 2)``.
 
@@ -71,23 +90,31 @@ class Intrinsics:
         with np.errstate(divide="ignore", invalid="ignore"):
             x = np.where(z > 0, p[..., 0] / z, np.nan)
             y = np.where(z > 0, p[..., 1] / z, np.nan)
+        return np.stack(self.distort(x, y), axis=-1)
+
+    def undistort_normalized(self, uv: np.ndarray) -> np.ndarray:
+        """Raw pixels ``(..., 2)`` to undistorted normalised coordinates ``(..., 2)``
+        (``cv2.undistortPointsIter`` to :data:`UNDISTORT_CRITERIA`)."""
+        uv = np.asarray(uv, dtype=float)
+        if not self.distorted:
+            return np.stack([(uv[..., 0] - self.cx) / self.fx,
+                             (uv[..., 1] - self.cy) / self.fy], axis=-1)
+        x = cv2.undistortPointsIter(uv.reshape(-1, 1, 2), self.K, self.dist, None, None,
+                                    UNDISTORT_CRITERIA)
+        return x.reshape(uv.shape)
+
+    def undistort_jacobian(self, xy: np.ndarray) -> np.ndarray:
+        """d(undistorted normalised point)/d(raw pixel) ``(..., 2, 2)`` at undistorted
+        normalised points ``xy (..., 2)``: the inverse of the distortion's Jacobian."""
+        xy = np.asarray(xy, dtype=float)
+        x, y = xy[..., 0], xy[..., 1]
         r2 = x * x + y * y
         s = 1.0 + self.k1 * r2 + self.k2 * r2 * r2
-        return np.stack([self.fx * x * s + self.cx, self.fy * y * s + self.cy], axis=-1)
-
-    def undistort_normalized(self, uv: np.ndarray, iterations: int = 8) -> np.ndarray:
-        """Pixels ``(..., 2)`` to undistorted normalised coordinates ``(..., 2)`` (fixed point)."""
-        uv = np.asarray(uv, dtype=float)
-        xd = (uv[..., 0] - self.cx) / self.fx
-        yd = (uv[..., 1] - self.cy) / self.fy
-        x, y = xd.copy(), yd.copy()
-        if self.k1 == 0.0 and self.k2 == 0.0:
-            return np.stack([x, y], axis=-1)
-        for _ in range(iterations):
-            r2 = x * x + y * y
-            s = 1.0 + self.k1 * r2 + self.k2 * r2 * r2
-            x, y = xd / s, yd / s
-        return np.stack([x, y], axis=-1)
+        ds = 2.0 * (self.k1 + 2.0 * self.k2 * r2)
+        a, b, d = s + ds * x * x, ds * x * y, s + ds * y * y  # d(distorted)/d(undistorted)
+        det = a * d - b * b
+        return np.stack([np.stack([d / (det * self.fx), -b / (det * self.fy)], -1),
+                         np.stack([-b / (det * self.fx), a / (det * self.fy)], -1)], -2)
 
 
 @dataclass(frozen=True)

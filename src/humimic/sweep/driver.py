@@ -79,7 +79,7 @@ def run_sweep(sweep: Sweep, out_dir: str | Path | None = None, jobs: int | None 
     by_name = {p.name: p for p in planned}
     rerun = "save" if sweep.config.rerun else "off"
     bar = tqdm(total=len(planned), initial=len(planned) - len(todo), unit="run",
-               desc=sweep.name, disable=not progress, dynamic_ncols=True)
+               desc=sweep.name, disable=None if progress else True, dynamic_ncols=True)
     try:
         args = [(p.name, p.scenario, p.out_dir, rerun) for p in todo]
         for outcome in run_map(backend, execute_run, args, jobs, address):

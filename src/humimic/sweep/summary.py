@@ -19,26 +19,12 @@ from typing import Any
 from rich.console import Console
 from rich.table import Table
 
+from humimic.metrics.flatten import flatten_metrics as flatten
 from humimic.sweep.grid import RunSpec
 from humimic.sweep.runs import RunOutcome
 
 LEAD = ("run", "status", "cached", "seed")
 SKIP_METRICS = {"seed", "scenario"}
-
-
-def flatten(value: Any, prefix: str = "") -> dict[str, Any]:
-    """Nested dicts/lists to ``{dotted.key: scalar}``."""
-    if isinstance(value, dict):
-        out: dict[str, Any] = {}
-        for k, v in value.items():
-            out.update(flatten(v, f"{prefix}{k}."))
-        return out
-    if isinstance(value, list | tuple):
-        out = {}
-        for i, v in enumerate(value):
-            out.update(flatten(v, f"{prefix}{i}."))
-        return out
-    return {prefix[:-1]: value}
 
 
 def is_number(v: Any) -> bool:

@@ -4,7 +4,7 @@
   poses, eye images, blobs, estimates, series and events against simulated time; a no-op
   when rerun is off. The entity layout is documented there.
 * :func:`default_blueprint` (:mod:`humimic.viz.blueprint`) -- the layout stored with it.
-* :func:`plot_trajectories`, :func:`plot_errors`, :func:`plot_stacked_bar`
+* :func:`plot_trajectories`, :func:`plot_errors`, :func:`plot_error_budget`
   (:mod:`humimic.viz.plots`) -- matplotlib PNGs.
 * :mod:`humimic.viz.config` -- the scenario's ``output`` section.
 
@@ -34,7 +34,7 @@ _EXPORTS = {
     "default_blueprint": "blueprint",
     "plot_trajectories": "plots",
     "plot_errors": "plots",
-    "plot_stacked_bar": "plots",
+    "plot_error_budget": "plots",
 }
 __all__ = sorted(_EXPORTS)
 

@@ -26,6 +26,25 @@ def ellipse_points(centers: np.ndarray, covariances: np.ndarray, n_sigma: float,
     return centers[:, None, :] + np.einsum("nij,jp->npi", A, circle)
 
 
+def label_anchors(centers: np.ndarray, covariances: np.ndarray, n_sigma: float,
+                  labels: list[str], char_px: float = 7.0, line_px: float = 12.0,
+                  gap_px: float = 3.0) -> np.ndarray:
+    """Image positions (N, 2) for the labels of 2-D blobs: centred above each ``n_sigma``
+    ellipse, each label a box ``char_px`` per character wide and ``line_px`` tall; a label whose
+    box would overlap one already placed (left to right) moves up a line until it does not."""
+    c = np.asarray(centers, float).reshape(-1, 2)
+    top = c[:, 1] - n_sigma * np.sqrt(np.clip(np.asarray(covariances, float)[:, 1, 1], 0, None))
+    out = np.stack([c[:, 0], top - gap_px - 0.5 * line_px], axis=1)
+    half_w = 0.5 * char_px * np.array([len(s) for s in labels], float)
+    placed: list[int] = []
+    for i in np.argsort(c[:, 0], kind="stable").tolist():
+        while any(abs(out[i, 0] - out[j, 0]) < half_w[i] + half_w[j]
+                  and abs(out[i, 1] - out[j, 1]) < line_px for j in placed):
+            out[i, 1] -= line_px
+        placed.append(i)
+    return out
+
+
 def ellipsoid_axes(covariances: np.ndarray, n_sigma: float) -> tuple[np.ndarray, np.ndarray]:
     """Half-sizes (N, 3) and rotations as xyzw quaternions (N, 4) of ``n_sigma`` ellipsoids."""
     w, V = np.linalg.eigh(covariances)

@@ -1,4 +1,4 @@
-"""PNG plots of a run: trajectories per axis, errors over time, stacked error budgets.
+"""PNG plots of a run: trajectories per axis, errors over time, the mimicry error budget.
 
 Figures are built with :class:`matplotlib.figure.Figure` on an explicit Agg canvas, never
 through ``pyplot``: nothing global is touched (no backend switch, no figure registry), so the
@@ -98,30 +98,57 @@ def plot_errors(path: Path | str, times: np.ndarray, errors: Mapping[str, Series
     return _save(fig, path)
 
 
-def plot_stacked_bar(path: Path | str, categories: Sequence[str],
-                     parts: Mapping[str, Sequence[float]], title: str,
-                     ylabel: str = "mm", quantity: str = "error") -> Path:
-    """One bar per category, stacked from ``parts`` (label -> one value per category).
+def plot_error_budget(path: Path | str, sites: Sequence[str],
+                      rms: Mapping[str, Sequence[float]], shares: Mapping[str, Sequence[float]],
+                      totals: Sequence[float], unit: str = "mm") -> Path:
+    """The mimicry error budget, one row per robot site, two panels that answer two questions.
 
-    Made for the error budget (perception, filtering, IK, servo per robot site); the total
-    is printed above each bar.
+    Left, *how large is each term*: the RMS of every stage term (``rms``: term -> one value per
+    site) beside the total's RMS (``totals``). Right, *how much of the total does each term
+    make*: its share of the total's mean square (``shares``, fractions adding up to 1),
+    stacked: positive shares up from 0, negative ones (terms that cancel others) down, the sum
+    marked at 100 %. The RMS values do not add up to the total; the shares do.
     """
-    fig = _figure(max(6.5, 1.2 * len(categories) + 4.0), 4.5)
-    ax = fig.add_subplot()
-    x = np.arange(len(categories))
-    bottom = np.zeros(len(categories))
-    for label, values in parts.items():
-        v = np.asarray(values, dtype=float)
-        ax.bar(x, v, bottom=bottom, label=label, width=0.6)
-        bottom += v
-    for xi, total in zip(x, bottom, strict=True):
-        ax.annotate(f"{total:.3g}", (xi, total), textcoords="offset points", xytext=(0, 3),
-                    ha="center", fontsize="small")
-    ax.set_xticks(x, list(categories))
-    ax.set_ylabel(_label(quantity, ylabel))
-    fig.suptitle(title, fontsize="medium")
-    ax.margins(y=0.12)
-    ax.grid(True, axis="y", alpha=0.3)
-    handles, labels = ax.get_legend_handles_labels()  # top part first, beside the bars
-    fig.legend(handles[::-1], labels[::-1], loc="outside right center", fontsize="small")
+    names = list(rms)
+    fig = _figure(10.0, 1.0 + 2.6 * len(sites))
+    axes = fig.subplots(len(sites), 2, squeeze=False, width_ratios=[1.25, 1.0])
+    colours = {n: f"C{k}" for k, n in enumerate(names)}
+    for row, site in enumerate(sites):
+        ax, ax_s = axes[row]
+        y = np.arange(len(names) + 1)
+        values = [float(rms[n][row]) for n in names] + [float(totals[row])]
+        ax.barh(y, values, color=[colours[n] for n in names] + ["0.15"], height=0.7)
+        for yi, v in zip(y, values, strict=True):
+            ax.annotate(f"{v:.3g}", (v, yi), xytext=(3, 0), textcoords="offset points",
+                        va="center", fontsize="small")
+        ax.set_yticks(y, names + ["total"])
+        ax.invert_yaxis()
+        ax.set_xlabel(f"RMS [{unit}]")
+        ax.margins(x=0.18)
+        ax.grid(True, axis="x", alpha=0.3)
+        ax.set_title(f"{site}: RMS of each term (terms partly cancel: no sum)",
+                     fontsize="medium")
+        up = down = 0.0
+        for n in names:
+            v = 100.0 * float(shares[n][row])
+            if not np.isfinite(v):
+                continue
+            bottom = up if v >= 0 else down
+            ax_s.bar(0, v, bottom=bottom, color=colours[n], width=0.5, label=n)
+            if abs(v) >= 4.0:
+                ax_s.annotate(f"{n} {v:.0f} %", (0.27, bottom + v / 2), va="center",
+                              fontsize="small")
+            up, down = (up + v, down) if v >= 0 else (up, down + v)
+        ax_s.axhline(100.0, color="0.15", linewidth=1.2, linestyle="--")
+        ax_s.annotate("total = 100 %", (1.05, 100.0), xytext=(0, -3), textcoords="offset points",
+                      ha="right", va="top", fontsize="small")
+        ax_s.set_ylim(min(down, 0.0) - 8.0, max(up, 100.0) + 8.0)
+        ax_s.axhline(0.0, color="0.3", linewidth=0.8)
+        ax_s.set_xlim(-0.4, 1.1)
+        ax_s.set_xticks([])
+        ax_s.set_ylabel("share of total mean square [%]")
+        ax_s.grid(True, axis="y", alpha=0.3)
+        ax_s.set_title("share of the total: mean(term·total) / mean(|total|²)",
+                       fontsize="medium")
+    fig.suptitle("Mimicry error budget: robot site vs the mapped truth, split by stage")
     return _save(fig, path)

@@ -50,8 +50,16 @@ from humimic.viz.geometry import (
     ellipse_points,
     ellipsoid_axes,
     geom_archetypes,
+    label_anchors,
     rigid_root,
 )
+
+#: Display colour (RGB) of each tracked target, everywhere it is drawn.
+TARGET_COLORS = {"head": (255, 210, 0), "right_hand": (230, 40, 40),
+                 "left_hand": (40, 200, 60)}
+OTHER_COLOR = (200, 200, 200)
+#: Line colours of x, y, z in time series.
+AXIS_RGB = ((214, 39, 40), (44, 160, 44), (31, 119, 180))
 
 TIMELINE = "sim_time"
 WORLD = "world"
@@ -102,6 +110,8 @@ class RerunLog:
             raise ValueError("rerun mode 'save' needs a path for the .rrd")
         self.scene, self.mode, self.path = scene, mode, path
         self._rec: rr.RecordingStream | None = None
+        self.logged: set[str] = set()
+        """Entities that got series, text or images (what a layout can show)."""
         if mode == "off":
             return
         m = scene.model
@@ -260,6 +270,7 @@ class RerunLog:
             if static_pose:
                 self._static_done.add(entity)
         img = f"{entity}/image"
+        self.logged.add(img)
         K = cam.intrinsics.K.copy()
         K[:2, 2] += _PIXEL_CENTRE_SHIFT
         h, w = cam_image.image.shape[:2]
@@ -281,7 +292,10 @@ class RerunLog:
     def log_ellipses_2d(self, t: float, entity: str, centers_px: np.ndarray,
                         covariances_px2: np.ndarray, n_sigma: float = 2.0, colors=None,
                         labels=None, n_points: int = 48) -> None:
-        """Blobs as ``n_sigma`` ellipses (LineStrips2D) plus centre points on a camera image.
+        """Blobs as ``n_sigma`` ellipses (LineStrips2D) plus centre points on a camera image,
+        their ``labels`` at ``entity/labels``, placed above the ellipses where they do not
+        overlap (:func:`~humimic.viz.geometry.label_anchors`: targets close together get
+        stacked names, never ``right_hanhead``).
 
         ``entity`` lies below an image entity (``image_entity("L_wide") + "/blobs"``);
         centres (N, 2) and covariances (N, 2, 2) in OpenCV pixels.
@@ -289,34 +303,46 @@ class RerunLog:
         if self._rec is None:
             return
         c = np.asarray(centers_px, dtype=float).reshape(-1, 2) + _PIXEL_CENTRE_SHIFT
-        strips = ellipse_points(c, np.asarray(covariances_px2, dtype=float).reshape(-1, 2, 2),
-                                n_sigma, n_points)
+        cov = np.asarray(covariances_px2, dtype=float).reshape(-1, 2, 2)
+        strips = ellipse_points(c, cov, n_sigma, n_points)
         self._rec.set_time(TIMELINE, duration=t)
-        self._rec.log(entity, rr.LineStrips2D(strips, colors=colors, labels=labels),
+        self._rec.log(entity, rr.LineStrips2D(strips, colors=colors),
                       rr.Points2D(c, colors=colors, radii=1.5))
+        if labels is not None:
+            self._rec.log(f"{entity}/labels", rr.Points2D(
+                label_anchors(c, cov, n_sigma, list(labels)), colors=colors, radii=0.01,
+                labels=list(labels), show_labels=True))
 
     # ---- 3-D ---------------------------------------------------------------------------------
     def log_points(self, t: float, entity: str, points: np.ndarray, colors=None,
-                   radii=0.012, labels=None) -> None:
-        """Points (N, 3) in the frame of ``entity``'s parent (world under ``world/truth``)."""
+                   radii=0.012, labels=None, show_labels: bool = False) -> None:
+        """Points (N, 3) in the frame of ``entity``'s parent (world under ``world/truth``).
+        Labels show on hover unless ``show_labels``."""
         if self._rec is None:
             return
         self._rec.set_time(TIMELINE, duration=t)
         self._rec.log(entity, rr.Points3D(np.asarray(points, dtype=float).reshape(-1, 3),
-                                          colors=colors, radii=radii, labels=labels))
+                                          colors=colors, radii=radii, labels=labels,
+                                          show_labels=show_labels))
 
     def log_ellipsoids_3d(self, t: float, entity: str, centers: np.ndarray,
                           covariances: np.ndarray, n_sigma: float = 2.0, colors=None,
-                          labels=None) -> None:
-        """Covariance ellipsoids: centres (N, 3) in m, covariances (N, 3, 3) in m^2."""
+                          labels=None, point_radius: float = 0.018) -> None:
+        """Covariance ellipsoids (wireframe; labels on hover) and their centres as points of
+        radius ``point_radius`` (a 2-sigma ellipsoid of a few mm is invisible at room scale):
+        centres (N, 3) in m, covariances (N, 3, 3) in m^2."""
         if self._rec is None:
             return
         half_sizes, q_xyzw = ellipsoid_axes(
             np.asarray(covariances, dtype=float).reshape(-1, 3, 3), n_sigma)
+        centers = np.asarray(centers, dtype=float).reshape(-1, 3)
         self._rec.set_time(TIMELINE, duration=t)
         self._rec.log(entity, rr.Ellipsoids3D(
-            centers=np.asarray(centers, dtype=float).reshape(-1, 3), half_sizes=half_sizes,
-            quaternions=q_xyzw, colors=colors, labels=labels))
+            centers=centers, half_sizes=half_sizes, quaternions=q_xyzw, colors=colors,
+            labels=labels, show_labels=False,
+            fill_mode=rr.components.FillMode.MajorWireframe),
+            rr.Points3D(centers, colors=colors, radii=point_radius, labels=labels,
+                        show_labels=False))
 
     def log_arrow(self, t: float, entity: str, origin: np.ndarray, vector: np.ndarray,
                   colors=None, labels=None) -> None:
@@ -341,29 +367,35 @@ class RerunLog:
         """One sample (a float, or a 1-D array for several lines in one plot) at ``t``."""
         if self._rec is None:
             return
+        self.logged.add(entity)
         self._rec.set_time(TIMELINE, duration=t)
         self._rec.log(entity, rr.Scalars(np.atleast_1d(np.asarray(value, dtype=float))))
 
     def log_series(self, entity: str, times: np.ndarray, values: np.ndarray,
-                   names: list[str] | None = None) -> None:
-        """A whole series in one call: ``values`` (N,) or (N, k) at ``times`` (N,) in s."""
-        if self._rec is None:
+                   names: list[str] | None = None, colors=None, widths=None) -> None:
+        """A whole series in one call: ``values`` (N,) or (N, k) at ``times`` (N,) in s; one
+        legend name (with its unit) per line, optionally colours and widths."""
+        if self._rec is None or len(times) == 0:
             return
+        self.logged.add(entity)
         v = np.asarray(values, dtype=float)
         self._rec.send_columns(
             entity, indexes=[rr.TimeColumn(TIMELINE, duration=np.asarray(times, dtype=float))],
             columns=rr.Scalars.columns(scalars=v if v.ndim == 2 else v.reshape(-1, 1)))
         if names is not None:
-            self.set_series_names(entity, names)
+            self.set_series_names(entity, names, colors, widths)
 
-    def set_series_names(self, entity: str, names: list[str]) -> None:
-        """Legend names for the lines of a multi-valued scalar entity (static)."""
+    def set_series_names(self, entity: str, names: list[str], colors=None,
+                         widths=None) -> None:
+        """Legend names (and colours, widths) of the lines of a scalar entity (static)."""
         if self._rec is not None:
-            self._rec.log(entity, rr.SeriesLines(names=list(names)), static=True)
+            self._rec.log(entity, rr.SeriesLines(names=list(names), colors=colors,
+                                                 widths=widths), static=True)
 
     def log_text(self, t: float, entity: str, text: str, level: str = "INFO") -> None:
         """A text event (``INFO``, ``WARN``, ``ERROR`` ...), e.g. ``searching -> tracking``."""
         if self._rec is None:
             return
+        self.logged.add(entity)
         self._rec.set_time(TIMELINE, duration=t)
         self._rec.log(entity, rr.TextLog(text, level=level))

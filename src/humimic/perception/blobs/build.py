@@ -93,5 +93,5 @@ def perception_stages(scenario, world, rngs, rlog) -> list[Stage]:
     if scenario.filter is not None:
         frec = FilterRecord(list(cfg.targets))
         stages.append(FilterStage(scenario.filter, cfg.targets, frec, rlog, world.gt))
-    stages.append(TrackingReport(cfg.targets, prec, frec, world.gt, rlog))
+    stages.append(TrackingReport(cfg.targets, prec, frec, world.gt))
     return stages

@@ -9,8 +9,8 @@ Example (every key optional)::
       roi_side: 20              # EM samples per ROI side (the fixed window the ROI maps onto)
       em_iterations: 6
       detection: {period: 5.0, lam: 0.67, restart_phase: 2}
-      pixel_std: 0.3            # blob-centre noise (px) } propagated through triangulation
-      match_std: 0.1            # stereo-match noise (px) } into each measurement's R
+      pixel_std: 0.28           # blob-centre noise (px) } propagated through triangulation
+      match_std: 0.04           # stereo-match noise (px) } into each measurement's R
       latency: null             # s added to each measurement's t_ready (null: one frame)
 
 Units: s, px, m. Target names are the avatar's visible coloured parts.
@@ -136,12 +136,17 @@ class PerceptionConfig(Section):
     """Bits per channel of the colour look-up table."""
     detection: DetectionConfig = Field(default_factory=DetectionConfig)
     stereo: StereoConfig = Field(default_factory=StereoConfig)
-    pixel_std: float = Field(0.3, gt=0.0, le=20.0)
-    """Standard deviation (px, per image axis) of a measured blob centre, calibrated in advance
-    as in Ude's Table 2 (``python -m humimic.perception.reproduce table2``)."""
-    match_std: float = Field(0.1, gt=0.0, le=20.0)
+    pixel_std: float = Field(0.28, gt=0.0, le=20.0)
+    """Standard deviation (px, per image axis) of a measured blob centre. It depends on the
+    resolution, the blobs' size and motion: calibrate it per scenario from its own renders
+    (``python -m humimic.perception.calibrate SCENARIO.yaml``; measured 0.15 px for a still
+    hand at 640x480 to 0.96 px through the foveal cameras). The default is the fit for the wide
+    cameras at 320x240 (``ude_wave_tracking``, ``mimic_tracked_wave``: 0.27-0.28)."""
+    match_std: float = Field(0.04, gt=0.0, le=20.0)
     """Standard deviation (px) of the stereo match along the epipolar line, on top of the left
-    centre's error that the template carries over (calibrated with ``table2`` too)."""
+    centre's error that the template carries over; calibrated with ``pixel_std`` (0.014 px for
+    a still hand at 640x480 to 0.08 px for a hand moving along the depth axis; default: the
+    wide 320x240 fit, 0.039-0.044)."""
     covariance: Literal["following", "independent"] = "following"
     """How pixel errors are propagated into each measurement's covariance R: ``following``
     (the right match follows the template cut at the left centre: ``pixel_std`` moves the point

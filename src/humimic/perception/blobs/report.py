@@ -3,8 +3,9 @@ perception + filter.
 
 A stage with no inputs: it reads the perception and filter records after the run and the
 ground truth at the frames' photon times (see :mod:`humimic.metrics.tracking` for the scores).
-``plots(out_dir)`` writes ``tracking_<target>_error.png``, ``tracking_<target>_pva.png`` and
-``tracking.npz`` (:mod:`humimic.perception.blobs.archive`).
+``archive(out_dir)`` writes ``tracking.npz`` (:mod:`humimic.perception.blobs.archive`), plots or
+not; ``plots(out_dir)`` writes ``tracking_<target>_error.png`` and ``tracking_<target>_pva.png``;
+``log(rlog)`` logs the error series to rerun.
 """
 
 from __future__ import annotations
@@ -17,17 +18,17 @@ from humimic.metrics.tracking import FILTER_SETTLE_S, stereo_failures, target_sc
 from humimic.perception.blobs.archive import save_archive
 from humimic.perception.blobs.plots import plot_pva, plot_tracking_errors
 from humimic.pipeline.stage import Stage
-from humimic.viz.rerun_log import SERIES
+from humimic.viz.rerun_log import AXIS_RGB, SERIES
 
 
 class TrackingReport(Stage):
     name = "tracking"
 
-    def __init__(self, targets: list[str], perception_record, filter_record, gt, rlog=None,
+    def __init__(self, targets: list[str], perception_record, filter_record, gt,
                  settle_s: float = FILTER_SETTLE_S):
         self.targets = list(targets)
         self.perception_record, self.filter_record = perception_record, filter_record
-        self.gt, self.rlog, self.settle_s = gt, rlog, settle_s
+        self.gt, self.settle_s = gt, settle_s
 
     def arrays(self):
         """``(PerceptionArrays, FilterArrays | None)`` of the run so far."""
@@ -45,7 +46,7 @@ class TrackingReport(Stage):
                 self.gt.a_base(target)[k])
 
     def metrics(self) -> dict:
-        """``tracking.<target>`` scores; also logs the error series to rerun."""
+        """``tracking.<target>`` scores."""
         pa, fa = self.arrays()
         out = {}
         for target in self.targets:
@@ -55,34 +56,52 @@ class TrackingReport(Stage):
                                    self.settle_s)
             scores["stereo_failures"] = stereo_failures(pa, pa.index(target))
             out[target] = scores
-            if self.rlog is not None and self.rlog.enabled:
-                self._log_series(target, pa, fa, p)
         return {"tracking": out}
 
-    def _log_series(self, target, pa, fa, p) -> None:
+    def log(self, rlog) -> None:
+        """Raw and filtered error series (and the filter's 2-sigma) per target, to rerun."""
+        if rlog is None or not rlog.enabled:
+            return
+        pa, fa = self.arrays()
+        for target in self.targets:
+            self._log_series(rlog, target, pa, fa, self.truth(pa.t, target)[0])
+
+    def archive(self, out_dir) -> list:
+        """``tracking.npz``: every measurement and estimate with the truth at their times."""
+        pa, fa = self.arrays()
+        return [save_archive(
+            Path(out_dir) / "tracking.npz", pa, fa,
+            {t: self.truth(pa.t, t) for t in self.targets},
+            {t: self.truth(fa.t, t) for t in self.targets} if fa is not None else {})]
+
+    def _log_series(self, rlog, target, pa, fa, p) -> None:
         i = pa.index(target)
         ok = pa.ok[:, i]
         root = f"{SERIES}/tracking/{target}"
         if ok.any():
-            self.rlog.log_series(f"{root}/raw_error_mm", pa.t[ok],
-                                 1e3 * (pa.p_base[ok, i] - p[ok]), names=["x", "y", "z"])
+            rlog.log_series(f"{root}/raw_error_mm", pa.t[ok], 1e3 * (pa.p_base[ok, i] - p[ok]),
+                            names=[f"raw {a} error (mm)" for a in "xyz"],
+                            colors=[tuple(128 + c // 2 for c in rgb) for rgb in AXIS_RGB],
+                            widths=[1.0] * 3)
         if fa is not None:
             j = fa.targets.index(target)
             use = fa.valid[:, j]
             pf, _, _ = self.truth(fa.t, target)
             if use.any():
-                self.rlog.log_series(f"{root}/filtered_error_mm", fa.t[use],
-                                     1e3 * (fa.x[use, j, :3] - pf[use]), names=["x", "y", "z"])
+                rlog.log_series(f"{root}/filtered_error_mm", fa.t[use],
+                                1e3 * (fa.x[use, j, :3] - pf[use]),
+                                names=[f"filtered {a} error (mm)" for a in "xyz"],
+                                colors=list(AXIS_RGB), widths=[2.0] * 3)
                 sig = 1e3 * np.sqrt(np.diagonal(fa.P[use, j, :3, :3], axis1=-2, axis2=-1))
-                self.rlog.log_series(f"{root}/filter_2sigma_mm", fa.t[use], 2.0 * sig,
-                                     names=["x", "y", "z"])
+                rlog.log_series(f"{root}/filter_2sigma_mm", fa.t[use],
+                                np.concatenate([2.0 * sig, -2.0 * sig], axis=1),
+                                names=[f"{s}2σ {a} (mm)" for s in "+−" for a in "xyz"],
+                                colors=list(AXIS_RGB) * 2, widths=[0.75] * 6)
 
     def plots(self, out_dir) -> list:
         pa, fa = self.arrays()
         out = Path(out_dir)
-        paths = [save_archive(
-            out / "tracking.npz", pa, fa, {t: self.truth(pa.t, t) for t in self.targets},
-            {t: self.truth(fa.t, t) for t in self.targets} if fa is not None else {})]
+        paths = []
         for target in self.targets:
             i = pa.index(target)
             p, _, _ = self.truth(pa.t, target)

@@ -39,11 +39,8 @@ from humimic.perception.blobs.core import FrameResult, PerceptionCore
 from humimic.perception.blobs.record import PerceptionRecord
 from humimic.pipeline.stage import Stage
 from humimic.sensors.faults import RepeatDetector
-from humimic.viz.rerun_log import EVENTS, image_entity
+from humimic.viz.rerun_log import EVENTS, OTHER_COLOR, TARGET_COLORS, image_entity
 
-#: Display colours (RGB) of the targets in rerun.
-TARGET_COLORS = {"head": (255, 210, 0), "right_hand": (230, 40, 40),
-                 "left_hand": (40, 200, 60)}
 #: ``auto`` runs perception in a process for runs at least this long (simulated s). The child
 #: starts in ~0.2 s (of CPU on the other core, while frames go to the thread); measured on 2
 #: cores, closed loop (mimic_tracked_wave): process / thread / synchronous 2.0 / 2.4 / 2.6x real
@@ -189,12 +186,14 @@ class PerceptionStage(Stage):
             idx = np.flatnonzero(seen[:, eye])
             self.rlog.log_ellipses_2d(
                 t, image_entity(cam) + "/blobs", centre[idx, eye], cov[idx, eye],
-                colors=[TARGET_COLORS.get(self.targets[i], (200, 200, 200)) for i in idx],
+                colors=[TARGET_COLORS.get(self.targets[i], OTHER_COLOR) for i in idx],
                 labels=[self.targets[i] for i in idx])
 
     # ---- results -----------------------------------------------------------------------------
-    def metrics(self) -> dict:
+    def finish(self) -> None:
         self.flush()  # the last frame (after the loop: published to nobody, but recorded)
+
+    def metrics(self) -> dict:
         rows = self.record.arrays()
         out = {"targets": self.published, "distractors": self.targets[len(self.published):],
                "cameras": list(self.cameras), "frames": len(rows.t),

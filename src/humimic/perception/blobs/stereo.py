@@ -40,13 +40,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from humimic.perception.blobs.triangulation import (  # noqa: F401  (re-exported)
-    distort_to_pixels,
     dlt_jacobian,
     following_covariance,
     joint_covariance,
     triangulate_dlt,
-    undistort_jacobian,
-    undistort_point,
 )
 from humimic.perception.blobs.zncc import Prefiltered, zncc_strips, zncc_windows
 from humimic.perception.blobs.zncc import read_batch as _read
@@ -147,8 +144,8 @@ class StereoRig:
         """
         single = np.ndim(uv_left) == 1
         uvl, uvr = np.atleast_2d(uv_left), np.atleast_2d(uv_right)
-        xl = np.array([undistort_point(self.intr_l, u, v) for u, v in uvl.tolist()])
-        xr = np.array([undistort_point(self.intr_r, u, v) for u, v in uvr.tolist()])
+        xl = self.intr_l.undistort_normalized(np.asarray(uvl, float))
+        xr = self.intr_r.undistort_normalized(np.asarray(uvr, float))
         p, R = self._triangulate_normalised(xl, xr, joint_covariance(len(xl), cov_left, cov_right,
                                                            cov_joint))
         return (p[0], R[0]) if single else (p, R)
@@ -159,8 +156,8 @@ class StereoRig:
         p_base = X_h[:, :3] / X_h[:, 3:]
         J = dlt_jacobian(self.P_left, self.P_right, X_h, svd)  # (N, 3, 4)
         Ju = np.zeros((len(xl), 4, 4))
-        Ju[:, 0:2, 0:2] = [undistort_jacobian(self.intr_l, x, y) for x, y in xl.tolist()]
-        Ju[:, 2:4, 2:4] = [undistort_jacobian(self.intr_r, x, y) for x, y in xr.tolist()]
+        Ju[:, 0:2, 0:2] = self.intr_l.undistort_jacobian(xl)
+        Ju[:, 2:4, 2:4] = self.intr_r.undistort_jacobian(xr)
         Jt = J @ Ju
         return p_base, Jt @ C @ np.swapaxes(Jt, 1, 2)
 
@@ -232,9 +229,12 @@ class StereoRig:
         H, W = image_left.shape[:2]
         out: list[StereoMeasurement | None] = [None] * len(uv_left)
         jobs = []
-        for i, ((u, v), (ru, rv), (vu, vv), (a, b, c)) in enumerate(zip(
+        with np.errstate(invalid="ignore"):  # non-finite inputs are caught below
+            x_left = self.intr_l.undistort_normalized(uv_left).tolist()
+            x_right = self.intr_r.undistort_normalized(uv_rb).tolist()
+        for i, ((u, v), (ru, rv), (vu, vv), (a, b, c), (xl, yl), (xr, yr)) in enumerate(zip(
                 uv_left.tolist(), uv_rb.tolist(), bc[:, [0, 1], [0, 1]].tolist(),
-                bl[:, [0, 0, 1], [0, 1, 1]].tolist(), strict=True)):
+                bl[:, [0, 0, 1], [0, 1, 1]].tolist(), x_left, x_right, strict=True)):
             if not all(math.isfinite(z) for z in (u, v, ru, rv, vu, vv, a, b, c)):
                 out[i] = _fail("non_finite_input", uv_left[i])
                 continue
@@ -245,8 +245,6 @@ class StereoRig:
             if not (r <= u <= W - 1 - r and r <= v <= H - 1 - r):
                 out[i] = _fail("template_out_of_image", uv_left[i])
                 continue
-            xl, yl = undistort_point(self.intr_l, u, v)
-            xr, yr = undistort_point(self.intr_r, ru, rv)
             line = self._epipolar_interval(
                 xl, yl, self.intr_r.fx * xr + self.intr_r.cx, self.intr_r.fy * yr + self.intr_r.cy,
                 p.box_sigma * math.sqrt(max(vu, 0.25)), p.box_sigma * math.sqrt(max(vv, 0.25)))
@@ -278,7 +276,7 @@ class StereoRig:
             - kd[:, :, None] * t[:, 1, None, None]
         qy = q0[:, 1, None, None] + s[:, None, :] * t[:, 1, None, None] \
             + kd[:, :, None] * t[:, 0, None, None]
-        mx, my = distort_to_pixels(ir, (qx - ir.cx) / ir.fx, (qy - ir.cy) / ir.fy)
+        mx, my = ir.distort((qx - ir.cx) / ir.fx, (qy - ir.cy) / ir.fy)
         masks = [None if luts is None else luts[i] for i, *_ in jobs]
         src_l = [Prefiltered(img_l, p.prefilter_sigma, dr, lut)
                  for dr, lut in zip(d.tolist(), masks, strict=True)]
@@ -292,7 +290,7 @@ class StereoRig:
             - kd[:, :, None] * tl[:, 1, None, None]
         ly = ql[:, 1, None, None] + kd[:, None, :] * tl[:, 1, None, None] \
             + kd[:, :, None] * tl[:, 0, None, None]
-        mx, my = distort_to_pixels(il, (lx - il.cx) / il.fx, (ly - il.cy) / il.fy)
+        mx, my = il.distort((lx - il.cx) / il.fx, (ly - il.cy) / il.fy)
         tpls = _read(src_l, mx, my)
         few = np.zeros(n, bool)
         if luts is not None:  # templates with too little of the target's colour
@@ -310,7 +308,7 @@ class StereoRig:
             * t[:, 0, None, None, None] - kd[:, None, :, None] * t[:, 1, None, None, None]
         wy = q0[:, 1, None, None, None] + (s_f[:, :, None, None] + kd[:, None, None, :]) \
             * t[:, 1, None, None, None] + kd[:, None, :, None] * t[:, 0, None, None, None]
-        mx, my = distort_to_pixels(ir, (wx - ir.cx) / ir.fx, (wy - ir.cy) / ir.fy)
+        mx, my = ir.distort((wx - ir.cx) / ir.fx, (wy - ir.cy) / ir.fy)
         win = _read(src_r, mx.reshape(n, -1, len(k)), my.reshape(n, -1, len(k))
                     ).reshape(n, 2 * F + 1, len(k), len(k), -1)
         fs = zncc_windows(win, tpls)
@@ -341,12 +339,12 @@ class StereoRig:
             cl = cl[rows]
         if cr is not None and cr.ndim == 3:
             cr = cr[rows]
-        ur, vr = distort_to_pixels(ir, xr_a[:, 0], xr_a[:, 1])
+        ur, vr = ir.distort(xr_a[:, 0], xr_a[:, 1])
         if match_std is None:
             C = joint_covariance(len(rows), cl, cr, None)
         else:  # the raw-pixel direction of the epipolar line at each match
             q1 = qr[good] + t[good]
-            u1, v1 = distort_to_pixels(ir, (q1[:, 0] - ir.cx) / ir.fx, (q1[:, 1] - ir.cy) / ir.fy)
+            u1, v1 = ir.distort((q1[:, 0] - ir.cx) / ir.fx, (q1[:, 1] - ir.cy) / ir.fy)
             C = following_covariance(np.zeros((2, 2)) if cl is None else cl, match_std,
                                      np.stack([u1 - ur, v1 - vr], 1))
         P, R = self._triangulate_normalised(xl_a, xr_a, C)
@@ -369,6 +367,16 @@ class StereoRig:
         return self.match_many(image_left, image_right, [uv_left], [blob_cov_left],
                                [uv_right_blob], [blob_cov_right], cov_uv_left, cov_uv_right,
                                None if template_lut is None else [template_lut])[0]
+
+
+def epipolar_direction(cam_left: CameraModel, cam_right: CameraModel, p_base: np.ndarray
+                       ) -> np.ndarray:
+    """Unit raw-pixel direction in the right image of moving ``p_base`` along the left eye's
+    ray (where a stereo match error moves the right point)."""
+    ray = p_base - cam_left.T_base_cam[:3, 3]
+    ray = ray / np.linalg.norm(ray)
+    t = cam_right.project_base(p_base + 0.01 * ray) - cam_right.project_base(p_base)
+    return t / np.linalg.norm(t)
 
 
 def match_and_triangulate(image_left, image_right, cam_left: CameraModel,

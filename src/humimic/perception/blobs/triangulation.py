@@ -2,16 +2,15 @@
 
 Homogeneous linear triangulation (DLT, as ``cv2.triangulatePoints``) of undistorted
 normalised points, the analytic Jacobian of the result w.r.t. the four image coordinates
-(first-order perturbation of the DLT null vector), and the radial (un)distortion helpers that
-chain raw pixels to normalised coordinates. Used by :mod:`humimic.perception.blobs.stereo`
-(Ude eq. 10 and the covariance propagation of Table 2).
+(first-order perturbation of the DLT null vector), and the pixel covariances of a stereo
+correspondence. Raw pixels and normalised coordinates are converted by
+:class:`humimic.sensors.camera_model.Intrinsics` (the one camera model). Used by
+:mod:`humimic.perception.blobs.stereo` (Ude eq. 10 and the covariance propagation of Table 2).
 """
 
 from __future__ import annotations
 
 import numpy as np
-
-from humimic.sensors.camera_model import Intrinsics
 
 
 def triangulate_dlt(P1: np.ndarray, P2: np.ndarray, x1: np.ndarray, x2: np.ndarray):
@@ -43,39 +42,6 @@ def dlt_jacobian(P1: np.ndarray, P2: np.ndarray, X_h: np.ndarray, svd) -> np.nda
     Xe = X_h[:, :3] / X_h[:, 3:]
     J = (dX[:, :, :3] - dX[:, :, 3:] * Xe[:, None, :]) / X_h[:, 3, None, None]
     return np.swapaxes(J, 1, 2)
-
-
-def undistort_point(intr: Intrinsics, u: float, v: float, iterations: int = 8
-                    ) -> tuple[float, float]:
-    """One pixel to undistorted normalised coordinates (scalar fixed point, as Intrinsics)."""
-    xd, yd = (u - intr.cx) / intr.fx, (v - intr.cy) / intr.fy
-    x, y = xd, yd
-    if intr.k1 != 0.0 or intr.k2 != 0.0:
-        for _ in range(iterations):
-            r2 = x * x + y * y
-            s = 1.0 + intr.k1 * r2 + intr.k2 * r2 * r2
-            x, y = xd / s, yd / s
-    return x, y
-
-
-def undistort_jacobian(intr: Intrinsics, x: float, y: float) -> list[list[float]]:
-    """d(undistorted normalised point)/d(pixel) (2x2) at the undistorted point ``(x, y)``."""
-    r2 = x * x + y * y
-    s = 1.0 + intr.k1 * r2 + intr.k2 * r2 * r2
-    ds = 2.0 * (intr.k1 + 2.0 * intr.k2 * r2)
-    a, b, d = s + ds * x * x, ds * x * y, s + ds * y * y  # d(distorted)/d(undistorted)
-    det = a * d - b * b
-    return [[d / (det * intr.fx), -b / (det * intr.fy)],
-            [-b / (det * intr.fx), a / (det * intr.fy)]]
-
-
-def distort_to_pixels(intr: Intrinsics, x: np.ndarray, y: np.ndarray):
-    """Undistorted normalised coordinates to raw (distorted) pixels (arrays)."""
-    if intr.k1 == 0.0 and intr.k2 == 0.0:  # s == 1 exactly (finite inputs)
-        return intr.fx * x + intr.cx, intr.fy * y + intr.cy
-    r2 = x * x + y * y
-    s = 1.0 + r2 * (intr.k1 + intr.k2 * r2)
-    return intr.fx * x * s + intr.cx, intr.fy * y * s + intr.cy
 
 
 def joint_covariance(n: int, cov_left, cov_right, cov_joint) -> np.ndarray:

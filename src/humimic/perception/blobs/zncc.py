@@ -1,14 +1,19 @@
-"""Zero-mean normalised cross-correlation (Ude eq. 10) and sub-pixel peak refinement.
+"""Zero-mean normalised cross-correlation (Ude eq. 10) for the stereo matcher, and the images
+it reads.
 
 For colour images the paper's eq. 10 treats each pixel as a colour vector: the covariance is the
 sum over the box of dot products of mean-free colour vectors (per-channel means), the variance the
-sum of squared norms; the ``1/(n-1)`` factors cancel. This equals OpenCV's multichannel
-``TM_CCOEFF_NORMED``, against which it is tested, but is computed independently here: the
-numerator is one ``cv2.filter2D`` correlation (channels interleaved along the row, so one call
-covers all channels) or, for maps of few rows, float32 matrix-vector products on strided window
-views; window sums come from integral images or column cumulative sums. :func:`zncc_strips`
-batches the one-row case over many strips (stereo: one strip per target). Flat (zero-variance)
-windows or templates score 0, never NaN.
+sum of squared norms; the ``1/(n-1)`` factors cancel. This is OpenCV's multichannel
+``TM_CCOEFF_NORMED``: for a score map over a 2-D window call ``cv2.matchTemplate``. Two batched
+forms stay hand-written, because the matcher needs what ``cv2.matchTemplate`` does not offer:
+
+* :func:`zncc_strips`: many targets' one-row strips in a few array operations (2.3x faster than
+  one ``cv2.matchTemplate`` per strip, ``benchmarks/peers_zncc.py``);
+* :func:`zncc_windows`: each template against a few windows resampled at sub-sample offsets
+  along its epipolar line (not a pixel grid, so no ``cv2.matchTemplate`` call covers them).
+
+Both are tested against ``cv2.matchTemplate``. Flat (zero-variance) windows or templates score
+0, never NaN.
 """
 
 from __future__ import annotations
@@ -17,93 +22,6 @@ import math
 
 import cv2
 import numpy as np
-
-#: Output maps with at most this many rows use strided row products instead of cv2.filter2D.
-_ROW_PATH_MAX_ROWS = 4
-
-
-def _numerator(S: np.ndarray, Tz: np.ndarray, oh: int, ow: int) -> np.ndarray:
-    """``sum_{dy,dx,c} Tz[dy,dx,c] * S[y+dy, x+dx, c]`` for every valid ``(y, x)``: ``(oh, ow)``.
-
-    Channels are interleaved along the row, so a (h, w*C) kernel on the (H, W*C) image covers all
-    channels at once (output columns at multiples of C). Few output rows (stereo strips): one
-    float32 matrix-vector product per row on a strided window view; otherwise ``cv2.filter2D``.
-    """
-    H, W, C = S.shape
-    h, w = Tz.shape[:2]
-    S2 = np.ascontiguousarray(S, dtype=np.float32).reshape(H, W * C)
-    t2 = np.ascontiguousarray(Tz, dtype=np.float32).reshape(h, w * C)
-    if oh <= _ROW_PATH_MAX_ROWS:
-        flat = S2.ravel()
-        es = flat.itemsize
-        tv = t2.ravel()
-        out = np.empty((oh, ow))
-        for y in range(oh):
-            V = np.lib.stride_tricks.as_strided(flat[y * W * C:], shape=(ow, h, w * C),
-                                                strides=(C * es, W * C * es, es), writeable=False)
-            out[y] = V.reshape(ow, h * w * C) @ tv
-        return out
-    full = cv2.filter2D(S2, cv2.CV_32F, t2, anchor=(0, 0), borderType=cv2.BORDER_CONSTANT)
-    return full[:oh, : ow * C : C].astype(np.float64)
-
-
-def zncc_map(search: np.ndarray, template: np.ndarray) -> np.ndarray:
-    """ZNCC of ``template`` (h, w[, C]) at every valid position of ``search`` (H, W[, C]).
-
-    Returns ``(H - h + 1, W - w + 1)`` float64 scores in [-1, 1]; entry ``[y, x]`` is the template
-    with its top-left pixel on ``search[y, x]`` (as ``cv2.matchTemplate``). Products are float32
-    (relative error ~1e-6 of the score); window sums exact (float64 integral images).
-    # Ude eq. 10
-    """
-    S = np.asarray(search)
-    T = np.asarray(template)
-    if S.ndim == 2:
-        S, T = S[..., None], T[..., None]
-    H, W, C = S.shape
-    h, w = T.shape[:2]
-    if T.ndim != 3 or T.shape[2] != C or h > H or w > W or h < 1 or w < 1:
-        raise ValueError(f"template {template.shape} does not fit search region {search.shape}")
-    n = h * w
-    oh, ow = H - h + 1, W - w + 1
-    Tz = T.reshape(n, C).astype(np.float64)
-    Tz -= Tz.mean(axis=0)  # mean-free template, per channel
-    var_T = float(np.einsum("ij,ij->", Tz, Tz))
-    if var_T <= 1e-10 * (1.0 + float(np.abs(Tz).max())):
-        return np.zeros((oh, ow))  # flat template
-    if oh == 1:  # a strip exactly as tall as the template (stereo): column sums suffice
-        return _zncc_row(S, Tz.reshape(h, w, C), var_T)
-    # sum of Tz is 0 per channel, so the window mean drops out of the numerator
-    num = _numerator(S, Tz.reshape(h, w, C), oh, ow)
-    Sd = S if S.dtype in (np.uint8, np.float64) else S.astype(np.float64)
-    ii, ii2 = cv2.integral2(Sd, sdepth=cv2.CV_64F, sqdepth=cv2.CV_64F)
-    ii, ii2 = ii.reshape(H + 1, W + 1, C), ii2.reshape(H + 1, W + 1, C)
-
-    def box(I):
-        return I[h:, w:] - I[:-h, w:] - I[h:, :-w] + I[:-h, :-w]
-
-    s1, s2 = box(ii), box(ii2)
-    var_S = (s2 - s1 * s1 / n).sum(axis=-1)
-    ok = var_S > 1e-10 * (s2.sum(axis=-1) + 1e-300)  # flat windows score 0
-    out = np.zeros((oh, ow))
-    np.divide(num, np.sqrt(np.where(ok, var_S, 1.0) * var_T), out=out, where=ok)
-    return np.clip(out, -1.0, 1.0)
-
-
-def _zncc_row(S: np.ndarray, Tz: np.ndarray, var_T: float) -> np.ndarray:
-    """:func:`zncc_map` for ``H == h`` (one output row) with few array operations."""
-    H, W, C = S.shape
-    h, w = Tz.shape[:2]
-    ow = W - w + 1
-    Sd = S.astype(np.float64)
-    cs = np.zeros((W + 1, 2 * C))
-    np.cumsum(np.concatenate([Sd.sum(0), np.einsum("hwc,hwc->wc", Sd, Sd)], 1), 0, out=cs[1:])
-    win = cs[w:] - cs[:-w]  # (ow, 2C): per-channel window sums of S and S^2
-    var_S = (win[:, C:] - win[:, :C] * win[:, :C] / (h * w)).sum(1)
-    num = _numerator(S, Tz, 1, ow)[0]
-    ok = var_S > 1e-10 * (win[:, C:].sum(1) + 1e-300)
-    out = np.zeros(ow)
-    np.divide(num, np.sqrt(np.where(ok, var_S, 1.0) * var_T), out=out, where=ok)
-    return np.clip(out, -1.0, 1.0)[None]
 
 
 def _center_channels(X: np.ndarray, integers: bool) -> None:
@@ -131,8 +49,9 @@ def _channel_means(X: np.ndarray, integers: bool) -> np.ndarray:
 def zncc_strips(strips: np.ndarray, templates: np.ndarray) -> np.ndarray:
     """Batched ZNCC of ``templates (n, h, w, C)`` along ``strips (n, h, Ws, C)`` of equal height.
 
-    Row ``i`` of the result ``(n, Ws - w + 1)`` equals ``zncc_map(strips[i], templates[i])[0]``;
-    all strips are processed by the same few array operations (stereo, one strip per target).
+    Row ``i`` of the result ``(n, Ws - w + 1)`` equals ``cv2.matchTemplate(strips[i],
+    templates[i], TM_CCOEFF_NORMED)[0]`` (float32 products, ~1e-6 of a score); all strips are
+    processed by the same few array operations (stereo, one strip per target).
     # Ude eq. 10
     """
     n, h, Ws, C = strips.shape
@@ -182,34 +101,6 @@ def zncc_windows(windows: np.ndarray, templates: np.ndarray) -> np.ndarray:
     out = np.zeros((n, m))
     np.divide(num, np.sqrt(np.where(ok, den2, 1.0)), out=out, where=ok)
     return np.clip(out, -1.0, 1.0)
-
-
-def parabola_offset(f_minus: float, f_0: float, f_plus: float) -> float:
-    """Sub-sample offset of the vertex of the parabola through (-1, f-), (0, f0), (1, f+).
-
-    Clipped to [-0.5, 0.5]; 0 when the three samples do not bracket a maximum.
-    """
-    curv = f_minus - 2.0 * f_0 + f_plus
-    if not curv < 0.0:
-        return 0.0
-    return float(np.clip(0.5 * (f_minus - f_plus) / curv, -0.5, 0.5))
-
-
-def subpixel_peak(score: np.ndarray, mask: np.ndarray | None = None) -> tuple[float, float, float]:
-    """Maximum of a score map refined per axis by parabola fits: ``(x, y, peak score)``.
-
-    ``x`` is the column, ``y`` the row (map coordinates). ``mask`` (bool, same shape) restricts
-    the integer search; neighbours used for the fit need not be in the mask.
-    """
-    s = np.where(mask, score, -np.inf) if mask is not None else score
-    iy, ix = np.unravel_index(int(np.argmax(s)), s.shape)
-    best = float(score[iy, ix])
-    dx = dy = 0.0
-    if 0 < ix < score.shape[1] - 1:
-        dx = parabola_offset(score[iy, ix - 1], best, score[iy, ix + 1])
-    if 0 < iy < score.shape[0] - 1:
-        dy = parabola_offset(score[iy - 1, ix], best, score[iy + 1, ix])
-    return ix + dx, iy + dy, best
 
 
 class Prefiltered:
