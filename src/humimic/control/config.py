@@ -19,7 +19,7 @@ Units: m, s, rad, Hz. Robot sites and human targets are the names in
 
 from __future__ import annotations
 
-from typing import Annotated, Literal
+from typing import Literal
 
 from pydantic import Field, field_validator, model_validator
 
@@ -177,7 +177,7 @@ class MimicConfig(Section):
     """relative: the robot site's displacement equals the human part's (robot base frame, the
     paper); mirrored: as a mirror image across the space between them (depth reversed);
     follow: a robot hand follows the person's head (Fig. 4)."""
-    scale: Annotated[float, Field(gt=0.0, le=5.0)] | Literal["auto"] = "auto"
+    scale: float | Literal["auto"] = "auto"
     """Displacement scale at the start: a number, or ``auto``: the driven robot arm's length
     over the person's (shoulder to palm; shoulder to elbow for an elbow site). ``fit`` may
     shrink it; ``mimicry.<site>.scale`` reports the one in use at the end."""
@@ -217,6 +217,18 @@ class MimicConfig(Section):
                                  f"{target!r}; each site takes one human target")
             seen[site] = target
         return value
+
+    @field_validator("scale", mode="before")
+    @classmethod
+    def _check_scale(cls, value):
+        allowed = "allowed: auto, or a number > 0 and <= 5"
+        if value == "auto":
+            return value
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise ValueError(f"not a scale; {allowed}")
+        if not 0.0 < value <= 5.0:
+            raise ValueError(f"out of range; {allowed}")
+        return float(value)
 
     @field_validator("relative_to")
     @classmethod
