@@ -86,13 +86,13 @@ def _reach_by_sampling(a, u, lam, c, r_min, r_max):
     """The largest l <= lam with a + l u in the shell, by dense sampling down from lam and
     bisection (independent of the closed form)."""
     def inside(x):
-        return r_min <= np.linalg.norm(a + x * u - c) <= r_max
-    if inside(lam):
-        return lam
+        r = np.linalg.norm(a + np.multiply.outer(x, u) - c, axis=-1)
+        return (r_min <= r) & (r <= r_max)
     ls = np.linspace(lam, 0.0, 40001)
-    hi = next(x for x in ls if inside(x))  # the first feasible point coming back
-    lo_out = hi + ls[0] - ls[1]
-    lo, out = hi, lo_out
+    first = int(np.argmax(inside(ls)))  # the first feasible point coming back
+    if first == 0:
+        return lam
+    lo, out = ls[first], ls[first - 1]
     for _ in range(60):
         mid = 0.5 * (lo + out)
         lo, out = (mid, out) if inside(mid) else (lo, mid)
