@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import tempfile
 import time
 from pathlib import Path
 
@@ -68,7 +69,8 @@ def bench_loop(duration: float) -> dict[str, float]:
 
     sc = load_scenario(ROOT / "scenarios" / "mimic_wave.yaml",
                        ['output.rerun="off"', "output.plots=false"], duration=duration)
-    m = run_one(sc, Path("/tmp/humimic-bench-control"), rerun="off", progress=False)
+    m = run_one(sc, Path(tempfile.gettempdir()) / "humimic-bench-control", rerun="off",
+                progress=False)
     st = m["stages"]
     loop = m["loop_wall_time_s"]
     mimic = st["mimic"]["total_s"] + st.get("oracle", {}).get("total_s", 0.0)

@@ -12,6 +12,7 @@ import argparse
 import json
 import platform
 import statistics
+import tempfile
 from pathlib import Path
 
 import humimic  # noqa: F401  (headless GL before mujoco)
@@ -78,8 +79,8 @@ def bench_world_loop(repeats: int, duration: float = 3.0) -> list[float]:
     })
     out = []
     for i in range(repeats):
-        metrics = run_one(scenario, out_dir=Path("/tmp") / f"humimic-bench-{i}", rerun="off",
-                          progress=False)
+        out_dir = Path(tempfile.gettempdir()) / f"humimic-bench-{i}"
+        metrics = run_one(scenario, out_dir=out_dir, rerun="off", progress=False)
         out.append(metrics["realtime_factor"])
     return out
 
@@ -105,7 +106,7 @@ def bench_wearable_loop(repeats: int, duration: float = 4.0) -> list[float]:
 
     scenario = load_scenario(SCENARIOS_DIR / "wearable_walk.yaml", duration=duration,
                              overrides=["output.plots=false"])
-    return [run_one(scenario, out_dir=Path("/tmp") / f"humimic-bench-wearable-{i}",
+    return [run_one(scenario, out_dir=Path(tempfile.gettempdir()) / f"humimic-bench-wearable-{i}",
                     rerun="off", progress=False)["realtime_factor"] for i in range(repeats)]
 
 

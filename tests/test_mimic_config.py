@@ -38,6 +38,8 @@ def _run(tmp_path, capsys, mimic: str) -> tuple[int, str]:
     ("map: {}\n", ["mimic.map", "empty"]),
     ("scale: 0\n", ["mimic.scale", "out of range", "> 0"]),
     ("scale: -1.5\n", ["mimic.scale", "out of range"]),
+    ("scale: automatic\n", ["mimic.scale", "not a scale", "auto"]),
+    ("fit: {time_constant: -1}\n", ["mimic.fit.time_constant", "out of range"]),
     ("mode: mirror\n", ["mimic.mode", "did you mean 'mirrored'"]),
     ("relative_to: nose\n", ["mimic.relative_to", "unknown human target 'nose'"]),
     ("gaze: {enabled: true, target: nose}\n", ["mimic.gaze.target", "'nose'"]),

@@ -53,10 +53,13 @@ def test_no_limit_no_nan_and_the_head_stays_still(wave):
     assert m["ik"]["failures"] == 0
 
 
-def test_joint_limit_hits_name_the_joints(wave):
-    """The wave raises the arm: the shoulder abduction touches its band (ticks counted per joint;
-    a tick where two joints touch counts once in the total)."""
-    palm = wave["mimicry"]["R_palm"]
+def test_joint_limit_hits_name_the_joints(root, tmp_path):
+    """An arm started 0.35 rad from its adduction stop (the old ready pose): the wave drives the
+    shoulder abduction onto its band (ticks counted per joint; a tick where two joints touch
+    counts once in the total)."""
+    old_ready = "robot.pose={R_SFE: 0.3, R_SAA: 0.15, R_HR: 0.0, R_EB: 1.4}"
+    palm = _run(root, tmp_path, "mimic_wave", old_ready, "mimic.fit.enabled=false",
+                duration=3.0)["mimicry"]["R_palm"]
     by_joint = palm["joint_limit_hits_by_joint"]
     assert set(by_joint) <= {"R_SFE", "R_SAA", "R_HR", "R_EB", "R_WR", "R_WFE", "R_WAA",
                              "B_TR", "B_TAA", "B_TFE"}

@@ -94,6 +94,7 @@ def _metrics(scenario, world, stages, result, setup_s, wall0) -> dict:
         "mujoco_warnings": {w: int(c) for w, c in _warnings(world).items()},
         "stages": timer.summary(),
     }
+    deep_merge(metrics, world.faults.metrics())
     for stage in stages:
         deep_merge(metrics, stage.metrics())
     return metrics

@@ -5,7 +5,8 @@ Example (every key optional except what differs from the defaults)::
     mimic:
       map: {right_hand: R_palm}     # human target -> robot site it drives
       mode: relative                # relative (paper) | mirrored | follow (Fig. 4)
-      scale: 1.0
+      scale: auto                   # auto (robot arm / person's arm) | a number
+      fit: {enabled: true, margin: 0.03, time_constant: 0.3, strain_rate: 0.5}
       start: 0.0                    # s: the first estimate at/after this time starts mimicry
       perception: oracle            # oracle (ground truth + noise) | tracked (perception+filter)
       oracle: {noise_std: 0.0, latency: 0.0}
@@ -76,6 +77,28 @@ class OracleConfig(Section):
     """Photon-to-estimate latency (s), added to the cameras' transfer latency."""
     require_in_view: bool = True
     """Report a target only while it projects inside every eye camera's image."""
+
+
+class FitConfig(Section):
+    """Fit the person's motion range into the robot's reach by shrinking the scale (see
+    :mod:`humimic.control.mapping`): when a mapped displacement would leave the driven site's
+    reachable shell, the scale decays towards the largest one that keeps it inside, and while
+    the arm is strained (IK miss, a joint on its limit band) it shrinks steadily; it never
+    grows back."""
+
+    enabled: bool = True
+    margin: float = Field(0.03, ge=0.0, le=0.2)
+    """Distance (m) the fitted motion keeps inside the reachable shell (room for the PD's
+    overshoot and the IK's joint limits)."""
+    time_constant: float = Field(0.3, ge=0.0, le=10.0)
+    """Time constant (s) of the scale's decay: 0 jumps at once; longer ignores brief outliers
+    (a mis-tracked frame) but clamps longer while the scale settles."""
+    strain_rate: float = Field(0.5, ge=0.0, le=20.0)
+    """Relative rate (1/s) at which the scale shrinks while the arm is strained: the IK misses
+    the command by more than ``tolerance`` or a shoulder or elbow joint sits on its limit band
+    (0: the IK is not listened to)."""
+    tolerance: float = Field(0.005, gt=0.0, le=0.1)
+    """IK miss (m) beyond which the arm counts as strained."""
 
 
 class InterpolationConfig(Section):
@@ -154,8 +177,11 @@ class MimicConfig(Section):
     """relative: the robot site's displacement equals the human part's (robot base frame, the
     paper); mirrored: as a mirror image across the space between them (depth reversed);
     follow: a robot hand follows the person's head (Fig. 4)."""
-    scale: float = Field(1.0, gt=0.0, le=5.0)
-    """Displacement scale."""
+    scale: float | Literal["auto"] = "auto"
+    """Displacement scale at the start: a number, or ``auto``: the driven robot arm's length
+    over the person's (shoulder to palm; shoulder to elbow for an elbow site). ``fit`` may
+    shrink it; ``mimicry.<site>.scale`` reports the one in use at the end."""
+    fit: FitConfig = Field(default_factory=FitConfig)
     relative_to: str | None = None
     """Human target whose motion is subtracted first (e.g. ``pelvis``): the mapped motion is
     then the part's motion relative to the body, not the whole body's travel."""
@@ -172,7 +198,8 @@ class MimicConfig(Section):
     servo: ServoConfig = Field(default_factory=ServoConfig)
     gaze: GazeConfig = Field(default_factory=GazeConfig)
     clamp_workspace: bool = True
-    """Clamp commands into each driven site's reachable shell (reported in the metrics)."""
+    """Clamp commands into each driven site's reachable shell (reported in the metrics); off
+    also turns ``fit`` off (it fits into that shell)."""
 
     @field_validator("map")
     @classmethod
@@ -190,6 +217,18 @@ class MimicConfig(Section):
                                  f"{target!r}; each site takes one human target")
             seen[site] = target
         return value
+
+    @field_validator("scale", mode="before")
+    @classmethod
+    def _check_scale(cls, value):
+        allowed = "allowed: auto, or a number > 0 and <= 5"
+        if value == "auto":
+            return value
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise ValueError(f"not a scale; {allowed}")
+        if not 0.0 < value <= 5.0:
+            raise ValueError(f"out of range; {allowed}")
+        return float(value)
 
     @field_validator("relative_to")
     @classmethod

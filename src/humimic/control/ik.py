@@ -49,6 +49,15 @@ BODY_GEOMS = ("pelvis", "abdomen", "thorax", "neck", "skull", "R_thigh", "L_thig
 FROZEN_COST = 1.0
 LEG_SPEED = 1.0  # rad/s
 EYE_SPEED = 20.0  # rad/s
+#: A joint closer than the IK's limit margin plus this (rad) to a limit sits on its limit band.
+LIMIT_BAND_TOL = 2e-3
+
+
+def on_limit_band(q: np.ndarray, ranges: np.ndarray, margin: float) -> np.ndarray:
+    """Which joints (``q (..., n)``, ``ranges (n, 2)``) sit on the band the IK keeps them out
+    of (within ``margin + LIMIT_BAND_TOL`` of a limit)."""
+    band = margin + LIMIT_BAND_TOL
+    return (q <= ranges[:, 0] + band) | (q >= ranges[:, 1] - band)
 
 
 def build_robot_model(interocular: float = 0.07) -> mujoco.MjModel:

@@ -8,6 +8,11 @@ For every eye-camera frame (photon time ``t``) the oracle reads the ground truth
 available at ``t_ready(frame) + latency``. With ``require_in_view`` a target is reported only
 while it projects inside every eye camera's image (as a tracker could see it); a target never
 seen is never reported, and mimicry says so in its metrics.
+
+Sensor faults (:mod:`humimic.sensors.faults`) reach the oracle as they reach a tracker: a lost
+frame gives no estimate, a covered camera sees nothing (no estimate for that frame), and a frozen
+camera shows the past, so the estimate is the truth at the oldest capture time among the frame's
+images (stale, under the new time stamp).
 """
 
 from __future__ import annotations
@@ -65,6 +70,8 @@ class OracleStage(Stage):
         self.published = dict.fromkeys(self.targets, 0)
         self.out_of_view = dict.fromkeys(self.targets, 0)
         self.frames = 0
+        self.blind_frames = 0
+        self.stale_frames = 0
         self._bus = None
         self._timer = None
 
@@ -77,24 +84,47 @@ class OracleStage(Stage):
         return all(in_image(camera_frame_point(data, cid, p_world), intr)
                    for cid, intr in self._cams)
 
+    def _content_time(self, t: float, cameras) -> float | None:
+        """Capture time of what the frame at ``t`` shows (None if a camera is covered)."""
+        t_content = t
+        for name in cameras:
+            status = self.world.faults.frames.status(t, name)
+            if status is not None:
+                if status.covered:
+                    return None
+                t_content = min(t_content, status.t_content)
+        return t_content
+
     def _on_frame(self, topic: str, msg: Stamped) -> None:
         with self._timer.time(self.name):
             self.frames += 1
-            k = min(int(round(msg.t * self.rate)), len(self.world.times) - 1)
-            out = {}
-            for target in self.targets:
-                if self.cfg.require_in_view and not self.visible(self._world_p[target][k]):
-                    self.out_of_view[target] += 1
-                    continue
-                p, v, a = noisy_state(self._p[target][k], self._v[target][k],
-                                      self._a[target][k], self.std, self.rng)
-                out[target] = TargetEstimate(target, p, v, a, self.P)
-                self.published[target] += 1
+            t_content = self._content_time(msg.t, msg.value)
+            if t_content is None:
+                self.blind_frames += 1
+                out = {}
+            else:
+                self.stale_frames += t_content < msg.t
+                out = self._estimates(t_content)
             self._bus.publish("estimates", Stamped(msg.t, Estimates(out),
                                                    msg.t_ready + self.cfg.latency))
+
+    def _estimates(self, t: float) -> dict[str, TargetEstimate]:
+        """The (noisy) truth of every target in view at time ``t``."""
+        k = min(int(round(t * self.rate)), len(self.world.times) - 1)
+        out = {}
+        for target in self.targets:
+            if self.cfg.require_in_view and not self.visible(self._world_p[target][k]):
+                self.out_of_view[target] += 1
+                continue
+            p, v, a = noisy_state(self._p[target][k], self._v[target][k], self._a[target][k],
+                                  self.std, self.rng)
+            out[target] = TargetEstimate(target, p, v, a, self.P)
+            self.published[target] += 1
+        return out
 
     def metrics(self) -> dict:
         return {"oracle": {"frames": self.frames, "estimates": dict(self.published),
                            "out_of_view_frames": dict(self.out_of_view),
+                           "blind_frames": self.blind_frames, "stale_frames": self.stale_frames,
                            "latency_ms": 1e3 * self.cfg.latency,
                            "noise_std_mm": 1e3 * self.cfg.noise_std}}

@@ -48,6 +48,8 @@ class MimicRecord:
         self.p_est = np.full((n, s, 3), np.nan)
         """Mapped position of the estimate in use (its photon time in ``t_est``)."""
         self.t_est = np.full((n, s), np.nan)
+        self.scale = np.full((n, s), np.nan)
+        """Mapping scale in use (``mimic.fit`` may shrink it)."""
         self.clamped = np.zeros((n, s), bool)
         self.lost = np.zeros((n, s), bool)
         self.active = np.zeros((n, s), bool)

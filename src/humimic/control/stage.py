@@ -4,8 +4,8 @@ Per servo tick (Ude & Atkeson, "Generation of humanoid motion from human motion"
 
 1. each mapped human target's latest estimate (``estimates`` topic) is interpolated to the servo
    rate by a Cartesian PD (:mod:`~humimic.control.interpolation`);
-2. mapped to its robot site by relative motion and clamped into the site's reachable shell
-   (:mod:`~humimic.control.mapping`);
+2. mapped to its robot site by relative motion at the site's scale (fitted to the reach, see
+   :mod:`~humimic.control.mapping`) and clamped into the site's reachable shell;
 3. the redundant IK moves the driven sites there while holding the eyes' base still
    (:mod:`~humimic.control.ik`);
 4. gaze points the eyes at the gaze target (:mod:`~humimic.control.gaze`);
@@ -22,25 +22,38 @@ import time
 import numpy as np
 
 from humimic.control.gaze import Gaze
-from humimic.control.ik import MimicIK, build_robot_model
+from humimic.control.ik import MimicIK, build_robot_model, on_limit_band
 from humimic.control.interpolation import CartesianInterpolator
-from humimic.control.mapping import map_displacement, mapping_matrix, reach_shell
+from humimic.control.mapping import (
+    REFLECTIONS,
+    ScaleFit,
+    arm_length,
+    auto_scale,
+    map_displacement,
+    reach_shell,
+)
 from humimic.control.record import MimicRecord
 from humimic.control.servo import Servo
+from humimic.motion.arm_ik import arm_lengths
+from humimic.motion.avatar import AvatarGeometry
 from humimic.pipeline.stage import Stage
-from humimic.world.names import ROBOT_JOINTS
+from humimic.world.names import HUMAN_PREFIX, ROBOT_JOINTS
 
 #: An estimate older than this (s) counts as lost: the command stops where it was.
 MAX_AGE = 0.25
 EYES = np.array([ROBOT_JOINTS.index(j) for j in ("L_EP", "L_ET", "R_EP", "R_ET")])
+#: Joints of a driven arm whose limit band strains it (the wrists hardly move a palm).
+STRAIN_JOINTS = ("SFE", "SAA", "HR", "EB")
 
 
 class Channel:
     """One human target (optionally relative to another) driving one robot site."""
 
     def __init__(self, target: str, ref: str | None, site: str, p0_base_robot: np.ndarray,
-                 S: np.ndarray, shell):
-        self.target, self.ref, self.site, self.S, self.shell = target, ref, site, S, shell
+                 M: np.ndarray, scale: float, shell, fit: ScaleFit | None):
+        self.target, self.ref, self.site, self.M, self.shell = target, ref, site, M, shell
+        self.scale = self.scale_initial = float(scale)
+        self.fit = fit
         self.p0_robot = p0_base_robot.copy()
         self.p0_human: np.ndarray | None = None
         self.t0: float | None = None
@@ -50,6 +63,17 @@ class Channel:
     @property
     def started(self) -> bool:
         return self.p0_human is not None
+
+    @property
+    def S(self) -> np.ndarray:
+        """The current ``s M``."""
+        return self.scale * self.M
+
+    def fit_scale(self, p_base_human: np.ndarray) -> float:
+        """Update the scale (if fitted) for the human position of this tick; returns it."""
+        if self.fit is not None:
+            self.scale = self.fit.update(self.M @ (p_base_human - self.p0_human))
+        return self.scale
 
     def to_robot(self, p_base_human: np.ndarray) -> np.ndarray:
         return map_displacement(p_base_human, self.p0_human, self.p0_robot, self.S)
@@ -75,14 +99,10 @@ class MimicStage(Stage):
         self.sites = list(cfg.map.values())
         self.ik = MimicIK(self.ik_model, q0, self.sites, cfg.ik, self.dt)
         p0_base = self.to_base(self.ik.site_positions())
-        S = mapping_matrix(cfg.mode, cfg.scale)
+        self.channels = [self._channel(target, site, p0_base[i])
+                         for i, (target, site) in enumerate(cfg.map.items())]
         ic = cfg.interpolation
         other = "extrapolate" if ic.mode == "hold" else "hold"
-        self.channels = [
-            Channel(target, cfg.relative_to, site, p0_base[i], S,
-                    reach_shell(self.ik_model, self.ik.q, site, scene.T_world_base)
-                    if cfg.clamp_workspace else None)
-            for i, (target, site) in enumerate(cfg.map.items())]
         #: target -> (PD in the configured mode, PD in the other mode, for comparison)
         self.interps = {
             k: (CartesianInterpolator(ic.omega, ic.zeta, self.dt, ic.mode, MAX_AGE,
@@ -105,10 +125,29 @@ class MimicStage(Stage):
         phys_every = int(round(sc.timing.physics_rate / base_rate))
         n = world.n_ticks // (phys_every * self.every) + 2
         self.rec = MimicRecord(n, self.sites, len(ROBOT_JOINTS), self.dt)
+        #: per channel: the shoulder and elbow joints whose limit bands count as strain
+        self._strain_joints = [np.array([ROBOT_JOINTS.index(f"{s[0]}_{j}")
+                                         for j in STRAIN_JOINTS]) for s in self.sites]
+        self._strain_ranges = [self.ik_model.jnt_range[j] for j in self._strain_joints]
         self.latest: dict[str, tuple] = {}
         self.v_prev = np.zeros(len(ROBOT_JOINTS))
         self._calls = 0
         self._timer = None
+
+    def _channel(self, target: str, site: str, p0_base: np.ndarray) -> Channel:
+        """The mapping of ``target`` to ``site``: reflection, initial scale, shell and fit."""
+        cfg = self.cfg
+        scale = cfg.scale
+        if scale == "auto":
+            g = AvatarGeometry.from_model(self.scene.model, HUMAN_PREFIX)
+            scale = auto_scale(arm_length(self.ik_model, site), *arm_lengths(g), site)
+        shell = (reach_shell(self.ik_model, self.ik.q, site, self.scene.T_world_base)
+                 if cfg.clamp_workspace else None)
+        f = cfg.fit
+        fit = (ScaleFit(scale, shell, p0_base, f.margin, f.time_constant, self.dt,
+                        f.strain_rate) if f.enabled and shell is not None else None)
+        return Channel(target, cfg.relative_to, site, p0_base, REFLECTIONS[cfg.mode], scale,
+                       shell, fit)
 
     # ---- frames ---------------------------------------------------------------------------
     def to_base(self, p_world: np.ndarray) -> np.ndarray:
@@ -185,6 +224,7 @@ class MimicStage(Stage):
             if not ch.started:  # the paper's "initial position of a tracked human body part"
                 ch.p0_human = np.array(p_est, float)
                 ch.t0 = t_est
+            rec.scale[k, i] = ch.fit_scale(p_h)
             p_cmd, p_cmd_alt = ch.to_robot(p_h), ch.to_robot(p_alt)
             rec.p_cmd_raw[k, i] = p_cmd
             if ch.shell is not None:
@@ -236,6 +276,7 @@ class MimicStage(Stage):
         rec.ctrl[k] = self.servo_out.command(q_d, v_d, a)
         rec.q_ik[k], rec.qdot_ik[k] = q_d, v_d
         rec.p_ik[k] = self.to_base(self.ik.site_positions())
+        self._strain(k, q)
         rec.p_robot[k] = self.to_base(d.site_xpos[self.scene_sites])
         rec.q_robot[k] = d.qpos[scene.robot_qpos]
         rec.p_head[k] = d.site_xpos[self.head_site]
@@ -243,6 +284,17 @@ class MimicStage(Stage):
         rec.cam_pos[k] = d.cam_xpos[self.cams]
         rec.cam_mat[k] = d.cam_xmat[self.cams]
         rec.n = k + 1
+
+    def _strain(self, k: int, q: np.ndarray) -> None:
+        """Tell each fitted channel whether its arm was strained this tick: the IK missed the
+        command by more than ``fit.tolerance`` or a shoulder or elbow joint is on its band."""
+        rec, f = self.rec, self.cfg.fit
+        miss = np.linalg.norm(rec.p_ik[k] - rec.p_cmd[k], axis=1)
+        for i, ch in enumerate(self.channels):
+            if ch.fit is not None and rec.active[k, i]:
+                j = self._strain_joints[i]
+                ch.fit.strain(bool(miss[i] > f.tolerance or np.any(on_limit_band(
+                    q[j], self._strain_ranges[i], self.cfg.ik.limit_margin))))
 
     # ---- results --------------------------------------------------------------------------
     def metrics(self) -> dict:

@@ -8,6 +8,13 @@ first measurement initialises its filter (Ude: p and its covariance from the mea
 filter reset) until it is measured again: extrapolating a hand for seconds is no estimate.
 ``estimates`` (every initialised target) is published for every frame, time-stamped with the
 photon time and ready ``latency`` after the measurements were.
+
+Coasting: a frame without a target's measurement (missed detection, covered or frozen camera,
+see :mod:`humimic.sensors.faults`) is a prediction only, so the covariance grows with the time
+since the last measurement; a lost frame is simply absent and the next prediction spans the gap.
+``filter.coasted_frames`` counts the estimates published on prediction alone,
+``filter.longest_coast_s`` the longest such stretch, and ``filter.nonfinite_estimates`` any
+estimate that was not finite (always 0 unless something is broken).
 """
 
 from __future__ import annotations
@@ -66,6 +73,10 @@ class FilterStage(Stage):
                       if gt is not None and rlog is not None and rlog.enabled else {})
         self.filters = {t: RandomJerkFilter(cfg.b, cfg.init_vel_std**2, cfg.init_acc_std**2,
                                             cfg.max_gap) for t in self.targets}
+        self._t_meas = dict.fromkeys(self.targets, -np.inf)
+        self.coasted = dict.fromkeys(self.targets, 0)
+        self.longest_coast = dict.fromkeys(self.targets, 0.0)
+        self.nonfinite = 0
         self._bus = self._timer = None
 
     def attach(self, bus, timer) -> None:
@@ -93,13 +104,20 @@ class FilterStage(Stage):
             if m is not None:
                 kf.step(t, m.p_base, m.R_base)
                 measured[i] = True
+                self._t_meas[name] = t
             else:
                 kf.step(t)
+                if kf.initialised:  # a prediction, not a reset
+                    self.coasted[name] += 1
+                    self.longest_coast[name] = max(self.longest_coast[name],
+                                                   t - self._t_meas[name])
             if kf.resets != resets and self.rlog is not None:
                 self.rlog.log_text(t, f"{EVENTS}/filter/{name}",
                                    f"no measurement for {self.cfg.max_gap:g} s: reset", "WARN")
             if kf.initialised:
                 x, Pi = kf.x, kf.P
+                if not (np.all(np.isfinite(x)) and np.all(np.isfinite(Pi))):
+                    self.nonfinite += 1
                 valid[i], X[i], P[i], since[i] = True, x, Pi, kf.since_init
                 out[name] = TargetEstimate(name, x[0:3], x[3:6], x[6:9], Pi)
         self.record.rows.append((t, valid, measured, X, P, since))
@@ -123,4 +141,7 @@ class FilterStage(Stage):
         return {"filter": {"kind": self.cfg.kind, "b": self.cfg.b,
                            "b_paper_mm_units": self.cfg.b * 1e3, "max_gap_s": self.cfg.max_gap,
                            "resets": {n: kf.resets for n, kf in self.filters.items()},
+                           "coasted_frames": dict(self.coasted),
+                           "longest_coast_s": dict(self.longest_coast),
+                           "nonfinite_estimates": self.nonfinite,
                            "latency_ms": 1e3 * self.cfg.latency}}

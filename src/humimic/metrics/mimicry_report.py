@@ -14,7 +14,10 @@ displacement after the mapping, ``lag_ms`` (cross-correlation peak: a lag, not a
 * ``measurements_rmse_mm`` / ``estimates_rmse_mm``: separate RMS errors, not budget terms, of
   the raw 3-D measurements (tracked perception only; None with the oracle, which measures
   nothing) and of the estimates that arrived, each against the truth at its photon time;
-* ``interpolation``: hold vs extrapolate commands against the truth.
+* ``interpolation``: hold vs extrapolate commands against the truth;
+* ``scale``: the mapping's scale in use at the end (``scale_initial`` at the start; the mapped
+  truth is scaled by the scale in use at each tick), ``strained_fraction``: servo ticks at
+  which the fit found the arm strained (:mod:`humimic.control.mapping`).
 
 ``mimicry.head_still``, ``mimicry.gaze`` and ``mimicry.ik`` complete it; ``latency_ms`` holds
 true delays in simulated time (photon to the first servo tick that used a frame) and
@@ -24,8 +27,11 @@ true delays in simulated time (photon to the first servo tick that used a frame)
 
 from __future__ import annotations
 
+from functools import partial
+
 import numpy as np
 
+from humimic.control.ik import on_limit_band
 from humimic.maths.stats import finite_or_none as _num
 from humimic.maths.stats import rmse
 from humimic.metrics import mm as _mm
@@ -47,7 +53,6 @@ ARM_JOINTS = {
     "R": ("R_SFE", "R_SAA", "R_HR", "R_EB", "R_WR", "R_WFE", "R_WAA"),
     "L": ("L_SFE", "L_SAA", "L_HR", "L_EB", "L_WR", "L_WFE", "L_WAA"),
 }
-LIMIT_TOL = 2e-3  # rad
 #: Fewest servo ticks of mimicry worth scoring.
 MIN_TICKS = 30
 
@@ -88,12 +93,13 @@ def site_series(stage, i: int, ch):
     if ch.ref is not None:
         P = P - world.gt.p_base(ch.ref)
     N = len(P)
-    S, p0r = ch.S, ch.p0_robot
+    M, p0r = ch.M, ch.p0_robot
+    scale = rec.scale[k0:n - 1, i, None]
     origin = P[_idx(ch.t0, rate, N)]
     t = rec.t[k0 + 1:n]
-    true_now = (P[_idx(t, rate, N)] - origin) @ S.T
+    true_now = scale * ((P[_idx(t, rate, N)] - origin) @ M.T)
     t_ph = rec.t_est[k0:n - 1, i]
-    true_ph = (P[_idx(t_ph, rate, N)] - origin) @ S.T
+    true_ph = scale * ((P[_idx(t_ph, rate, N)] - origin) @ M.T)
     s = {
         "t": t,
         "true_now": true_now,
@@ -108,17 +114,29 @@ def site_series(stage, i: int, ch):
     return k0, s
 
 
-def _event_error(arrivals, P: np.ndarray, S: np.ndarray, rate: float,
+def _scale_at(stage, i: int, ch, t: np.ndarray) -> np.ndarray:
+    """``(N, 1)`` mapping scale of site ``i`` in use at times ``t`` (its first before it
+    started)."""
+    rec = stage.rec
+    active = rec.active[:rec.n, i]
+    ts, ss = rec.t[:rec.n][active], rec.scale[:rec.n, i][active]
+    if len(ts) == 0:
+        return np.full((len(t), 1), ch.scale)
+    return np.interp(t, ts, ss)[:, None]
+
+
+def _event_error(arrivals, P: np.ndarray, M: np.ndarray, scale_at, rate: float,
                  t_start: float) -> float | None:
-    """RMS (mm, mapped space) of the values that arrived on a topic, photon times from
-    ``t_start`` on, against the truth at their photon times (None if there are none)."""
+    """RMS (mm, mapped space: reflection ``M``, the scale at each photon time from
+    ``scale_at(t)``) of the values that arrived on a topic, photon times from ``t_start`` on,
+    against the truth at their photon times (None if there are none)."""
     if arrivals is None or not arrivals.t:
         return None
     t, _, p = arrivals.arrays()
     keep = t >= t_start - 1e-9
     if not np.any(keep):
         return None
-    return _mm(rmse(p[keep] @ S.T - P[_idx(t[keep], rate, len(P))] @ S.T))
+    return _mm(rmse(scale_at(t[keep]) * ((p[keep] - P[_idx(t[keep], rate, len(P))]) @ M.T)))
 
 
 def _limit_hits(stage, site: str, k0: int) -> tuple[int, dict[str, int]]:
@@ -127,10 +145,8 @@ def _limit_hits(stage, site: str, k0: int) -> tuple[int, dict[str, int]]:
     rec = stage.rec
     names = ARM_JOINTS[site[0]] + TORSO_JOINTS
     j = np.array([ROBOT_JOINTS.index(x) for x in names])
-    band = stage.cfg.ik.limit_margin + LIMIT_TOL
-    rng = stage.ik_model.jnt_range[j]
-    q = rec.q_ik[k0:rec.n, j]
-    hit = (q <= rng[:, 0] + band) | (q >= rng[:, 1] - band)
+    hit = on_limit_band(rec.q_ik[k0:rec.n, j], stage.ik_model.jnt_range[j],
+                        stage.cfg.ik.limit_margin)
     per_joint = {name: int(n) for name, n in zip(names, hit.sum(axis=0), strict=True) if n}
     return int(np.any(hit, axis=1).sum()), per_joint
 
@@ -150,6 +166,7 @@ def site_metrics(stage, i: int, ch) -> tuple[dict, dict]:
                         s["ik"], s["robot"])
     rate = world.scenario.timing.physics_rate
     P = world.gt.p_base(ch.target)
+    scale_at = partial(_scale_at, stage, i, ch)
     budget = {name: _mm(rmse(terms[name])) for name in (*TERMS, "total")}
     primary, other = cfg.interpolation.mode, ("extrapolate" if cfg.interpolation.mode == "hold"
                                               else "hold")
@@ -172,14 +189,19 @@ def site_metrics(stage, i: int, ch) -> tuple[dict, dict]:
         "joint_limit_hits": hits,
         "joint_limit_hits_by_joint": hits_by_joint,
         "clamped_fraction": float(rec.clamped[k0:rec.n, i].mean()),
+        "scale": ch.scale,
+        "scale_initial": ch.scale_initial,
+        "strained_fraction": (ch.fit.strained_ticks / n_active if ch.fit is not None
+                              else None),
         "lost_fraction": float(rec.lost[k0:rec.n, i].mean()),
         "started_s": float(rec.t[k0]),
         "ticks": int(n_active),
         "error_budget_mm": budget,
         "error_budget_share": {k: _num(v) for k, v in mse_shares(terms).items()},
-        "measurements_rmse_mm": _event_error(rec.measurements.get(ch.target), P, ch.S, rate,
-                                             ch.t0),
-        "estimates_rmse_mm": _event_error(rec.estimates.get(ch.target), P, ch.S, rate, ch.t0),
+        "measurements_rmse_mm": _event_error(rec.measurements.get(ch.target), P, ch.M,
+                                             scale_at, rate, ch.t0),
+        "estimates_rmse_mm": _event_error(rec.estimates.get(ch.target), P, ch.M, scale_at,
+                                          rate, ch.t0),
         "interpolation": interp,
     }
 
@@ -273,7 +295,8 @@ def mimic_metrics(stage) -> dict:
     ik_ms = 1e3 * rec.ik_s[:n]
     out = {
         **sites,
-        "mode": cfg.mode, "scale": cfg.scale, "perception": cfg.perception,
+        "mode": cfg.mode, "scale_setting": cfg.scale, "fit": cfg.fit.enabled,
+        "perception": cfg.perception,
         "interpolation_mode": cfg.interpolation.mode,
         "head_still": {"max_displacement_mm": 1e3 * dp, "max_rotation_deg": float(np.degrees(dr))},
         "joints": {"limit_violations": int(np.sum(excess > 0.0)),

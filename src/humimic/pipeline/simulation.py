@@ -3,7 +3,8 @@
 Per physics tick ``k`` (time ``t = k / physics_rate``):
 
 1. write the person's state at ``t`` into the scene, ``mj_step1`` (kinematics at ``t``);
-2. sample the sensors that are due (eye cameras, IMU, Wii remote) and publish them;
+2. sample the sensors that are due (eye cameras, IMU, Wii remote) and publish them, minus the
+   configured faults (:mod:`humimic.sensors.faults`);
 3. deliver every bus value that is ready at ``t`` (stages run here, in causal order);
 4. at servo ticks, let control stages write actuator targets, then step the planar base's
    controller (``world.base``) towards its target;
@@ -62,7 +63,8 @@ def simulate(world, stages: list[Stage], rlog, bus: Bus | None = None,
     for topic, samples in (("imu", world.imu), ("wiimote", world.wiimote)):
         if samples is not None:
             data, ticks = samples
-            inertial.append((topic, data, {int(k): i for i, k in enumerate(ticks)}))
+            keep = world.faults.keep(topic, len(ticks))
+            inertial.append((topic, data, {int(k): i for i, k in enumerate(ticks) if keep[i]}))
     with timer.time("render_setup"):  # GL contexts before the clock starts
         for rig in (world.eye_rig, world.head_rig):
             if rig is not None:
@@ -93,12 +95,13 @@ def simulate(world, stages: list[Stage], rlog, bus: Bus | None = None,
 
             if cam_sched is not None and cam_sched.due(tick):
                 with timer.time("render"):
-                    images = world.eye_rig.capture(t)
-                bus.publish("frames", Stamped(t, images, t + latency))
-                if image_every and frames % image_every == 0:
-                    for name, img in images.items():
-                        rlog.log_camera_image(t, f"world/cameras/{name}", img, quality)
-                frames += 1
+                    images = world.faults.frames.apply(t, world.eye_rig.capture(t))
+                if images is not None:
+                    bus.publish("frames", Stamped(t, images, t + latency))
+                    if image_every and frames % image_every == 0:
+                        for name, img in images.items():
+                            rlog.log_camera_image(t, f"world/cameras/{name}", img, quality)
+                    frames += 1
             if head_sched is not None and head_sched.due(tick):
                 with timer.time("render_headcam"):
                     image = world.capture_headcam(t)

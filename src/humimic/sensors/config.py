@@ -9,6 +9,20 @@ from pydantic import Field, model_validator
 from humimic.scenario.base import Section
 
 
+class CoveredWindow(Section):
+    """A camera covered (black frames) from ``start`` to ``end`` (s)."""
+
+    camera: Literal["left", "right", "both"] = "both"
+    start: float = Field(ge=0.0)
+    end: float = Field(gt=0.0)
+
+    @model_validator(mode="after")
+    def _check_order(self) -> CoveredWindow:
+        if self.end <= self.start:
+            raise ValueError(f"end ({self.end:g} s) must be after start ({self.start:g} s)")
+        return self
+
+
 class Cameras(Section):
     """The robot's eye cameras (both eyes: stereo)."""
 
@@ -27,6 +41,15 @@ class Cameras(Section):
     """Radial distortion k1, k2 (OpenCV convention)."""
     latency: float = Field(0.0, ge=0.0, le=0.5)
     """Transfer latency (s) before a frame reaches perception."""
+    drop_rate: float = Field(0.0, ge=0.0, lt=1.0)
+    """Probability that a stereo frame is lost in transfer (never published); see
+    :mod:`humimic.sensors.faults`."""
+    freeze_rate: float = Field(0.0, ge=0.0, lt=1.0)
+    """Probability, per camera and frame, that a camera delivers its previous image again
+    (stale pixels under the new time stamp)."""
+    covered: list[CoveredWindow] = Field(default_factory=list)
+    """Time windows in which a camera's images are black, e.g.
+    ``[{camera: left, start: 2.0, end: 3.0}]``."""
 
     @model_validator(mode="after")
     def _check_resolution(self) -> Cameras:
@@ -65,6 +88,8 @@ class Inertial(Section):
     """rad/s/sqrt(Hz)."""
     gyro_bias_walk: float = Field(2.0e-5, ge=0.0)
     """rad/s^2/sqrt(Hz)."""
+    drop_rate: float = Field(0.0, ge=0.0, lt=1.0)
+    """Probability that a sample is lost (never published); see :mod:`humimic.sensors.faults`."""
 
 
 class HeadInertial(Inertial):

@@ -18,6 +18,7 @@ from humimic.motion import MotionContext, compute_ground_truth, make_motion
 from humimic.sensors.camera_model import CameraImage
 from humimic.sensors.cameras import CameraRig, CameraSpec
 from humimic.sensors.clock import Clock, Schedule
+from humimic.sensors.faults import SensorFaults
 from humimic.sensors.inertial import simulate_inertial, simulate_orientation
 from humimic.world.gaze import pan_tilt_to
 from humimic.world.names import EYE_CAMERAS, ROBOT_JOINTS, ROBOT_PREFIX
@@ -78,6 +79,8 @@ class World:
                          if hc.enabled else None)
         self.imu = self._inertial("head_imu", scenario.sensors.imu, rngs["imu"])
         self.wiimote = self._inertial("wiimote", scenario.sensors.wiimote, rngs["wiimote"])
+        self.faults = SensorFaults(scenario, self.eye_cameras, rngs)
+        """Lost, frozen and covered frames, lost inertial samples (applied when published)."""
 
     @property
     def T_world_W(self) -> np.ndarray:

@@ -87,7 +87,8 @@ def perception_stages(scenario, world, rngs, rlog) -> list[Stage]:
     period = 1.0 / scenario.cameras.rate
     latency = period if cfg.latency is None else cfg.latency
     stages: list[Stage] = [PerceptionStage(cfg, cams, luts, rngs["perception"], prec, rlog,
-                                           latency, period, scenario.duration)]
+                                           latency, period, scenario.duration,
+                                           skip_repeats=scenario.cameras.noise_std > 0.0)]
     frec = None
     if scenario.filter is not None:
         frec = FilterRecord(list(cfg.targets))

@@ -4,7 +4,9 @@ The per-frame work (tracking, identities, stereo, triangulation; Ude eqs. 1-10) 
 :class:`~humimic.perception.blobs.core.PerceptionCore`'s; this stage feeds it the ``frames`` topic,
 publishes ``measurements`` with the frame's photon time, ready ``latency`` after the frame was
 (a declared processing delay; the compute time itself is reported separately in
-``stages.perception``), records every frame and logs blobs and state changes to rerun.
+``stages.perception``), records every frame and logs blobs and state changes to rerun. A frame
+set in which a camera repeats its previous image bit for bit (frozen, see
+:mod:`humimic.sensors.faults`) is skipped like a lost one when the cameras have pixel noise.
 
 Pipelining (``perception.pipelined``): when the declared latency is at least one camera frame,
 each frame is processed in a worker while the simulation goes on, and the result is collected
@@ -36,6 +38,7 @@ import numpy as np
 from humimic.perception.blobs.core import FrameResult, PerceptionCore
 from humimic.perception.blobs.record import PerceptionRecord
 from humimic.pipeline.stage import Stage
+from humimic.sensors.faults import RepeatDetector
 from humimic.viz.rerun_log import EVENTS, OTHER_COLOR, TARGET_COLORS, image_entity
 
 #: ``auto`` runs perception in a process for runs at least this long (simulated s). The child
@@ -69,8 +72,11 @@ class PerceptionStage(Stage):
 
     def __init__(self, cfg, cameras: tuple[str, str], luts: dict, rng: np.random.Generator,
                  record: PerceptionRecord, rlog=None, latency: float = 0.0,
-                 frame_period: float = np.inf, duration: float = np.inf):
+                 frame_period: float = np.inf, duration: float = np.inf,
+                 skip_repeats: bool = False):
         self.core: PerceptionCore | None = PerceptionCore(cfg, cameras, luts, rng)
+        self.repeats = RepeatDetector(skip_repeats)
+        """Frozen frames (a camera repeating its image) are skipped like lost ones."""
         self.cameras, self.rlog = self.core.cameras, rlog
         self.published, self.targets = self.core.published, self.core.targets
         self.latency = float(latency)
@@ -99,12 +105,16 @@ class PerceptionStage(Stage):
         bus.subscribe("frames", self._on_frames)
 
     def _on_frames(self, topic: str, msg) -> None:
+        stale = self.repeats.stale(msg.value)
         if self._pool is None:
-            with self._timer.time(self.name):
-                out = self.core.process(msg.t, msg.value)
-            self._publish(msg, out)
+            if not stale:
+                with self._timer.time(self.name):
+                    out = self.core.process(msg.t, msg.value)
+                self._publish(msg, out)
             return
         self.flush()  # the previous frame: due no later than now (latency >= one frame)
+        if stale:
+            return
         if self.core is not None and self._proc is not None and self._proc.ready():
             t0 = time.perf_counter()
             self._proc.adopt(self.core)  # the child carries on from this state
@@ -115,6 +125,13 @@ class PerceptionStage(Stage):
             self._pending = (msg, None)
         else:
             self._pending = (msg, self._pool.submit(self._timed_process, msg.t, msg.value))
+
+    def servo(self, t: float, bus) -> None:
+        """Publish a pipelined result that no frame came to collect by its ready time (the next
+        frame was lost), and deliver it now, as it would have been."""
+        if self._pending is not None and t + 1e-9 >= self._pending[0].t_ready + self.latency:
+            self.flush()
+            bus.deliver(t)
 
     def _timed_process(self, t: float, images: dict):
         t0 = time.perf_counter()
@@ -181,7 +198,8 @@ class PerceptionStage(Stage):
         out = {"targets": self.published, "distractors": self.targets[len(self.published):],
                "cameras": list(self.cameras), "frames": len(rows.t),
                "identity_solves": self.identity_solves, "latency_ms": 1e3 * self.latency,
-               "pipelined": self.pipelined, "worker": self.worker}
+               "pipelined": self.pipelined, "worker": self.worker,
+               "stale_frames_skipped": self.repeats.stale_frames}
         return {"perception": out}
 
     def close(self) -> None:
