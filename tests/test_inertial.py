@@ -72,3 +72,14 @@ def test_same_seed_same_readings():
     finally:
         a.close()
         b.close()
+
+
+def test_setting_one_wiimote_key_keeps_the_wiimote_defaults():
+    """A regression: ``sensors.wiimote.drop_rate`` alone used to reset the remote to the head
+    IMU's 180 Hz and noise densities."""
+    base = validate_scenario({"name": "w"}).sensors.wiimote
+    one = validate_scenario({"name": "w", "sensors": {"wiimote": {"drop_rate": 0.1}}})
+    wii = one.sensors.wiimote
+    assert wii.rate == base.rate == 100.0
+    assert wii.drop_rate == 0.1
+    assert wii.model_dump(exclude={"drop_rate"}) == base.model_dump(exclude={"drop_rate"})

@@ -120,15 +120,21 @@ class HeadInertial(Inertial):
         return self
 
 
-def _wiimote_default() -> Inertial:
-    return Inertial(rate=100.0, accel_noise_density=2.7e-3, accel_bias_walk=5e-3,
-                    gyro_noise_density=5e-4, gyro_bias_walk=5e-5)
+class WiiInertial(Inertial):
+    """The Wii remote's accelerometer and Motion Plus gyroscope: 100 Hz, noisier than the
+    head sensor. Its own class, so that setting one key keeps the other Wii defaults."""
+
+    rate: float = Field(100.0, gt=0.0, le=840.0)
+    accel_noise_density: float = Field(2.7e-3, ge=0.0)
+    accel_bias_walk: float = Field(5.0e-3, ge=0.0)
+    gyro_noise_density: float = Field(5.0e-4, ge=0.0)
+    gyro_bias_walk: float = Field(5.0e-5, ge=0.0)
 
 
 class Sensors(Section):
     imu: HeadInertial = Field(default_factory=HeadInertial)
     """The IMU on the person's forehead (at the head camera, axes of its frame I), 180 Hz."""
-    wiimote: Inertial = Field(default_factory=_wiimote_default)
+    wiimote: WiiInertial = Field(default_factory=WiiInertial)
     """The Wii remote's accelerometer and gyroscope (Motion Plus) in the person's right hand,
     100 Hz, axes of the remote's frame A."""
     head_camera: HeadCamera = Field(default_factory=HeadCamera)
