@@ -26,6 +26,8 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from humimic.estimation.ekf.arm_marker import hue_mask
+
 
 @dataclass(frozen=True)
 class ArmMaskParams:
@@ -85,16 +87,13 @@ def body_colour_lut(body_rgb: tuple, chroma_tol: float, min_value: float) -> np.
     return out
 
 
-def marker_region(hsv: np.ndarray, prm: ArmMaskParams, scale: float = 1.0
+def marker_region(rgb: np.ndarray, prm: ArmMaskParams, scale: float = 1.0
                   ) -> np.ndarray | None:
-    """The marker (uint8 0/255) or None: hue extraction, labelling and the largest region
-    (Sugiyama sec. IV-B) among the round ones no larger than a marker can look. ``scale``:
-    the image's size relative to the camera's (pixel parameters are the camera's)."""
-    lo, hi = prm.marker_hue_deg
-    s, v = int(255 * prm.marker_min_saturation), int(255 * prm.marker_min_value)
-    m = cv2.inRange(hsv, (max(0, int(lo // 2)), s, v), (int(hi // 2), 255, 255))
-    if lo < 0:
-        m |= cv2.inRange(hsv, (int(180 + lo / 2), s, v), (180, 255, 255))
+    """The marker (uint8 0/255) or None: hue extraction (:func:`.arm_marker.hue_mask`, the
+    arm EKF's), labelling and the largest region (Sugiyama sec. IV-B) among the round ones no
+    larger than a marker can look. ``scale``: the image's size relative to the camera's (pixel
+    parameters are the camera's)."""
+    m = hue_mask(rgb, prm.marker_hue_deg, prm.marker_min_saturation, prm.marker_min_value)
     n, labels, stats, _ = cv2.connectedComponentsWithStats(m, connectivity=8)
     area = stats[1:, cv2.CC_STAT_AREA].astype(float)
     r = 0.5 * np.maximum(stats[1:, cv2.CC_STAT_WIDTH], stats[1:, cv2.CC_STAT_HEIGHT])
@@ -128,7 +127,7 @@ def arm_mask(rgb: np.ndarray, prm: ArmMaskParams = ArmMaskParams(), scale: float
     is the image's size relative to the camera's: the mask is coarse (grown by a margin), so
     it is computed on a half-size image (``scale=0.5``) and upsampled."""
     h, w = rgb.shape[:2]
-    marker = marker_region(cv2.cvtColor(rgb, cv2.COLOR_RGB2HSV), prm, scale)
+    marker = marker_region(rgb, prm, scale)
     if marker is not None:
         radius = np.sqrt(np.count_nonzero(marker) / np.pi)
         seed = grow(marker, prm.hand_scale * radius)
