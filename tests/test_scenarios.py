@@ -60,6 +60,8 @@ def test_scenario_runs_end_to_end_and_every_stage_scores(name, tmp_path):
         assert (tmp_path / "tracking.npz").is_file()  # archived without plots
         if scenario.filter is not None:
             assert any(t.get("filtered_rmse_mm") is not None for t in tracking.values())
+    for name in getattr(scenario, "trackers", {}):  # every tracker ran and scored
+        assert metrics["trackers"][name]["frames"] > 0, metrics["trackers"][name]
     if scenario.mimic is not None:
         for site in scenario.mimic.map.values():
             palm = metrics["mimicry"][site]
