@@ -11,8 +11,15 @@ def _gest(name, cfg, scenario, world, rngs, rlog) -> Stage:
     return gest_stage(name, cfg, scenario, world, rngs, rlog)
 
 
+def _tbp(name, cfg, scenario, world, rngs, rlog) -> Stage:
+    from humimic.perception.trackers.tbp.build import tbp_stage
+
+    return tbp_stage(name, cfg, scenario, world, rngs, rlog)
+
+
 BUILDERS = {
     "gest": _gest,
+    "tbp": _tbp,
 }
 
 

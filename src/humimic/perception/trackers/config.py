@@ -8,8 +8,10 @@ from typing import Annotated
 from pydantic import Field
 
 from humimic.perception.trackers.gest.config import GestConfig
+from humimic.perception.trackers.tbp.config import TbpConfig
 
 TrackerConfig = Annotated[
-    GestConfig,
+    GestConfig
+    | TbpConfig,
     Field(discriminator="kind"),
 ]

@@ -6,10 +6,11 @@ chance of re-appearing anywhere in the workspace (:class:`.proposal.PoseReset`, 
 particles the importance function proposes after the hand left the view keep their weight).
 ICONDENSATION (:func:`humimic.estimation.particles.icondensation_step`) mixes ``alpha``
 particles from the stereo importance function (:mod:`.stereo`, :class:`.proposal.
-CandidateProposal`), ``beta`` from the dynamics and the rest from the prior; the likelihood is
-:mod:`.likelihood`'s. Initialisation is automatic: the filter starts from the importance function at the
-first frame with a hand-sized stereo skin blob, and re-starts from it whenever the estimate
-is lost (its contour off the edges by more than ``lost_px`` or out of the image).
+CandidateProposal`), ``beta`` from the dynamics and the rest from the prior; the likelihood
+is :mod:`.likelihood`'s. Initialisation is automatic: the filter starts from the importance
+function at the first frame with a hand-sized stereo skin blob, and re-starts from it
+whenever the estimate is lost (its contour off the edges by more than ``lost_px`` or out of
+the image).
 """
 
 from __future__ import annotations
