@@ -66,7 +66,7 @@ class GestConfig(Section):
     workspace_low: Vec3 = (0.3, -0.8, 0.5)
     """Workspace box (robot base frame, m) of the prior over the centre."""
     workspace_high: Vec3 = (2.0, 0.8, 1.9)
-    blob_size: tuple[float, float] = (0.04, 0.16)
+    blob_size: tuple[float, float] = (0.04, 0.14)
     """Physical size range (m, sqrt of the blob's area times depth / focal length) of a skin
     blob the importance function accepts: a head is larger."""
     blob_subsample: int = Field(2, ge=1, le=4)
@@ -93,6 +93,11 @@ class GestConfig(Section):
     lost_px: float = Field(5.0, gt=0.0)
     """The estimate is ``lost`` when its mean contour distance to edges exceeds this (px) or
     it left the image; then the filter re-initialises from the importance function."""
+    lost_m: float = Field(0.1, gt=0.0)
+    """... or when no stereo candidate lies within this distance (m) of it ...
+    """
+    lost_frames: int = Field(3, ge=1)
+    """... for this many frames in a row."""
     latency: float = Field(0.0, ge=0.0, le=1.0)
     """Declared processing latency (s) of the published pose."""
 

@@ -9,8 +9,8 @@ particles from the stereo importance function (:mod:`.stereo`, :class:`.proposal
 CandidateProposal`), ``beta`` from the dynamics and the rest from the prior; the likelihood
 is :mod:`.likelihood`'s. Initialisation is automatic: the filter starts from the importance
 function at the first frame with a hand-sized stereo skin blob, and re-starts from it
-whenever the estimate is lost (its contour off the edges by more than ``lost_px`` or out of
-the image).
+whenever the estimate is lost (its contour off the edges by more than ``lost_px``, out of
+the image, or ``lost_frames`` frames in a row without a stereo skin blob within ``lost_m``).
 """
 
 from __future__ import annotations
@@ -104,6 +104,8 @@ class GestTracker:
         self.ref: np.ndarray | None = None
         self.orientation = np.zeros(3)
         self.locked = False
+        self.unsupported = 0
+        """Consecutive frames without a stereo candidate near the estimate."""
 
     def _ll(self, views, pairs):
         cfg = self.cfg
@@ -154,7 +156,10 @@ class GestTracker:
         mean[6:] = np.maximum(mean[6:], 1e-3)
         proj = project_hands(mean[None], views[0], cfg.n_points)
         d = float(shape_distance(proj, views[0])[0])
-        status = "tracking" if (s.ok and proj.valid[0] and d <= cfg.lost_px) else "lost"
+        support = len(p) > 0 and float(np.min(np.linalg.norm(p - mean[:3], axis=1))) <= cfg.lost_m
+        self.unsupported = 0 if support else self.unsupported + 1
+        status = ("tracking" if (s.ok and proj.valid[0] and d <= cfg.lost_px
+                                 and self.unsupported < cfg.lost_frames) else "lost")
         if status == "tracking":
             self.orientation = mean[3:6]
             h = patch_histogram(mean, views[0])
