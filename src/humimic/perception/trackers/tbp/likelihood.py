@@ -109,6 +109,18 @@ def project_arms(body: BodyModel, q: np.ndarray, torso: np.ndarray, view: ArmVie
     return ArmProjection(pose, uv, pts.visible[:, idx] & ok[..., None], hand_inner, patches)
 
 
+def hand_interiors(hands: BodyModel, q: np.ndarray, torso: np.ndarray, view: ArmView,
+                   shrink: float = 0.6) -> np.ndarray:
+    """``(N, 2, V, 2)`` the hands' outlines shrunk towards their centroids (px), from a model
+    ``hands`` holding only the two hand parts (the first stage's cheap projection)."""
+    bv = project(hands, hands.forward(q, fixed=torso), view.intrinsics, view.T_cam_base,
+                 n_vertices=8)
+    poly = bv.outline.uv[:, [bv.index(h) for h in HANDS]]
+    c = poly.mean(axis=2, keepdims=True)
+    out = c + shrink * (poly - c)
+    return np.where(np.isfinite(out), out, OFF_IMAGE)
+
+
 def shape_motion_distance(proj: ArmProjection, maps: MotionEdgeMaps, K: float,
                           cap_px: float = DT_CAP_PX) -> np.ndarray:
     """Menezes eq. 5 over the visible arm contour points: ``(N,)`` px (``cap_px`` when none is
@@ -123,9 +135,10 @@ def shape_motion_distance(proj: ArmProjection, maps: MotionEdgeMaps, K: float,
     return np.where(n > 0, (d * w).sum(axis=(1, 2)) / np.maximum(n, 1), cap_px)
 
 
-def skin_distance(proj: ArmProjection, skin: np.ndarray) -> np.ndarray:
-    """``1 - mean skin posterior`` inside the two hands' outlines, ``(N,)`` in [0, 1]."""
-    return 1.0 - sample(skin, proj.hand_inner, 0.0).mean(axis=(1, 2))
+def skin_distance(hand_inner: np.ndarray, skin: np.ndarray) -> np.ndarray:
+    """``1 - mean skin posterior`` at the points ``(N, 2, V, 2)`` inside the two hands'
+    outlines, ``(N,)`` in [0, 1]."""
+    return 1.0 - sample(skin, hand_inner, 0.0).mean(axis=(1, 2))
 
 
 def patch_histograms_all(proj: ArmProjection, qimage: QuantizedImage) -> np.ndarray:
@@ -166,7 +179,7 @@ def full_log_likelihood(proj: ArmProjection, view: ArmView, q: np.ndarray, body:
     lambda_co, q_def``)."""
     D = shape_motion_distance(proj, view.maps, w["K"], w["cap_px"])
     out = shape_log_likelihood(D, w["sigma_s"], w["lambda_s"])                # eq. 2 with eq. 5
-    out += shape_log_likelihood(skin_distance(proj, view.skin), w["sigma_k"])
+    out += shape_log_likelihood(skin_distance(proj.hand_inner, view.skin), w["sigma_k"])
     if refs is not None:
         lam = np.repeat(w["lambda_c"][:, None], 3, axis=1)
         out += color_log_likelihood(patch_histograms_all(proj, view.qimage), refs,

@@ -30,6 +30,7 @@ from humimic.perception.trackers.tbp.likelihood import (
     ArmView,
     arm_view,
     full_log_likelihood,
+    hand_interiors,
     patch_histograms_all,
     project_arms,
     skin_distance,
@@ -50,6 +51,8 @@ def cv_dynamics(n: int, sigma: float) -> LinearGaussian:
 class TbpTracker:
     def __init__(self, cfg: TbpConfig, body: BodyModel, lut):
         self.cfg, self.body, self.lut = cfg, body.with_free(ARM_NAMES), lut
+        self.hands = self.body.without(*[p for p in self.body.part_names
+                                         if p not in ("r_hand", "l_hand")])
         self.q_def = np.radians(np.tile(cfg.rest_deg, 2))
         self.dynamics = cv_dynamics(8, math.radians(cfg.sigma_deg))
         self.flow = OpticalFlow()
@@ -95,9 +98,8 @@ class TbpTracker:
         body, w, refs = self.body, self.weights, self.refs
 
         def first(x):                                           # skin cue of the hands
-            q = body.clamp(x[:, :8])
-            proj = project_arms(body, q, torso, view, 4)
-            return shape_log_likelihood(skin_distance(proj, view.skin), cfg.sigma_k)
+            inner = hand_interiors(self.hands, body.clamp(x[:, :8]), torso, view)
+            return shape_log_likelihood(skin_distance(inner, view.skin), cfg.sigma_k)
 
         def second(x):
             q = body.clamp(x[:, :8])
