@@ -10,11 +10,47 @@ returning a :class:`~humimic.messages.PoseEstimate` (or None to publish nothing)
 from __future__ import annotations
 
 import time
+from dataclasses import dataclass
 
 import numpy as np
 
+from humimic.perception.cues.color_models import ColorLUT
+from humimic.perception.cues.edges import edge_maps
+from humimic.perception.cues.histograms import QuantizedImage, quantize
+from humimic.perception.cues.motion import MotionEdgeMaps, motion_edge_maps
 from humimic.pipeline.stage import Stage
 from humimic.scenario.errors import ScenarioError
+from humimic.sensors.camera_model import CameraImage, Intrinsics, invert_transform
+
+
+@dataclass(frozen=True)
+class FrameCues:
+    """One camera frame's cue images, computed once per frame for all particles."""
+
+    intrinsics: Intrinsics
+    T_cam_base: np.ndarray
+    maps: MotionEdgeMaps
+    """Canny edges, moving edges (empty without optical flow) and their distance transforms."""
+    skin: np.ndarray | None
+    """float32 skin posterior per pixel (None without a skin model)."""
+    qimage: QuantizedImage
+    edge_density: float
+    """Fraction of edge pixels."""
+
+    @property
+    def dt(self) -> np.ndarray:
+        return self.maps.dt
+
+
+def frame_cues(frame: CameraImage, bins: int, lut: ColorLUT | None = None,
+               flow: np.ndarray | None = None) -> FrameCues:
+    """The cue images of ``frame``: edges (and moving edges with ``flow``), skin posterior,
+    quantised colours."""
+    maps = edge_maps(frame.image)
+    return FrameCues(frame.camera.intrinsics, invert_transform(frame.camera.T_base_cam),
+                     motion_edge_maps(maps, flow), None if lut is None else
+                     lut.posterior(frame.image), quantize(frame.image, bins),
+                     float(np.mean(maps.edges > 0)))
 
 
 def check_cameras(scenario, world, name: str, cameras, needed: int) -> tuple[str, ...]:

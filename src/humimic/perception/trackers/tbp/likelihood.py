@@ -26,15 +26,15 @@ from humimic.bodymodel.features import contour_points
 from humimic.bodymodel.model import BodyModel, Cone, Pose
 from humimic.bodymodel.projection import project
 from humimic.perception.cues.color_models import ColorLUT
-from humimic.perception.cues.edges import DT_CAP_PX, edge_maps, sample, shape_log_likelihood
+from humimic.perception.cues.edges import DT_CAP_PX, sample, shape_log_likelihood
 from humimic.perception.cues.histograms import (
     QuantizedImage,
     color_log_likelihood,
     patch_histograms,
-    quantize,
 )
-from humimic.perception.cues.motion import MotionEdgeMaps, motion_edge_maps, sample_pair
-from humimic.sensors.camera_model import CameraImage, Intrinsics, invert_transform
+from humimic.perception.cues.motion import MotionEdgeMaps, sample_pair
+from humimic.perception.trackers.common import FrameCues, frame_cues
+from humimic.sensors.camera_model import CameraImage
 
 ARM_PARTS = ("r_upper_arm", "r_forearm", "r_hand", "l_upper_arm", "l_forearm", "l_hand")
 HANDS = ("r_hand", "l_hand")
@@ -42,25 +42,11 @@ INSCRIBED = np.array([[0.0, 0.0, 1.0, 1.0]])
 OFF_IMAGE = -1.0e6
 
 
-@dataclass(frozen=True)
-class ArmView:
-    """One frame's data for the likelihood (computed once per frame)."""
-
-    intrinsics: Intrinsics
-    T_cam_base: np.ndarray
-    maps: MotionEdgeMaps
-    skin: np.ndarray
-    """float32 skin posterior per pixel."""
-    qimage: QuantizedImage
-    edge_density: float
-    """Fraction of edge pixels."""
+ArmView = FrameCues
 
 
 def arm_view(frame: CameraImage, flow: np.ndarray | None, lut: ColorLUT, bins: int) -> ArmView:
-    maps = edge_maps(frame.image)
-    return ArmView(frame.camera.intrinsics, invert_transform(frame.camera.T_base_cam),
-                   motion_edge_maps(maps, flow), lut.posterior(frame.image),
-                   quantize(frame.image, bins), float(np.mean(maps.edges > 0)))
+    return frame_cues(frame, bins, lut, flow)
 
 
 @dataclass(frozen=True)
