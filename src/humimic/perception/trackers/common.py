@@ -53,18 +53,21 @@ def frame_cues(frame: CameraImage, bins: int, lut: ColorLUT | None = None,
                      float(np.mean(maps.edges > 0)))
 
 
-def check_cameras(scenario, world, name: str, cameras, needed: int) -> tuple[str, ...]:
+def check_cameras(scenario, world, name: str, cameras, needed: int,
+                  key: str = "cameras") -> tuple[str, ...]:
     """The cameras a tracker uses (``cameras`` or the first ``needed`` rendered eyes); a
-    camera that is not rendered is a :class:`ScenarioError` naming the key."""
+    camera that is not rendered is a :class:`ScenarioError` naming the key
+    (``trackers.<name>.<key>``, with the index when ``key`` is a list)."""
     where = f"scenario {scenario.name!r}"
     cams = tuple(cameras) if cameras is not None else tuple(world.eye_cameras[:needed])
     if len(cams) < needed:
-        raise ScenarioError(where, f"trackers.{name}.cameras",
+        raise ScenarioError(where, f"trackers.{name}.{key}",
                             f"this tracker needs {needed} camera(s)", list(cams),
                             "cameras.eyes: stereo")
     for i, cam in enumerate(cams):
         if cam not in world.eye_cameras:
-            raise ScenarioError(where, f"trackers.{name}.cameras.{i}",
+            where_key = f"trackers.{name}.{key}" + (f".{i}" if needed > 1 else "")
+            raise ScenarioError(where, where_key,
                                 f"camera {cam!r} is not rendered by this scenario", cam,
                                 f"{', '.join(world.eye_cameras) or 'none'} (set cameras.which)")
     return cams

@@ -14,7 +14,7 @@ from humimic.world.names import HUMAN_PREFIX
 def tbp_stage(name, cfg, scenario, world, rngs, rlog) -> TbpStage:
     where = f"scenario {scenario.name!r}"
     cams = check_cameras(scenario, world, name,
-                         None if cfg.camera is None else [cfg.camera], 1)
+                         None if cfg.camera is None else [cfg.camera], 1, "camera")
     if cfg.torso == "head":
         perc = getattr(scenario, "perception", None)
         if perc is None or "head" not in perc.targets:
