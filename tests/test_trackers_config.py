@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import pytest
-
 from test_scenario_errors import GOOD, _run
 
 
