@@ -8,8 +8,8 @@ picks predecessors by the skin cue of their predicted hands (first stage) and we
 particles by eq. 19 (second stage, :mod:`.likelihood`). Samples outside the joint limits are
 clamped to them, not rejected. Cue weights are set on the first frame: ``lambda_s`` from the
 edge density around the person (plain or cluttered), each patch's ``lambda_c`` from how far
-its reference histogram is from a uniform one. If every particle has zero likelihood the set restarts from
-the rest pose.
+its reference histogram is from a uniform one. If every particle has zero likelihood the set
+restarts from the rest pose.
 """
 
 from __future__ import annotations
