@@ -38,8 +38,7 @@ def run_one(scenario: Scenario, out_dir: str | Path | None = None, rerun: str | 
             progress: bool = True) -> dict:
     """Run ``scenario`` (its own seed) and return the metrics written to ``metrics.json``."""
     wall0 = time.perf_counter()
-    out = Path(out_dir) if out_dir is not None else default_out_dir(scenario)
-    out.mkdir(parents=True, exist_ok=True)
+    out = prepare_out_dir(Path(out_dir) if out_dir is not None else default_out_dir(scenario))
     (out / "scenario.resolved.yaml").write_text(dump_scenario(scenario))
     mode = rerun or scenario.output.rerun
     rngs = Rngs(scenario.seed)
@@ -77,6 +76,37 @@ def run_one(scenario: Scenario, out_dir: str | Path | None = None, rerun: str | 
     if scenario.output.plots:
         _plots(out, world, stages, result.ticks_done)
     return metrics
+
+
+def check_out_dir(out: Path) -> None:
+    """:class:`InputError` if ``out`` exists and is not a directory."""
+    if out.exists() and not out.is_dir():
+        raise InputError(f"--out {out}: exists and is not a directory")
+
+
+def prepare_out_dir(out: Path) -> Path:
+    """Create the output directory; :class:`InputError` if ``out`` is a file or cannot be made."""
+    check_out_dir(out)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise InputError(f"--out {out}: cannot create the directory ({exc.strerror})") from None
+    return out
+
+
+def dry_run(scenario: Scenario) -> None:
+    """Everything a run does before its first step -- build the world (scene, motion, ground
+    truth, sensors) and the stages -- then close them: no simulation, no output files."""
+    rngs = Rngs(scenario.seed)
+    world = World(scenario, rngs)
+    stages: list = []
+    try:
+        with RerunLog(world.scene, "off", None, recording_id=scenario.name) as rlog:
+            stages = build_stages(scenario, world, rngs, rlog)
+    finally:
+        for stage in stages:
+            stage.close()
+        world.close()
 
 
 def _metrics(scenario, world, stages, result, setup_s, wall0) -> dict:
@@ -140,8 +170,16 @@ def _plots(out: Path, world, stages, ticks: int) -> None:
     write_report(out)
 
 
+class OneLineParser(argparse.ArgumentParser):
+    """An argument parser whose errors are one line on stderr (exit 2), like a bad scenario's;
+    ``--help`` shows the usage."""
+
+    def error(self, message: str):
+        self.exit(2, f"error: {self.prog}: {message} (see --help)\n")
+
+
 def _parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="python -m humimic.run", description=__doc__.split("\n")[0])
+    p = OneLineParser(prog="python -m humimic.run", description=__doc__.split("\n")[0])
     p.add_argument("scenario", type=Path, help="scenario YAML file")
     p.add_argument("--out", type=Path, default=None, help="output directory")
     p.add_argument("--seed", type=int, default=None, help="override the scenario's seed")
@@ -151,6 +189,9 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--set", dest="overrides", action="append", default=[],
                    metavar="KEY=VALUE", help="override a scenario key, e.g. human.distance=1.5")
     p.add_argument("--quiet", action="store_true", help="no progress bar or summary table")
+    p.add_argument("--dry-run", action="store_true",
+                   help="load and check the scenario, build the world and the stages, then stop "
+                        "(no simulation, nothing written)")
     return p
 
 
@@ -159,6 +200,11 @@ def main(argv: list[str] | None = None) -> int:
     try:
         scenario = load_scenario(args.scenario, args.overrides, seed=args.seed,
                                  duration=args.duration)
+        if args.dry_run:
+            if args.out is not None:
+                check_out_dir(args.out)
+            dry_run(scenario)
+            return 0
         metrics = run_one(scenario, args.out, args.rerun, progress=not args.quiet)
     except InputError as err:
         print(f"error: {err}", file=sys.stderr)

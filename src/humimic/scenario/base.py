@@ -8,9 +8,10 @@ from pydantic import BaseModel, ConfigDict, Field
 
 
 class Section(BaseModel):
-    """Base of every scenario section: unknown keys are errors, values are validated on set."""
+    """Base of every scenario section: unknown keys are errors, values are validated on set,
+    numbers are finite (``.nan`` and ``.inf`` are errors)."""
 
-    model_config = ConfigDict(extra="forbid", validate_assignment=True)
+    model_config = ConfigDict(extra="forbid", validate_assignment=True, allow_inf_nan=False)
 
 
 Unit = Annotated[float, Field(ge=0.0, le=1.0)]

@@ -23,6 +23,7 @@ from humimic.world.frames import paper_frame_of
 from humimic.world.names import (
     BASE_JOINTS,
     EYE_CAMERAS,
+    EYE_HFOV_DEG,
     HUMAN_JOINTS,
     HUMAN_PREFIX,
     HUMAN_TARGETS,
@@ -34,8 +35,8 @@ from humimic.world.names import (
 ROOMS = {"lab": "room.xml", "sugiyama": "room_sugiyama.xml"}
 #: Room site at which the person's (avatar) frame is placed, when the room has one.
 PERSON_START_SITE = "person_start"
-WIDE_HFOV_DEG = 100.0
-FOVEAL_HFOV_DEG = 24.0
+WIDE_HFOV_DEG = EYE_HFOV_DEG["wide"]
+FOVEAL_HFOV_DEG = EYE_HFOV_DEG["foveal"]
 #: MuJoCo geom group of the Wii remote (hidden unless the scenario shows it).
 WIIMOTE_GROUP = 3
 
