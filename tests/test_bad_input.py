@@ -189,3 +189,13 @@ def test_the_resolved_scenario_a_run_writes_reloads(tmp_path, path):
     resolved.write_text(dump_scenario(scenario))
     again = load_scenario(resolved)
     assert dump_scenario(again) == dump_scenario(scenario)
+
+
+@pytest.mark.parametrize("frame_time", ["1e-9", "0", "-0.1", "nan", "1e300"])
+def test_bvh_frame_time_is_bounded(data_dir, frame_time):
+    """A clip is sampled at its frame rate: 1 ns frames would mean billions of samples."""
+    lines = _bvh_lines(data_dir)
+    k = lines.index("MOTION")
+    lines[k + 2] = f"Frame Time: {frame_time}"
+    with pytest.raises(BVHError, match=f"line {k + 3}: expected a frame time of 0.0005 to 10 s"):
+        parse_bvh("\n".join(lines), "fast.bvh")

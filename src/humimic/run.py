@@ -207,7 +207,7 @@ def main(argv: list[str] | None = None) -> int:
             return 0
         metrics = run_one(scenario, args.out, args.rerun, progress=not args.quiet)
     except InputError as err:
-        print(f"error: {err}", file=sys.stderr)
+        print(f"error: {' '.join(str(err).split())}", file=sys.stderr)  # always one line
         return 2
     if not args.quiet:
         print_summary(metrics, args.out or default_out_dir(scenario))

@@ -24,6 +24,9 @@ from humimic.motion import quat
 
 CHANNELS = {f"{a}{k}" for a in "XYZ" for k in ("position", "rotation")}
 _ROT = {"X": quat.rot_x, "Y": quat.rot_y, "Z": quat.rot_z}
+#: Frame times accepted (s): motion capture runs at 2 kHz at most (playback samples the clip at
+#: its frame rate, so a header claiming 1 ns frames would mean billions of samples).
+FRAME_TIME_S = (5e-4, 10.0)
 
 
 class BVHError(InputError, ValueError):
@@ -189,8 +192,9 @@ def parse_bvh(text: str, source: str = "<string>") -> BVH:
     n_frames = int(value)
     value, i = header(i + 1, "Frame Time:")
     frame_time = float(value) if _is_finite_number(value) else -1.0
-    if not frame_time > 0:
-        raise tk.error(i + 1, f"expected a positive number after 'Frame Time:', got {value!r}")
+    if not FRAME_TIME_S[0] <= frame_time <= FRAME_TIME_S[1]:
+        raise tk.error(i + 1, f"expected a frame time of {FRAME_TIME_S[0]:g} to "
+                              f"{FRAME_TIME_S[1]:g} s after 'Frame Time:', got {value!r}")
 
     # never more rows than the file has lines (a header may claim any number of frames)
     motion = np.empty((min(n_frames, len(lines) - i - 1), ncol))

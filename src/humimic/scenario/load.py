@@ -81,9 +81,13 @@ def read_yaml_mapping(path: Path, what: str, hint: str) -> tuple[str, dict]:
                             line=raw.count(b"\n", 0, exc.start) + 1) from None
     try:
         data = yaml.safe_load(text)
+    except yaml.reader.ReaderError as exc:  # a character YAML does not allow
+        raise ScenarioError(path, "", f"not valid YAML: character #x{exc.character:04x} is not "
+                            "allowed", line=text.count("\n", 0, exc.position) + 1) from None
     except (yaml.YAMLError, RecursionError) as exc:
         mark = getattr(exc, "problem_mark", None)
-        raise ScenarioError(path, "", f"not valid YAML: {getattr(exc, 'problem', exc)}",
+        problem = " ".join(str(getattr(exc, "problem", exc)).split())
+        raise ScenarioError(path, "", f"not valid YAML: {problem}",
                             line=mark.line + 1 if mark else None) from None
     if not isinstance(data, dict):
         raise ScenarioError(path, "", f"a {what} must be a mapping of keys", data, hint)
