@@ -163,7 +163,8 @@ class RoiSamples:
 
 def roi_samples(image: np.ndarray, centres: np.ndarray, covs: np.ndarray,
                 params: EMParams) -> RoiSamples:
-    """Sample each blob's box (+-(roi_k_sigma sigma + margin)) with a stride capping it at roi_side^2.
+    """Sample each blob's box (+-(roi_k_sigma sigma + margin)) with a stride capping it at
+    roi_side^2.
 
     Samples of a box inside an earlier blob's box are dropped (each pixel counted once).
     """
