@@ -11,7 +11,7 @@ is built (loading and validation are what bad input reaches first); a few build 
 (``--dry-run`` as is), and malformed BVH clips go through the parser and the retargeting.
 
 Examples: ``HUMIMIC_FUZZ_EXAMPLES`` (default 300) for the scenario/command-line property, a
-third of that for BVH clips, a thirtieth (at least 8) for world-building dry runs; the examples
+third of that for BVH clips, a sixtieth (at least 5) for world-building dry runs; the examples
 are derandomized (the same every run) unless ``HUMIMIC_FUZZ_RANDOM=1``.
 """
 
@@ -244,7 +244,7 @@ def test_scenarios_and_command_lines_exit_0_or_2_with_one_line(tmp_path_factory,
         assert err == ""
 
 
-@settings(FUZZ, max_examples=max(8, N_EXAMPLES // 30))
+@settings(FUZZ, max_examples=max(5, N_EXAMPLES // 60))
 @given(case=_case(CHEAP))
 def test_world_building_dry_runs_exit_0_or_2_with_one_line(tmp_path_factory, case):
     data, options = case

@@ -7,13 +7,16 @@ prints one line and exits with status 2.
 
 from __future__ import annotations
 
+from humimic import select_gl_backend
+
+select_gl_backend()  # an entry point: MuJoCo's OpenGL backend, before anything imports mujoco
+
 import argparse
 import json
 import sys
 import time
 from pathlib import Path
 
-import humimic  # noqa: F401  (selects the OpenGL backend before mujoco is imported)
 from humimic.errors import InputError
 from humimic.metrics.summary import print_summary
 from humimic.pipeline.build import build_stages
