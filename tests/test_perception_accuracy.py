@@ -97,12 +97,15 @@ def test_wave_detection_rate_and_filtered_rmse():
     m = run("ude_wave_tracking", ["perception.detection.period=0.5"], duration=4.5)[0]
     hand, head = m["tracking"]["right_hand"], m["tracking"]["head"]
     assert hand["detection_rate"] >= 0.98  # measured 1.0
-    assert hand["filtered_rmse_mm"] <= 15.0  # measured 6.9 mm (raw 8.3 mm)
-    # a consistent filter: ~95 % of frames inside the band (measured 0.90)
+    assert hand["filtered_rmse_mm"] <= 15.0  # measured 6.7 mm (raw 7.9 mm)
+    # a consistent filter: ~95 % of frames inside the band (measured 0.91)
     assert hand["filtered_nees_pos3_in_band"] >= 0.7 and not hand["biased"]
-    # the head's stereo surface lies ~20 mm before its centre: flagged, and out of the band
+    # the head's stereo surface lies before its centre: flagged. The colour model learned for
+    # this person covers the whole face, features included, so the blob is the whole head:
+    # raw RMSE 9.9 mm, 0.78 of frames in the band (the shipped skin.json, hands only:
+    # 14.5 mm, 0.10)
     assert head["detection_rate"] >= 0.98
-    assert head["biased"] and head["filtered_nees_pos3_in_band"] < 0.2
+    assert head["biased"] and head["raw_rmse_mm"] <= 13.0
 
 
 # ---- hidden for ~1 s --------------------------------------------------------------------------

@@ -92,6 +92,13 @@ def inputs(world, cameras: list[str], color_class: str, space: str, bits: int,
             world.gt.qpos[ticks].tobytes())
 
 
+def digest_of(world, cameras: list[str], color_class: str = "skin", space: str = "rgb",
+              bits: int = 6) -> str:
+    """The cache key of the model :func:`learned_lut` would learn."""
+    ticks = sample_ticks(world.n_ticks)
+    return cache.key(*inputs(world, cameras, color_class, space, bits, ticks))
+
+
 def learn_model(world, cameras: list[str], color_class: str, space: str,
                 rng: np.random.Generator, ticks: np.ndarray) -> ColorModel:
     """A colour model of ``color_class`` learned from the world's own renders."""
@@ -131,7 +138,7 @@ def learned_lut(world, cameras: list[str], color_class: str = "skin", space: str
     world's renders of ``cameras`` and stored. Raises :class:`NotInView`."""
     t0 = time.perf_counter()
     ticks = sample_ticks(world.n_ticks)
-    digest = cache.key(*inputs(world, cameras, color_class, space, bits, ticks))
+    digest = digest_of(world, cameras, color_class, space, bits)
     kind = f"colors-{color_class}"
     lut = _restore(cache.load(kind, digest), bits)
     cached = lut is not None
