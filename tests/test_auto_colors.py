@@ -28,10 +28,10 @@ def _world(*overrides: str) -> World:
     return World(scenario, Rngs(scenario.seed))
 
 
-def _skin_and_rest(world) -> tuple[np.ndarray, np.ndarray]:
-    """Noisy skin pixels and other pixels of the full scene (an independent labelling)."""
+def _skin_and_rest(world, noise: float = 2.0) -> tuple[np.ndarray, np.ndarray]:
+    """Skin pixels and other pixels of the full scene (an independent labelling)."""
     geoms = material_geoms(world.scene.model, "skin")
-    pos, neg = frame_pixels(world, world.eye_cameras, np.array([0]), geoms, 2.0,
+    pos, neg = frame_pixels(world, world.eye_cameras, np.array([0]), geoms, noise,
                             np.random.default_rng(3), negatives_per_frame=20000)
     return np.concatenate(pos), np.concatenate(neg)
 
@@ -64,6 +64,20 @@ def test_dark_skin_learned_and_cached(cache_dir):
     # the shipped model, learned for the default skin, misses most of it (measured 0.22)
     shipped = ColorLUT(load_color_model(DEFAULT_COLOR_MODEL))
     assert (shipped.lookup(skin) > 1.0).mean() <= 0.45
+
+
+def test_noiseless_renders_give_a_usable_table(cache_dir):
+    """Without pixel noise the skin has few distinct colours: the mixture must still cover
+    them at the table's bin centres (measured 1.0; without the bin-wide floor on the
+    covariances mimic_tracked_wave detected nothing)."""
+    world = _world("cameras.noise_std=0.0")
+    try:
+        lut = learned_lut(world, world.eye_cameras).lut
+        skin, rest = _skin_and_rest(world, noise=0.0)
+    finally:
+        world.close()
+    assert (lut.lookup(skin) > 1.0).mean() >= 0.97
+    assert (lut.lookup(rest) > 1.0).mean() <= 0.01
 
 
 def test_cache_key_follows_the_person(cache_dir):

@@ -35,7 +35,7 @@ from humimic.perception.cues.color_models import (
 )
 from humimic.perception.cues.learn_colors import frame_pixels, material_geoms
 
-VERSION = 1
+VERSION = 2
 FRAMES = 8
 """Poses of the person rendered (spread evenly over the run)."""
 COMPONENTS = 3
@@ -99,9 +99,19 @@ def digest_of(world, cameras: list[str], color_class: str = "skin", space: str =
     return cache.key(*inputs(world, cameras, color_class, space, bits, ticks))
 
 
+def bin_variance(bits: int) -> float:
+    """Variance of a colour channel (in [0, 1]) uniform over one LUT bin of ``bits`` bits."""
+    return (2.0 ** (8 - bits) / 255.0) ** 2 / 12.0
+
+
 def learn_model(world, cameras: list[str], color_class: str, space: str,
-                rng: np.random.Generator, ticks: np.ndarray) -> ColorModel:
-    """A colour model of ``color_class`` learned from the world's own renders."""
+                rng: np.random.Generator, ticks: np.ndarray, bits: int = 6) -> ColorModel:
+    """A colour model of ``color_class`` learned from the world's own renders.
+
+    Each component's covariance is at least one LUT bin wide (:func:`bin_variance` added to
+    its diagonal): the LUT evaluates the density at bin centres, and a noiseless render gives
+    components so narrow that they would fall between two centres and vanish from the table.
+    """
     geoms = material_geoms(world.scene.model, color_class)
     noise = max((s.noise_std for s in world.eye_rig.specs if s.name in cameras), default=0.0)
     pos, _ = frame_pixels(world, cameras, ticks, geoms, noise, rng)
@@ -112,7 +122,7 @@ def learn_model(world, cameras: list[str], color_class: str, space: str,
     if len(pixels) > MAX_PIXELS:
         pixels = pixels[rng.choice(len(pixels), MAX_PIXELS, replace=False)]
     return fit_color_model(pixels, space, COMPONENTS, rng, name=color_class, tol=TOL,
-                           max_iter=100)
+                           max_iter=100, reg_covar=bin_variance(bits))
 
 
 def _store(model: ColorModel, lut: ColorLUT) -> dict[str, np.ndarray]:
@@ -144,7 +154,7 @@ def learned_lut(world, cameras: list[str], color_class: str = "skin", space: str
     cached = lut is not None
     if lut is None:
         rng = np.random.default_rng(int(digest[:15], 16))
-        model = learn_model(world, cameras, color_class, space, rng, ticks)
+        model = learn_model(world, cameras, color_class, space, rng, ticks, bits)
         lut = ColorLUT(model, bits)
         cache.save(kind, digest, _store(model, lut))
     return CachedLUT(lut, cached, time.perf_counter() - t0, digest)
