@@ -153,11 +153,13 @@ class CameraRig:
                 g.offwidth, g.offheight = size
         return self._renderers[key]
 
-    def render_ideal(self, name: str, segmentation: bool = False) -> np.ndarray:
+    def render_ideal(self, name: str, segmentation: bool = False,
+                     only: np.ndarray | None = None) -> np.ndarray:
         """The noise-free pinhole image (or segmentation ``(H, W, 2)`` [id, type]) of a camera.
 
         Geoms whose bounding sphere lies outside the camera's view frustum are left out of the
-        scene (they would be clipped anyway; llvmpipe pays ~30 us per drawn geom).
+        scene (they would be clipped anyway; llvmpipe pays ~30 us per drawn geom). ``only``:
+        draw just these geom ids (e.g. a part of the person without what hides it).
         """
         canvas = self._canvas[name]
         cid = self._cam_ids[name]
@@ -168,6 +170,8 @@ class CameraRig:
         r = self._renderer(canvas.width, canvas.height)
         hidden = ~frustum_visible(d.geom_xpos, self._geom_radius, d.cam_xpos[cid],
                                   d.cam_xmat[cid].reshape(3, 3), canvas)
+        if only is not None:
+            hidden |= ~np.isin(np.arange(m.ngeom), only)
         groups = m.geom_group[hidden].copy()
         m.geom_group[hidden] = CULLED_GROUP
         try:

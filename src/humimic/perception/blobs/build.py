@@ -110,5 +110,7 @@ def perception_stages(scenario, world, rngs, rlog) -> list[Stage]:
     if scenario.filter is not None:
         frec = FilterRecord(list(cfg.targets))
         stages.append(FilterStage(scenario.filter, cfg.targets, frec, rlog, world.gt))
-    stages.append(TrackingReport(cfg.targets, prec, frec, world.gt))
+    stages.append(TrackingReport(cfg.targets, prec, frec, world.gt,
+                                 visibility=world.track_visibility(),
+                                 warmup_s=cfg.detection.period))
     return stages

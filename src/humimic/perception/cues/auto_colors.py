@@ -3,18 +3,19 @@
 ``perception.color_model: auto`` (the default) learns the skin model from the run's own world
 before the loop starts: the person is put in :data:`FRAMES` poses spread over its motion, the
 eye cameras perception uses render only the avatar's geoms of the colour class (``skin``: the
-hands and the face-textured head; nothing else would be used) with the scenario's pixel noise,
-and the segmentation labels pick the pixels (:func:`~humimic.perception.cues.learn_colors.
-frame_pixels`, as ``learn_colors`` does). A Gaussian mixture (Ude eqs. 6-7) is fitted and
-tabulated (:class:`~humimic.perception.cues.color_models.ColorLUT`). Since the renders come from
-the run's own scene, the model sees the scenario's colours, face, lights, cameras and noise.
+hands and the head, drawn without the face's texture: its eyes and brows are not skin) with the
+scenario's pixel noise, and the segmentation labels pick the pixels
+(:func:`~humimic.perception.cues.learn_colors.frame_pixels`, as ``learn_colors`` does). A
+Gaussian mixture (Ude eqs. 6-7) is fitted and tabulated
+(:class:`~humimic.perception.cues.color_models.ColorLUT`). Since the renders come from the run's
+own scene, the model sees the scenario's colours, face, lights, cameras and noise.
 
-Model and table are stored with :mod:`humimic.cache` under a hash of everything they depend
-on (:func:`inputs`: the class's materials and textures, the lights, the cameras, the geoms'
-shapes, the poses rendered, the learner's settings), so a second run with the same person and
-cameras loads them (measured by ``benchmarks/bench_colors.py``). The noise of the renders is
-drawn from a generator seeded by that hash: the same inputs give the same model on every run.
-Colour-model files (an explicit ``color_model``) get their tables cached the same way.
+Model and table are stored with :mod:`humimic.cache` under a hash of everything they depend on
+(:func:`inputs`: the class's materials and textures, the lights, the cameras, the geoms' shapes,
+the poses rendered, the learner's settings), so a second run with the same person and cameras
+loads them (measured by ``benchmarks/bench_colors.py``). The noise of the renders is drawn from
+a generator seeded by that hash: the same inputs give the same model on every run. Colour-model
+files (an explicit ``color_model``) get their tables cached the same way.
 """
 
 from __future__ import annotations
@@ -33,9 +34,9 @@ from humimic.perception.cues.color_models import (
     fit_color_model,
     load_color_model,
 )
-from humimic.perception.cues.learn_colors import frame_pixels, material_geoms
+from humimic.perception.cues.learn_colors import frame_pixels, material_geoms, plain_materials
 
-VERSION = 2
+VERSION = 3
 FRAMES = 8
 """Poses of the person rendered (spread evenly over the run)."""
 COMPONENTS = 3
@@ -114,7 +115,8 @@ def learn_model(world, cameras: list[str], color_class: str, space: str,
     """
     geoms = material_geoms(world.scene.model, color_class)
     noise = max((s.noise_std for s in world.eye_rig.specs if s.name in cameras), default=0.0)
-    pos, _ = frame_pixels(world, cameras, ticks, geoms, noise, rng)
+    pos, _ = frame_pixels(world, cameras, ticks, geoms, noise, rng,
+                          plain=plain_materials(world.scene.model, color_class))
     pixels = np.concatenate(pos) if pos else np.zeros((0, 3), np.uint8)
     if len(pixels) < MIN_PIXELS:
         raise NotInView(f"only {len(pixels)} pixels of {color_class!r} in view of "
