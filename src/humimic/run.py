@@ -15,7 +15,7 @@ from pathlib import Path
 
 import humimic  # noqa: F401  (selects the OpenGL backend before mujoco is imported)
 from humimic.errors import InputError
-from humimic.metrics.summary import print_summary
+from humimic.metrics.summary import print_summary, verdict_warning
 from humimic.pipeline.build import build_stages
 from humimic.pipeline.simulation import simulate
 from humimic.report import write_report
@@ -165,6 +165,9 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     if not args.quiet:
         print_summary(metrics, args.out or default_out_dir(scenario))
+    warning = verdict_warning(metrics)
+    if warning:
+        print(warning, file=sys.stderr)
     return 0
 
 
