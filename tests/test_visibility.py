@@ -48,7 +48,8 @@ def test_off_target_is_a_mahalanobis_test():
     a = rng.normal(size=(20, 2, 2))
     cov = a @ np.swapaxes(a, 1, 2) * 9 + np.eye(2)
     uv = centre + rng.normal(size=(20, 2)) * 8
-    expected = [mahalanobis(u, c, np.linalg.inv(s)) > 3.0 for u, c, s in zip(uv, centre, cov)]
+    expected = [mahalanobis(u, c, np.linalg.inv(s)) > 3.0
+                for u, c, s in zip(uv, centre, cov, strict=True)]
     np.testing.assert_array_equal(off_target(centre, cov, uv), expected)
 
 
