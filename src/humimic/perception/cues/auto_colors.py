@@ -36,7 +36,7 @@ from humimic.perception.cues.color_models import (
 )
 from humimic.perception.cues.learn_colors import frame_pixels, material_geoms, plain_materials
 
-VERSION = 3
+VERSION = 5
 FRAMES = 8
 """Poses of the person rendered (spread evenly over the run)."""
 COMPONENTS = 3
