@@ -65,7 +65,7 @@ def test_static_hand_wide_filter_smooths_depth(static_hand):
     # (filtered/raw 0.53; the paper's Table 3: 0.48)
     assert filt[0] <= 0.9
     assert filt[0] <= 0.65 * raw[0]
-    assert t["detection_rate"] == 1.0 and t["scored_estimates"] > 300
+    assert t["detection_rate_from_first"] == 1.0 and t["scored_estimates"] > 300
     for key in ("vel", "acc"):  # true value 0: the means are well inside their spread
         for mean, std in zip(t[f"{key}_bias_mm_s" if key == "vel" else "acc_bias_mm_s2"],
                              t[f"{key}_std_mm_s" if key == "vel" else "acc_std_mm_s2"],
@@ -96,7 +96,11 @@ def test_static_hand_foveal_depth_sigma():
 def test_wave_detection_rate_and_filtered_rmse():
     m = run("ude_wave_tracking", ["perception.detection.period=0.5"], duration=4.5)[0]
     hand, head = m["tracking"]["right_hand"], m["tracking"]["head"]
-    assert hand["detection_rate"] >= 0.98  # measured 1.0
+    # over the frames the hand is visible, after detection's phase one (the first detection
+    # and the blob's settling take a few frames): measured HAND_RATE; from the first on: 1.0
+    assert hand["visible_fraction"] == 1.0 and hand["detection_rate"] >= 0.95
+    assert hand["detection_rate_from_first"] >= 0.98
+    assert hand["false_detection_rate"] <= 0.01  # measured 0.0
     assert hand["filtered_rmse_mm"] <= 15.0  # measured 6.7 mm (raw 7.9 mm)
     # a consistent filter: ~95 % of frames inside the band (measured 0.91)
     assert hand["filtered_nees_pos3_in_band"] >= 0.7 and not hand["biased"]
@@ -104,7 +108,7 @@ def test_wave_detection_rate_and_filtered_rmse():
     # this person covers the whole face, features included, so the blob is the whole head:
     # raw RMSE 9.9 mm, 0.78 of frames in the band (the shipped skin.json, hands only:
     # 14.5 mm, 0.10)
-    assert head["detection_rate"] >= 0.98
+    assert head["detection_rate"] >= 0.95  # measured HEAD_RATE
     assert head["biased"] and head["raw_rmse_mm"] <= 13.0
 
 
@@ -174,7 +178,7 @@ def test_head_and_eye_motion_is_compensated():
     f = np.flatnonzero(pa.ok[:, i])
     eye_motion = np.linalg.norm(pa.T_base_cam[f, 0, :3, 2] - pa.T_base_cam[f[0], 0, :3, 2], axis=1)
     assert eye_motion.max() > 0.1  # the left eye's axis really turned (> 6 deg)
-    assert moving["detection_rate"] >= 0.98
+    assert moving["detection_rate_from_first"] >= 0.98
     # measured (seed 1): still 8.5 mm, moving 14.8 mm (filtered 3-D RMSE; the blobs move in
     # the images, the EM centre lags a little)
     assert still["filtered_rmse_mm"] <= 17.0 and moving["filtered_rmse_mm"] <= 30.0

@@ -154,12 +154,13 @@ class CameraRig:
         return self._renderers[key]
 
     def render_ideal(self, name: str, segmentation: bool = False,
-                     only: np.ndarray | None = None) -> np.ndarray:
+                     only: np.ndarray | None = None, scale: float = 1.0) -> np.ndarray:
         """The noise-free pinhole image (or segmentation ``(H, W, 2)`` [id, type]) of a camera.
 
         Geoms whose bounding sphere lies outside the camera's view frustum are left out of the
         scene (they would be clipped anyway; llvmpipe pays ~30 us per drawn geom). ``only``:
-        draw just these geom ids (e.g. a part of the person without what hides it).
+        draw just these geom ids (e.g. a part of the person without what hides it). ``scale``
+        < 1: the same view at that fraction of the resolution (a cheaper render).
         """
         canvas = self._canvas[name]
         cid = self._cam_ids[name]
@@ -167,7 +168,8 @@ class CameraRig:
         fovy0 = m.cam_fovy[cid]
         if canvas.height != self._intrinsics[name].height:
             m.cam_fovy[cid] = math.degrees(2 * math.atan((canvas.height / 2) / canvas.fy))
-        r = self._renderer(canvas.width, canvas.height)
+        r = self._renderer(max(1, round(canvas.width * scale)),
+                           max(1, round(canvas.height * scale)))
         hidden = ~frustum_visible(d.geom_xpos, self._geom_radius, d.cam_xpos[cid],
                                   d.cam_xmat[cid].reshape(3, 3), canvas)
         if only is not None:

@@ -3,7 +3,8 @@ much of it is unoccluded, and its size in pixels.
 
 Any stage that scores a tracker asks the world for it (:meth:`humimic.world.world.World.
 track_visibility`); the simulation then samples it at the camera frames, decimated to
-``cameras.visibility_rate`` (each sample costs two segmentation renders per camera). Per sample
+``cameras.visibility_rate`` (each sample costs two segmentation renders per camera, at most
+:data:`MAX_WIDTH` pixels wide). Per sample
 and camera, two segmentation renders of the scene as it is at the frame's photon time:
 
 * the whole scene (what the camera sees): ``visible_px``, the pixels of each target's geoms
@@ -32,6 +33,9 @@ from humimic.world.names import HUMAN_PREFIX, TARGET_GEOMS
 
 VISIBLE_FRACTION = 0.5
 """A target at least this unoccluded (and in view) is visible."""
+MAX_WIDTH = 320
+"""Wider cameras are rendered for visibility at a fraction of their resolution, this wide (the
+counts scaled back; 640x480: 4x fewer pixels to draw and label)."""
 
 
 def target_pixel_counts(seg: np.ndarray, geom_target: np.ndarray, n_targets: int
@@ -67,7 +71,7 @@ class VisibilityArrays:
     t: np.ndarray
     """(N,) photon times (s)."""
     visible_px: np.ndarray
-    """(N, C, T) pixels of the target the camera sees."""
+    """(N, C, T) pixels of the target the camera sees (at the camera's resolution)."""
     full_px: np.ndarray
     """(N, C, T) pixels of its whole silhouette inside the image."""
 
@@ -113,6 +117,8 @@ class Visibility:
     _next_t: float = 0.0
 
     def __post_init__(self) -> None:
+        width = max(self.rig.intrinsics(c).width for c in self.cameras) if self.cameras else 1
+        self.scale = min(1.0, MAX_WIDTH / width)
         m = self.rig.scene.model
         self.geom_target = np.full(m.ngeom, -1, np.intp)
         for k, target in enumerate(self.targets):
@@ -129,11 +135,11 @@ class Visibility:
         visible = np.zeros((len(self.cameras), n), np.int64)
         full = np.zeros_like(visible)
         for c, cam in enumerate(self.cameras):
-            visible[c] = target_pixel_counts(self.rig.render_ideal(cam, True),
-                                             self.geom_target, n)
-            full[c] = target_pixel_counts(self.rig.render_ideal(cam, True, self.geoms),
-                                          self.geom_target, n)
-        self.rows.append((t, visible, full))
+            visible[c] = target_pixel_counts(
+                self.rig.render_ideal(cam, True, scale=self.scale), self.geom_target, n)
+            full[c] = target_pixel_counts(
+                self.rig.render_ideal(cam, True, self.geoms, self.scale), self.geom_target, n)
+        self.rows.append((t, visible / self.scale**2, full / self.scale**2))
         self._next_t = t + 1.0 / self.rate
 
     def maybe_sample(self, t: float) -> bool:
@@ -146,7 +152,7 @@ class Visibility:
     def arrays(self) -> VisibilityArrays:
         c, n = len(self.cameras), len(self.targets)
         if not self.rows:
-            z = np.zeros((0, c, n), np.int64)
+            z = np.zeros((0, c, n))
             return VisibilityArrays(list(self.cameras), list(self.targets), np.zeros(0), z, z)
         t, vis, full = zip(*self.rows, strict=True)
         return VisibilityArrays(list(self.cameras), list(self.targets), np.array(t),
