@@ -97,8 +97,8 @@ def test_wave_detection_rate_and_filtered_rmse():
     m = run("ude_wave_tracking", ["perception.detection.period=0.5"], duration=4.5)[0]
     hand, head = m["tracking"]["right_hand"], m["tracking"]["head"]
     # over the frames the hand is visible, after detection's phase one (the first detection
-    # and the blob's settling take a few frames): measured HAND_RATE; from the first on: 1.0
-    assert hand["visible_fraction"] == 1.0 and hand["detection_rate"] >= 0.95
+    # and the blob's settling take ~10 frames): measured 0.958; from the first on: 1.0
+    assert hand["visible_fraction"] == 1.0 and hand["detection_rate"] >= 0.93
     assert hand["detection_rate_from_first"] >= 0.98
     assert hand["false_detection_rate"] <= 0.01  # measured 0.0
     assert hand["filtered_rmse_mm"] <= 15.0  # measured 6.7 mm (raw 7.9 mm)
@@ -108,7 +108,7 @@ def test_wave_detection_rate_and_filtered_rmse():
     # this person covers the whole face, features included, so the blob is the whole head:
     # raw RMSE 9.9 mm, 0.78 of frames in the band (the shipped skin.json, hands only:
     # 14.5 mm, 0.10)
-    assert head["detection_rate"] >= 0.95  # measured HEAD_RATE
+    assert head["detection_rate"] >= 0.93  # measured 0.971
     assert head["biased"] and head["raw_rmse_mm"] <= 13.0
 
 
