@@ -18,7 +18,7 @@ import time
 from pathlib import Path
 
 from humimic.errors import InputError
-from humimic.metrics.summary import print_summary
+from humimic.metrics.summary import print_summary, verdict_warning
 from humimic.pipeline.build import build_stages
 from humimic.pipeline.simulation import simulate
 from humimic.report import write_report
@@ -214,6 +214,9 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     if not args.quiet:
         print_summary(metrics, args.out or default_out_dir(scenario))
+    warning = verdict_warning(metrics)
+    if warning:
+        print(warning, file=sys.stderr)
     return 0
 
 

@@ -20,6 +20,7 @@ from humimic.sensors.cameras import CameraRig, CameraSpec
 from humimic.sensors.clock import Clock, Schedule
 from humimic.sensors.faults import SensorFaults
 from humimic.sensors.inertial import simulate_inertial, simulate_orientation
+from humimic.sensors.visibility import Visibility
 from humimic.world.gaze import pan_tilt_to
 from humimic.world.names import EYE_CAMERAS, ROBOT_JOINTS, ROBOT_PREFIX
 from humimic.world.scene import SceneOptions, build_scene
@@ -81,6 +82,16 @@ class World:
         self.wiimote = self._inertial("wiimote", scenario.sensors.wiimote, rngs["wiimote"])
         self.faults = SensorFaults(scenario, self.eye_cameras, rngs)
         """Lost, frozen and covered frames, lost inertial samples (applied when published)."""
+        self.visibility: Visibility | None = None
+        """Visibility ground truth of the eye cameras, once a stage asked for it
+        (:meth:`track_visibility`); sampled by the simulation at camera frames."""
+
+    def track_visibility(self) -> Visibility | None:
+        """Start (or return) the eye cameras' visibility ground truth; None without cameras."""
+        if self.visibility is None and self.eye_rig is not None:
+            self.visibility = Visibility(self.eye_rig, list(self.eye_cameras),
+                                         self.scenario.cameras.visibility_rate)
+        return self.visibility
 
     @property
     def T_world_W(self) -> np.ndarray:
