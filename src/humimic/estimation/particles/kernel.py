@@ -1,0 +1,141 @@
+"""The kernel particle filter (Schmidt, Fritsch & Kwolek sec. 5.2, after Chang & Ansari 2005):
+kernel density estimate of the weighted particle set with the Epanechnikov kernel, mean-shift
+mode seeking with a shrinking bandwidth, reweighting after each shift, the dominant mode, and
+mixed propagation (a linear motion model for part of the particles, random walk for the rest).
+
+Bandwidths are per dimension (``h`` a ``(d,)`` vector, Schmidt's ``h0 = D``): distances are
+``||(x - s) / h||``, i.e. the kernel of eq. 11 in coordinates scaled by ``h``. Everything is
+pure and vectorised over particles; randomness comes in as a ``numpy.random.Generator``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+import numpy as np
+
+from humimic.estimation.particles.weights import weights
+
+
+def sq_distances(x: np.ndarray, s: np.ndarray, h: np.ndarray) -> np.ndarray:
+    """``(M, N)`` squared scaled distances ``||(x_m - s_n) / h||^2`` (one matrix product)."""
+    a, b = x / h, s / h
+    d2 = np.sum(a * a, 1)[:, None] + np.sum(b * b, 1)[None, :] - 2.0 * a @ b.T
+    return np.maximum(d2, 0.0)
+
+
+def epanechnikov_norm(d: int) -> float:
+    """``c_d``, the volume of the unit ``d``-ball (Schmidt eq. 12's normalisation)."""
+    return math.pi ** (d / 2) / math.gamma(d / 2 + 1)
+
+
+def epanechnikov(r2: np.ndarray, d: int) -> np.ndarray:
+    """Schmidt eq. 12: ``K_E(x) = (d + 2) / (2 c_d) (1 - ||x||^2)`` inside the unit ball, of
+    the squared norm ``r2``; it integrates to one over R^d."""
+    return (d + 2) / (2.0 * epanechnikov_norm(d)) * np.maximum(1.0 - r2, 0.0)
+
+
+def kde(x: np.ndarray, particles: np.ndarray, w: np.ndarray, h: np.ndarray) -> np.ndarray:
+    """Schmidt eq. 11: ``p(x) = sum_n K_h(x - s_n) w_n`` with ``K_h(u) = K(u / h) / prod(h)``
+    (normalised weights ``w``), at points ``x (M, d)``."""
+    d = particles.shape[1]
+    h = np.broadcast_to(np.asarray(h, float), (d,))
+    return epanechnikov(sq_distances(x, particles, h), d) @ w / np.prod(h)
+
+
+def mean_shift(particles: np.ndarray, w: np.ndarray, h: np.ndarray) -> np.ndarray:
+    """Schmidt eq. 13: every particle moved to ``m(s) = sum H(s_i - s) w_i s_i / sum H w_i``.
+    ``H``'s profile is ``-k'``: for the Epanechnikov kernel a constant inside the bandwidth
+    (the flat kernel), so ``m(s)`` is the weighted mean of the particles within ``h`` of ``s``
+    (a particle alone in its window with weight 0 stays put)."""
+    h = np.broadcast_to(np.asarray(h, float), (particles.shape[1],))
+    inside = (sq_distances(particles, particles, h) <= 1.0).astype(float)   # (N, N)
+    num = inside @ (w[:, None] * particles)
+    den = inside @ w
+    stay = den <= 0.0
+    out = num / np.where(stay, 1.0, den)[:, None]
+    out[stay] = particles[stay]
+    return out
+
+
+def kernel_log_weights(log_lik: np.ndarray, shifted: np.ndarray, prior_particles: np.ndarray,
+                       prior_w: np.ndarray, h: np.ndarray) -> np.ndarray:
+    """Reweighting after a mean shift (Chang & Ansari eq. 9, which Schmidt follows): shifted
+    samples are no longer drawn from the prior, so ``w ∝ p(y|s) p(s) / q(s)`` with the prior
+    ``p`` the KDE (eq. 11) of the particles before the shift and the proposal ``q`` the
+    unweighted KDE of the shifted ones. Unnormalised log-weights."""
+    n = len(shifted)
+    p = kde(shifted, prior_particles, prior_w, h)
+    q = kde(shifted, shifted, np.full(n, 1.0 / n), h)       # > 0: each sample covers itself
+    with np.errstate(divide="ignore"):
+        return log_lik + np.log(p) - np.log(q)
+
+
+def dominant_mode(particles: np.ndarray, w: np.ndarray, h: np.ndarray, window: np.ndarray
+                  ) -> tuple[np.ndarray, int]:
+    """The dominant mode (Schmidt sec. 5.2): the particle where the posterior's KDE (eq. 11)
+    peaks, then the weighted mean of the particles within ``window`` (scaled distance <= 1) of
+    it. Returns the mode ``(d,)`` and the peak particle's index."""
+    peak = int(np.argmax(kde(particles, particles, w, h)))
+    near = sq_distances(particles[peak:peak + 1], particles, window)[0] <= 1.0
+    wn = w * near
+    if wn.sum() <= 0.0:
+        return particles[peak].copy(), peak
+    return wn @ particles / wn.sum(), peak
+
+
+def motion_share(w: np.ndarray, moved: np.ndarray, min_random: float) -> float:
+    """Share of next step's particles for the motion model: its group's cumulated posterior
+    weight, leaving the random group at least ``min_random`` (Schmidt sec. 5.2)."""
+    total = w.sum()
+    share = float(w[moved].sum() / total) if total > 0 else 0.5
+    return min(max(share, 0.0), 1.0 - min_random)
+
+
+def mixed_propagate(particles: np.ndarray, velocity: np.ndarray, share: float, D: np.ndarray,
+                    rng: np.random.Generator, valid: Callable[[np.ndarray], np.ndarray],
+                    motion_scale: float = 0.25, retries: int = 10
+                    ) -> tuple[np.ndarray, np.ndarray]:
+    """Schmidt sec. 5.2's mixed propagation of resampled particles ``(N, d)``: the first
+    ``round(share N)`` through the linear motion model ``s + velocity`` (velocity: the last
+    two best modes' difference) with uniform noise of half-width ``motion_scale D``, the rest
+    by a random walk with uniform noise of half-width ``D`` (the paper's "variance D", read as
+    the noise's extent); a particle outside ``valid`` is re-drawn (up to ``retries`` times,
+    then left to the caller's clamp). Returns the particles and the motion-model mask."""
+    n = len(particles)
+    moved = np.arange(n) < int(round(share * n))
+    half = np.where(moved[:, None], motion_scale * D, D)
+    base = particles + np.where(moved[:, None], velocity, 0.0)
+    out = base + rng.uniform(-1.0, 1.0, base.shape) * half
+    for _ in range(retries):
+        bad = ~valid(out)
+        if not bad.any():
+            break
+        out[bad] = base[bad] + rng.uniform(-1.0, 1.0, (int(bad.sum()), base.shape[1])) * half[bad]
+    return out, moved
+
+
+def kpf_modes(particles: np.ndarray, log_lik_fn: Callable[[np.ndarray], np.ndarray],
+              h0: np.ndarray, iterations: int, tol: float = 1e-3, shrink: float = 0.8,
+              reweight: bool = True) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+    """Mean-shift mode seeking of a predicted particle set (Schmidt sec. 5.2): weight by the
+    likelihood, then up to ``iterations`` times shift every particle (eq. 13, bandwidth
+    ``h = shrink^i h0``) and reweight (:func:`kernel_log_weights`, or the likelihood alone
+    with ``reweight=False``); stop early when the best particle moves less than ``tol``
+    (scaled by ``h0``). Returns particles, normalised weights, log-likelihoods, iterations
+    done."""
+    lik = log_lik_fn(particles)
+    w = weights(lik)
+    done = 0
+    for i in range(iterations):
+        h = shrink ** i * h0
+        best = particles[int(np.argmax(w))]
+        shifted = mean_shift(particles, w, h)
+        lik = log_lik_fn(shifted)
+        lw = kernel_log_weights(lik, shifted, particles, w, h) if reweight else lik
+        particles, w = shifted, weights(lw)
+        done = i + 1
+        if np.linalg.norm((particles[int(np.argmax(w))] - best) / h0) < tol:
+            break
+    return particles, w, lik, done

@@ -1,0 +1,140 @@
+"""The stateful tracker around the kernel particle filter's pure maths
+(:mod:`humimic.estimation.particles.kernel`) and the likelihood (eqs. 9-10).
+
+One frame (Schmidt sec. 5.2): resample the posterior, propagate a share of the particles with
+the linear motion model (velocity from the last two best modes) and the rest randomly, seek the
+modes by mean shift with reweighting, take the dominant mode as the estimate, set next frame's
+motion share from each group's cumulated posterior, and adapt the mean colours from the mode's
+back-projection (eq. 7). ``filter: condensation`` runs plain CONDENSATION instead (the same
+likelihood; a random walk of the same extent; the weighted mean).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from humimic import bodymodel as bm
+from humimic.estimation.particles import kernel as kpf
+from humimic.estimation.particles.filters import condensation_step
+from humimic.estimation.particles.resampling import resample_indices
+from humimic.estimation.particles.weights import uniform_log_weights
+from humimic.perception.trackers.kpf.cues import CueMaps
+from humimic.perception.trackers.kpf.likelihood import Likelihood
+
+#: Mean-shift modes reported per frame (the heaviest distinct ones), for display.
+MAX_MODES = 8
+
+
+@dataclass(frozen=True)
+class ClampedWalk:
+    """CONDENSATION's dynamics: uniform noise of half-width ``D`` (as the KPF's random group),
+    clamped into the joint limits."""
+
+    D: np.ndarray
+    limits: bm.JointLimits
+
+    def sample(self, x: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+        return self.limits.clamp(x + rng.uniform(-1.0, 1.0, x.shape) * self.D)
+
+    def log_density(self, x_new: np.ndarray, x_old: np.ndarray) -> np.ndarray:
+        raise NotImplementedError("CONDENSATION samples from the dynamics only")
+
+    def mean(self, x: np.ndarray) -> np.ndarray:
+        return x
+
+
+@dataclass(frozen=True)
+class FrameResult:
+    mode: np.ndarray
+    """(14,) the estimate."""
+    particles: np.ndarray
+    weights: np.ndarray
+    spread: np.ndarray
+    """(14,) weighted standard deviation of the particles."""
+    lost: bool
+    cost: float
+    """Mean cue cost of the estimate."""
+    iterations: int
+    modes: np.ndarray
+    """(M, 14) distinct mean-shift modes (the particles' converged positions, deduplicated)."""
+
+
+class KpfTracker:
+    """Schmidt et al.'s 14-DOF upper-body tracker; ``cfg`` a
+    :class:`~humimic.perception.trackers.kpf.config.KpfConfig`."""
+
+    def __init__(self, body: bm.BodyModel, intrinsics, cfg, rng: np.random.Generator):
+        self.body, self.cfg, self.rng = body, cfg, rng
+        self.lik = Likelihood(body, intrinsics, cfg)
+        self.D = np.asarray(cfg.D(), float)
+        self.limits = body.free_limits
+        self.particles: np.ndarray | None = None
+        self.w = np.zeros(0)
+        self.mode = self.mode_prev = None
+        self.share = 0.5
+
+    def start(self, q0: np.ndarray, maps: CueMaps, T_cam_base: np.ndarray) -> None:
+        """Initialise at a known pose (the paper fits the model by hand): every particle at
+        ``q0`` and the colour references from its back-projection."""
+        n = self.cfg.particles
+        self.mode = self.mode_prev = self.limits.clamp(np.asarray(q0, float))
+        self.particles = np.repeat(self.mode[None], n, axis=0)
+        self.w = np.full(n, 1.0 / n)
+        self.lik.adapt({p: c[0] for p, c in
+                        self.lik.evaluate(self.mode[None], maps, T_cam_base).colours.items()})
+
+    def _log_lik(self, maps, T_cam_base):
+        return lambda q: self.lik.evaluate(q, maps, T_cam_base).log_lik
+
+    def step(self, maps: CueMaps, T_cam_base: np.ndarray) -> FrameResult:
+        """Track one frame."""
+        if self.particles is None:
+            raise RuntimeError("KpfTracker.step before start")
+        if self.cfg.filter == "condensation":
+            mode, iters, modes = self._condensation(maps, T_cam_base), 0, None
+        else:
+            mode, iters, modes = self._kpf(maps, T_cam_base)
+        ev = self.lik.evaluate(mode[None], maps, T_cam_base)
+        cost = ev.mean_cost(0)
+        lost = not cost <= self.cfg.lost_cost
+        if lost:   # keep the particles; no velocity, no colour adaptation
+            self.mode_prev = self.mode
+        else:
+            self.mode_prev, self.mode = self.mode, mode
+            self.lik.adapt({p: c[0] for p, c in ev.colours.items()})
+        mean = self.w @ self.particles
+        spread = np.sqrt(np.maximum(self.w @ (self.particles - mean) ** 2, 0.0))
+        if modes is None:
+            modes = mode[None]
+        return FrameResult(mode, self.particles, self.w, spread, lost, cost, iters, modes)
+
+    def _kpf(self, maps, T_cam_base):
+        cfg, rng = self.cfg, self.rng
+        idx = resample_indices(np.log(np.maximum(self.w, 1e-300)), rng)
+        velocity = self.mode - self.mode_prev
+        pred, moved = kpf.mixed_propagate(self.particles[idx], velocity, self.share, self.D,
+                                          rng, self.limits.inside, cfg.motion_noise)
+        pred = self.limits.clamp(pred)
+        parts, w, _, iters = kpf.kpf_modes(pred, self._log_lik(maps, T_cam_base), self.D,
+                                           cfg.iterations, cfg.tol, cfg.shrink,
+                                           cfg.reweight == "kernel")
+        parts = self.limits.clamp(parts)
+        h = cfg.shrink ** max(iters - 1, 0) * self.D
+        mode, _ = kpf.dominant_mode(parts, w, h, cfg.window * self.D)
+        self.share = kpf.motion_share(w, moved, cfg.min_random)
+        self.particles, self.w = parts, w
+        _, first = np.unique(np.round(parts / (cfg.window * self.D)), axis=0,
+                             return_index=True)
+        return mode, iters, parts[first[np.argsort(-w[first])][:MAX_MODES]]
+
+    def _condensation(self, maps, T_cam_base):
+        n = len(self.particles)
+        step = condensation_step(self.particles, uniform_log_weights(n) if self.w is None
+                                 else np.log(np.maximum(self.w, 1e-300)),
+                                 ClampedWalk(self.D, self.limits),
+                                 self._log_lik(maps, T_cam_base), self.rng)
+        # the weighted set before resampling is gone: keep the resampled, equally weighted one
+        self.particles, self.w = step.particles, np.full(n, 1.0 / n)
+        return self.limits.clamp(step.mean)
