@@ -36,21 +36,30 @@ def epanechnikov(r2: np.ndarray, d: int) -> np.ndarray:
     return (d + 2) / (2.0 * epanechnikov_norm(d)) * np.maximum(1.0 - r2, 0.0)
 
 
-def kde(x: np.ndarray, particles: np.ndarray, w: np.ndarray, h: np.ndarray) -> np.ndarray:
+def _bandwidth(h, d: int) -> np.ndarray:
+    return np.broadcast_to(np.asarray(h, float), (d,))
+
+
+def kde(x: np.ndarray, particles: np.ndarray, w: np.ndarray, h: np.ndarray,
+        d2: np.ndarray | None = None) -> np.ndarray:
     """Schmidt eq. 11: ``p(x) = sum_n K_h(x - s_n) w_n`` with ``K_h(u) = K(u / h) / prod(h)``
-    (normalised weights ``w``), at points ``x (M, d)``."""
+    (normalised weights ``w``), at points ``x (M, d)``; ``d2`` the scaled squared distances
+    :func:`sq_distances` ``(x, particles, h)`` when already known."""
     d = particles.shape[1]
-    h = np.broadcast_to(np.asarray(h, float), (d,))
-    return epanechnikov(sq_distances(x, particles, h), d) @ w / np.prod(h)
+    h = _bandwidth(h, d)
+    d2 = sq_distances(x, particles, h) if d2 is None else d2
+    return epanechnikov(d2, d) @ w / np.prod(h)
 
 
-def mean_shift(particles: np.ndarray, w: np.ndarray, h: np.ndarray) -> np.ndarray:
+def mean_shift(particles: np.ndarray, w: np.ndarray, h: np.ndarray,
+               d2: np.ndarray | None = None) -> np.ndarray:
     """Schmidt eq. 13: every particle moved to ``m(s) = sum H(s_i - s) w_i s_i / sum H w_i``.
     ``H``'s profile is ``-k'``: for the Epanechnikov kernel a constant inside the bandwidth
     (the flat kernel), so ``m(s)`` is the weighted mean of the particles within ``h`` of ``s``
-    (a particle alone in its window with weight 0 stays put)."""
-    h = np.broadcast_to(np.asarray(h, float), (particles.shape[1],))
-    inside = (sq_distances(particles, particles, h) <= 1.0).astype(float)   # (N, N)
+    (a particle alone in its window with weight 0 stays put). ``d2`` as in :func:`kde`."""
+    d2 = sq_distances(particles, particles, _bandwidth(h, particles.shape[1])) if d2 is None \
+        else d2
+    inside = (d2 <= 1.0).astype(float)                                      # (N, N)
     num = inside @ (w[:, None] * particles)
     den = inside @ w
     stay = den <= 0.0
@@ -59,25 +68,28 @@ def mean_shift(particles: np.ndarray, w: np.ndarray, h: np.ndarray) -> np.ndarra
     return out
 
 
-def kernel_log_weights(log_lik: np.ndarray, shifted: np.ndarray, prior_particles: np.ndarray,
-                       prior_w: np.ndarray, h: np.ndarray) -> np.ndarray:
+def kernel_log_weights(log_lik: np.ndarray, shifted: np.ndarray, prior: np.ndarray,
+                       h: np.ndarray, d2_prior: np.ndarray | None = None,
+                       d2_self: np.ndarray | None = None) -> np.ndarray:
     """Reweighting after a mean shift (Chang & Ansari eq. 9, which Schmidt follows): shifted
     samples are no longer drawn from the prior, so ``w ∝ p(y|s) p(s) / q(s)`` with the prior
-    ``p`` the KDE (eq. 11) of the particles before the shift and the proposal ``q`` the
-    unweighted KDE of the shifted ones. Unnormalised log-weights."""
-    n = len(shifted)
-    p = kde(shifted, prior_particles, prior_w, h)
-    q = kde(shifted, shifted, np.full(n, 1.0 / n), h)       # > 0: each sample covers itself
+    ``p`` the KDE (eq. 11) of the predicted particles ``prior`` (equally weighted, before any
+    shift) and the proposal ``q`` the KDE of the shifted ones. Unnormalised log-weights
+    (``-inf`` where the prior's KDE is 0). ``d2_prior``, ``d2_self``: the shifted particles'
+    scaled squared distances to the prior's and to their own."""
+    n, m = len(shifted), len(prior)
+    p = kde(shifted, prior, np.full(m, 1.0 / m), h, d2_prior)
+    q = kde(shifted, shifted, np.full(n, 1.0 / n), h, d2_self)   # > 0: each covers itself
     with np.errstate(divide="ignore"):
         return log_lik + np.log(p) - np.log(q)
 
 
-def dominant_mode(particles: np.ndarray, w: np.ndarray, h: np.ndarray, window: np.ndarray
-                  ) -> tuple[np.ndarray, int]:
+def dominant_mode(particles: np.ndarray, w: np.ndarray, h: np.ndarray, window: np.ndarray,
+                  d2: np.ndarray | None = None) -> tuple[np.ndarray, int]:
     """The dominant mode (Schmidt sec. 5.2): the particle where the posterior's KDE (eq. 11)
     peaks, then the weighted mean of the particles within ``window`` (scaled distance <= 1) of
-    it. Returns the mode ``(d,)`` and the peak particle's index."""
-    peak = int(np.argmax(kde(particles, particles, w, h)))
+    it. Returns the mode ``(d,)`` and the peak particle's index. ``d2`` as in :func:`kde`."""
+    peak = int(np.argmax(kde(particles, particles, w, h, d2)))
     near = sq_distances(particles[peak:peak + 1], particles, window)[0] <= 1.0
     wn = w * near
     if wn.sum() <= 0.0:
@@ -118,24 +130,32 @@ def mixed_propagate(particles: np.ndarray, velocity: np.ndarray, share: float, D
 
 def kpf_modes(particles: np.ndarray, log_lik_fn: Callable[[np.ndarray], np.ndarray],
               h0: np.ndarray, iterations: int, tol: float = 1e-3, shrink: float = 0.8,
-              reweight: bool = True) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+              reweight: bool = True
+              ) -> tuple[np.ndarray, np.ndarray, np.ndarray, int, np.ndarray]:
     """Mean-shift mode seeking of a predicted particle set (Schmidt sec. 5.2): weight by the
     likelihood, then up to ``iterations`` times shift every particle (eq. 13, bandwidth
     ``h = shrink^i h0``) and reweight (:func:`kernel_log_weights`, or the likelihood alone
     with ``reweight=False``); stop early when the best particle moves less than ``tol``
     (scaled by ``h0``). Returns particles, normalised weights, log-likelihoods, iterations
-    done."""
+    done and the final set's scaled squared distances at the last bandwidth (for
+    :func:`dominant_mode`). Each iteration costs two ``N x N`` distance products."""
     lik = log_lik_fn(particles)
     w = weights(lik)
+    prior = particles
+    h0 = _bandwidth(h0, particles.shape[1])
+    d2 = last = sq_distances(particles, particles, h0)
     done = 0
     for i in range(iterations):
         h = shrink ** i * h0
         best = particles[int(np.argmax(w))]
-        shifted = mean_shift(particles, w, h)
+        shifted = mean_shift(particles, w, h, d2)
         lik = log_lik_fn(shifted)
-        lw = kernel_log_weights(lik, shifted, particles, w, h) if reweight else lik
-        particles, w = shifted, weights(lw)
-        done = i + 1
+        d2_self = sq_distances(shifted, shifted, h)
+        lw = (kernel_log_weights(lik, shifted, prior, h, sq_distances(shifted, prior, h),
+                                 d2_self)
+              if reweight else lik)
+        particles, w, done, last = shifted, weights(lw), i + 1, d2_self
         if np.linalg.norm((particles[int(np.argmax(w))] - best) / h0) < tol:
             break
-    return particles, w, lik, done
+        d2 = d2_self / shrink ** 2        # the same distances at the next, smaller bandwidth
+    return particles, w, lik, done, last

@@ -14,6 +14,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from threadpoolctl import ThreadpoolController
 
 from humimic import bodymodel as bm
 from humimic.estimation.particles import kernel as kpf
@@ -23,6 +24,7 @@ from humimic.estimation.particles.weights import uniform_log_weights
 from humimic.perception.trackers.kpf.cues import CueMaps
 from humimic.perception.trackers.kpf.likelihood import Likelihood
 
+_BLAS = ThreadpoolController()
 #: Mean-shift modes reported per frame (the heaviest distinct ones), for display.
 MAX_MODES = 8
 
@@ -89,9 +91,14 @@ class KpfTracker:
         return lambda q: self.lik.evaluate(q, maps, T_cam_base).log_lik
 
     def step(self, maps: CueMaps, T_cam_base: np.ndarray) -> FrameResult:
-        """Track one frame."""
+        """Track one frame (BLAS on one thread: the N x N products are small, and threads
+        spinning on a shared 2-core machine made them 5x slower)."""
         if self.particles is None:
             raise RuntimeError("KpfTracker.step before start")
+        with _BLAS.limit(limits=1, user_api="blas"):
+            return self._step(maps, T_cam_base)
+
+    def _step(self, maps: CueMaps, T_cam_base: np.ndarray) -> FrameResult:
         if self.cfg.filter == "condensation":
             mode, iters, modes = self._condensation(maps, T_cam_base), 0, None
         else:
@@ -117,12 +124,11 @@ class KpfTracker:
         pred, moved = kpf.mixed_propagate(self.particles[idx], velocity, self.share, self.D,
                                           rng, self.limits.inside, cfg.motion_noise)
         pred = self.limits.clamp(pred)
-        parts, w, _, iters = kpf.kpf_modes(pred, self._log_lik(maps, T_cam_base), self.D,
-                                           cfg.iterations, cfg.tol, cfg.shrink,
-                                           cfg.reweight == "kernel")
-        parts = self.limits.clamp(parts)
+        parts, w, _, iters, d2 = kpf.kpf_modes(pred, self._log_lik(maps, T_cam_base), self.D,
+                                               cfg.iterations, cfg.tol, cfg.shrink,
+                                               cfg.reweight == "kernel")
         h = cfg.shrink ** max(iters - 1, 0) * self.D
-        mode, _ = kpf.dominant_mode(parts, w, h, cfg.window * self.D)
+        mode, _ = kpf.dominant_mode(parts, w, h, cfg.window * self.D, d2)
         self.share = kpf.motion_share(w, moved, cfg.min_random)
         self.particles, self.w = parts, w
         _, first = np.unique(np.round(parts / (cfg.window * self.D)), axis=0,
