@@ -15,6 +15,7 @@ from collections.abc import Callable
 
 import numpy as np
 
+from humimic.estimation.particles.resampling import resample_indices
 from humimic.estimation.particles.weights import weights
 
 
@@ -130,32 +131,63 @@ def mixed_propagate(particles: np.ndarray, velocity: np.ndarray, share: float, D
 
 def kpf_modes(particles: np.ndarray, log_lik_fn: Callable[[np.ndarray], np.ndarray],
               h0: np.ndarray, iterations: int, tol: float = 1e-3, shrink: float = 0.8,
-              reweight: bool = True
-              ) -> tuple[np.ndarray, np.ndarray, np.ndarray, int, np.ndarray]:
+              reweight: bool = True, groups: list[np.ndarray] | None = None
+              ) -> tuple[np.ndarray, np.ndarray, np.ndarray, int, list[np.ndarray]]:
     """Mean-shift mode seeking of a predicted particle set (Schmidt sec. 5.2): weight by the
     likelihood, then up to ``iterations`` times shift every particle (eq. 13, bandwidth
     ``h = shrink^i h0``) and reweight (:func:`kernel_log_weights`, or the likelihood alone
     with ``reweight=False``); stop early when the best particle moves less than ``tol``
-    (scaled by ``h0``). Returns particles, normalised weights, log-likelihoods, iterations
-    done and the final set's scaled squared distances at the last bandwidth (for
-    :func:`dominant_mode`). Each iteration costs two ``N x N`` distance products."""
-    lik = log_lik_fn(particles)
-    w = weights(lik)
+    (scaled by ``h0``).
+
+    ``groups`` (default: one group of every dimension) partitions the dimensions; then
+    ``log_lik_fn`` returns ``(N, G)``, column ``g`` the log-likelihood terms that group ``g``'s
+    dimensions affect (e.g. a torso group with the whole pose's, an arm group with that arm's
+    limbs), and each group is shifted and reweighted with its own weights over its own
+    dimensions (a product kernel). Returns particles, normalised weights ``(N, G)``,
+    log-likelihoods, iterations done and, per group, the final set's scaled squared distances
+    at the last bandwidth (for :func:`dominant_mode`). Each iteration costs two ``N x N``
+    distance products per group."""
+    d = particles.shape[1]
+    groups = [np.arange(d)] if groups is None else [np.asarray(g) for g in groups]
+    h0 = _bandwidth(h0, d)
+
+    def lik_of(x):
+        return np.asarray(log_lik_fn(x), float).reshape(len(x), len(groups))
+
+    lik = lik_of(particles)
+    W = np.stack([weights(lik[:, g]) for g in range(len(groups))], axis=1)
     prior = particles
-    h0 = _bandwidth(h0, particles.shape[1])
-    d2 = last = sq_distances(particles, particles, h0)
+    d2 = last = [sq_distances(particles[:, g], particles[:, g], h0[g]) for g in groups]
     done = 0
     for i in range(iterations):
         h = shrink ** i * h0
-        best = particles[int(np.argmax(w))]
-        shifted = mean_shift(particles, w, h, d2)
-        lik = log_lik_fn(shifted)
-        d2_self = sq_distances(shifted, shifted, h)
-        lw = (kernel_log_weights(lik, shifted, prior, h, sq_distances(shifted, prior, h),
-                                 d2_self)
-              if reweight else lik)
-        particles, w, done, last = shifted, weights(lw), i + 1, d2_self
-        if np.linalg.norm((particles[int(np.argmax(w))] - best) / h0) < tol:
+        best = particles[np.argmax(W, axis=0), :]
+        shifted = particles.copy()
+        for k, g in enumerate(groups):
+            shifted[:, g] = mean_shift(particles[:, g], W[:, k], h[g], d2[k])
+        lik = lik_of(shifted)
+        d2_self = [sq_distances(shifted[:, g], shifted[:, g], h[g]) for g in groups]
+        for k, g in enumerate(groups):
+            lw = (kernel_log_weights(lik[:, k], shifted[:, g], prior[:, g], h[g],
+                                     sq_distances(shifted[:, g], prior[:, g], h[g]),
+                                     d2_self[k]) if reweight else lik[:, k])
+            W[:, k] = weights(lw)
+        particles, done, last = shifted, i + 1, d2_self
+        moved = [np.linalg.norm((particles[int(np.argmax(W[:, k])), g] - best[k, g]) / h0[g])
+                 for k, g in enumerate(groups)]
+        if max(moved) < tol:
             break
-        d2 = d2_self / shrink ** 2        # the same distances at the next, smaller bandwidth
-    return particles, w, lik, done, last
+        d2 = [x / shrink ** 2 for x in d2_self]   # the same distances at the next bandwidth
+    return particles, W, lik, done, last
+
+
+def partitioned_resample(particles: np.ndarray, W: np.ndarray, groups: list[np.ndarray],
+                         rng: np.random.Generator) -> np.ndarray:
+    """Resample each group's dimensions with its own weights ``W[:, g]`` (systematic), the
+    groups independently: partitioned sampling's recombination (MacCormick & Isard 2000) for
+    groups whose likelihood terms do not interact."""
+    out = np.empty_like(particles)
+    for k, g in enumerate(groups):
+        idx = resample_indices(np.log(np.maximum(W[:, k], 1e-300)), rng)
+        out[:, g] = particles[idx][:, g]
+    return out

@@ -72,6 +72,14 @@ class KpfConfig(Section):
     reweight: Literal["kernel", "likelihood"] = "kernel"
     """After each shift: ``kernel`` (likelihood x prior KDE / proposal KDE, Chang & Ansari) or
     ``likelihood`` alone."""
+    partitioned: bool = False
+    """Our extension: the torso and each arm are shifted, weighted and resampled with their
+    own limbs' likelihood terms (partitioned sampling), instead of the whole pose's."""
+    torso_prior_m: float | None = Field(None, gt=0.0, le=10.0)
+    """Our extension: a Gaussian prior (this standard deviation, m) keeping the torso near its
+    start (a person standing in front of the robot); None: off, as the paper."""
+    torso_prior_deg: float = Field(5.0, gt=0.0, le=180.0)
+    """The prior's standard deviation of the torso's rotations (deg), with ``torso_prior_m``."""
     cues: KpfCues = Field(default_factory=KpfCues)
     edge_points: int = Field(20, ge=2, le=200, multiple_of=2)
     """M_E, even."""

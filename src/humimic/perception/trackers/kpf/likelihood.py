@@ -34,9 +34,15 @@ class Evaluation:
     the log-likelihoods and the band colours (for eq. 7's adaptation)."""
 
     cost: dict[str, np.ndarray]
-    log_lik: np.ndarray
+    terms: np.ndarray
+    """(N, parts) each part's eq.-10 factor (log): ``1/N_l sum_c log p(c, l)``."""
     colours: dict[str, np.ndarray]
     """Part name -> (N, B, 3) mean band colours."""
+
+    @property
+    def log_lik(self) -> np.ndarray:
+        """(N,) eq. 10 (log)."""
+        return self.terms.sum(axis=1)
 
     def mean_cost(self, i: int) -> float:
         """Mean cost over the used (part, cue) pairs of particle ``i``."""
@@ -114,12 +120,13 @@ class Likelihood:
         return out
 
     def combine(self, cost: dict[str, np.ndarray]) -> np.ndarray:
-        """Schmidt eqs. 9-10: ``sum_l 1/N_l sum_c -e^2 / (2 sigma_c^2)``."""
+        """Schmidt eqs. 9-10 per part ``l``: ``1/N_l sum_c -e^2 / (2 sigma_c^2)``, ``(N, parts)``
+        (their sum over parts is the pose's log-likelihood)."""
         sig = self.sigmas(cost)
         n_l = np.array([max(len(self.use[p]), 1) for p in self.parts], float)
         total = 0.0
         for c, e in cost.items():
-            total = total + np.nansum(-(e * e) / (2.0 * sig[c] ** 2) / n_l, axis=1)
+            total = total + np.nan_to_num(-(e * e) / (2.0 * sig[c] ** 2) / n_l)
         return np.asarray(total)
 
     def adapt(self, colours: dict[str, np.ndarray]) -> None:

@@ -17,12 +17,11 @@ from humimic import bodymodel as bm
 from humimic.messages import PoseEstimate
 from humimic.perception.trackers.kpf.cues import cue_maps
 from humimic.perception.trackers.kpf.scores import ENDPOINTS, KpfRecord, kpf_metrics
-from humimic.perception.trackers.kpf.tracker import KpfTracker
+from humimic.perception.trackers.kpf.tracker import KpfTracker, kpf_body
 from humimic.perception.trackers.kpf.viz import log_frame, log_run
 from humimic.pipeline.stage import Stage
 from humimic.sensors.camera_model import invert_transform
 from humimic.stamped import Stamped
-from humimic.world.names import HUMAN_PREFIX
 
 
 class KpfStage(Stage):
@@ -31,7 +30,7 @@ class KpfStage(Stage):
     def __init__(self, name: str, cfg, camera: str, world, skin_lut, rng, rlog=None):
         self.name, self.cfg, self.camera, self.world = name, cfg, camera, world
         self.skin_lut, self.rlog = skin_lut, rlog
-        self.body = bm.avatar_body(world.scene.model, HUMAN_PREFIX, torso="cylinder")
+        self.body = kpf_body(world.scene.model)
         self.rng = rng
         self.tracker: KpfTracker | None = None
         self.rec = KpfRecord()

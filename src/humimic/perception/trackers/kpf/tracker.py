@@ -18,13 +18,15 @@ from threadpoolctl import ThreadpoolController
 
 from humimic import bodymodel as bm
 from humimic.estimation.particles import kernel as kpf
+from humimic.estimation.particles.densities import Gaussian
 from humimic.estimation.particles.filters import condensation_step
-from humimic.estimation.particles.resampling import resample_indices
 from humimic.estimation.particles.weights import uniform_log_weights
 from humimic.perception.trackers.kpf.cues import CueMaps
 from humimic.perception.trackers.kpf.likelihood import Likelihood
 
 _BLAS = ThreadpoolController()
+#: The state's partition (``partitioned``): torso, right arm, left arm DOFs.
+GROUPS = [np.arange(0, 6), np.arange(6, 10), np.arange(10, 14)]
 #: Mean-shift modes reported per frame (the heaviest distinct ones), for display.
 MAX_MODES = 8
 
@@ -63,6 +65,18 @@ class FrameResult:
     """(M, 14) distinct mean-shift modes (the particles' converged positions, deduplicated)."""
 
 
+def kpf_body(model=None) -> bm.BodyModel:
+    """Schmidt's 14-DOF model of the avatar (elliptic-cylinder torso), the torso's yaw free
+    over +-360 deg (a person facing the robot has yaw 180 deg in the base frame: a +-180 deg
+    limit would clamp half the particles)."""
+    from humimic.world.names import HUMAN_PREFIX
+
+    limits = bm.JointLimits.default(torso_yaw=(-2 * np.pi, 2 * np.pi))
+    if model is None:
+        return bm.avatar_body(limits=limits, torso="cylinder")
+    return bm.avatar_body(model, HUMAN_PREFIX, limits=limits, torso="cylinder")
+
+
 class KpfTracker:
     """Schmidt et al.'s 14-DOF upper-body tracker; ``cfg`` a
     :class:`~humimic.perception.trackers.kpf.config.KpfConfig`."""
@@ -76,19 +90,42 @@ class KpfTracker:
         self.w = np.zeros(0)
         self.mode = self.mode_prev = None
         self.share = 0.5
+        self.torso_prior: Gaussian | None = None
 
     def start(self, q0: np.ndarray, maps: CueMaps, T_cam_base: np.ndarray) -> None:
         """Initialise at a known pose (the paper fits the model by hand): every particle at
         ``q0`` and the colour references from its back-projection."""
         n = self.cfg.particles
         self.mode = self.mode_prev = self.limits.clamp(np.asarray(q0, float))
+        c = self.cfg
+        self.torso_prior = None if c.torso_prior_m is None else Gaussian(
+            self.mode[:6], np.diag([c.torso_prior_m ** 2] * 3
+                                   + [np.radians(c.torso_prior_deg) ** 2] * 3))
         self.particles = np.repeat(self.mode[None], n, axis=0)
         self.w = np.full(n, 1.0 / n)
+        self.W = np.full((n, len(GROUPS)), 1.0 / n)
         self.lik.adapt({p: c[0] for p, c in
                         self.lik.evaluate(self.mode[None], maps, T_cam_base).colours.items()})
 
+    def _prior(self, q: np.ndarray) -> np.ndarray:
+        """Log-prior of the torso pose (0 without ``torso_prior_m``)."""
+        return 0.0 if self.torso_prior is None else self.torso_prior.log_density(q[:, :6])
+
     def _log_lik(self, maps, T_cam_base):
-        return lambda q: self.lik.evaluate(q, maps, T_cam_base).log_lik
+        return lambda q: self.lik.evaluate(q, maps, T_cam_base).log_lik + self._prior(q)
+
+    def _group_log_lik(self, maps, T_cam_base):
+        """``(N, 3)``: the whole pose's log-likelihood (torso group), the right arm's limbs',
+        the left arm's."""
+        cols = [self.lik.parts.index(p) for p in self.lik.parts]
+        side = [np.array([c for c, p in zip(cols, self.lik.parts, strict=True) if p[:2] == s])
+                for s in ("r_", "l_")]
+
+        def f(q):
+            t = self.lik.evaluate(q, maps, T_cam_base).terms
+            return np.column_stack([t.sum(1) + self._prior(q), t[:, side[0]].sum(1),
+                                    t[:, side[1]].sum(1)])
+        return f
 
     def step(self, maps: CueMaps, T_cam_base: np.ndarray) -> FrameResult:
         """Track one frame (BLAS on one thread: the N x N products are small, and threads
@@ -119,18 +156,23 @@ class KpfTracker:
 
     def _kpf(self, maps, T_cam_base):
         cfg, rng = self.cfg, self.rng
-        idx = resample_indices(np.log(np.maximum(self.w, 1e-300)), rng)
+        groups = GROUPS if cfg.partitioned else [np.arange(len(self.D))]
+        resampled = kpf.partitioned_resample(self.particles, self.W, groups, rng)
         velocity = self.mode - self.mode_prev
-        pred, moved = kpf.mixed_propagate(self.particles[idx], velocity, self.share, self.D,
+        pred, moved = kpf.mixed_propagate(resampled, velocity, self.share, self.D,
                                           rng, self.limits.inside, cfg.motion_noise)
         pred = self.limits.clamp(pred)
-        parts, w, _, iters, d2 = kpf.kpf_modes(pred, self._log_lik(maps, T_cam_base), self.D,
-                                               cfg.iterations, cfg.tol, cfg.shrink,
-                                               cfg.reweight == "kernel")
+        lik = (self._group_log_lik if cfg.partitioned else self._log_lik)(maps, T_cam_base)
+        parts, W, _, iters, d2 = kpf.kpf_modes(pred, lik, self.D, cfg.iterations, cfg.tol,
+                                               cfg.shrink, cfg.reweight == "kernel", groups)
         h = cfg.shrink ** max(iters - 1, 0) * self.D
-        mode, _ = kpf.dominant_mode(parts, w, h, cfg.window * self.D, d2)
+        win = cfg.window * self.D
+        mode = np.empty(len(self.D))
+        for k, g in enumerate(groups):
+            mode[g], _ = kpf.dominant_mode(parts[:, g], W[:, k], h[g], win[g], d2[k])
+        w = W[:, 0]
         self.share = kpf.motion_share(w, moved, cfg.min_random)
-        self.particles, self.w = parts, w
+        self.particles, self.w, self.W = parts, w, W
         _, first = np.unique(np.round(parts / (cfg.window * self.D)), axis=0,
                              return_index=True)
         return mode, iters, parts[first[np.argsort(-w[first])][:MAX_MODES]]
@@ -143,4 +185,5 @@ class KpfTracker:
                                  self._log_lik(maps, T_cam_base), self.rng)
         # the weighted set before resampling is gone: keep the resampled, equally weighted one
         self.particles, self.w = step.particles, np.full(n, 1.0 / n)
+        self.W = np.repeat(self.w[:, None], len(GROUPS), axis=1)
         return self.limits.clamp(step.mean)
