@@ -41,28 +41,36 @@ def _bandwidth(h, d: int) -> np.ndarray:
     return np.broadcast_to(np.asarray(h, float), (d,))
 
 
-def kde(x: np.ndarray, particles: np.ndarray, w: np.ndarray, h: np.ndarray,
-        d2: np.ndarray | None = None) -> np.ndarray:
+#: Weights below this fraction of the largest are left out of weighted sums (their share of
+#: any sum is below N times it): mean shift and weighted KDEs then cost N x (heavy particles).
+NEGLIGIBLE = 1e-7
+
+
+def heavy(w: np.ndarray, rel: float = NEGLIGIBLE) -> np.ndarray:
+    """Indices of the weights above ``rel`` times the largest."""
+    return np.flatnonzero(w > rel * np.max(w, initial=0.0))
+
+
+def kde(x: np.ndarray, particles: np.ndarray, w: np.ndarray, h: np.ndarray) -> np.ndarray:
     """Schmidt eq. 11: ``p(x) = sum_n K_h(x - s_n) w_n`` with ``K_h(u) = K(u / h) / prod(h)``
-    (normalised weights ``w``), at points ``x (M, d)``; ``d2`` the scaled squared distances
-    :func:`sq_distances` ``(x, particles, h)`` when already known."""
+    (normalised weights ``w``), at points ``x (M, d)`` (negligible weights left out)."""
     d = particles.shape[1]
     h = _bandwidth(h, d)
-    d2 = sq_distances(x, particles, h) if d2 is None else d2
-    return epanechnikov(d2, d) @ w / np.prod(h)
+    keep = heavy(np.asarray(w, float))
+    return epanechnikov(sq_distances(x, particles[keep], h), d) @ np.asarray(w)[keep] / np.prod(h)
 
 
-def mean_shift(particles: np.ndarray, w: np.ndarray, h: np.ndarray,
-               d2: np.ndarray | None = None) -> np.ndarray:
+def mean_shift(particles: np.ndarray, w: np.ndarray, h: np.ndarray) -> np.ndarray:
     """Schmidt eq. 13: every particle moved to ``m(s) = sum H(s_i - s) w_i s_i / sum H w_i``.
     ``H``'s profile is ``-k'``: for the Epanechnikov kernel a constant inside the bandwidth
     (the flat kernel), so ``m(s)`` is the weighted mean of the particles within ``h`` of ``s``
-    (a particle alone in its window with weight 0 stays put). ``d2`` as in :func:`kde`."""
-    d2 = sq_distances(particles, particles, _bandwidth(h, particles.shape[1])) if d2 is None \
-        else d2
-    inside = (d2 <= 1.0).astype(float)                                      # (N, N)
-    num = inside @ (w[:, None] * particles)
-    den = inside @ w
+    (a particle with no weighted particle in its window stays put)."""
+    keep = heavy(w)
+    src, wk = particles[keep], w[keep]
+    inside = (sq_distances(particles, src, _bandwidth(h, particles.shape[1])) <= 1.0
+              ).astype(float)                                               # (N, K)
+    num = inside @ (wk[:, None] * src)
+    den = inside @ wk
     stay = den <= 0.0
     out = num / np.where(stay, 1.0, den)[:, None]
     out[stay] = particles[stay]
@@ -70,27 +78,33 @@ def mean_shift(particles: np.ndarray, w: np.ndarray, h: np.ndarray,
 
 
 def kernel_log_weights(log_lik: np.ndarray, shifted: np.ndarray, prior: np.ndarray,
-                       h: np.ndarray, d2_prior: np.ndarray | None = None,
-                       d2_self: np.ndarray | None = None) -> np.ndarray:
+                       h: np.ndarray, stride: int = 1) -> np.ndarray:
     """Reweighting after a mean shift (Chang & Ansari eq. 9, which Schmidt follows): shifted
     samples are no longer drawn from the prior, so ``w ∝ p(y|s) p(s) / q(s)`` with the prior
     ``p`` the KDE (eq. 11) of the predicted particles ``prior`` (equally weighted, before any
     shift) and the proposal ``q`` the KDE of the shifted ones. Unnormalised log-weights
-    (``-inf`` where the prior's KDE is 0). ``d2_prior``, ``d2_self``: the shifted particles'
-    scaled squared distances to the prior's and to their own."""
-    n, m = len(shifted), len(prior)
-    p = kde(shifted, prior, np.full(m, 1.0 / m), h, d2_prior)
-    q = kde(shifted, shifted, np.full(n, 1.0 / n), h, d2_self)   # > 0: each covers itself
+    (``-inf`` where the prior's KDE is 0). ``stride > 1`` estimates both KDEs from every
+    ``stride``-th particle (a Monte Carlo estimate, ``N / stride`` kernels per point instead of
+    N), keeping each sample's own kernel in ``q`` so it stays positive."""
+    n, d = shifted.shape
+    h = _bandwidth(h, d)
+    ref_p, ref_q = prior[::stride], shifted[::stride]
+    p = kde(shifted, ref_p, np.full(len(ref_p), 1.0 / len(ref_p)), h)
+    q = kde(shifted, ref_q, np.full(len(ref_q), 1.0 / len(ref_q)), h)   # > 0 when stride 1
+    if stride > 1:
+        q = q * (1.0 - 1.0 / n) + epanechnikov(0.0, d) / np.prod(h) / n
     with np.errstate(divide="ignore"):
         return log_lik + np.log(p) - np.log(q)
 
 
-def dominant_mode(particles: np.ndarray, w: np.ndarray, h: np.ndarray, window: np.ndarray,
-                  d2: np.ndarray | None = None) -> tuple[np.ndarray, int]:
+def dominant_mode(particles: np.ndarray, w: np.ndarray, h: np.ndarray, window: np.ndarray
+                  ) -> tuple[np.ndarray, int]:
     """The dominant mode (Schmidt sec. 5.2): the particle where the posterior's KDE (eq. 11)
     peaks, then the weighted mean of the particles within ``window`` (scaled distance <= 1) of
-    it. Returns the mode ``(d,)`` and the peak particle's index. ``d2`` as in :func:`kde`."""
-    peak = int(np.argmax(kde(particles, particles, w, h, d2)))
+    it. Returns the mode ``(d,)`` and the peak particle's index. Only particles of
+    non-negligible weight are candidates for the peak (the others' KDE value is no larger)."""
+    keep = heavy(w)
+    peak = int(keep[np.argmax(kde(particles[keep], particles, w, h))])
     near = sq_distances(particles[peak:peak + 1], particles, window)[0] <= 1.0
     wn = w * near
     if wn.sum() <= 0.0:
@@ -131,22 +145,20 @@ def mixed_propagate(particles: np.ndarray, velocity: np.ndarray, share: float, D
 
 def kpf_modes(particles: np.ndarray, log_lik_fn: Callable[[np.ndarray], np.ndarray],
               h0: np.ndarray, iterations: int, tol: float = 1e-3, shrink: float = 0.8,
-              reweight: bool = True, groups: list[np.ndarray] | None = None
-              ) -> tuple[np.ndarray, np.ndarray, np.ndarray, int, list[np.ndarray]]:
+              reweight: bool = True, groups: list[np.ndarray] | None = None,
+              stride: int = 1) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
     """Mean-shift mode seeking of a predicted particle set (Schmidt sec. 5.2): weight by the
     likelihood, then up to ``iterations`` times shift every particle (eq. 13, bandwidth
-    ``h = shrink^i h0``) and reweight (:func:`kernel_log_weights`, or the likelihood alone
-    with ``reweight=False``); stop early when the best particle moves less than ``tol``
-    (scaled by ``h0``).
+    ``h = shrink^i h0``) and reweight (:func:`kernel_log_weights` with ``stride``, or the
+    likelihood alone with ``reweight=False``); stop early when the best particle moves less
+    than ``tol`` (scaled by ``h0``).
 
     ``groups`` (default: one group of every dimension) partitions the dimensions; then
     ``log_lik_fn`` returns ``(N, G)``, column ``g`` the log-likelihood terms that group ``g``'s
     dimensions affect (e.g. a torso group with the whole pose's, an arm group with that arm's
     limbs), and each group is shifted and reweighted with its own weights over its own
     dimensions (a product kernel). Returns particles, normalised weights ``(N, G)``,
-    log-likelihoods, iterations done and, per group, the final set's scaled squared distances
-    at the last bandwidth (for :func:`dominant_mode`). Each iteration costs two ``N x N``
-    distance products per group."""
+    log-likelihoods ``(N, G)`` and the iterations done."""
     d = particles.shape[1]
     groups = [np.arange(d)] if groups is None else [np.asarray(g) for g in groups]
     h0 = _bandwidth(h0, d)
@@ -157,28 +169,24 @@ def kpf_modes(particles: np.ndarray, log_lik_fn: Callable[[np.ndarray], np.ndarr
     lik = lik_of(particles)
     W = np.stack([weights(lik[:, g]) for g in range(len(groups))], axis=1)
     prior = particles
-    d2 = last = [sq_distances(particles[:, g], particles[:, g], h0[g]) for g in groups]
     done = 0
     for i in range(iterations):
         h = shrink ** i * h0
         best = particles[np.argmax(W, axis=0), :]
         shifted = particles.copy()
         for k, g in enumerate(groups):
-            shifted[:, g] = mean_shift(particles[:, g], W[:, k], h[g], d2[k])
+            shifted[:, g] = mean_shift(particles[:, g], W[:, k], h[g])
         lik = lik_of(shifted)
-        d2_self = [sq_distances(shifted[:, g], shifted[:, g], h[g]) for g in groups]
         for k, g in enumerate(groups):
-            lw = (kernel_log_weights(lik[:, k], shifted[:, g], prior[:, g], h[g],
-                                     sq_distances(shifted[:, g], prior[:, g], h[g]),
-                                     d2_self[k]) if reweight else lik[:, k])
+            lw = (kernel_log_weights(lik[:, k], shifted[:, g], prior[:, g], h[g], stride)
+                  if reweight else lik[:, k])
             W[:, k] = weights(lw)
-        particles, done, last = shifted, i + 1, d2_self
+        particles, done = shifted, i + 1
         moved = [np.linalg.norm((particles[int(np.argmax(W[:, k])), g] - best[k, g]) / h0[g])
                  for k, g in enumerate(groups)]
         if max(moved) < tol:
             break
-        d2 = [x / shrink ** 2 for x in d2_self]   # the same distances at the next bandwidth
-    return particles, W, lik, done, last
+    return particles, W, lik, done
 
 
 def partitioned_resample(particles: np.ndarray, W: np.ndarray, groups: list[np.ndarray],

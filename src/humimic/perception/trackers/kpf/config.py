@@ -80,6 +80,8 @@ class KpfConfig(Section):
     start (a person standing in front of the robot); None: off, as the paper."""
     torso_prior_deg: float = Field(5.0, gt=0.0, le=180.0)
     """The prior's standard deviation of the torso's rotations (deg), with ``torso_prior_m``."""
+    kde_stride: int = Field(1, ge=1, le=100)
+    """The reweighting's KDEs from every k-th particle (1: all, exact; more: faster)."""
     cues: KpfCues = Field(default_factory=KpfCues)
     edge_points: int = Field(20, ge=2, le=200, multiple_of=2)
     """M_E, even."""

@@ -163,13 +163,14 @@ class KpfTracker:
                                           rng, self.limits.inside, cfg.motion_noise)
         pred = self.limits.clamp(pred)
         lik = (self._group_log_lik if cfg.partitioned else self._log_lik)(maps, T_cam_base)
-        parts, W, _, iters, d2 = kpf.kpf_modes(pred, lik, self.D, cfg.iterations, cfg.tol,
-                                               cfg.shrink, cfg.reweight == "kernel", groups)
+        parts, W, _, iters = kpf.kpf_modes(pred, lik, self.D, cfg.iterations, cfg.tol,
+                                           cfg.shrink, cfg.reweight == "kernel", groups,
+                                           cfg.kde_stride)
         h = cfg.shrink ** max(iters - 1, 0) * self.D
         win = cfg.window * self.D
         mode = np.empty(len(self.D))
         for k, g in enumerate(groups):
-            mode[g], _ = kpf.dominant_mode(parts[:, g], W[:, k], h[g], win[g], d2[k])
+            mode[g], _ = kpf.dominant_mode(parts[:, g], W[:, k], h[g], win[g])
         w = W[:, 0]
         self.share = kpf.motion_share(w, moved, cfg.min_random)
         self.particles, self.w, self.W = parts, w, W
