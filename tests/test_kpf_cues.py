@@ -9,8 +9,8 @@ import cv2
 import numpy as np
 import pytest
 
-from humimic.perception.cues.color_models import ColorLUT, load_color_model
 from humimic.perception.blobs.config import DEFAULT_COLOR_MODEL
+from humimic.perception.cues.color_models import ColorLUT, load_color_model
 from humimic.perception.trackers.kpf import cues as C
 
 H, W = 120, 160
