@@ -12,6 +12,7 @@ topic          value                                       producer -> consumer
 ``head_pose``  :class:`HeadPose` (paper's W, frame I)      slam -> arm EKF, commands
 ``arm_pose``   :class:`ArmPose` (frame I, remote frame A)  arm EKF -> commands
 ``commands``   :class:`RobotCommand`                       commands -> robot follower
+``poses``      :class:`PoseEstimate` (robot base frame)    gest, tbp, kpf -> mimic, metrics
 ``measurements`` :class:`Measurements` (robot base frame)  perception -> filter
 ``estimates``  :class:`Estimates` (robot base frame)       filter / oracle -> control
 =============  ==========================================  ===========================
@@ -151,3 +152,24 @@ class RobotCommand:
     """When it went out (s)."""
     seq: int
     """Its number among the commands of its kind (0, 1, ...)."""
+
+
+@dataclass(frozen=True)
+class PoseEstimate:
+    """One tracker's articulated pose estimate of the person (topic ``poses``), stamped with
+    the photon time of the frame it came from."""
+
+    tracker: str
+    """The tracker's name (its key under ``trackers:``)."""
+    names: tuple[str, ...]
+    """Names of the values in ``q`` (:data:`humimic.bodymodel.DOF_NAMES` or a subset)."""
+    q: np.ndarray
+    """(D,) joint angles (rad, DB's convention) and torso pose (m, rad) in the robot base
+    frame."""
+    endpoints: dict[str, np.ndarray]
+    """Limb endpoints (``r_shoulder``, ``r_elbow``, ``r_wrist``, ...) -> (3,) position in the
+    robot base frame (m)."""
+    spread: np.ndarray
+    """(D,) standard deviation of the particles (or the filter's) per value of ``q``."""
+    state: str = "tracking"
+    """``tracking`` or ``lost``."""

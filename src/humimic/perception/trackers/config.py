@@ -1,0 +1,21 @@
+"""``trackers:`` -- the scenario's image-based trackers, by name, each with a ``kind``.
+
+:data:`TrackerConfig` is the discriminated union over ``kind`` of the tracker kinds' config
+classes (one import and one union member per kind, each kind's config in its own package
+``perception/trackers/<kind>/``). Several trackers may run side by side on the same frames.
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Union
+
+from pydantic import Field
+
+from humimic.perception.trackers.kpf.config import KpfConfig
+
+TrackerConfig = Annotated[
+    Union[  # noqa: UP007 -- one member per line, one line per kind
+        KpfConfig,
+    ],
+    Field(discriminator="kind"),
+]
