@@ -66,8 +66,9 @@ def test_poses_published_per_frame_and_scored(run):
     assert m["frames"] == 15 == len(msgs)
     assert [msg.t for msg in msgs] == pytest.approx(np.arange(15) / 7.5)
     p = msgs[0].value
-    assert isinstance(p, PoseEstimate) and p.tracker == "kpf" and len(p.q) == 14
-    assert set(p.endpoints) >= {"r_wrist", "r_elbow", "l_wrist"} and p.spread.shape == (14,)
+    assert isinstance(p, PoseEstimate) and p.tracker == "kpf" and len(p.state) == 14
+    assert set(p.joints) >= {"r_wrist", "r_elbow", "l_wrist"} and p.cov.shape == (14, 14)
+    assert set(p.angles) == {"R_SFE", "R_SAA", "R_HR", "R_EB", "L_SFE", "L_SAA", "L_HR", "L_EB"}
     # measured 40-60 mm over the first 1.2 s of tracking before the camera is covered
     assert m["wrist_error_mm"] < 150.0
     assert m["wrist_lateral_mm"] < m["wrist_error_mm"] + 1e-9

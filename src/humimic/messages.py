@@ -12,9 +12,9 @@ topic          value                                       producer -> consumer
 ``head_pose``  :class:`HeadPose` (paper's W, frame I)      slam -> arm EKF, commands
 ``arm_pose``   :class:`ArmPose` (frame I, remote frame A)  arm EKF -> commands
 ``commands``   :class:`RobotCommand`                       commands -> robot follower
-``poses``      :class:`PoseEstimate` (robot base frame)    gest, tbp, kpf -> mimic, metrics
 ``measurements`` :class:`Measurements` (robot base frame)  perception -> filter
 ``estimates``  :class:`Estimates` (robot base frame)       filter / oracle -> control
+``poses``      :class:`PoseEstimate` (robot base frame)    gest, tbp, kpf -> mimic, metrics
 =============  ==========================================  ===========================
 
 Perception's positions are in the robot base frame (m), velocities m/s, accelerations m/s^2.
@@ -156,20 +156,22 @@ class RobotCommand:
 
 @dataclass(frozen=True)
 class PoseEstimate:
-    """One tracker's articulated pose estimate of the person (topic ``poses``), stamped with
-    the photon time of the frame it came from."""
+    """One articulated (or free-part) pose estimate of one tracker (topic ``poses``), stamped
+    with the photon time of the frame it came from."""
 
     tracker: str
     """The tracker's name (its key under ``trackers:``)."""
-    names: tuple[str, ...]
-    """Names of the values in ``q`` (:data:`humimic.bodymodel.DOF_NAMES` or a subset)."""
-    q: np.ndarray
-    """(D,) joint angles (rad, DB's convention) and torso pose (m, rad) in the robot base
-    frame."""
-    endpoints: dict[str, np.ndarray]
-    """Limb endpoints (``r_shoulder``, ``r_elbow``, ``r_wrist``, ...) -> (3,) position in the
-    robot base frame (m)."""
-    spread: np.ndarray
-    """(D,) standard deviation of the particles (or the filter's) per value of ``q``."""
-    state: str = "tracking"
-    """``tracking`` or ``lost``."""
+    kind: str
+    """The tracker's kind (``gest``, ``tbp``, ``kpf``)."""
+    state: np.ndarray
+    """(d,) the MMSE estimate of the tracker's own state vector (``state_names``)."""
+    state_names: tuple[str, ...]
+    cov: np.ndarray | None = None
+    """(d, d) weighted particle covariance of the state (the particles' spread)."""
+    joints: dict[str, np.ndarray] = field(default_factory=dict)
+    """Joint / part positions in the robot base frame (m) by name (``r_elbow``, ``r_wrist``,
+    ``r_hand`` ... as :data:`humimic.bodymodel.kinematics.JOINT_SEGMENT`)."""
+    angles: dict[str, float] = field(default_factory=dict)
+    """Arm joint angles (rad, DB's convention ``R_SFE`` ... ``L_EB``) where estimated."""
+    status: str = "tracking"
+    """``tracking``, ``searching`` (no target yet or re-initialising) or ``lost``."""

@@ -32,7 +32,7 @@ from humimic.world.names import (
 )
 
 #: Room name -> MJCF file in ``models/``.
-ROOMS = {"lab": "room.xml", "sugiyama": "room_sugiyama.xml"}
+ROOMS = {"lab": "room.xml", "sugiyama": "room_sugiyama.xml", "lab_clutter": "room_clutter.xml"}
 #: Room site at which the person's (avatar) frame is placed, when the room has one.
 PERSON_START_SITE = "person_start"
 WIDE_HFOV_DEG = EYE_HFOV_DEG["wide"]
