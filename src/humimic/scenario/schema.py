@@ -17,6 +17,7 @@ from humimic.estimation.config import FilterConfig
 from humimic.estimation.ekf.arm_config import ArmConfig
 from humimic.estimation.ekf.slam_config import SlamConfig
 from humimic.perception.blobs.config import PerceptionConfig
+from humimic.perception.trackers.config import TrackerConfig
 from humimic.scenario.base import Section
 from humimic.sensors.config import Cameras, Sensors, Timing
 from humimic.viz.config import Output
@@ -58,6 +59,9 @@ class Scenario(Section):
     commands: CommandsConfig | None = None
     """Robot commands from the wearer's motion and the robot following them (Sugiyama &
     Miura sec. V-C, :mod:`humimic.control.commands_config`); excludes ``mimic``."""
+    trackers: dict[str, TrackerConfig] = Field(default_factory=dict)
+    """Tracker stages by name, each with a ``kind`` (:mod:`humimic.perception.trackers`);
+    several may run side by side on the same frames; scored as ``trackers.<name>.*``."""
 
     @model_validator(mode="after")
     def _placement_fits_the_room(self) -> Scenario:

@@ -48,14 +48,20 @@ def distance_transform(edges: np.ndarray, cap: float = DT_CAP_PX) -> np.ndarray:
     return np.minimum(dt, np.float32(cap))
 
 
-def edge_maps(image: np.ndarray, low: float = 50.0, high: float = 150.0,
-              blur_sigma: float = 1.0, cap: float = DT_CAP_PX) -> EdgeMaps:
-    """Canny edges (after a small Gaussian blur against pixel noise) and their distance
-    transform for an RGB or grey uint8 image."""
+def canny(image: np.ndarray, low: float = 50.0, high: float = 150.0,
+          blur_sigma: float = 1.0) -> np.ndarray:
+    """Canny edges (uint8 0/255) of an RGB or grey uint8 image, after a small Gaussian blur
+    against pixel noise."""
     g = grey(image)
     if blur_sigma > 0:
         g = cv2.GaussianBlur(g, (0, 0), blur_sigma)
-    edges = cv2.Canny(g, low, high, L2gradient=True)
+    return cv2.Canny(g, low, high, L2gradient=True)
+
+
+def edge_maps(image: np.ndarray, low: float = 50.0, high: float = 150.0,
+              blur_sigma: float = 1.0, cap: float = DT_CAP_PX) -> EdgeMaps:
+    """:func:`canny` edges and their distance transform for an RGB or grey uint8 image."""
+    edges = canny(image, low, high, blur_sigma)
     return EdgeMaps(edges, distance_transform(edges, cap))
 
 
