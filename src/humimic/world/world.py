@@ -37,6 +37,7 @@ def scene_options(scenario) -> SceneOptions:
         ambient=light.ambient, diffuse=light.diffuse, shadows=light.shadows, msaa=light.msaa,
         show_wiimote=h.wiimote, room=scenario.room, base=scenario.robot.base,
         identity=h.identity, show_headcam=scenario.sensors.head_camera.enabled,
+        clutter=getattr(scenario, "clutter", False),
     )
 
 

@@ -1,0 +1,15 @@
+"""``TrackerConfig``: the scenario's ``trackers:`` values, a union discriminated by ``kind``
+(one import and one union member per tracker kind)."""
+
+from __future__ import annotations
+
+from typing import Annotated
+
+from pydantic import Field
+
+from humimic.perception.trackers.hand2d.config import Hand2DConfig
+
+TrackerConfig = Annotated[
+    Hand2DConfig,
+    Field(discriminator="kind"),
+]
