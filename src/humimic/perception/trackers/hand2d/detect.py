@@ -2,9 +2,9 @@
 
 OpenCV ships no hand cascade, so the agreement is between skin blobs (sec. 4.2.2), the Haar
 face detector (a skin blob on a detected face is not a hand) and the hand template: a blob is
-a hand when the template placed on it (width = the blob's width, upright; three scales tried)
-lies within ``init_edge_px`` mean edge distance (widths around the blob's, five angles). Among agreeing blobs the one whose box holds
-the most moving edges wins (Menezes' hands wave), then the best template fit.
+a hand when the template placed on it (three widths around the blob's, five angles) lies
+within ``init_edge_px`` mean edge distance. Among agreeing blobs the one whose box holds the
+most moving edges wins (Menezes' hands wave), then the best template fit.
 """
 
 from __future__ import annotations

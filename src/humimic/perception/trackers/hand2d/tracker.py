@@ -15,8 +15,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from humimic.estimation.particles import Gaussian, GaussianMixture, ParticleFilter, RandomWalk
-from humimic.estimation.particles import UniformBox
+from humimic.estimation.particles import (
+    Gaussian,
+    GaussianMixture,
+    ParticleFilter,
+    RandomWalk,
+    UniformBox,
+)
 from humimic.perception.cues.edges import grey as to_grey
 from humimic.perception.cues.histograms import patch_histograms, quantize, update_reference
 from humimic.perception.cues.importance import Blobs
