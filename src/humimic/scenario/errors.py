@@ -70,13 +70,20 @@ def _tag_of(model: type[BaseModel]) -> str | None:
     return args[0] if args else None
 
 
+def _is_tag(part, models: list[type[BaseModel]]) -> bool:
+    """Whether a location part is a discriminated union's tag (a union of one model too,
+    unless the part is also one of its fields)."""
+    return (any(_tag_of(m) == part for m in models)
+            and (len(models) > 1 or part not in models[0].model_fields))
+
+
 def model_at(root: type[BaseModel], loc: tuple) -> type[BaseModel] | None:
     """The pydantic model that owns the last element of ``loc`` (for listing allowed keys)."""
     current: Any = root
     for part in loc[:-1]:
         models = _models_in(current)
         if models and isinstance(part, str):
-            if len(models) > 1:  # discriminated union: the location names the tag
+            if _is_tag(part, models):  # discriminated union: the location names the tag
                 match = [m for m in models if _tag_of(m) == part]
                 if match:
                     current = match[0]
@@ -103,7 +110,7 @@ def _dotted(loc: tuple, root: type[BaseModel]) -> str:
     current: Any = root
     for part in loc:
         models = _models_in(current)
-        if len(models) > 1 and isinstance(part, str) and any(_tag_of(m) == part for m in models):
+        if isinstance(part, str) and _is_tag(part, models):
             current = next(m for m in models if _tag_of(m) == part)
             continue
         parts.append(str(part))
