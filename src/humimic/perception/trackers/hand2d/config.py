@@ -46,8 +46,9 @@ class Hand2DConfig(Section):
     """Half length of the search along each normal (px)."""
     min_flow_px: float = Field(0.5, ge=0.0, le=20.0)
     """Optical flow (px/frame) above which an edge is moving."""
-    sigma_c: float = Field(0.1, gt=0.0, le=10.0)
-    """Colour likelihood's standard deviation over the Bhattacharyya distance (eq. 6)."""
+    sigma_c: float = Field(0.2, gt=0.0, le=10.0)
+    """Colour likelihood's standard deviation over the Bhattacharyya distance (eq. 6); 0.2
+    fused best on the Fig. 5 sequence (0.1: the colour cue overrode the shape)."""
     bins: int = Field(16, ge=2, le=256)
     """Histogram bins per RGB channel (must divide 256)."""
     kappa: float = Field(0.05, ge=0.0, le=1.0)
