@@ -11,8 +11,15 @@ def _hand2d(name, cfg, scenario, world, rngs, rlog) -> Stage:
     return hand2d_stage(name, cfg, scenario, world, rngs, rlog)
 
 
+def _icu(name, cfg, scenario, world, rngs, rlog) -> Stage:
+    from humimic.perception.trackers.icu.build import icu_stage
+
+    return icu_stage(name, cfg, scenario, world, rngs, rlog)
+
+
 BUILDERS = {
     "hand2d": _hand2d,
+    "icu": _icu,
 }
 
 

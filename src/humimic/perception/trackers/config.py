@@ -8,8 +8,9 @@ from typing import Annotated
 from pydantic import Field
 
 from humimic.perception.trackers.hand2d.config import Hand2DConfig
+from humimic.perception.trackers.icu.config import IcuConfig
 
 TrackerConfig = Annotated[
-    Hand2DConfig,
+    Hand2DConfig | IcuConfig,
     Field(discriminator="kind"),
 ]
