@@ -8,17 +8,20 @@ whether it is in view). A frame is
   ``max(gate_px, gate_size * true size)`` of the projected truth;
 * *lost* when the target is visible but the tracker is not on it (reporting ``lost``/``init``,
   or ``tracking`` something else: a track far off the target is not counted as tracking);
-* *on the wrong person* when the tracker reports ``tracking``, is off its target, and is within
-  the gate of another person's projected head (people given by ``others``).
+* *on the wrong person* when the target is in view (and not hidden by a nearer person, see
+  :func:`hide_occluded`) and the tracker reports ``tracking``, is off its target, and is
+  within the gate of another person's projected head (people given by ``others``). While the
+  target is hidden, such frames count as ``on_other_while_hidden_frames`` instead.
 
 Scores (:func:`scores`): ``frames``, ``visible_frames``, ``center_rmse_px`` /
 ``center_median_px`` (over visible frames the tracker reports ``tracking``, wherever it is),
 ``scale_rmse_px`` (true size vs estimated), ``on_target_rmse_px``, ``lost_fraction`` (of the
-visible frames), ``false_track_fraction`` (frames the target is out of view but the tracker
-claims to track it, of such frames), ``identity_switches`` (episodes on another person),
-``wrong_person_frames``, ``acquire_s`` (first visible to first on target) and ``reacquire_s``
-(per event: the target becoming visible again after being out of view, to on target; null
-when never re-acquired), ``reacquire_max_s``.
+visible frames), ``false_track_fraction`` (frames the target is out of view or hidden but the
+tracker claims to track it, of such frames), ``identity_switches`` (episodes on another person
+while the target is in view), ``wrong_person_frames``, ``on_other_while_hidden_frames``,
+``acquire_s`` (first visible to first on target) and ``reacquire_s`` (per event: the target
+becoming visible again after being out of view or hidden, to on target; null when never
+re-acquired), ``reacquire_max_s``.
 """
 
 from __future__ import annotations
@@ -45,7 +48,10 @@ class ImageTruth:
     size_px: np.ndarray
     """(F,) apparent size of the physical size (px)."""
     visible: np.ndarray
-    """(F,) bool: in front of the camera and the centre inside the image."""
+    """(F,) bool: in front of the camera and the centre inside the image (and, after
+    :func:`hide_occluded`, not behind a nearer person)."""
+    depth: np.ndarray | None = None
+    """(F,) distance along the optical axis (m)."""
 
 
 def project_truth(cameras: list[CameraModel], p_base: np.ndarray, size_m: float,
@@ -55,11 +61,12 @@ def project_truth(cameras: list[CameraModel], p_base: np.ndarray, size_m: float,
     the border counts as out of view."""
     F = len(cameras)
     uv = np.full((F, 2), np.nan)
-    size = np.full(F, np.nan)
+    size, depth = np.full(F, np.nan), np.full(F, np.nan)
     vis = np.zeros(F, bool)
     for k, cam in enumerate(cameras):
         T = invert_transform(cam.T_base_cam)
         p_cam = T[:3, :3] @ np.asarray(p_base[k], float) + T[:3, 3]
+        depth[k] = p_cam[2]
         if p_cam[2] <= 1e-6:
             continue
         intr = cam.intrinsics
@@ -67,7 +74,22 @@ def project_truth(cameras: list[CameraModel], p_base: np.ndarray, size_m: float,
         size[k] = intr.fx * size_m / p_cam[2]
         vis[k] = (margin_px <= uv[k, 0] < intr.width - margin_px
                   and margin_px <= uv[k, 1] < intr.height - margin_px)
-    return ImageTruth(uv, size, vis)
+    return ImageTruth(uv, size, vis, depth)
+
+
+def hide_occluded(target: ImageTruth, occluders: list[ImageTruth], half_width: float = 1.5
+                  ) -> ImageTruth:
+    """The target made invisible where a nearer occluder covers it: horizontally within
+    ``half_width`` occluder sizes (a person's shoulders are ~1.5 head widths either side of
+    the head) plus half the target's size, and not above the occluder's head."""
+    hidden = np.zeros(len(target.visible), bool)
+    for o in occluders:
+        with np.errstate(invalid="ignore"):
+            du = np.abs(target.uv[:, 0] - o.uv[:, 0])
+            covers = du < half_width * o.size_px + 0.5 * target.size_px
+            below = target.uv[:, 1] > o.uv[:, 1] - 0.5 * o.size_px
+            hidden |= (o.depth < target.depth) & covers & below
+    return ImageTruth(target.uv, target.size_px, target.visible & ~hidden, target.depth)
 
 
 def gate(size_px: np.ndarray, gate_px: float = GATE_PX, gate_size: float = GATE_SIZE
@@ -129,7 +151,8 @@ def scores(t: np.ndarray, est_uv: np.ndarray, est_scale: np.ndarray, tracking: n
     tracking = np.asarray(tracking, bool)
     vis = truth.visible
     on = on_target(est_uv, tracking, truth, gate_px, gate_size)
-    wrong = wrong_person(est_uv, tracking, on, others or [], gate_px, gate_size)
+    near_other = wrong_person(est_uv, tracking, on, others or [], gate_px, gate_size)
+    wrong = near_other & truth.visible
     err = est_uv - truth.uv
     judged = vis & tracking
     acq, reacq = reacquire_times(t, vis, on)
@@ -148,6 +171,7 @@ def scores(t: np.ndarray, est_uv: np.ndarray, est_scale: np.ndarray, tracking: n
                                  else None),
         "identity_switches": len(rising_edges(wrong)),
         "wrong_person_frames": int(wrong.sum()),
+        "on_other_while_hidden_frames": int((near_other & ~truth.visible).sum()),
         "acquire_s": finite_or_none(acq),
         "reacquire_s": [finite_or_none(r) for r in reacq],
         "reacquire_max_s": (finite_or_none(np.max(reacq)) if reacq and np.all(np.isfinite(reacq))

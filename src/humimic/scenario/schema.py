@@ -69,7 +69,8 @@ class Scenario(Section):
     @model_validator(mode="after")
     def _placement_fits_the_room(self) -> Scenario:
         if self.room != "lab":
-            given = [k for k in ("distance", "lateral") if k in self.human.model_fields_set]
+            given = [k for k in ("distance", "lateral", "people")
+                     if k in self.human.model_fields_set]
             if given:
                 raise ValueError(f"human.{given[0]} does not apply in room {self.room!r}: the "
                                  "room places the person (move them with human.motion)")

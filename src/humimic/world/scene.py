@@ -79,6 +79,8 @@ class SceneOptions:
     max_render_size: tuple[int, int] = field(default=(1280, 960))
     clutter: bool = False
     """A cluttered background behind the person (:func:`add_clutter`)."""
+    people: tuple = ()
+    """Other people (:class:`humimic.world.people.Person`), attached after the tutor."""
 
 
 def _robot_eye_height_and_x() -> tuple[float, float]:
@@ -144,6 +146,10 @@ def compose(opts: SceneOptions) -> mjcf.RootElement:
     frame.euler = [0.0, 0.0, math.pi]  # face the robot (avatar +x points to world -x)
     if opts.clutter:
         add_clutter(room, eye_x + opts.distance + 0.7, opts.lateral)
+    if opts.people:
+        from humimic.world.people import attach_people
+
+        attach_people(room, opts.people, eye_x, add_face)
     return room
 
 

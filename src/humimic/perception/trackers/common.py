@@ -17,12 +17,15 @@ import numpy as np
 import rerun as rr
 
 from humimic.messages import TRACK_STATES, Tracks2D
-from humimic.metrics.tracks2d import project_truth, scores
+from humimic.metrics.tracks2d import hide_occluded, project_truth, scores
 from humimic.pipeline.stage import Stage
 from humimic.scenario.errors import ScenarioError
+from humimic.sensors.camera_model import invert_transform
 from humimic.viz.rerun_log import EVENTS, SERIES, image_entity
 
 GOOD, BAD, DETECTION = (40, 200, 60), (230, 40, 40), (255, 220, 0)
+HEAD_WIDTH_M = 0.156
+"""The avatar's head is 15.6 cm wide seen from the front."""
 
 
 def check_cameras(scenario, world, name: str, cameras, needed: int) -> tuple[str, ...]:
@@ -81,10 +84,12 @@ class ImageTrackerStage(Stage):
     ground truth of ``target`` (a site of physical size ``size_m``)."""
 
     def __init__(self, name: str, camera: str, target: str, size_m: float, gt, rlog=None,
-                 latency: float = 0.0):
+                 latency: float = 0.0, people=None):
         self.name = f"trackers.{name}"
         self.tracker_name, self.camera, self.target, self.size_m = name, camera, target, size_m
         self.gt, self.rlog, self.latency = gt, rlog, float(latency)
+        self.people = people
+        """The other people's motion (:class:`humimic.world.people.PeopleMotion`) or None."""
         self.times: list[float] = []
         self.cameras: list = []
         self.tracks: list[Tracks2D] = []
@@ -160,11 +165,20 @@ class ImageTrackerStage(Stage):
                 uv[k], scale[k], tracking[k] = (a.u, a.v), a.scale, a.state == "tracking"
         idx = self.gt.index_of(np.array(self.times))
         truth = project_truth(self.cameras, self.gt.p_base(self.target)[idx], self.size_m)
-        return uv, scale, tracking, truth
+        return uv, scale, tracking, hide_occluded(truth, self.others())
 
     def others(self) -> list:
-        """Projected truths of the other people (for identity switches); none by default."""
-        return []
+        """Projected head truths of the other people in the room (``human.people``), for
+        occlusion and identity switches."""
+        if self.people is None:
+            return []
+        t = np.array(self.times)
+        T_base_world = invert_transform(self.gt.T_world_base)
+        out = []
+        for k in range(len(self.people.people)):
+            p = self.people.head_world(k, t) @ T_base_world[:3, :3].T + T_base_world[:3, 3]
+            out.append(project_truth(self.cameras, p, HEAD_WIDTH_M))
+        return out
 
     def metrics(self) -> dict:
         n = len(self.times)
@@ -174,4 +188,5 @@ class ImageTrackerStage(Stage):
         if n:
             uv, scale, tracking, truth = self.arrays()
             out.update(scores(np.array(self.times), uv, scale, tracking, truth, self.others()))
+            out["hidden_frames"] = int(np.sum(~truth.visible))
         return {"trackers": {self.tracker_name: out}}

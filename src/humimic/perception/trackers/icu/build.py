@@ -30,4 +30,5 @@ def icu_stage(name, cfg, scenario, world, rngs, rlog) -> IcuStage:
     width, height = scenario.cameras.resolution
     tracker = IcuTracker(cfg, width, height, rngs[f"trackers.{name}"], FaceDetector(params),
                          recogniser, tutor)
-    return IcuStage(name, cfg, camera, tracker, identity, world.gt, rlog)
+    return IcuStage(name, cfg, camera, tracker, identity, world.gt, rlog,
+                    getattr(world, "people", None))

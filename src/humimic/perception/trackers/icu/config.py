@@ -48,7 +48,8 @@ class IcuConfig(Section):
     estimate (it costs ~20 ms on a whole 320 x 240 frame); while searching, every frame."""
     min_face_px: int = Field(20, ge=8, le=200)
     lost_colour: float = Field(0.5, gt=0.0, le=1.0)
-    """Loss: Bhattacharyya distance (mean of the patches) above which a frame is bad."""
+    """Loss: Bhattacharyya distance (the worse of head and torso) above which a frame is
+    bad."""
     lost_frames: int = Field(4, ge=1, le=1000)
     latency: float = Field(0.0, ge=0.0, le=1.0)
 

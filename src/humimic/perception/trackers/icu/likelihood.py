@@ -34,10 +34,11 @@ def log_likelihood(dt: np.ndarray, qimage: QuantizedImage, states: np.ndarray,
 
 
 def colour_distance(qimage: QuantizedImage, state: np.ndarray, refs: np.ndarray) -> float:
-    """Mean Bhattacharyya distance of one state's patches to the references (0 same, 1
-    disjoint or off the image)."""
+    """Bhattacharyya distance of one state's colours to the references: the larger of the
+    head's and the torso's (each the mean over the channels; 0 same, 1 disjoint or off the
+    image), so another person's shirt counts even under a matching face."""
     h = patch_histograms(qimage, np.asarray(state)[None], HEAD_TORSO_PATCHES, GRID)[0]
-    return float(bhattacharyya(h, refs).mean())
+    return float(bhattacharyya(h, refs).mean(axis=1).max())
 
 
 def references(qimage: QuantizedImage, state: np.ndarray) -> np.ndarray:

@@ -6,15 +6,13 @@ from __future__ import annotations
 import numpy as np
 
 from humimic.messages import Track2D, Tracks2D
-from humimic.perception.trackers.common import ImageTrackerStage, Overlay
-
-HEAD_WIDTH_M = 0.156
-"""The avatar's head is 15.6 cm wide seen from the front: the true scale."""
+from humimic.perception.trackers.common import HEAD_WIDTH_M, ImageTrackerStage, Overlay
 
 
 class IcuStage(ImageTrackerStage):
-    def __init__(self, name: str, cfg, camera: str, tracker, identity: str, gt, rlog=None):
-        super().__init__(name, camera, "head", HEAD_WIDTH_M, gt, rlog, cfg.latency)
+    def __init__(self, name: str, cfg, camera: str, tracker, identity: str, gt, rlog=None,
+                 people=None):
+        super().__init__(name, camera, "head", HEAD_WIDTH_M, gt, rlog, cfg.latency, people)
         self.tracker, self.identity = tracker, identity
 
     def track(self, t: float, image: np.ndarray):

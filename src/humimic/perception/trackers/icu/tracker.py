@@ -5,9 +5,10 @@ Machine states (:data:`MACHINE`): ``init`` -- nobody seen yet: the face detector
 as the tutor (or any face without recognition) started ICONDENSATION on (u, v, s): particles
 come from the dynamics, from the prior and from the detected faces weighted by their
 probability of being the tutor (eq. 12), the face detector running every ``detect_every``
-frames in a window around the estimate; ``lost`` -- the colour at the estimate stayed unlike
-the references (mean Bhattacharyya distance above ``lost_colour``) for ``lost_frames`` frames,
-or the estimate left the image: back to whole-frame detection, and to ``tracking`` when the
+frames in a window around the estimate; ``lost`` -- for ``lost_frames`` frames the colour at
+the estimate stayed unlike the references (head's or torso's Bhattacharyya distance above
+``lost_colour``) or the face there was recognised as someone else, or the estimate left the
+image: back to whole-frame detection, and to ``tracking`` when the
 tutor's face is found again. (The paper's machine also switches between image-based and 3-D
 tracking modules by distance; only the image-based module exists here.)
 """
@@ -113,6 +114,14 @@ class IcuTracker:
         return IcuStep("tracking", best, 0.0, self.pf.particles.copy(),
                        np.exp(self.pf.log_weights), boxes, conf, 0.0)
 
+    def _someone_else(self, boxes: np.ndarray, p: np.ndarray, mean: np.ndarray) -> bool:
+        """A face on the estimate (centre within half a head width) that the recogniser
+        does not take for the tutor (Fig. 15: recognition status)."""
+        if self.recogniser is None or not len(boxes):
+            return False
+        near = np.hypot(*(box_centers(boxes) - mean[:2]).T) < 0.5 * mean[2]
+        return bool(near.any() and np.all(p[near] < self.cfg.min_confidence))
+
     def _track(self, g, q) -> IcuStep:
         cfg = self.cfg
         boxes, p = np.zeros((0, 4)), np.zeros(0)
@@ -130,7 +139,8 @@ class IcuTracker:
         mean = step.mean
         colour = colour_distance(q, mean, self.refs)
         inside = 0 <= mean[0] < self.width and 0 <= mean[1] < self.height
-        good = step.ok and inside and colour <= cfg.lost_colour
+        good = (step.ok and inside and colour <= cfg.lost_colour
+                and not self._someone_else(boxes, p, mean))
         self.bad = 0 if good else self.bad + 1
         if good:  # Menezes eq. 13, per patch
             self.refs = update_reference(self.refs, references(q, mean), self.kappa)
