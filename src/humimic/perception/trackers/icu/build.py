@@ -23,10 +23,11 @@ def icu_stage(name, cfg, scenario, world, rngs, rlog) -> IcuStage:
     params = DetectorParams(min_size=cfg.min_face_px)
     recogniser, tutor = None, 0
     if cfg.recognition:
-        from humimic.perception.faces.training import trained_model
+        from humimic.perception.faces.training import RenderSpec, trained_model
 
-        others = [n for n in IDENTITY_NAMES if n != identity][: cfg.enrolled - 1]
-        recogniser = trained_model([identity, *others], params=params)
+        people = [p.identity for p in scenario.human.people]
+        known = list(dict.fromkeys([identity, *people, *IDENTITY_NAMES]))[: cfg.enrolled]
+        recogniser = trained_model(known, RenderSpec(per_identity=cfg.views), params)
     width, height = scenario.cameras.resolution
     tracker = IcuTracker(cfg, width, height, rngs[f"trackers.{name}"], FaceDetector(params),
                          recogniser, tutor)

@@ -27,8 +27,12 @@ class IcuConfig(Section):
     recognition: bool = False
     """Weigh faces by the eigenface recogniser's probability of the tutor (eq. 12). It is
     trained on the ``enrolled`` identities on first use (minutes; then cached)."""
-    enrolled: int = Field(10, ge=2, le=16)
-    """How many identities the recogniser knows (the first ones, with the tutor)."""
+    enrolled: int = Field(4, ge=2, le=16)
+    """How many identities the recogniser knows: the tutor, the other people in the room,
+    then the first names of :data:`IDENTITY_NAMES`."""
+    views: int = Field(40, ge=5, le=500)
+    """Rendered training views per identity (the recogniser's training cost: ~0.1 s each,
+    once per machine, then cached)."""
     min_confidence: float = Field(0.5, ge=0.0, le=1.0)
     """Recognition probability of the tutor a face needs to start the tracker."""
     n_particles: int = Field(150, ge=1, le=5000)
