@@ -11,6 +11,7 @@ from typing import Literal
 
 from pydantic import Field, field_validator
 
+from humimic.perception.trackers.fields import Bins
 from humimic.scenario.base import Section
 
 CUES = ("shape", "motion", "colour")
@@ -49,7 +50,7 @@ class Hand2DConfig(Section):
     sigma_c: float = Field(0.2, gt=0.0, le=10.0)
     """Colour likelihood's standard deviation over the Bhattacharyya distance (eq. 6); 0.2
     fused best on the Fig. 5 sequence (0.1: the colour cue overrode the shape)."""
-    bins: int = Field(16, ge=2, le=256)
+    bins: Bins = 16
     """Histogram bins per RGB channel (must divide 256)."""
     kappa: float = Field(0.05, ge=0.0, le=1.0)
     """Eq. 13's reference update rate."""
@@ -85,11 +86,3 @@ class Hand2DConfig(Section):
         if "motion" in v and "shape" not in v:
             raise ValueError("motion filters the shape cue's edges: add shape")
         return v
-
-    @field_validator("bins")
-    @classmethod
-    def _bins(cls, v):
-        if 256 % v:
-            raise ValueError("must divide 256 (2, 4, 8, 16, 32, 64, 128, 256)")
-        return v
-

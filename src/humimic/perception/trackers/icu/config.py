@@ -9,8 +9,9 @@ from __future__ import annotations
 
 from typing import Literal
 
-from pydantic import Field, field_validator
+from pydantic import Field
 
+from humimic.perception.trackers.fields import Bins
 from humimic.scenario.base import Section
 
 
@@ -40,7 +41,7 @@ class IcuConfig(Section):
     """Shape likelihood's standard deviation (px) over the *mean* distance (eq. 3)."""
     n_points: int = Field(15, ge=4, le=200)
     sigma_c: float = Field(0.03, gt=0.0, le=10.0)
-    bins: int = Field(32, ge=2, le=256)
+    bins: Bins = 32
     kappa: tuple[float, float] = (0.1, 0.05)
     """Eq. 13's reference update rates of the head and torso patches."""
     alpha: float = Field(0.3, ge=0.0, le=1.0)
@@ -56,10 +57,3 @@ class IcuConfig(Section):
     bad."""
     lost_frames: int = Field(4, ge=1, le=1000)
     latency: float = Field(0.0, ge=0.0, le=1.0)
-
-    @field_validator("bins")
-    @classmethod
-    def _bins(cls, v):
-        if 256 % v:
-            raise ValueError("must divide 256 (2, 4, 8, 16, 32, 64, 128, 256)")
-        return v
