@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from typing import Literal
 
-from pydantic import Field
+from pydantic import Field, field_validator
 
 from humimic.perception.trackers.fields import Bins
 from humimic.scenario.base import Section
@@ -37,6 +37,9 @@ class IcuConfig(Section):
     min_confidence: float = Field(0.5, ge=0.0, le=1.0)
     """Recognition probability of the tutor a face needs to start the tracker."""
     n_particles: int = Field(150, ge=1, le=5000)
+    cues: tuple[Literal["shape", "colour"], ...] = ("shape", "colour")
+    """Fused cues (eq. 7): the head-and-shoulders silhouette (eq. 3) and the head and torso
+    colour (eq. 6); the colour references are kept either way (the loss test uses them)."""
     sigma_s: float = Field(1.5, gt=0.0, le=100.0)
     """Shape likelihood's standard deviation (px) over the *mean* distance (eq. 3)."""
     n_points: int = Field(15, ge=4, le=200)
@@ -57,3 +60,10 @@ class IcuConfig(Section):
     bad."""
     lost_frames: int = Field(4, ge=1, le=1000)
     latency: float = Field(0.0, ge=0.0, le=1.0)
+
+    @field_validator("cues")
+    @classmethod
+    def _cues(cls, v):
+        if not v or len(set(v)) != len(v):
+            raise ValueError("give each cue once, at least one")
+        return v

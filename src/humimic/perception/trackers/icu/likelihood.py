@@ -23,14 +23,18 @@ GRID = 8
 
 
 def log_likelihood(dt: np.ndarray, qimage: QuantizedImage, states: np.ndarray,
-                   template: Template, refs: np.ndarray, sigma_s: float, sigma_c: float
-                   ) -> np.ndarray:
+                   template: Template, refs: np.ndarray, sigma_s: float, sigma_c: float,
+                   cues=("shape", "colour")) -> np.ndarray:
     """Menezes eq. 7 of eq. 3 (shape, mean DT distance) and eq. 6 (two patches) for states
-    ``(N, 3)`` (u, v, head width)."""
-    pts, _ = template.place(states)
-    shape = shape_log_likelihood(dt_distance(dt, pts), sigma_s)  # Menezes eq. 3
-    hists = patch_histograms(qimage, states, HEAD_TORSO_PATCHES, GRID)
-    return fuse(shape, color_log_likelihood(hists, refs, sigma_c))  # Menezes eqs. 6-7
+    ``(N, 3)`` (u, v, head width); ``cues`` chooses which."""
+    terms = []
+    if "shape" in cues:
+        pts, _ = template.place(states)
+        terms.append(shape_log_likelihood(dt_distance(dt, pts), sigma_s))  # Menezes eq. 3
+    if "colour" in cues:
+        hists = patch_histograms(qimage, states, HEAD_TORSO_PATCHES, GRID)
+        terms.append(color_log_likelihood(hists, refs, sigma_c))  # Menezes eq. 6
+    return fuse(*terms)  # Menezes eq. 7
 
 
 def colour_distance(qimage: QuantizedImage, state: np.ndarray, refs: np.ndarray) -> float:

@@ -132,10 +132,10 @@ class IcuTracker:
                 importance = recognition_proposal(
                     box_centers(boxes), p, self.sigma[:2], boxes[:, 2] * FACE_TO_HEAD,
                     self.sigma[2])
-        dt = edge_maps(g).dt
+        dt = edge_maps(g).dt if "shape" in cfg.cues else None
         step = self.pf.step(
             lambda x: log_likelihood(dt, q, x, self.template, self.refs, cfg.sigma_s,
-                                     cfg.sigma_c), self.rng, importance=importance)
+                                     cfg.sigma_c, cfg.cues), self.rng, importance=importance)
         mean = step.mean
         colour = colour_distance(q, mean, self.refs)
         inside = 0 <= mean[0] < self.width and 0 <= mean[1] < self.height
