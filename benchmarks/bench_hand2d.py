@@ -47,8 +47,10 @@ from humimic.world.world import World  # noqa: E402
 G = "hand2d"
 
 
-def render(seconds: float = 2.0) -> tuple[list[np.ndarray], object]:
-    sc = load_scenario(SCENARIOS_DIR / "menezes_fig5_hand.yaml")
+def render(seconds: float = 2.0, scenario: str = "menezes_fig5_hand.yaml",
+           tracker: str = "hand", camera: str = "L_foveal") -> tuple[list[np.ndarray], object]:
+    """A scenario's frames of one camera at 60 Hz for ``seconds``, and a tracker's config."""
+    sc = load_scenario(SCENARIOS_DIR / scenario)
     world = World(sc, Rngs(sc.seed))
     try:
         world.eye_rig.prepare()
@@ -56,10 +58,10 @@ def render(seconds: float = 2.0) -> tuple[list[np.ndarray], object]:
         for tick in range(0, int(seconds * 840), 14):
             world.apply_human(tick)
             mujoco.mj_forward(world.scene.model, world.scene.data)
-            frames.append(world.eye_rig.capture(tick / 840.0)["L_foveal"].image)
+            frames.append(world.eye_rig.capture(tick / 840.0)[camera].image)
     finally:
         world.close()
-    return frames, sc.trackers["hand"]
+    return frames, sc.trackers[tracker]
 
 
 def bench(repeats: int, clock: str = "wall") -> list[Row]:

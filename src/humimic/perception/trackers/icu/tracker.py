@@ -30,6 +30,10 @@ from humimic.perception.trackers.icu.likelihood import colour_distance, log_like
 MACHINE = ("init", "tracking", "lost")
 FACE_TO_HEAD = 1.0
 """Head width (the state's s) per Haar face-box width."""
+WINDOW_HALF = 1.2
+"""While tracking, faces are searched within this many head widths of the estimate..."""
+WINDOW_SIZES = (0.7, 1.45)
+"""... and only at sizes between these multiples of the estimated face width."""
 
 
 @dataclass(frozen=True)
@@ -70,11 +74,12 @@ class IcuTracker:
         self.refs: np.ndarray | None = None
 
     # ---- detection and recognition -----------------------------------------------------------
-    def faces(self, g: np.ndarray, window=None) -> tuple[np.ndarray, np.ndarray]:
+    def faces(self, g: np.ndarray, window=None, sizes=None) -> tuple[np.ndarray, np.ndarray]:
         """Face boxes ``(K, 4)`` in the whole image (searching ``window`` (x0, y0, x1, y1)
-        only, if given) and each face's probability of being the tutor ``(K,)``."""
+        only, and face ``sizes`` (min, max) px only, if given) and each face's probability of
+        being the tutor ``(K,)``."""
         x0, y0, x1, y1 = window or (0, 0, self.width, self.height)
-        boxes = self.detector.detect(np.ascontiguousarray(g[y0:y1, x0:x1]))
+        boxes = self.detector.detect(np.ascontiguousarray(g[y0:y1, x0:x1]), sizes)
         boxes = boxes + np.array([x0, y0, 0.0, 0.0])
         if self.recogniser is None or not len(boxes):
             return boxes, np.ones(len(boxes))
@@ -83,8 +88,9 @@ class IcuTracker:
 
     def _window(self, mean: np.ndarray) -> tuple[int, int, int, int]:
         u, v, s = mean
-        x0, y0 = int(max(0, u - 1.5 * s)), int(max(0, v - 1.5 * s))
-        x1, y1 = int(min(self.width, u + 1.5 * s)), int(min(self.height, v + 1.5 * s))
+        h = WINDOW_HALF * s
+        x0, y0 = int(max(0, u - h)), int(max(0, v - h))
+        x1, y1 = int(min(self.width, u + h)), int(min(self.height, v + h))
         return x0, y0, max(x1, x0 + 1), max(y1, y0 + 1)
 
     @staticmethod
@@ -127,7 +133,9 @@ class IcuTracker:
         boxes, p = np.zeros((0, 4)), np.zeros(0)
         importance = None
         if self.frame % cfg.detect_every == 0:
-            boxes, p = self.faces(g, self._window(self.pf.mean))
+            m = self.pf.mean
+            boxes, p = self.faces(g, self._window(m), (WINDOW_SIZES[0] * m[2] / FACE_TO_HEAD,
+                                                       WINDOW_SIZES[1] * m[2] / FACE_TO_HEAD))
             if len(boxes):  # Menezes eq. 12
                 importance = recognition_proposal(
                     box_centers(boxes), p, self.sigma[:2], boxes[:, 2] * FACE_TO_HEAD,
