@@ -109,3 +109,19 @@ def test_fig9_scenario_acquires_the_tutor(tmp_path):
     m = run_one(sc, tmp_path, rerun="off", progress=False)["trackers"]["icu"]
     assert m["visible_frames"] == 60 and m["acquire_s"] <= 0.05
     assert m["lost_fraction"] <= 0.05 and m["center_median_px"] < 10.0
+
+
+def test_recognition_counts_name_whose_face_it_was():
+    from humimic.metrics.tracks2d import ImageTruth
+    from humimic.perception.trackers.icu.stage import recognition_counts
+
+    def truth(u):
+        return ImageTruth(np.array([[u, 100.0]]), np.array([40.0]), np.ones(1, bool),
+                          np.ones(1))
+
+    boxes = np.array([[80.0, 80.0, 40.0, 40.0], [180.0, 80.0, 40.0, 40.0],
+                      [280.0, 80.0, 40.0, 40.0]])  # centres 100, 200, 300
+    faces = [(0, boxes, np.array([0.9, 0.7, 0.8])), (0, boxes[:2], np.array([0.2, 0.1]))]
+    out = recognition_counts(faces, truth(100.0), [truth(205.0)], 0.5)
+    assert out == {"tutor_accepted": 1, "tutor_rejected": 1, "other_accepted": 1,
+                   "other_rejected": 1, "false_detection": 1}

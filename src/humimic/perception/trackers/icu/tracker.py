@@ -48,6 +48,8 @@ class IcuStep:
     """(K, 4) face boxes detected this frame (x, y, w, h)."""
     confidence: float
     """Probability that the best face is the tutor (NaN without recognition or face)."""
+    probabilities: np.ndarray
+    """(K,) each face's probability of being the tutor (1 without recognition)."""
     colour: float
     """Mean Bhattacharyya distance at the estimate (NaN while searching)."""
 
@@ -112,13 +114,13 @@ class IcuTracker:
         conf = float(p.max()) if len(p) and self.recogniser is not None else np.nan
         nan = np.full(3, np.nan)
         if not ok.any():
-            return IcuStep(self.state, nan, np.nan, None, None, boxes, conf, np.nan)
+            return IcuStep(self.state, nan, np.nan, None, None, boxes, conf, p, np.nan)
         best = self.face_states(boxes)[int(np.argmax(np.where(ok, p, -1.0)))]
         self.pf.initialize(self.rng, Gaussian(best, np.diag(self.sigma**2)))
         self.refs = references(q, best)
         self.state, self.bad = "tracking", 0
         return IcuStep("tracking", best, 0.0, self.pf.particles.copy(),
-                       np.exp(self.pf.log_weights), boxes, conf, 0.0)
+                       np.exp(self.pf.log_weights), boxes, conf, p, 0.0)
 
     def _someone_else(self, boxes: np.ndarray, p: np.ndarray, mean: np.ndarray) -> bool:
         """A face on the estimate (centre within half a head width) that the recogniser
@@ -157,4 +159,4 @@ class IcuTracker:
         cov = self.pf.cov
         conf = float(p.max()) if len(p) and self.recogniser is not None else np.nan
         return IcuStep(self.state, mean, float(np.sqrt(cov[0, 0] + cov[1, 1])),
-                       self.pf.particles, np.exp(self.pf.log_weights), boxes, conf, colour)
+                       self.pf.particles, np.exp(self.pf.log_weights), boxes, conf, p, colour)
