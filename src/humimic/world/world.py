@@ -26,6 +26,7 @@ from humimic.sensors.inertial import simulate_inertial, simulate_orientation
 from humimic.sensors.visibility import Visibility
 from humimic.world.gaze import pan_tilt_to
 from humimic.world.names import EYE_CAMERAS, ROBOT_JOINTS, ROBOT_PREFIX
+from humimic.world.people import PeopleMotion
 from humimic.world.scene import SceneOptions, build_scene
 
 
@@ -41,6 +42,7 @@ def scene_options(scenario) -> SceneOptions:
         ambient=light.ambient, diffuse=light.diffuse, shadows=light.shadows, msaa=light.msaa,
         show_wiimote=h.wiimote, room=scenario.room, base=scenario.robot.base,
         identity=h.identity, show_headcam=scenario.sensors.head_camera.enabled,
+        clutter=getattr(scenario, "clutter", False), people=tuple(h.people),
     )
 
 
@@ -67,6 +69,9 @@ class World:
                                           self.clock.physics_rate)
         """Ground truth at every physics tick, evaluated on demand (flat memory in duration)."""
         self.times = self.gt.t
+        self.people = (PeopleMotion(m, scenario.human.people) if scenario.human.people
+                       else None)
+        """The other people's walks and head truth (``human.people``), or None."""
         self.set_robot_pose()
         self.base = BaseController(self.scene) if scenario.robot.base == "planar" else None
         """The planar base's controller (``robot.base: planar``), stepped by the simulation
@@ -117,6 +122,8 @@ class World:
         d, s = self.scene.data, self.scene
         d.qpos[s.human_qpos] = self.gt.qpos[tick]
         d.qvel[s.human_dof] = self.gt.qvel[tick]
+        if self.people is not None:
+            self.people.apply(d.qpos, self.times[tick])
 
     def _inertial(self, which: str, cfg, rng):
         if not cfg.enabled:

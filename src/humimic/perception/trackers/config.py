@@ -12,11 +12,15 @@ from typing import Annotated
 from pydantic import Field
 
 from humimic.perception.trackers.gest.config import GestConfig
+from humimic.perception.trackers.hand2d.config import Hand2DConfig
+from humimic.perception.trackers.icu.config import IcuConfig
 from humimic.perception.trackers.kpf.config import KpfConfig
 from humimic.perception.trackers.tbp.config import TbpConfig
 
 TrackerConfig = Annotated[
-    GestConfig
+    Hand2DConfig
+    | IcuConfig
+    | GestConfig
     | TbpConfig
     | KpfConfig,
     Field(discriminator="kind"),
