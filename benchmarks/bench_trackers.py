@@ -13,7 +13,10 @@ from __future__ import annotations
 import argparse
 import time
 
-import humimic  # noqa: F401  (headless GL before mujoco)
+from humimic import select_gl_backend
+
+select_gl_backend()  # before anything imports mujoco
+
 import mujoco
 import numpy as np
 

@@ -37,6 +37,9 @@ class Scenario(Section):
     of the robot; ``sugiyama``, Sugiyama & Miura's wearable room (Fig. 5), the person starting
     at the paper's W (0, -2.5) facing the screen, the robot 2 m to their right;
     ``lab_clutter``, the lab with heavy clutter behind the person (Menezes Figs. 11, 13)."""
+    clutter: bool = False
+    """A cluttered background behind the person (a busy poster wall and objects; Menezes
+    Fig. 5): edges everywhere for the shape cues (lab room only)."""
     human: Human = Field(default_factory=Human)
     robot: Robot = Field(default_factory=Robot)
     cameras: Cameras = Field(default_factory=Cameras)
@@ -67,7 +70,10 @@ class Scenario(Section):
     @model_validator(mode="after")
     def _placement_fits_the_room(self) -> Scenario:
         if self.room not in ("lab", "lab_clutter"):
-            given = [k for k in ("distance", "lateral") if k in self.human.model_fields_set]
+            fields = Human.model_fields  # a resolved file repeats the defaults: not "given"
+            given = [k for k in ("distance", "lateral", "people")
+                     if k in self.human.model_fields_set and getattr(self.human, k)
+                     != fields[k].get_default(call_default_factory=True)]
             if given:
                 raise ValueError(f"human.{given[0]} does not apply in room {self.room!r}: the "
                                  "room places the person (move them with human.motion)")

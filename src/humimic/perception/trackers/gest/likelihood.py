@@ -38,7 +38,7 @@ from humimic.bodymodel.projection import project_ellipsoids
 from humimic.perception.cues.color_models import ColorLUT
 from humimic.perception.cues.edges import DT_CAP_PX, dt_distance, sample, shape_log_likelihood
 from humimic.perception.cues.histograms import color_log_likelihood, patch_histograms
-from humimic.perception.trackers.common import FrameCues, frame_cues
+from humimic.perception.trackers.frame_cues import FrameCues, frame_cues
 from humimic.sensors.camera_model import CameraImage
 
 #: One square patch centred on the ellipse, ``s`` = its side (px) (histograms' patch units).

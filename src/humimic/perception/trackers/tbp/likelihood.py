@@ -33,7 +33,7 @@ from humimic.perception.cues.histograms import (
     patch_histograms,
 )
 from humimic.perception.cues.motion import MotionEdgeMaps, sample_pair
-from humimic.perception.trackers.common import FrameCues, frame_cues
+from humimic.perception.trackers.frame_cues import FrameCues, frame_cues
 from humimic.sensors.camera_model import CameraImage
 
 ARM_PARTS = ("r_upper_arm", "r_forearm", "r_hand", "l_upper_arm", "l_forearm", "l_hand")
