@@ -65,12 +65,18 @@ class HandProjection:
     """(N,) bool."""
 
 
+def hand_outlines(states: np.ndarray, intrinsics, T_cam_base: np.ndarray, n: int = 16):
+    """Eq. 15 for hand states ``(N, 9)``: the outlines (one part each) and image conics."""
+    R, c, axes = hand_ellipsoids(states)
+    R, c = to_camera(T_cam_base, R, c)
+    outline, _, conic = project_ellipsoids(R[:, None], c[:, None], axes[:, None],
+                                           intrinsics, n)              # Menezes eq. 15
+    return outline, conic
+
+
 def project_hands(states: np.ndarray, view: HandView, n_points: int) -> HandProjection:
     """Eq. 15 for every particle's ellipsoid, and its contour points and colour patch."""
-    R, c, axes = hand_ellipsoids(states)
-    R, c = to_camera(view.T_cam_base, R, c)
-    outline, _, conic = project_ellipsoids(R[:, None], c[:, None], axes[:, None],
-                                           view.intrinsics, 16)        # Menezes eq. 15
+    outline, conic = hand_outlines(states, view.intrinsics, view.T_cam_base)
     pts = resample(outline, n_points)
     valid = outline.valid[:, 0]
     uv = np.where(valid[:, None, None], pts.uv[:, 0], OFF_IMAGE)
