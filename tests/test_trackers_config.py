@@ -14,6 +14,8 @@ from test_scenario_errors import GOOD, _run
      ["trackers.t.camera", "'nope'", "not rendered"]),
     (GOOD + "trackers:\n  t: {kind: tbp}\n", ["trackers.t.torso", "perception"]),
     (GOOD + "mimic: {mode: joints}\n", ["mimic.mode", "joints", "tbp"]),
+    (GOOD + "trackers:\n  t: {kind: tbp, torso: truth, limits: {R_EB_deg: [150, 0]}}\n",
+     ["trackers.t.limits.R_EB_deg"]),
 ])
 def test_bad_tracker_input_exits_2_naming_the_key(tmp_path, capsys, text, must_contain):
     code, err = _run(tmp_path, text, capsys=capsys)

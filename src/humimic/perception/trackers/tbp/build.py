@@ -20,5 +20,9 @@ def tbp_stage(name, cfg, scenario, world, rngs, rlog) -> TbpStage:
                                 "(perception.targets with head)", cfg.torso,
                                 "truth (an oracle), or add perception: {targets: [head]}")
     lut = skin_model_lut(scenario, f"trackers.{name}")
-    body = avatar_body(world.scene.model, HUMAN_PREFIX, torso="cylinder")
+    try:
+        limits = cfg.limits.to_limits()
+    except ValueError as err:
+        raise ScenarioError(where, f"trackers.{name}.limits", str(err)) from None
+    body = avatar_body(world.scene.model, HUMAN_PREFIX, limits, torso="cylinder")
     return TbpStage(name, cfg, camera, body, lut, world, rngs[f"trackers.{name}"])

@@ -6,6 +6,7 @@ from typing import Literal
 
 from pydantic import Field, model_validator
 
+from humimic.bodymodel.limits import JointLimitsConfig
 from humimic.scenario.base import Section
 
 
@@ -54,6 +55,17 @@ class TbpConfig(Section):
     rest_deg: tuple[float, float, float, float] = (5.0, 5.0, 0.0, 10.0)
     """Rest pose ``SFE SAA HR EB`` (deg) of each arm: the stabiliser's x_def and the start."""
     init_sigma_deg: float = Field(10.0, gt=0.0)
+    limits: JointLimitsConfig = Field(default_factory=JointLimitsConfig)
+    """Joint limits of the model (``R_EB_deg: [0, 150]`` ...; default the library's); samples
+    beyond them are clamped."""
+    kalman: bool = False
+    """Also run the random-jerk Kalman filter on the true right-arm angles (``R_SFE R_SAA
+    R_EB``) plus ``kalman_sigma_deg`` of noise, and score how far it goes beyond the joint
+    limits (the paper's claim that a Kalman filter cannot track through end stops;
+    ``trackers.<name>.kalman.*``)."""
+    kalman_sigma_deg: float = Field(3.0, gt=0.0)
+    kalman_b: float = Field(30.0, gt=0.0)
+    """The random-jerk filter's spectral amplitude (rad s^-2.5)."""
     bins: Literal[8, 16, 32, 64] = 32
     latency: float = Field(0.0, ge=0.0, le=1.0)
 

@@ -102,6 +102,21 @@ class TbpStage(PoseTrackerStage):
                               [a @ T[:3, :3].T + T[:3, 3] for a in arms], colors=GOOD,
                               radii=0.01)
 
+    def _kalman(self, times, ticks, est) -> dict:
+        from humimic.perception.trackers.tbp.kalman import (
+            KALMAN_DOFS,
+            kalman_end_stops,
+            kalman_scores,
+        )
+
+        idx = [ARM_NAMES.index(n) for n in KALMAN_DOFS]
+        lim = self.tracker.body.free_limits
+        truth = truth_state(self.world, ticks, "base")[:, 6:][:, idx]
+        kf, _ = kalman_end_stops(times, truth, lim.lower[idx], lim.upper[idx],
+                                 math.radians(self.cfg.kalman_sigma_deg), self.cfg.kalman_b,
+                                 np.random.default_rng(self.world.scenario.seed))
+        return kalman_scores(kf, est[:, idx], truth, lim.lower[idx], lim.upper[idx])
+
     def scores(self) -> dict:
         use = [i for i, m in enumerate(self.means) if m is not None]
         out = {"torso_source": "truth (oracle)" if self.cfg.torso == "truth" else "head",
@@ -114,6 +129,9 @@ class TbpStage(PoseTrackerStage):
         if not use:
             return out
         ticks = self.world.gt.index_of(np.asarray(self.times)[use])
+        if self.cfg.kalman:
+            out["kalman"] = self._kalman(np.asarray(self.times)[use], ticks,
+                                         np.array([self.means[i] for i in use]))
         truth = truth_state(self.world, ticks, "base")
         est = np.array([self.means[i] for i in use])
         err = np.degrees((est - truth[:, 6:] + np.pi) % (2 * np.pi) - np.pi)
