@@ -23,6 +23,7 @@ the cost.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import cv2
 import numpy as np
@@ -56,6 +57,11 @@ class CueMaps:
     @property
     def shape(self) -> tuple[int, int]:
         return self.rgb.shape[:2]
+
+    @cached_property
+    def hessian_flat(self) -> np.ndarray:
+        """(3, sum of the levels' pixels): the levels' planes raveled end to end."""
+        return np.concatenate([hm.reshape(3, -1) for hm in self.hessian], axis=1)
 
 
 def cue_maps(image: np.ndarray, skin_lut: ColorLUT, levels: int = 3, k_edge: float = 0.15,
@@ -115,21 +121,23 @@ def ridge_level(width_px: np.ndarray, levels: int) -> np.ndarray:
 def ridge_response(maps: CueMaps, uv: np.ndarray, width_px: np.ndarray, angle: np.ndarray
                    ) -> np.ndarray:
     """Schmidt eqs. 3-4: ``(N, L)`` mean ridge response over the axis points ``uv (N, L, M, 2)``
-    at the pyramid level of each limb's mean width ``width_px (N, L)``."""
-    mu = ridge_level(width_px, len(maps.hessian))
+    at the pyramid level of each limb's mean width ``width_px (N, L)`` (one gather from the
+    levels laid end to end)."""
+    mu = ridge_level(width_px, len(maps.hessian))[..., None]                   # (N, L, 1)
+    shapes = np.array([hm.shape[1:] for hm in maps.hessian])                   # (levels, 2)
+    offsets = np.concatenate([[0], np.cumsum(shapes[:, 0] * shapes[:, 1])[:-1]])
+    scale = 0.5 ** mu
+    u = np.rint(uv[..., 0] * scale).astype(np.intp)
+    v = np.rint(uv[..., 1] * scale).astype(np.intp)
+    h, w = shapes[mu, 0], shapes[mu, 1]
+    inside = (u >= 0) & (u < w) & (v >= 0) & (v < h)
+    idx = np.where(inside, offsets[mu] + v * w + u, 0)
+    flat = maps.hessian_flat
+    uu, uv_, vv = flat[0][idx], flat[1][idx], flat[2][idx]
     c, s = np.cos(angle)[..., None], np.sin(angle)[..., None]
-    out = np.zeros(angle.shape)
-    for level, hm in enumerate(maps.hessian):
-        sel = mu == level
-        if not sel.any():
-            continue
-        idx, inside = _pixels(uv[sel], hm.shape[1:], 0.5 ** level)
-        uu, uv_, vv = hm[0].ravel()[idx], hm[1].ravel()[idx], hm[2].ravel()[idx]
-        cs, sn = c[sel], s[sel]
-        across = np.abs(sn * sn * uu + cs * cs * vv - 2 * sn * cs * uv_)
-        along = np.abs(cs * cs * uu + sn * sn * vv + 2 * sn * cs * uv_)
-        out[sel] = _mean_inside(across - along, inside, 0.0)
-    return out
+    across = np.abs(s * s * uu + c * c * vv - 2 * s * c * uv_)
+    along = np.abs(c * c * uu + s * s * vv + 2 * s * c * uv_)
+    return _mean_inside(across - along, inside, 0.0)
 
 
 #: Fractions (along, across) of a band quadrilateral where the colour is sampled (M_C = 9).
