@@ -9,4 +9,5 @@ from humimic.perception.trackers.kpf.stage import KpfStage
 def kpf_stage(name: str, cfg, scenario, world, rngs, rlog) -> list:
     camera = tracker_camera(scenario, world, name, cfg.camera)
     lut = skin_model_lut(scenario, f"trackers.{name}")
-    return [KpfStage(name, cfg, camera, world, lut, rngs[f"trackers.{name}"], rlog)]
+    return [KpfStage(name, cfg, camera, world, lut, rngs[f"trackers.{name}"], rlog,
+                     scenario.cameras.rate)]

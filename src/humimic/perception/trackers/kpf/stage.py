@@ -28,11 +28,12 @@ from humimic.stamped import Stamped
 class KpfStage(Stage):
     """See the module docstring."""
 
-    def __init__(self, name: str, cfg, camera: str, world, skin_lut, rng, rlog=None):
+    def __init__(self, name: str, cfg, camera: str, world, skin_lut, rng, rlog=None,
+                 frame_rate: float | None = None):
         self.name, self.cfg, self.camera, self.world = name, cfg, camera, world
         self.skin_lut, self.rlog = skin_lut, rlog
         self.body = kpf_body(world.scene.model)
-        self.rng = rng
+        self.rng, self.frame_rate = rng, frame_rate
         self.tracker: KpfTracker | None = None
         self.rec = KpfRecord()
         self._bus = self._timer = None
@@ -50,7 +51,8 @@ class KpfStage(Stage):
         t0, c0 = time.perf_counter(), time.thread_time()
         maps = cue_maps(frame.image, self.skin_lut)
         if self.tracker is None:
-            self.tracker = KpfTracker(self.body, frame.camera.intrinsics, self.cfg, self.rng)
+            self.tracker = KpfTracker(self.body, frame.camera.intrinsics, self.cfg, self.rng,
+                                      self.frame_rate)
             self.tracker.start(bm.truth_state(self.world, self.world.gt.index_of(t), "base"),
                                maps, T_cam_base)
         res = self.tracker.step(maps, T_cam_base)

@@ -90,12 +90,14 @@ def kpf_body(model=None) -> bm.BodyModel:
 
 class KpfTracker:
     """Schmidt et al.'s 14-DOF upper-body tracker; ``cfg`` a
-    :class:`~humimic.perception.trackers.kpf.config.KpfConfig`."""
+    :class:`~humimic.perception.trackers.kpf.config.KpfConfig`, ``frame_rate`` the camera's
+    (scales D, see ``KpfConfig.D_rate``)."""
 
-    def __init__(self, body: bm.BodyModel, intrinsics, cfg, rng: np.random.Generator):
+    def __init__(self, body: bm.BodyModel, intrinsics, cfg, rng: np.random.Generator,
+                 frame_rate: float | None = None):
         self.body, self.cfg, self.rng = body, cfg, rng
         self.lik = Likelihood(body, intrinsics, cfg)
-        self.D = np.asarray(cfg.D(), float)
+        self.D = np.asarray(cfg.D(frame_rate), float)
         self.limits = body.free_limits
         self.particles: np.ndarray | None = None
         self.w = np.zeros(0)
