@@ -32,13 +32,11 @@ class Scenario(Section):
     duration: float = Field(8.0, gt=0.0, le=600.0)
     """Simulated seconds."""
     seed: int = Field(0, ge=0)
-    room: Literal["lab", "sugiyama"] = "lab"
+    room: Literal["lab", "sugiyama", "lab_clutter"] = "lab"
     """The room (``models/``): ``lab``, Ude & Atkeson's, the person ``human.distance`` in front
     of the robot; ``sugiyama``, Sugiyama & Miura's wearable room (Fig. 5), the person starting
-    at the paper's W (0, -2.5) facing the screen, the robot 2 m to their right."""
-    clutter: bool = False
-    """A cluttered background behind the person (a busy poster wall and objects; Menezes
-    Fig. 5): edges everywhere for the shape cues (lab room only)."""
+    at the paper's W (0, -2.5) facing the screen, the robot 2 m to their right;
+    ``lab_clutter``, the lab with heavy clutter behind the person (Menezes Figs. 11, 13)."""
     human: Human = Field(default_factory=Human)
     robot: Robot = Field(default_factory=Robot)
     cameras: Cameras = Field(default_factory=Cameras)
@@ -68,9 +66,11 @@ class Scenario(Section):
 
     @model_validator(mode="after")
     def _placement_fits_the_room(self) -> Scenario:
-        if self.room != "lab":
-            given = [k for k in ("distance", "lateral", "people")
-                     if k in self.human.model_fields_set]
+        if self.room not in ("lab", "lab_clutter"):
+            given = [k for k in ("distance", "lateral") if k in self.human.model_fields_set
+                     and getattr(self.human, k) != Human.model_fields[k].default]  # resolved
+            if self.human.people:
+                given.append("people")
             if given:
                 raise ValueError(f"human.{given[0]} does not apply in room {self.room!r}: the "
                                  "room places the person (move them with human.motion)")

@@ -12,6 +12,7 @@ from humimic.scenario.base import RGB, Section, Vec3
 from humimic.world.faces import DEFAULT_IDENTITY, IDENTITY_NAMES
 from humimic.world.names import HUMAN_TARGETS, ROBOT_JOINTS
 from humimic.world.people import Person
+from humimic.world.robot_limits import robot_joint_ranges
 
 
 class Human(Section):
@@ -65,9 +66,23 @@ class Robot(Section):
     velocity actuators, driven by :class:`humimic.control.base.BaseController`, at most
     0.4 m/s as Sugiyama & Miura's robot)."""
     pose: Literal["ready", "zero"] | dict[Literal[ROBOT_JOINTS], float] = "ready"
-    """Initial joint configuration: a named pose or ``{joint: angle_rad}`` over the ready pose."""
+    """Initial joint configuration: a named pose or ``{joint: angle_rad}`` over the ready pose
+    (each angle within the joint's limits in ``models/db_humanoid.xml``)."""
     look_at: Literal[tuple(HUMAN_TARGETS)] | Vec3 | None = None
     """Point the eyes (then the head) at a human target or a world point (m) at t = 0."""
+
+
+    @field_validator("pose")
+    @classmethod
+    def _pose_within_limits(cls, pose):
+        if isinstance(pose, dict):
+            ranges = robot_joint_ranges()
+            for joint, angle in pose.items():
+                lo, hi = ranges[joint]
+                if not lo <= angle <= hi:
+                    raise ValueError(f"{joint} = {angle:g} rad is outside the joint's limits "
+                                     f"[{lo:g}, {hi:g}]")
+        return pose
 
 
 class Lighting(Section):

@@ -6,16 +6,18 @@ from __future__ import annotations
 import numpy as np
 
 from humimic.messages import Track2D, Tracks2D
-from humimic.perception.trackers.common import ImageTrackerStage, Overlay
 from humimic.perception.trackers.hand2d.tracker import Hand2DTracker
+from humimic.perception.trackers.image_stage import ImageTrackerStage, Overlay
 
 HAND_WIDTH_M = 0.09
 """The avatar's hand seen palm-on is 9 cm wide (``models/avatar.xml``): the true scale."""
 
 
 class Hand2DStage(ImageTrackerStage):
-    def __init__(self, name: str, cfg, camera: str, tracker: Hand2DTracker, gt, rlog=None):
-        super().__init__(name, camera, cfg.target, HAND_WIDTH_M, gt, rlog, cfg.latency)
+    def __init__(self, name: str, cfg, camera: str, tracker: Hand2DTracker, gt, rlog=None,
+                 visibility=None):
+        super().__init__(name, camera, cfg.target, HAND_WIDTH_M, gt, rlog, cfg.latency,
+                         visibility=visibility)
         self.cfg, self.tracker = cfg, tracker
 
     def track(self, t: float, image: np.ndarray):
