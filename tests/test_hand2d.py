@@ -169,7 +169,14 @@ def test_fig5_scenario_tracks_the_hand_in_clutter(tmp_path):
 
     sc = load_scenario(SCENARIOS_DIR / "menezes_fig5_hand.yaml", ["output.plots=false"],
                        duration=1.5)
-    m = run_one(sc, tmp_path, rerun="off", progress=False)["trackers"]["hand"]
+    m = run_one(sc, tmp_path, rerun="save", progress=False)["trackers"]["hand"]
     assert m["frames"] == 90 and m["visible_frames"] == 90
     assert m["lost_fraction"] <= 0.25 and m["center_median_px"] < 4.0
     assert m["center_rmse_px"] < 9.0 and m["acquire_s"] < 0.4
+
+    from rerun.chunk import RrdReader
+
+    entities = {c.entity_path for c in RrdReader(tmp_path / "run.rrd").stream()}
+    overlay = "/world/cameras/L_foveal/image/hand/"
+    assert {overlay + "particles", overlay + "estimate", overlay + "detections",
+            "/series/trackers/hand/state", "/series/trackers/hand/error_px"} <= entities
