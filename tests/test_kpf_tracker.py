@@ -78,7 +78,7 @@ def test_poses_published_per_frame_and_scored(run):
 
 def test_covered_camera_frames_are_lost_and_particles_stay_finite(run):
     _, msgs, kpf = run
-    states = {round(msg.t, 3): msg.value.state for msg in msgs}
+    states = {round(msg.t, 3): msg.value.status for msg in msgs}
     assert states[round(10 / 7.5, 3)] == "lost" and states[round(11 / 7.5, 3)] == "lost"
     assert states[0.0] == "tracking"
     assert np.all(np.isfinite(kpf.tracker.particles)) and np.all(np.isfinite(kpf.tracker.w))

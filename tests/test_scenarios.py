@@ -71,6 +71,7 @@ def test_scenario_runs_end_to_end_and_every_stage_scores(name, tmp_path):
         assert metrics["latency_ms"]["end_to_end"] is not None
     for name in scenario.trackers:  # image-based trackers (trackers:) score every frame
         assert metrics["trackers"][name]["frames"] > 0, name
+        assert metrics["trackers"][name]["frames_per_s"] is not None, name
 
 
 def test_cli_run_writes_outputs(tmp_path):

@@ -14,8 +14,8 @@ topic          value                                       producer -> consumer
 ``commands``   :class:`RobotCommand`                       commands -> robot follower
 ``measurements`` :class:`Measurements` (robot base frame)  perception -> filter
 ``estimates``  :class:`Estimates` (robot base frame)       filter / oracle -> control
-``tracks2d``   :class:`Tracks2D` (image px, one camera)    2-D trackers -> report
 ``poses``      :class:`PoseEstimate` (robot base frame)    gest, tbp, kpf -> mimic, metrics
+``tracks2d``   :class:`Tracks2D` (image px, one camera)    2-D trackers -> report
 =============  ==========================================  ===========================
 
 Perception's positions are in the robot base frame (m), velocities m/s, accelerations m/s^2.
@@ -155,6 +155,29 @@ class RobotCommand:
     """Its number among the commands of its kind (0, 1, ...)."""
 
 
+@dataclass(frozen=True)
+class PoseEstimate:
+    """One articulated (or free-part) pose estimate of one tracker (topic ``poses``), stamped
+    with the photon time of the frame it came from."""
+
+    tracker: str
+    """The tracker's name (its key under ``trackers:``)."""
+    kind: str
+    """The tracker's kind (``gest``, ``tbp``, ``kpf``)."""
+    state: np.ndarray
+    """(d,) the MMSE estimate of the tracker's own state vector (``state_names``)."""
+    state_names: tuple[str, ...]
+    cov: np.ndarray | None = None
+    """(d, d) weighted particle covariance of the state (the particles' spread)."""
+    joints: dict[str, np.ndarray] = field(default_factory=dict)
+    """Joint / part positions in the robot base frame (m) by name (``r_elbow``, ``r_wrist``,
+    ``r_hand`` ... as :data:`humimic.bodymodel.kinematics.JOINT_SEGMENT`)."""
+    angles: dict[str, float] = field(default_factory=dict)
+    """Arm joint angles (rad, DB's convention ``R_SFE`` ... ``L_EB``) where estimated."""
+    status: str = "tracking"
+    """``tracking``, ``searching`` (no target yet or re-initialising) or ``lost``."""
+
+
 TRACK_STATES = ("init", "tracking", "lost")
 """States of an image-space track: ``init`` (waiting for the detectors to agree), ``tracking``
 and ``lost`` (the target's likelihood collapsed; the tracker re-initialises)."""
@@ -193,24 +216,3 @@ class Tracks2D:
     tracks: tuple[Track2D, ...]
     state: str = ""
     """The tracker's own state (e.g. the ICU state machine's, Menezes Fig. 15)."""
-@dataclass(frozen=True)
-class PoseEstimate:
-    """One articulated (or free-part) pose estimate of one tracker (topic ``poses``), stamped
-    with the photon time of the frame it came from."""
-
-    tracker: str
-    """The tracker's name (its key under ``trackers:``)."""
-    kind: str
-    """The tracker's kind (``gest``, ``tbp``, ``kpf``)."""
-    state: np.ndarray
-    """(d,) the MMSE estimate of the tracker's own state vector (``state_names``)."""
-    state_names: tuple[str, ...]
-    cov: np.ndarray | None = None
-    """(d, d) weighted particle covariance of the state (the particles' spread)."""
-    joints: dict[str, np.ndarray] = field(default_factory=dict)
-    """Joint / part positions in the robot base frame (m) by name (``r_elbow``, ``r_wrist``,
-    ``r_hand`` ... as :data:`humimic.bodymodel.kinematics.JOINT_SEGMENT`)."""
-    angles: dict[str, float] = field(default_factory=dict)
-    """Arm joint angles (rad, DB's convention ``R_SFE`` ... ``L_EB``) where estimated."""
-    status: str = "tracking"
-    """``tracking``, ``searching`` (no target yet or re-initialising) or ``lost``."""

@@ -67,10 +67,10 @@ class Scenario(Section):
     @model_validator(mode="after")
     def _placement_fits_the_room(self) -> Scenario:
         if self.room not in ("lab", "lab_clutter"):
-            given = [k for k in ("distance", "lateral") if k in self.human.model_fields_set
-                     and getattr(self.human, k) != Human.model_fields[k].default]  # resolved
-            if self.human.people:
-                given.append("people")
+            fields = Human.model_fields  # a resolved file repeats the defaults: not "given"
+            given = [k for k in ("distance", "lateral", "people")
+                     if k in self.human.model_fields_set and getattr(self.human, k)
+                     != fields[k].get_default(call_default_factory=True)]
             if given:
                 raise ValueError(f"human.{given[0]} does not apply in room {self.room!r}: the "
                                  "room places the person (move them with human.motion)")

@@ -7,6 +7,18 @@ from __future__ import annotations
 from humimic.pipeline.stage import Stage
 
 
+def _hand2d(name, cfg, scenario, world, rngs, rlog) -> list[Stage]:
+    from humimic.perception.trackers.hand2d.build import hand2d_stage
+
+    return [hand2d_stage(name, cfg, scenario, world, rngs, rlog)]
+
+
+def _icu(name, cfg, scenario, world, rngs, rlog) -> list[Stage]:
+    from humimic.perception.trackers.icu.build import icu_stage
+
+    return [icu_stage(name, cfg, scenario, world, rngs, rlog)]
+
+
 def _gest(name, cfg, scenario, world, rngs, rlog) -> list[Stage]:
     from humimic.perception.trackers.gest.build import gest_stage
 
@@ -25,24 +37,12 @@ def _kpf(name, cfg, scenario, world, rngs, rlog) -> list[Stage]:
     return kpf_stage(name, cfg, scenario, world, rngs, rlog)
 
 
-def _hand2d(name, cfg, scenario, world, rngs, rlog) -> list[Stage]:
-    from humimic.perception.trackers.hand2d.build import hand2d_stage
-
-    return [hand2d_stage(name, cfg, scenario, world, rngs, rlog)]
-
-
-def _icu(name, cfg, scenario, world, rngs, rlog) -> list[Stage]:
-    from humimic.perception.trackers.icu.build import icu_stage
-
-    return [icu_stage(name, cfg, scenario, world, rngs, rlog)]
-
-
 BUILDERS = {
+    "hand2d": _hand2d,
+    "icu": _icu,
     "gest": _gest,
     "tbp": _tbp,
     "kpf": _kpf,
-    "hand2d": _hand2d,
-    "icu": _icu,
 }
 
 

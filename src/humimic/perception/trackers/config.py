@@ -18,10 +18,10 @@ from humimic.perception.trackers.kpf.config import KpfConfig
 from humimic.perception.trackers.tbp.config import TbpConfig
 
 TrackerConfig = Annotated[
-    GestConfig
+    Hand2DConfig
+    | IcuConfig
+    | GestConfig
     | TbpConfig
-    | KpfConfig
-    | Hand2DConfig
-    | IcuConfig,
+    | KpfConfig,
     Field(discriminator="kind"),
 ]

@@ -4,14 +4,14 @@ key)."""
 from __future__ import annotations
 
 from humimic.perception.faces.detect import FaceDetector
-from humimic.perception.trackers.common import skin_model_lut, tracker_camera
+from humimic.perception.trackers.common import check_camera, skin_model_lut
 from humimic.perception.trackers.hand2d.stage import Hand2DStage
 from humimic.perception.trackers.hand2d.tracker import Hand2DTracker
 from humimic.scenario.errors import ScenarioError
 
 
 def hand2d_stage(name, cfg, scenario, world, rngs, rlog) -> Hand2DStage:
-    camera = tracker_camera(scenario, world, name, cfg.camera)
+    camera = check_camera(scenario, world, name, cfg.camera)
     if cfg.alpha + cfg.beta > 1.0:
         raise ScenarioError(f"scenario {scenario.name!r}", f"trackers.{name}.beta",
                             "alpha + beta must not exceed 1", cfg.beta,

@@ -6,8 +6,8 @@ from __future__ import annotations
 import numpy as np
 
 from humimic.messages import Track2D, Tracks2D
+from humimic.perception.trackers.common import ImageTrackerStage, Overlay
 from humimic.perception.trackers.hand2d.tracker import Hand2DTracker
-from humimic.perception.trackers.image_stage import ImageTrackerStage, Overlay
 
 HAND_WIDTH_M = 0.09
 """The avatar's hand seen palm-on is 9 cm wide (``models/avatar.xml``): the true scale."""

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from humimic.perception.faces.detect import DetectorParams, FaceDetector
-from humimic.perception.trackers.common import tracker_camera
+from humimic.perception.trackers.common import check_camera
 from humimic.perception.trackers.icu.stage import IcuStage
 from humimic.perception.trackers.icu.tracker import IcuTracker
 from humimic.scenario.errors import ScenarioError
@@ -12,7 +12,7 @@ from humimic.world.faces import IDENTITY_NAMES
 
 def icu_stage(name, cfg, scenario, world, rngs, rlog) -> IcuStage:
     where = f"scenario {scenario.name!r}"
-    camera = tracker_camera(scenario, world, name, cfg.camera)
+    camera = check_camera(scenario, world, name, cfg.camera)
     identity = cfg.identity or scenario.human.identity
     if identity not in IDENTITY_NAMES:
         raise ScenarioError(where, f"trackers.{name}.identity", "unknown identity", identity,

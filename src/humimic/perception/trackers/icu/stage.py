@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from humimic.messages import Track2D, Tracks2D
-from humimic.perception.trackers.image_stage import HEAD_WIDTH_M, ImageTrackerStage, Overlay
+from humimic.perception.trackers.common import HEAD_WIDTH_M, ImageTrackerStage, Overlay
 
 
 class IcuStage(ImageTrackerStage):
