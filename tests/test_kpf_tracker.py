@@ -66,8 +66,9 @@ def test_poses_published_per_frame_and_scored(run):
     assert m["frames"] == 15 == len(msgs)
     assert [msg.t for msg in msgs] == pytest.approx(np.arange(15) / 7.5)
     p = msgs[0].value
-    assert isinstance(p, PoseEstimate) and p.tracker == "kpf" and len(p.q) == 14
-    assert set(p.endpoints) >= {"r_wrist", "r_elbow", "l_wrist"} and p.spread.shape == (14,)
+    assert isinstance(p, PoseEstimate) and p.tracker == "kpf" and len(p.state) == 14
+    assert set(p.joints) >= {"r_wrist", "r_elbow", "l_wrist"} and p.cov.shape == (14, 14)
+    assert set(p.angles) == {"R_SFE", "R_SAA", "R_HR", "R_EB", "L_SFE", "L_SAA", "L_HR", "L_EB"}
     # measured 119 mm (the covered frames keep the last pose while the arm rises)
     assert m["wrist_error_mm"] < 250.0
     assert m["wrist_lateral_mm"] < m["wrist_error_mm"] + 1e-9
@@ -77,7 +78,7 @@ def test_poses_published_per_frame_and_scored(run):
 
 def test_covered_camera_frames_are_lost_and_particles_stay_finite(run):
     _, msgs, kpf = run
-    states = {round(msg.t, 3): msg.value.state for msg in msgs}
+    states = {round(msg.t, 3): msg.value.status for msg in msgs}
     assert states[round(10 / 7.5, 3)] == "lost" and states[round(11 / 7.5, 3)] == "lost"
     assert states[0.0] == "tracking"
     assert np.all(np.isfinite(kpf.tracker.particles)) and np.all(np.isfinite(kpf.tracker.w))

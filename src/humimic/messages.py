@@ -12,9 +12,10 @@ topic          value                                       producer -> consumer
 ``head_pose``  :class:`HeadPose` (paper's W, frame I)      slam -> arm EKF, commands
 ``arm_pose``   :class:`ArmPose` (frame I, remote frame A)  arm EKF -> commands
 ``commands``   :class:`RobotCommand`                       commands -> robot follower
-``poses``      :class:`PoseEstimate` (robot base frame)    gest, tbp, kpf -> mimic, metrics
 ``measurements`` :class:`Measurements` (robot base frame)  perception -> filter
 ``estimates``  :class:`Estimates` (robot base frame)       filter / oracle -> control
+``poses``      :class:`PoseEstimate` (robot base frame)    gest, tbp, kpf -> mimic, metrics
+``tracks2d``   :class:`Tracks2D` (image px, one camera)    2-D trackers -> report
 =============  ==========================================  ===========================
 
 Perception's positions are in the robot base frame (m), velocities m/s, accelerations m/s^2.
@@ -156,20 +157,62 @@ class RobotCommand:
 
 @dataclass(frozen=True)
 class PoseEstimate:
-    """One tracker's articulated pose estimate of the person (topic ``poses``), stamped with
-    the photon time of the frame it came from."""
+    """One articulated (or free-part) pose estimate of one tracker (topic ``poses``), stamped
+    with the photon time of the frame it came from."""
 
     tracker: str
     """The tracker's name (its key under ``trackers:``)."""
-    names: tuple[str, ...]
-    """Names of the values in ``q`` (:data:`humimic.bodymodel.DOF_NAMES` or a subset)."""
-    q: np.ndarray
-    """(D,) joint angles (rad, DB's convention) and torso pose (m, rad) in the robot base
-    frame."""
-    endpoints: dict[str, np.ndarray]
-    """Limb endpoints (``r_shoulder``, ``r_elbow``, ``r_wrist``, ...) -> (3,) position in the
-    robot base frame (m)."""
-    spread: np.ndarray
-    """(D,) standard deviation of the particles (or the filter's) per value of ``q``."""
+    kind: str
+    """The tracker's kind (``gest``, ``tbp``, ``kpf``)."""
+    state: np.ndarray
+    """(d,) the MMSE estimate of the tracker's own state vector (``state_names``)."""
+    state_names: tuple[str, ...]
+    cov: np.ndarray | None = None
+    """(d, d) weighted particle covariance of the state (the particles' spread)."""
+    joints: dict[str, np.ndarray] = field(default_factory=dict)
+    """Joint / part positions in the robot base frame (m) by name (``r_elbow``, ``r_wrist``,
+    ``r_hand`` ... as :data:`humimic.bodymodel.kinematics.JOINT_SEGMENT`)."""
+    angles: dict[str, float] = field(default_factory=dict)
+    """Arm joint angles (rad, DB's convention ``R_SFE`` ... ``L_EB``) where estimated."""
+    status: str = "tracking"
+    """``tracking``, ``searching`` (no target yet or re-initialising) or ``lost``."""
+
+
+TRACK_STATES = ("init", "tracking", "lost")
+"""States of an image-space track: ``init`` (waiting for the detectors to agree), ``tracking``
+and ``lost`` (the target's likelihood collapsed; the tracker re-initialises)."""
+
+
+@dataclass(frozen=True)
+class Track2D:
+    """One image-space track (Menezes sec. 5): the MMSE state of a particle filter."""
+
+    target: str
+    """What is tracked: a human target (``right_hand``) or a person (``person``)."""
+    u: float
+    """Centre, pixels (OpenCV: u right, v down)."""
+    v: float
+    scale: float
+    """The target's size in pixels (hand width, head width)."""
+    angle: float = 0.0
+    """In-plane rotation (rad, clockwise on the image)."""
     state: str = "tracking"
-    """``tracking`` or ``lost``."""
+    """One of :data:`TRACK_STATES`."""
+    identity: str = ""
+    """Who the tracker believes it follows (a face identity), '' when unknown."""
+    confidence: float = float("nan")
+    """Recognition probability of ``identity`` (NaN without recognition)."""
+    spread_px: float = float("nan")
+    """Particle spread: sqrt of the trace of the (u, v) covariance (px)."""
+
+
+@dataclass(frozen=True)
+class Tracks2D:
+    """A tracker's tracks in one camera frame (topic ``tracks2d``)."""
+
+    tracker: str
+    """The tracker's name (its key under the scenario's ``trackers:``)."""
+    camera: str
+    tracks: tuple[Track2D, ...]
+    state: str = ""
+    """The tracker's own state (e.g. the ICU state machine's, Menezes Fig. 15)."""

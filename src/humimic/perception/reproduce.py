@@ -13,6 +13,10 @@ camera frame (x right, y down, z along the optical axis = depth), as the paper's
 
 from __future__ import annotations
 
+from humimic import select_gl_backend
+
+select_gl_backend()  # an entry point: MuJoCo's OpenGL backend, before anything imports mujoco
+
 import argparse
 import sys
 from pathlib import Path

@@ -139,7 +139,8 @@ def yaml_line(text: str, key_path: list[str]) -> int | None:
                     break
             else:
                 return line
-        elif isinstance(node, yaml.SequenceNode) and part.isdigit() and int(part) < len(node.value):
+        elif (isinstance(node, yaml.SequenceNode) and part.isdecimal()
+              and int(part) < len(node.value)):
             node = node.value[int(part)]
             line = node.start_mark.line + 1
         else:
@@ -147,21 +148,34 @@ def yaml_line(text: str, key_path: list[str]) -> int | None:
     return line
 
 
+def command_line_source(key: str, overridden: dict[str, str] | set[str]) -> str | None:
+    """The command-line option that set ``key``, a key inside it or a section holding it."""
+    options = overridden if isinstance(overridden, dict) else dict.fromkeys(overridden, "--set")
+    for k, option in options.items():
+        if key == k or key.startswith(k + ".") or k.startswith(key + "."):
+            return option
+    return None
+
+
 _BOUNDS = {"greater_than": "> {gt}", "greater_than_equal": ">= {ge}", "less_than": "< {lt}",
            "less_than_equal": "<= {le}"}
 
 
 def from_validation_error(err: ValidationError, root: type[BaseModel], file: str | Path,
-                          text: str = "", overridden: set[str] | None = None) -> ScenarioError:
-    """The first error of ``err`` as a :class:`ScenarioError`."""
+                          text: str = "", overridden: dict[str, str] | set[str] | None = None
+                          ) -> ScenarioError:
+    """The first error of ``err`` as a :class:`ScenarioError`. ``overridden`` maps keys set on
+    the command line to the option that set them (``{"duration": "--duration"}``; a set means
+    ``--set``): an error at, inside or above such a key names the option, not a file line."""
     e = err.errors()[0]
     loc, kind, ctx = tuple(e["loc"]), e["type"], e.get("ctx", {}) or {}
     key = _dotted(loc, root)
     value = e.get("input")
     line = yaml_line(text, key.split(".")) if text else None
     source = file
-    if overridden and any(key == k or key.startswith(k + ".") for k in overridden):
-        source, line = f"{file} (--set)", None
+    option = command_line_source(key, overridden or {})
+    if option:
+        source, line = f"{file} ({option})", None
 
     def suggest(word: str, options: list[str]) -> str | None:
         close = difflib.get_close_matches(str(word), [str(o) for o in options], n=1, cutoff=0.5)

@@ -32,6 +32,9 @@ EYE_CAMERAS = {
     ("right", "foveal"): "R_foveal",
 }
 
+#: Horizontal field of view (deg) of each kind of eye camera.
+EYE_HFOV_DEG = {"wide": 100.0, "foveal": 24.0}
+
 #: The avatar's joints in qpos order and their types.
 HUMAN_JOINTS: tuple[tuple[str, str], ...] = (
     ("root_x", "slide"), ("root_y", "slide"), ("root_z", "slide"), ("root_rot", "ball"),
@@ -57,4 +60,19 @@ HUMAN_TARGETS = {
     "wiimote": "wiimote_imu",
     "wiimote_marker": "wiimote_marker",
     "headcam": "headcam",
+}
+#: Colour classes of the avatar: class -> its materials (without prefix). The head wears the
+#: ``face`` material (the skin colour times a shading texture, :mod:`humimic.world.faces`), so
+#: a skin model must be learned from both, or the head is missed.
+COLOR_CLASSES: dict[str, tuple[str, ...]] = {
+    "skin": ("skin", "face"),
+    "shirt": ("shirt",),
+    "trousers": ("trousers",),
+    "marker": ("marker",),
+}
+#: The avatar's geoms that make up each visible target (visibility ground truth).
+TARGET_GEOMS: dict[str, tuple[str, ...]] = {
+    "head": ("head",),
+    "right_hand": ("r_hand",),
+    "left_hand": ("l_hand",),
 }

@@ -1,4 +1,4 @@
-"""``trackers:`` -- the scenario's image-based trackers, by name, each with a ``kind``.
+"""``trackers:`` -- the scenario's trackers, by name, each with a ``kind``.
 
 :data:`TrackerConfig` is the discriminated union over ``kind`` of the tracker kinds' config
 classes (one import and one union member per kind, each kind's config in its own package
@@ -7,15 +7,21 @@ classes (one import and one union member per kind, each kind's config in its own
 
 from __future__ import annotations
 
-from typing import Annotated, Union
+from typing import Annotated
 
 from pydantic import Field
 
+from humimic.perception.trackers.gest.config import GestConfig
+from humimic.perception.trackers.hand2d.config import Hand2DConfig
+from humimic.perception.trackers.icu.config import IcuConfig
 from humimic.perception.trackers.kpf.config import KpfConfig
+from humimic.perception.trackers.tbp.config import TbpConfig
 
 TrackerConfig = Annotated[
-    Union[  # noqa: UP007 -- one member per line, one line per kind
-        KpfConfig,
-    ],
+    Hand2DConfig
+    | IcuConfig
+    | GestConfig
+    | TbpConfig
+    | KpfConfig,
     Field(discriminator="kind"),
 ]

@@ -14,6 +14,8 @@ from __future__ import annotations
 
 import time
 
+import numpy as np
+
 from humimic import bodymodel as bm
 from humimic.messages import PoseEstimate
 from humimic.perception.trackers.kpf.cues import cue_maps
@@ -62,9 +64,11 @@ class KpfStage(Stage):
         ends = {j: pose.joint(j)[0] for j in ENDPOINTS}
         state = "lost" if res.lost else "tracking"
         self.rec.add(t, res.mode, ends, res.lost, dt, cpu, res.iterations, T_cam_base)
-        self._bus.publish("poses", Stamped(t, PoseEstimate(self.name, bm.DOF_NAMES, res.mode,
-                                                           ends, res.spread, state),
-                                           msg.t_ready + self.cfg.latency))
+        angles = {n: float(v) for n, v in zip(bm.DOF_NAMES, res.mode, strict=True)
+                  if n not in bm.TORSO_DOFS}
+        est = PoseEstimate(self.name, "kpf", res.mode, bm.DOF_NAMES, np.diag(res.spread ** 2),
+                           ends, angles, state)
+        self._bus.publish("poses", Stamped(t, est, msg.t_ready + self.cfg.latency))
         if self.rlog is not None and self.rlog.enabled:
             log_frame(self.rlog, self.name, self.camera, t, self.body, frame, T_cam_base, res,
                       self.world.gt.T_world_frame("base"))
