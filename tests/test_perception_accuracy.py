@@ -65,7 +65,7 @@ def test_static_hand_wide_filter_smooths_depth(static_hand):
     # (filtered/raw 0.53; the paper's Table 3: 0.48)
     assert filt[0] <= 0.9
     assert filt[0] <= 0.65 * raw[0]
-    assert t["detection_rate"] == 1.0 and t["scored_estimates"] > 300
+    assert t["detection_rate_from_first"] == 1.0 and t["scored_estimates"] > 300
     for key in ("vel", "acc"):  # true value 0: the means are well inside their spread
         for mean, std in zip(t[f"{key}_bias_mm_s" if key == "vel" else "acc_bias_mm_s2"],
                              t[f"{key}_std_mm_s" if key == "vel" else "acc_std_mm_s2"],
@@ -98,13 +98,20 @@ def test_static_hand_foveal_depth_sigma():
 def test_wave_detection_rate_and_filtered_rmse():
     m = run("ude_wave_tracking", ["perception.detection.period=0.5"], duration=4.5)[0]
     hand, head = m["tracking"]["right_hand"], m["tracking"]["head"]
-    assert hand["detection_rate"] >= 0.98  # measured 1.0
-    assert hand["filtered_rmse_mm"] <= 15.0  # measured 6.9 mm (raw 8.3 mm)
-    # a consistent filter: ~95 % of frames inside the band (measured 0.90)
+    # over the frames the hand is visible, after detection's phase one (the first detection
+    # and the blob's settling take ~10 frames): measured 0.958; from the first on: 1.0
+    assert hand["visible_fraction"] == 1.0 and hand["detection_rate"] >= 0.93
+    assert hand["detection_rate_from_first"] >= 0.98
+    assert hand["false_detection_rate"] <= 0.01  # measured 0.0
+    assert hand["filtered_rmse_mm"] <= 15.0  # measured 6.7 mm (raw 7.9 mm)
+    # a consistent filter: ~95 % of frames inside the band (measured 0.91)
     assert hand["filtered_nees_pos3_in_band"] >= 0.7 and not hand["biased"]
-    # the head's stereo surface lies ~20 mm before its centre: flagged, and out of the band
-    assert head["detection_rate"] >= 0.98
-    assert head["biased"] and head["filtered_nees_pos3_in_band"] < 0.2
+    # the head's stereo surface lies before its centre: flagged. The colour model learned for
+    # this person covers the whole face, features included, so the blob is the whole head:
+    # raw RMSE 9.9 mm, 0.78 of frames in the band (the shipped skin.json, hands only:
+    # 14.5 mm, 0.10)
+    assert head["detection_rate"] >= 0.93  # measured 0.971
+    assert head["biased"] and head["raw_rmse_mm"] <= 13.0
 
 
 # ---- hidden for ~1 s --------------------------------------------------------------------------
@@ -173,7 +180,7 @@ def test_head_and_eye_motion_is_compensated():
     f = np.flatnonzero(pa.ok[:, i])
     eye_motion = np.linalg.norm(pa.T_base_cam[f, 0, :3, 2] - pa.T_base_cam[f[0], 0, :3, 2], axis=1)
     assert eye_motion.max() > 0.1  # the left eye's axis really turned (> 6 deg)
-    assert moving["detection_rate"] >= 0.98
+    assert moving["detection_rate_from_first"] >= 0.98
     # measured (seed 1): still 8.5 mm, moving 14.8 mm (filtered 3-D RMSE; the blobs move in
     # the images, the EM centre lags a little)
     assert still["filtered_rmse_mm"] <= 17.0 and moving["filtered_rmse_mm"] <= 30.0

@@ -90,7 +90,11 @@ def test_never_appearing_target_scores_zero_and_null(tmp_path):
     m = run_one(scenario, tmp_path / "out", rerun="off", progress=False)
     _metrics_ok(m)
     t = m["tracking"]["left_hand"]
-    assert t["detection_rate"] == 0.0 and t["detection_rate_all"] == 0.0
+    assert t["detection_rate_from_first"] == 0.0 and t["detection_rate_all"] == 0.0
+    # never visible (behind the back): no detection rate, and the summary says why
+    assert t["visible_fraction"] == 0.0 and t["detection_rate"] is None
+    assert t["verdict"] == "poor" and t["cause"] == "occluded", t
+    assert t["false_detection_rate"] == 0.0 and t["false_detections"] == 0
     assert t["time_to_first_detection_s"] is None and t["measured_frames"] == 0
     assert t["raw_rmse_mm"] is None and t["filtered_rmse_mm"] is None
     assert m["perception"]["distractors"] == ["head", "right_hand"]

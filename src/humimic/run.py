@@ -17,8 +17,10 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
+
 from humimic.errors import InputError
-from humimic.metrics.summary import print_summary
+from humimic.metrics.summary import print_summary, verdict_warning
 from humimic.pipeline.build import build_stages
 from humimic.pipeline.simulation import simulate
 from humimic.report import write_report
@@ -158,8 +160,9 @@ def _log_ground_truth(rlog, world, ticks: int) -> None:
     # Every ground-truth site as points in the 3-D view (names on hover), at the pose rate.
     gt = world.gt
     step = max(1, round(world.scenario.timing.physics_rate / world.scenario.output.pose_rate))
-    for k in range(0, ticks, step):
-        rlog.log_points(float(gt.t[k]), f"{TRUTH}/sites", gt.pos[k], colors=[40, 200, 40],
+    ks = np.arange(0, ticks, step)
+    for k, pos in zip(ks, gt.pos[ks], strict=True):
+        rlog.log_points(float(gt.t[k]), f"{TRUTH}/sites", pos, colors=[40, 200, 40],
                         radii=0.01, labels=list(gt.targets))
 
 
@@ -214,6 +217,9 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     if not args.quiet:
         print_summary(metrics, args.out or default_out_dir(scenario))
+    warning = verdict_warning(metrics)
+    if warning:
+        print(warning, file=sys.stderr)
     return 0
 
 

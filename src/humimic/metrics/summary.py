@@ -38,7 +38,20 @@ def print_summary(metrics: dict, out_dir: str | Path, console: Console | None = 
     table.add_column("metric", style="cyan")
     table.add_column("value", justify="right")
     for key, value in summary_rows(metrics):
-        table.add_row(key, value)
+        poor = key.endswith(".verdict") and value == "poor"
+        table.add_row(key, value, style="bold red" if poor else None)
     console.print(table)
     console.print(f"outputs in [bold]{out_dir}[/bold]  (open the recording: rerun "
                   f"{Path(out_dir) / 'run.rrd'})")
+
+
+def verdict_warning(metrics: dict) -> str | None:
+    """One line naming every target detected on less than half of its visible frames, or
+    never, with its likely cause (``tracking.<target>.verdict``); None when there is none."""
+    poor = []
+    for target, s in metrics.get("tracking", {}).items():
+        if isinstance(s, dict) and s.get("verdict") == "poor":
+            rate = s.get("detection_rate")
+            seen = "never detected" if not rate else f"detected on {rate:.0%} of visible frames"
+            poor.append(f"{target} {seen} (likely cause: {s.get('cause')})")
+    return f"warning: {'; '.join(poor)}" if poor else None

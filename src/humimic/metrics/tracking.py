@@ -7,8 +7,11 @@ Undefined scores (no measurement, no estimate) are ``None`` (JSON null), never N
 ``tracking.<target>``:
 
 * ``frames``, ``measured_frames``;
-* ``detection_rate``: frames with a valid 3-D measurement / frames from the first one on
-  (0 if never measured); ``detection_rate_all``: the same over all frames;
+* ``detection_rate``: frames with a valid 3-D measurement / frames the target is visible
+  (:mod:`humimic.metrics.visibility`, with ``visible_fraction``, ``false_detection_rate`` and a
+  ``verdict``; without visibility ground truth, the next figure);
+  ``detection_rate_from_first``: the same over the frames from the first measurement on (0 if
+  never measured); ``detection_rate_all``: over all frames;
 * ``time_to_first_detection_s``: photon time of the first valid measurement since the first
   frame (None if never); ``losses`` / ``reacquisitions``: changes tracking -> lost and
   lost -> tracking of the target's state;
@@ -42,6 +45,7 @@ import numpy as np
 
 from humimic.maths.stats import finite_or_none, fraction_in_band, nees, rmse
 from humimic.metrics import mm
+from humimic.metrics.visibility import visibility_scores
 from humimic.perception.blobs.record import STATE_CODE
 
 MM = 1e3
@@ -89,6 +93,7 @@ def detection_stats(t: np.ndarray, ok: np.ndarray, state: np.ndarray) -> dict:
         "frames": n,
         "measured_frames": int(ok.sum()),
         "detection_rate": 0.0 if first is None else float(ok[first:].mean()),
+        "detection_rate_from_first": 0.0 if first is None else float(ok[first:].mean()),
         "detection_rate_all": float(ok.mean()) if n else 0.0,
         "time_to_first_detection_s": None if first is None else finite_or_none(t[first] - t[0]),
         "losses": int(np.sum((prev == tracking) & (cur == lost))),
@@ -146,11 +151,16 @@ def filtered_scores(fa, j: int, p_true, v_true, a_true, settle_s: float = FILTER
 
 
 def target_scores(target: str, pa, fa, p_true: np.ndarray, truth_filter=None,
-                  settle_s: float = FILTER_SETTLE_S) -> dict:
+                  settle_s: float = FILTER_SETTLE_S, visibility=None, warmup_s: float = 0.0
+                  ) -> dict:
     """Every ``tracking.<target>`` score (``fa`` None: perception only). ``p_true``: true
-    positions at the perception frames; ``truth_filter``: true (p, v, a) at the filter's."""
+    positions at the perception frames; ``truth_filter``: true (p, v, a) at the filter's;
+    ``visibility``: :class:`~humimic.sensors.visibility.VisibilityArrays` (None: no
+    visibility scores), ``warmup_s``: detection's phase one."""
     i = pa.index(target)
     out = detection_stats(pa.t, pa.ok[:, i], pa.state[:, i])
+    if visibility is not None and len(visibility.t) and len(pa.t):
+        out.update(visibility_scores(pa, i, target, visibility, p_true, warmup_s))
     out.update(raw_scores(pa, i, p_true))
     if fa is not None and target in fa.targets:
         out.update(filtered_scores(fa, fa.targets.index(target), *truth_filter,

@@ -96,6 +96,9 @@ def simulate(world, stages: list[Stage], rlog, bus: Bus | None = None,
             if cam_sched is not None and cam_sched.due(tick):
                 with timer.time("render"):
                     images = world.faults.frames.apply(t, world.eye_rig.capture(t))
+                if world.visibility is not None and world.visibility.due(t):
+                    with timer.time("visibility"):  # ground truth, whatever the faults
+                        world.visibility.sample(t)
                 if images is not None:
                     bus.publish("frames", Stamped(t, images, t + latency))
                     if image_every and frames % image_every == 0:

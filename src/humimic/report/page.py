@@ -130,7 +130,11 @@ def _worst(*statuses: str) -> str:
 def _tracking_verdicts(target: str, s: dict) -> list[Verdict]:
     rate = s.get("detection_rate")
     never = rate is None or s.get("time_to_first_detection_s") is None
-    out = [Verdict(f"{target}: detection rate", "never detected" if never else f"{rate:.3f}",
+    value = "never detected" if never else f"{rate:.3f}"
+    if s.get("verdict") == "poor":  # against the visibility ground truth
+        value += (f" of its visible frames (visible {s.get('visible_fraction', 0.0):.0%}; "
+                  f"likely cause: {s.get('cause')})")
+    out = [Verdict(f"{target}: detection rate", value,
                    *grade("detection_rate", None if never else rate))]
     f, raw = s.get("filtered_rmse_mm"), s.get("raw_rmse_mm")
     if f is None and raw is None:

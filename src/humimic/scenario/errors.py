@@ -70,17 +70,25 @@ def _tag_of(model: type[BaseModel]) -> str | None:
     return args[0] if args else None
 
 
+def _tagged(models: list[type[BaseModel]], part: Any) -> type[BaseModel] | None:
+    """The union member whose ``kind`` tag ``part`` is: pydantic puts the tag in a
+    discriminated union's error locations (a one-member union's too)."""
+    if not isinstance(part, str) or (len(models) == 1 and part in models[0].model_fields):
+        return None
+    match = [m for m in models if _tag_of(m) == part]
+    return match[0] if match else None
+
+
 def model_at(root: type[BaseModel], loc: tuple) -> type[BaseModel] | None:
     """The pydantic model that owns the last element of ``loc`` (for listing allowed keys)."""
     current: Any = root
     for part in loc[:-1]:
         models = _models_in(current)
         if models and isinstance(part, str):
-            if len(models) > 1:  # discriminated union: the location names the tag
-                match = [m for m in models if _tag_of(m) == part]
-                if match:
-                    current = match[0]
-                    continue
+            tagged = _tagged(models, part)  # discriminated union: the location names the tag
+            if tagged is not None:
+                current = tagged
+                continue
             model = models[0]
             if part in model.model_fields:
                 current = model.model_fields[part].annotation
@@ -103,8 +111,9 @@ def _dotted(loc: tuple, root: type[BaseModel]) -> str:
     current: Any = root
     for part in loc:
         models = _models_in(current)
-        if len(models) > 1 and isinstance(part, str) and any(_tag_of(m) == part for m in models):
-            current = next(m for m in models if _tag_of(m) == part)
+        tagged = _tagged(models, part)
+        if tagged is not None:
+            current = tagged
             continue
         parts.append(str(part))
         if models and isinstance(part, str) and part in models[0].model_fields:

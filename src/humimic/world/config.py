@@ -11,6 +11,7 @@ from humimic.motion.config import MotionConfig, StaticMotion
 from humimic.scenario.base import RGB, Section, Vec3
 from humimic.world.faces import DEFAULT_IDENTITY, IDENTITY_NAMES
 from humimic.world.names import HUMAN_TARGETS, ROBOT_JOINTS
+from humimic.world.people import Person
 from humimic.world.robot_limits import robot_joint_ranges
 
 
@@ -30,20 +31,29 @@ class Human(Section):
     """The person's face: a name of :data:`humimic.world.faces.IDENTITY_NAMES` or its index."""
     motion: MotionConfig = Field(default_factory=lambda: StaticMotion(kind="static"))
 
+    people: list[Person] = Field(default_factory=list, max_length=3)
+    """Other people in the room (lab only), each with a face, clothes and a walk
+    (:mod:`humimic.world.people`)."""
+
     @field_validator("identity", mode="before")
     @classmethod
     def _known_identity(cls, v):
-        if isinstance(v, int) and not isinstance(v, bool):
-            if 0 <= v < len(IDENTITY_NAMES):
-                return IDENTITY_NAMES[v]
-            raise PydanticCustomError("less_than", "identity index out of range",
-                                      {"lt": len(IDENTITY_NAMES)})
-        if v not in IDENTITY_NAMES:
-            expected = ", ".join(f"'{n}'" for n in IDENTITY_NAMES)
-            raise PydanticCustomError("literal_error", "unknown identity",
-                                      {"expected": f"{expected} or an index 0.."
-                                                   f"{len(IDENTITY_NAMES) - 1}"})
-        return v
+        return check_identity(v)
+
+
+def check_identity(v):
+    """An identity name (or index into :data:`IDENTITY_NAMES`) checked for a validator."""
+    if isinstance(v, int) and not isinstance(v, bool):
+        if 0 <= v < len(IDENTITY_NAMES):
+            return IDENTITY_NAMES[v]
+        raise PydanticCustomError("less_than", "identity index out of range",
+                                  {"lt": len(IDENTITY_NAMES)})
+    if v not in IDENTITY_NAMES:
+        expected = ", ".join(f"'{n}'" for n in IDENTITY_NAMES)
+        raise PydanticCustomError("literal_error", "unknown identity",
+                                  {"expected": f"{expected} or an index 0.."
+                                               f"{len(IDENTITY_NAMES) - 1}"})
+    return v
 
 
 class Robot(Section):

@@ -61,3 +61,18 @@ HUMAN_TARGETS = {
     "wiimote_marker": "wiimote_marker",
     "headcam": "headcam",
 }
+#: Colour classes of the avatar: class -> its materials (without prefix). The head wears the
+#: ``face`` material (the skin colour times a shading texture, :mod:`humimic.world.faces`), so
+#: a skin model must be learned from both, or the head is missed.
+COLOR_CLASSES: dict[str, tuple[str, ...]] = {
+    "skin": ("skin", "face"),
+    "shirt": ("shirt",),
+    "trousers": ("trousers",),
+    "marker": ("marker",),
+}
+#: The avatar's geoms that make up each visible target (visibility ground truth).
+TARGET_GEOMS: dict[str, tuple[str, ...]] = {
+    "head": ("head",),
+    "right_hand": ("r_hand",),
+    "left_hand": ("l_hand",),
+}

@@ -32,7 +32,7 @@ from humimic.world.names import (
 )
 
 #: Room name -> MJCF file in ``models/``.
-ROOMS = {"lab": "room.xml", "sugiyama": "room_sugiyama.xml"}
+ROOMS = {"lab": "room.xml", "sugiyama": "room_sugiyama.xml", "lab_clutter": "room_clutter.xml"}
 #: Room site at which the person's (avatar) frame is placed, when the room has one.
 PERSON_START_SITE = "person_start"
 WIDE_HFOV_DEG = EYE_HFOV_DEG["wide"]
@@ -78,6 +78,8 @@ class SceneOptions:
     in front of the robot) or ``sugiyama`` (the wearable room; the person starts at its
     ``person_start`` site and ``distance``/``lateral`` do not apply)."""
     max_render_size: tuple[int, int] = field(default=(1280, 960))
+    people: tuple = ()
+    """Other people (:class:`humimic.world.people.Person`), attached after the tutor."""
 
 
 def _robot_eye_height_and_x() -> tuple[float, float]:
@@ -141,6 +143,10 @@ def compose(opts: SceneOptions) -> mjcf.RootElement:
     frame = room.attach(human)
     frame.pos = [eye_x + opts.distance + head_x_in_avatar, opts.lateral, 0.0]
     frame.euler = [0.0, 0.0, math.pi]  # face the robot (avatar +x points to world -x)
+    if opts.people:
+        from humimic.world.people import attach_people
+
+        attach_people(room, opts.people, eye_x, add_face)
     return room
 
 

@@ -2,7 +2,7 @@
 
 Cross-section checks raise :class:`~humimic.scenario.errors.ScenarioError` (one line, exit
 status 2): perception needs both eyes, named cameras must be rendered, colour-model files must
-be readable, a filter needs perception.
+be readable (or the skin in view, to learn it: ``auto``), a filter needs perception.
 """
 
 from __future__ import annotations
@@ -14,7 +14,8 @@ from humimic.perception.blobs.config import DEFAULT_COLOR_MODEL, TRACKABLE_TARGE
 from humimic.perception.blobs.record import PerceptionRecord
 from humimic.perception.blobs.report import TrackingReport
 from humimic.perception.blobs.stage import PerceptionStage
-from humimic.perception.cues.color_models import ColorLUT, load_color_model
+from humimic.perception.cues.auto_colors import NotInView, file_lut, learned_lut
+from humimic.perception.cues.color_models import ColorLUT
 from humimic.pipeline.stage import Stage
 from humimic.scenario.errors import ScenarioError
 
@@ -47,34 +48,50 @@ def _color_key(cfg, target: str) -> str:
     return "perception.color_model"
 
 
-def load_luts(scenario) -> dict[str, ColorLUT]:
+def _source(cfg, target: str) -> Path | str:
+    f = cfg.color_file(target)
+    return "auto" if f == "auto" else Path(f).resolve()
+
+
+def load_luts(scenario, world, cams) -> dict[str, ColorLUT]:
     """One :class:`ColorLUT` per tracked target (published first, then distractors); targets
-    whose colour-model files are the same share one LUT object."""
+    with the same colour model (file, or ``auto``: learned for this world's person as seen by
+    ``cams``, :mod:`humimic.perception.cues.auto_colors`) share one LUT object."""
     cfg, where = scenario.perception, _where(scenario)
     targets = list(cfg.targets)
     if cfg.identify_all:
-        files = {Path(cfg.color_file(t)).resolve() for t in targets}
+        sources = {_source(cfg, t) for t in targets}
         targets += [t for t in TRACKABLE_TARGETS
-                    if t not in targets and Path(cfg.color_file(t)).resolve() in files]
-    by_file: dict[Path, ColorLUT] = {}
+                    if t not in targets and _source(cfg, t) in sources]
+    by_source: dict[Path | str, ColorLUT] = {}
     out = {}
     for target in targets:
-        path = Path(cfg.color_file(target)).resolve()
-        if path not in by_file:
+        source = _source(cfg, target)
+        if source not in by_source:
             key = _color_key(cfg, target)
-            if not path.is_file():
+            if source == "auto":
+                try:
+                    by_source[source] = learned_lut(world, list(cams), "skin", "rgb",
+                                                    cfg.lut_bits).lut
+                except NotInView as err:
+                    raise ScenarioError(where, key, f"cannot learn the skin colours: {err}",
+                                        "auto", f"a colour-model file, e.g. "
+                                        f"{DEFAULT_COLOR_MODEL}") from None
+                out[target] = by_source[source]
+                continue
+            if not source.is_file():
                 hint = ("learn one: python -m humimic.perception.cues.learn_colors --out "
-                        f"{DEFAULT_COLOR_MODEL}") if path == DEFAULT_COLOR_MODEL.resolve() \
+                        f"{DEFAULT_COLOR_MODEL}") if source == DEFAULT_COLOR_MODEL.resolve() \
                     else "an existing colour-model file"
-                raise ScenarioError(where, key, "colour-model file not found", str(path), hint)
+                raise ScenarioError(where, key, "colour-model file not found", str(source),
+                                    hint)
             try:
-                model = load_color_model(path)
+                by_source[source] = file_lut(source, cfg.lut_bits).lut
             except ValueError as err:
                 raise ScenarioError(
-                    where, key, str(err), str(path),
+                    where, key, str(err), str(source),
                     "a file written by humimic.perception.cues.learn_colors") from None
-            by_file[path] = ColorLUT(model, cfg.lut_bits)
-        out[target] = by_file[path]
+        out[target] = by_source[source]
     return out
 
 
@@ -82,7 +99,7 @@ def perception_stages(scenario, world, rngs, rlog) -> list[Stage]:
     """Perception, filter (when configured) and the tracking report, in pipeline order."""
     cams = check_perception(scenario, world)
     cfg = scenario.perception
-    luts = load_luts(scenario)
+    luts = load_luts(scenario, world, cams)
     prec = PerceptionRecord(list(luts), cams)
     period = 1.0 / scenario.cameras.rate
     latency = period if cfg.latency is None else cfg.latency
@@ -93,5 +110,7 @@ def perception_stages(scenario, world, rngs, rlog) -> list[Stage]:
     if scenario.filter is not None:
         frec = FilterRecord(list(cfg.targets))
         stages.append(FilterStage(scenario.filter, cfg.targets, frec, rlog, world.gt))
-    stages.append(TrackingReport(cfg.targets, prec, frec, world.gt))
+    stages.append(TrackingReport(cfg.targets, prec, frec, world.gt,
+                                 visibility=world.track_visibility(),
+                                 warmup_s=cfg.detection.period))
     return stages

@@ -5,7 +5,8 @@ Example (every key optional)::
     perception:
       tracker: em_blobs
       targets: [head, right_hand, left_hand]
-      color_model: ../models/colors/skin.json   # default: models/colors/skin.json
+      color_model: auto         # learned for this scenario's person (or a file, e.g.
+                                #   ../models/colors/skin.json)
       roi_side: 20              # EM samples per ROI side (the fixed window the ROI maps onto)
       em_iterations: 6
       detection: {period: 5.0, lam: 0.67, restart_phase: 2}
@@ -31,7 +32,8 @@ from humimic.world.names import EYE_CAMERAS
 TRACKABLE_TARGETS = ("head", "right_hand", "left_hand")
 TrackableTarget = Literal["head", "right_hand", "left_hand"]
 EyeCamera = Literal[tuple(EYE_CAMERAS.values())]
-#: The colour model used when a scenario names none (learnt by ``learn_colors``).
+#: The shipped colour model (learnt by ``learn_colors`` for the default person); scenarios
+#: learn their own unless they name a file (``perception.color_model``).
 DEFAULT_COLOR_MODEL = MODELS_DIR / "colors" / "skin.json"
 
 
@@ -100,7 +102,8 @@ class TargetColor(Section):
     """A colour model for one target (overrides ``color_model``)."""
 
     target: TrackableTarget
-    file: Path
+    file: Literal["auto"] | Path
+    """A colour-model file, or ``auto`` (learned for the scenario)."""
 
 
 class PerceptionConfig(Section):
@@ -113,8 +116,11 @@ class PerceptionConfig(Section):
     """Targets measured and published."""
     cameras: tuple[EyeCamera, EyeCamera] | None = None
     """(left, right) eye cameras; default: the ones the scenario renders (``cameras.which``)."""
-    color_model: Path | None = None
-    """Colour-model file for every target (default ``models/colors/skin.json``)."""
+    color_model: Literal["auto"] | Path = "auto"
+    """Colour model of every target: ``auto`` (learned at start-up for this scenario's skin,
+    face, lights, cameras and noise from the run's own renders, cached on disk; see
+    :mod:`humimic.perception.cues.auto_colors`) or a colour-model file (written by
+    ``learn_colors``, e.g. ``models/colors/skin.json``)."""
     colors: list[TargetColor] = Field(default_factory=list)
     """Per-target colour models, overriding ``color_model``."""
     identify_all: bool = True
@@ -183,9 +189,9 @@ class PerceptionConfig(Section):
             raise ValueError(f"a target has two colour models: {names}")
         return value
 
-    def color_file(self, target: str) -> Path:
-        """The colour-model file of ``target``."""
+    def color_file(self, target: str) -> Path | Literal["auto"]:
+        """The colour-model file of ``target``, or ``auto``."""
         for c in self.colors:
             if c.target == target:
                 return c.file
-        return self.color_model if self.color_model is not None else DEFAULT_COLOR_MODEL
+        return self.color_model

@@ -32,7 +32,7 @@ import numpy as np
 from humimic.messages import Measurement, Measurements
 from humimic.perception.blobs.detection import DetectingTracker, DetectionParams, TargetState
 from humimic.perception.blobs.em_blobs import EMParams
-from humimic.perception.blobs.identity import Blob, assign, stereo_evidence
+from humimic.perception.blobs.identity import Blob, assign, clipped_by_border, stereo_evidence
 from humimic.perception.blobs.record import STATE_CODE
 from humimic.perception.blobs.stereo import StereoParams, StereoRig
 from humimic.scenario.base import pass_through
@@ -114,8 +114,10 @@ class PerceptionCore:
         """Track, identify, match and triangulate one stereo frame (``{camera: CameraImage}``)."""
         il, ir = images[self.cameras[0]], images[self.cameras[1]]
         reports = [self.trackers[0].process(t, il.image), self.trackers[1].process(t, ir.image)]
-        tracked = [{k: Blob(k, r.centre, r.cov) for k, r in enumerate(reps)
-                    if r.state == TargetState.TRACKING} for reps in reports]
+        tracked = [{k: Blob(k, r.centre, r.cov, clipped_by_border(r.centre, r.cov, w, h))
+                    for k, r in enumerate(reps) if r.state == TargetState.TRACKING}
+                   for reps, (h, w) in zip(reports, (il.image.shape[:2], ir.image.shape[:2]),
+                                           strict=True)]
         rig = StereoRig(il.camera, ir.camera, self.stereo)
         keys = [frozenset(tr) for tr in tracked]
         settled = any(int(t.tracker.age[k]) == SETTLE_FRAMES

@@ -25,10 +25,13 @@ class TrackingReport(Stage):
     name = "tracking"
 
     def __init__(self, targets: list[str], perception_record, filter_record, gt,
-                 settle_s: float = FILTER_SETTLE_S):
+                 settle_s: float = FILTER_SETTLE_S, visibility=None, warmup_s: float = 0.0):
         self.targets = list(targets)
         self.perception_record, self.filter_record = perception_record, filter_record
         self.gt, self.settle_s = gt, settle_s
+        self.visibility, self.warmup_s = visibility, warmup_s
+        """:class:`~humimic.sensors.visibility.Visibility` of the eyes (None: no visibility
+        scores) and detection's phase one (s), which detection rates leave out."""
 
     def arrays(self):
         """``(PerceptionArrays, FilterArrays | None)`` of the run so far."""
@@ -48,12 +51,13 @@ class TrackingReport(Stage):
     def metrics(self) -> dict:
         """``tracking.<target>`` scores."""
         pa, fa = self.arrays()
+        vis = self.visibility.arrays() if self.visibility is not None else None
         out = {}
         for target in self.targets:
             p, _, _ = self.truth(pa.t, target)
             scores = target_scores(target, pa, fa, p,
                                    self.truth(fa.t, target) if fa is not None else None,
-                                   self.settle_s)
+                                   self.settle_s, vis, self.warmup_s)
             scores["stereo_failures"] = stereo_failures(pa, pa.index(target))
             out[target] = scores
         return {"tracking": out}

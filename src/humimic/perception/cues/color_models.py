@@ -232,17 +232,24 @@ class ColorLUT:
     exact density is a quantisation of the colour by up to half a bin (2 levels at 6 bits).
     """
 
-    def __init__(self, model: ColorModel, bits: int = 6) -> None:
+    def __init__(self, model: ColorModel, bits: int = 6, table: np.ndarray | None = None
+                 ) -> None:
         if not 1 <= bits <= 8:
             raise ValueError(f"bits must be in 1..8, got {bits}")
         self.model = model
         self.bits = bits
         self.shift = 8 - bits
         n = 1 << bits
-        step = 1 << self.shift
-        centres = (np.arange(n) * step + 0.5 * (step - 1)) / 255.0
-        grid = np.stack(np.meshgrid(centres, centres, centres, indexing="ij"), -1).reshape(-1, 3)
-        self.table = model.likelihood(grid).astype(np.float32)
+        if table is not None:  # tabulated before (a cached LUT): ``self.table`` of that LUT
+            if table.shape != (n**3,):
+                raise ValueError(f"a {bits}-bit table has {n**3} entries, got {table.shape}")
+            self.table = np.asarray(table, np.float32)
+        else:
+            step = 1 << self.shift
+            centres = (np.arange(n) * step + 0.5 * (step - 1)) / 255.0
+            grid = np.stack(np.meshgrid(centres, centres, centres, indexing="ij"),
+                            -1).reshape(-1, 3)
+            self.table = model.likelihood(grid).astype(np.float32)
         self.post_table = self.table / (self.table + 1.0)
         """``p / (p + 1)`` per bin (float32, as computed on looked-up densities)."""
 

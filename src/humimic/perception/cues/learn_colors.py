@@ -5,9 +5,12 @@
 The person of a scenario (default ``scenarios/wave.yaml``) is rendered by the robot's eye
 cameras at ``--frames`` instants spread over its motion, for each camera kind in ``--which``
 (wide and foveal by default, so the model has seen both scales). The pixels whose segmentation
-label is a geom of the avatar material ``--material`` (``skin``: head and hands) are the
-training set, with the scenario's pixel noise added as in a real capture; a Gaussian mixture
-(Ude eqs. 6-7) is fitted in ``--space`` (``rgb`` for skin, ``hs`` for coloured objects).
+label is a geom of the avatar's colour class ``--material`` (``skin``: the hands and the head,
+drawn without the face's texture: eyes and brows are not skin) are the training set, with the
+scenario's pixel noise added as in a real capture; a Gaussian mixture (Ude eqs. 6-7) is fitted
+in ``--space`` (``rgb`` for skin, ``hs`` for coloured objects). Scenarios learn their own model
+at start-up the same way (:mod:`humimic.perception.cues.auto_colors`); this command writes one
+to a file.
 
 It prints how well the model separates the material from the rest of the view: the fraction of
 material pixels and of all other pixels whose colour density exceeds the uniform outlier's (1).
@@ -33,7 +36,7 @@ from humimic.perception.cues.color_models import ColorModel, fit_color_model, sa
 from humimic.rngs import Rngs
 from humimic.scenario import load_scenario
 from humimic.sensors.cameras import add_pixel_noise
-from humimic.world.names import HUMAN_PREFIX
+from humimic.world.names import COLOR_CLASSES, HUMAN_PREFIX
 from humimic.world.world import World
 
 
@@ -49,21 +52,81 @@ class Samples:
 
 
 def material_geoms(model: mujoco.MjModel, material: str) -> np.ndarray:
-    """Ids of the avatar's geoms that use ``material`` (e.g. ``skin``)."""
+    """Ids of the avatar's geoms of ``material`` or of the colour class of that name
+    (:data:`~humimic.world.names.COLOR_CLASSES`: ``skin`` is the hands' skin and the face)."""
+    ids = []
+    for name in COLOR_CLASSES.get(material, (material,)):
+        try:
+            ids.append(model.material(HUMAN_PREFIX + name).id)
+        except KeyError:
+            if name != material:  # a class member the scene lacks (e.g. no face texture)
+                continue
+            names = [model.material(i).name.removeprefix(HUMAN_PREFIX)
+                     for i in range(model.nmat)
+                     if model.material(i).name.startswith(HUMAN_PREFIX)]
+            raise InputError(f"--material: the avatar has no material {material!r}; "
+                             f"its materials: {', '.join(names)}") from None
+    return np.flatnonzero(np.isin(model.geom_matid, ids))
+
+
+def plain_materials(model: mujoco.MjModel, material: str) -> dict[int, int]:
+    """Textured geoms of a colour class -> the class's first material, untextured: the face's
+    texture draws eyes, brows and hair line on the head, which are not skin (a model learned
+    from them also takes black for skin). ``{}`` when nothing is textured or the class's first
+    material is textured too."""
+    names = COLOR_CLASSES.get(material, (material,))
     try:
-        mat = model.material(HUMAN_PREFIX + material).id
+        base = model.material(HUMAN_PREFIX + names[0]).id
     except KeyError:
-        names = [model.material(i).name.removeprefix(HUMAN_PREFIX) for i in range(model.nmat)
-                 if model.material(i).name.startswith(HUMAN_PREFIX)]
-        raise InputError(f"--material: the avatar has no material {material!r}; "
-                         f"its materials: {', '.join(names)}") from None
-    return np.flatnonzero(model.geom_matid == mat)
+        return {}
+    if (model.mat_texid[base] >= 0).any():
+        return {}
+    geoms = material_geoms(model, material)
+    return {int(g): base for g in geoms if (model.mat_texid[model.geom_matid[g]] >= 0).any()}
 
 
 def label_mask(seg: np.ndarray, geoms: np.ndarray) -> np.ndarray:
     """Pixels of a segmentation render ``(H, W, 2)`` [object id, object type] on ``geoms``."""
     is_geom = seg[..., 1] == int(mujoco.mjtObj.mjOBJ_GEOM)
     return is_geom & np.isin(seg[..., 0], geoms)
+
+
+def frame_pixels(world, cameras: list[str], ticks: np.ndarray, geoms: np.ndarray,
+                 noise_std: float, rng: np.random.Generator, negatives_per_frame: int = 0,
+                 plain: dict[int, int] | None = None
+                 ) -> tuple[list[np.ndarray], list[np.ndarray]]:
+    """Pixels of ``geoms`` (and ``negatives_per_frame`` others per frame) in the ideal images of
+    ``cameras`` of ``world`` at the person's poses of ``ticks`` (the robot as it is now), with
+    pixel noise ``noise_std`` added. Without negatives only ``geoms`` are drawn (the others
+    would only be thrown away; ~10x faster). ``plain``: geoms drawn with another material
+    (:func:`plain_materials`). The scene's state is restored afterwards."""
+    m, d = world.scene.model, world.scene.data
+    qpos, qvel = d.qpos.copy(), d.qvel.copy()
+    matids = m.geom_matid.copy()
+    for g, mat in (plain or {}).items():
+        m.geom_matid[g] = mat
+    only = None if negatives_per_frame else geoms
+    pos, neg = [], []
+    try:
+        for tick in np.asarray(ticks).tolist():
+            world.apply_human(tick)
+            mujoco.mj_forward(m, d)
+            for cam in cameras:
+                image = world.eye_rig.render_ideal(cam, only=only)
+                if noise_std > 0.0:
+                    image = add_pixel_noise(image, noise_std, rng)
+                mask = label_mask(world.eye_rig.render_ideal(cam, True, only), geoms)
+                pos.append(image[mask])
+                if negatives_per_frame:
+                    rest = image[~mask]
+                    pick = rng.choice(len(rest), min(negatives_per_frame, len(rest)),
+                                      replace=False)
+                    neg.append(rest[pick])
+    finally:
+        m.geom_matid[:] = matids
+        d.qpos[:], d.qvel[:] = qpos, qvel
+        mujoco.mj_forward(m, d)
+    return pos, neg
 
 
 def collect(scenario, which: list[str], n_frames: int, rng: np.random.Generator,
@@ -75,23 +138,14 @@ def collect(scenario, which: list[str], n_frames: int, rng: np.random.Generator,
         sc.cameras.which = kind
         world = World(sc, Rngs(scenario.seed))
         try:
-            m, d = world.scene.model, world.scene.data
-            geoms = material_geoms(m, material)
+            geoms = material_geoms(world.scene.model, material)
             ticks = np.linspace(0, world.n_ticks - 1, n_frames).round().astype(int)
-            for tick in ticks.tolist():
-                world.apply_human(tick)
-                mujoco.mj_forward(m, d)
-                for cam in world.eye_cameras:
-                    image = world.eye_rig.render_ideal(cam)
-                    if sc.cameras.noise_std > 0.0:
-                        image = add_pixel_noise(image, sc.cameras.noise_std, rng)
-                    mask = label_mask(world.eye_rig.render_ideal(cam, segmentation=True), geoms)
-                    pos.append(image[mask])
-                    rest = image[~mask]
-                    pick = rng.choice(len(rest), min(negatives_per_frame, len(rest)),
-                                      replace=False)
-                    neg.append(rest[pick])
-                    frames += 1
+            p, n = frame_pixels(world, world.eye_cameras, ticks, geoms, sc.cameras.noise_std,
+                                rng, negatives_per_frame,
+                                plain_materials(world.scene.model, material))
+            pos += p
+            neg += n
+            frames += len(p)
         finally:
             world.close()
     return Samples(np.concatenate(pos), np.concatenate(neg), frames)

@@ -1,0 +1,107 @@
+"""Detection scores against the visibility ground truth (:mod:`humimic.sensors.visibility`).
+
+``tracking.<target>`` gains:
+
+* ``visible_fraction``: perception frames in which the target is visible to both eyes (in view,
+  at least half unoccluded; stereo needs both);
+* ``detection_rate``: frames with a valid 3-D measurement / visible frames, counted from the
+  end of detection's phase one (``warmup_s``: the tracker is blind by design before it);
+  ``None`` when the target is never visible then;
+* ``false_detection_rate``: blob reports (per eye) that are false / all blob reports: the
+  target is hidden in that eye (out of view or less than :data:`HIDDEN_FRACTION` unoccluded),
+  or the blob is on something else (the target's true position lies outside the blob's
+  :data:`OFF_TARGET_SIGMA`-sigma ellipse); ``false_detections``: frames with one;
+* ``median_size_px``, ``median_unoccluded``: over the frames the target is in view of both eyes;
+* ``verdict`` (``ok`` / ``poor``) and ``cause``: a target detected on less than
+  :data:`POOR_RATE` of its visible frames, or never, is ``poor``, with its likely cause:
+  ``out of view``, ``occluded``, ``too small: N px`` or ``colour model mismatch``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from humimic.maths.stats import finite_or_none
+
+HIDDEN_FRACTION = 0.1
+"""A target less unoccluded than this (or out of view) is hidden."""
+OFF_TARGET_SIGMA = 3.0
+"""A blob whose ellipse (this many standard deviations) misses the true position is false."""
+POOR_RATE = 0.5
+"""A target detected on fewer of its visible frames is flagged (verdict ``poor``)."""
+SMALL_PX = 10.0
+"""A target smaller than this (median diameter, px) is named too small to be detected
+(measured: ude_wave_tracking's left hand, 8 px in the wide cameras at 320x240, is never
+detected; Ude's threshold (eq. 9) is a fraction of the largest blobs' colour sums)."""
+
+
+def eye_visibility(vis, t: np.ndarray, cams: tuple[str, str], target: str):
+    """``(visible, hidden, in_view, unoccluded, size)``, each ``(F, 2)``: per perception frame
+    (photon times ``t``) and eye."""
+    k = vis.at(t)
+    c = [vis.camera(name) for name in cams]
+    j = vis.target(target)
+    in_view = vis.in_view[k][:, c, j]
+    unocc = vis.unoccluded[k][:, c, j]
+    return (vis.visible[k][:, c, j], ~in_view | (unocc < HIDDEN_FRACTION), in_view, unocc,
+            vis.size_px[k][:, c, j])
+
+
+def off_target(centre: np.ndarray, cov: np.ndarray, uv_true: np.ndarray,
+               k_sigma: float = OFF_TARGET_SIGMA) -> np.ndarray:
+    """Whether ``uv_true`` ``(N, 2)`` lies outside blobs (``centre (N, 2)``, shape ``cov
+    (N, 2, 2)``) at ``k_sigma`` standard deviations (squared Mahalanobis distance)."""
+    d = uv_true - centre
+    m2 = np.einsum("ni,nij,nj->n", d, np.linalg.inv(cov), d)
+    return m2 > k_sigma**2
+
+
+def cause(visible_fraction: float, median_unoccluded: float | None,
+          median_size: float | None) -> str:
+    """The likely reason a target was detected on few of its visible frames."""
+    if median_unoccluded is None:
+        return "out of view"
+    if visible_fraction == 0.0:
+        return "occluded"
+    if median_size is not None and median_size < SMALL_PX:
+        return f"too small: {median_size:.0f} px"
+    return "colour model mismatch"
+
+
+def visibility_scores(pa, i: int, target: str, vis, p_true: np.ndarray, warmup_s: float
+                      ) -> dict:
+    """The scores above for target ``i`` of the perception arrays ``pa`` (``p_true``: its true
+    positions at the frames)."""
+    visible_eye, hidden_eye, in_view, unocc, size = eye_visibility(vis, pa.t, pa.cameras,
+                                                                   target)
+    visible = visible_eye.all(axis=1)
+    ok = pa.ok[:, i]
+    after = (pa.t - pa.t[0] >= warmup_s - 1e-9) if len(pa.t) else np.zeros(0, bool)
+    scored = visible & after
+    seen = pa.seen[:, i] & after[:, None]
+    false = seen & hidden_eye
+    for eye in (0, 1):
+        frames = np.flatnonzero(seen[:, eye] & ~hidden_eye[:, eye])
+        if len(frames):
+            uv = np.array([pa.camera(f, eye).project_base(p_true[f]) for f in frames.tolist()])
+            false[frames, eye] = off_target(pa.centre[frames, i, eye], pa.cov[frames, i, eye],
+                                            uv)
+    in_view = in_view.all(axis=1)
+    med_unocc = finite_or_none(np.median(unocc[in_view].min(axis=1))) if in_view.any() \
+        else None
+    med_size = finite_or_none(np.median(size[in_view].min(axis=1))) if in_view.any() \
+        else None
+    rate = float(ok[scored].mean()) if scored.any() else None
+    visible_fraction = float(visible.mean()) if len(visible) else 0.0
+    poor = rate is None or rate < POOR_RATE
+    return {
+        "visible_fraction": visible_fraction,
+        "visible_frames": int(visible.sum()),
+        "detection_rate": rate,
+        "false_detection_rate": float(false.sum() / seen.sum()) if seen.any() else 0.0,
+        "false_detections": int(false.any(axis=1).sum()),
+        "median_size_px": med_size,
+        "median_unoccluded": med_unocc,
+        "verdict": "poor" if poor else "ok",
+        "cause": cause(visible_fraction, med_unocc, med_size) if poor else None,
+    }

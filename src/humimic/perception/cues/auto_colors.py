@@ -1,0 +1,176 @@
+"""Colour models learned for the scenario's own person at start-up, cached on disk.
+
+``perception.color_model: auto`` (the default) learns the skin model from the run's own world
+before the loop starts: the person is put in :data:`FRAMES` poses spread over its motion, the
+eye cameras perception uses render only the avatar's geoms of the colour class (``skin``: the
+hands and the head, drawn without the face's texture: its eyes and brows are not skin) with the
+scenario's pixel noise, and the segmentation labels pick the pixels
+(:func:`~humimic.perception.cues.learn_colors.frame_pixels`, as ``learn_colors`` does). A
+Gaussian mixture (Ude eqs. 6-7) is fitted and tabulated
+(:class:`~humimic.perception.cues.color_models.ColorLUT`). Since the renders come from the run's
+own scene, the model sees the scenario's colours, face, lights, cameras and noise.
+
+Model and table are stored with :mod:`humimic.cache` under a hash of everything they depend on
+(:func:`inputs`: the class's materials and textures, the lights, the cameras, the geoms' shapes,
+the poses rendered, the learner's settings), so a second run with the same person and cameras
+loads them (measured by ``benchmarks/bench_colors.py``). The noise of the renders is drawn from
+a generator seeded by that hash: the same inputs give the same model on every run. Colour-model
+files (an explicit ``color_model``) get their tables cached the same way.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import mujoco
+import numpy as np
+
+from humimic import cache
+from humimic.perception.cues.color_models import (
+    ColorLUT,
+    ColorModel,
+    fit_color_model,
+    load_color_model,
+)
+from humimic.perception.cues.learn_colors import frame_pixels, material_geoms, plain_materials
+
+VERSION = 5
+FRAMES = 8
+"""Poses of the person rendered (spread evenly over the run)."""
+COMPONENTS = 3
+MAX_PIXELS = 10000
+"""Pixels the mixture is fitted to (a random subset beyond this)."""
+TOL = 1e-5
+"""EM stops when the mean log-likelihood gains less (0.2 s instead of 1.5 s at 1e-7, the same
+mixture to 0.3 % in mean log-likelihood)."""
+MIN_PIXELS = 200
+"""Fewer labelled pixels than this: the colour class is not in view of the cameras."""
+
+
+class NotInView(ValueError):
+    """The colour class is not (enough) in view of the cameras to learn it."""
+
+
+@dataclass(frozen=True)
+class CachedLUT:
+    lut: ColorLUT
+    cached: bool
+    """Loaded from the cache (False: learned or tabulated now, and stored)."""
+    seconds: float
+    digest: str
+
+
+def sample_ticks(n_ticks: int, n_frames: int = FRAMES) -> np.ndarray:
+    """``n_frames`` physics ticks spread evenly over ``n_ticks`` (first and last included)."""
+    return np.unique(np.linspace(0, max(n_ticks - 1, 0), n_frames).round().astype(int))
+
+
+def inputs(world, cameras: list[str], color_class: str, space: str, bits: int,
+           ticks: np.ndarray) -> tuple:
+    """Everything a learned model depends on, for :func:`humimic.cache.key`."""
+    m, d = world.scene.model, world.scene.data
+    geoms = material_geoms(m, color_class)
+    mats = np.unique(m.geom_matid[geoms])
+    textures = [m.tex_data[m.tex_adr[t]:m.tex_adr[t] + m.tex_width[t] * m.tex_height[t]
+                           * m.tex_nchannel[t]].tobytes()
+                for t in np.unique(m.mat_texid[mats]) if t >= 0]
+    lights = [getattr(m, f"light_{k}").tobytes() for k in
+              ("active", "type", "ambient", "diffuse", "specular", "pos", "dir", "intensity",
+               "attenuation", "castshadow")]
+    head = m.vis.headlight
+    cam_ids = [world.scene.camera(c) for c in cameras]
+    specs = [s for s in world.eye_rig.specs if s.name in cameras]
+    return (VERSION, mujoco.__version__, color_class, space, bits, FRAMES, COMPONENTS,
+            MAX_PIXELS, TOL, repr(specs), m.cam_fovy[cam_ids].tobytes(),
+            *(getattr(m, f"mat_{k}")[mats].tobytes() for k in
+              ("rgba", "specular", "shininess", "emission", "reflectance", "texid")),
+            *textures, *lights, head.ambient.tobytes(), head.diffuse.tobytes(),
+            head.specular.tobytes(), int(head.active),
+            *(getattr(m, f"geom_{k}")[geoms].tobytes() for k in ("type", "size", "pos", "quat")),
+            m.body_pos.tobytes(), m.body_quat.tobytes(), d.qpos.tobytes(),
+            world.gt.qpos[ticks].tobytes())
+
+
+def digest_of(world, cameras: list[str], color_class: str = "skin", space: str = "rgb",
+              bits: int = 6) -> str:
+    """The cache key of the model :func:`learned_lut` would learn."""
+    ticks = sample_ticks(world.n_ticks)
+    return cache.key(*inputs(world, cameras, color_class, space, bits, ticks))
+
+
+def bin_variance(bits: int) -> float:
+    """Variance of a colour channel (in [0, 1]) uniform over one LUT bin of ``bits`` bits."""
+    return (2.0 ** (8 - bits) / 255.0) ** 2 / 12.0
+
+
+def learn_model(world, cameras: list[str], color_class: str, space: str,
+                rng: np.random.Generator, ticks: np.ndarray, bits: int = 6) -> ColorModel:
+    """A colour model of ``color_class`` learned from the world's own renders.
+
+    Each component's covariance is at least one LUT bin wide (:func:`bin_variance` added to
+    its diagonal): the LUT evaluates the density at bin centres, and a noiseless render gives
+    components so narrow that they would fall between two centres and vanish from the table.
+    """
+    geoms = material_geoms(world.scene.model, color_class)
+    noise = max((s.noise_std for s in world.eye_rig.specs if s.name in cameras), default=0.0)
+    pos, _ = frame_pixels(world, cameras, ticks, geoms, noise, rng,
+                          plain=plain_materials(world.scene.model, color_class))
+    pixels = np.concatenate(pos) if pos else np.zeros((0, 3), np.uint8)
+    if len(pixels) < MIN_PIXELS:
+        raise NotInView(f"only {len(pixels)} pixels of {color_class!r} in view of "
+                        f"{', '.join(cameras)} in {len(ticks)} poses of the person")
+    if len(pixels) > MAX_PIXELS:
+        pixels = pixels[rng.choice(len(pixels), MAX_PIXELS, replace=False)]
+    return fit_color_model(pixels, space, COMPONENTS, rng, name=color_class, tol=TOL,
+                           max_iter=100, reg_covar=bin_variance(bits))
+
+
+def _store(model: ColorModel, lut: ColorLUT) -> dict[str, np.ndarray]:
+    return {"space": np.array(model.space), "name": np.array(model.name),
+            "weights": model.weights, "means": model.means, "covs": model.covs,
+            "table": lut.table}
+
+
+def _restore(stored: dict[str, np.ndarray] | None, bits: int) -> ColorLUT | None:
+    if stored is None:
+        return None
+    try:
+        model = ColorModel(str(stored["space"]), stored["weights"], stored["means"],
+                           stored["covs"], str(stored["name"]))
+        return ColorLUT(model, bits, stored["table"])
+    except (KeyError, ValueError):  # an entry of another layout: learn again
+        return None
+
+
+def learned_lut(world, cameras: list[str], color_class: str = "skin", space: str = "rgb",
+                bits: int = 6) -> CachedLUT:
+    """The colour LUT of ``color_class`` for this world: from the cache, or learned from the
+    world's renders of ``cameras`` and stored. Raises :class:`NotInView`."""
+    t0 = time.perf_counter()
+    ticks = sample_ticks(world.n_ticks)
+    digest = digest_of(world, cameras, color_class, space, bits)
+    kind = f"colors-{color_class}"
+    lut = _restore(cache.load(kind, digest), bits)
+    cached = lut is not None
+    if lut is None:
+        rng = np.random.default_rng(int(digest[:15], 16))
+        model = learn_model(world, cameras, color_class, space, rng, ticks, bits)
+        lut = ColorLUT(model, bits)
+        cache.save(kind, digest, _store(model, lut))
+    return CachedLUT(lut, cached, time.perf_counter() - t0, digest)
+
+
+def file_lut(path: Path, bits: int = 6) -> CachedLUT:
+    """The LUT of a colour-model file (its table cached under the file's content). Raises
+    ``ValueError`` for a malformed file, ``FileNotFoundError`` for a missing one."""
+    t0 = time.perf_counter()
+    model = load_color_model(path)
+    digest = cache.key(VERSION, "file", Path(path), bits)
+    lut = _restore(cache.load("colors-file", digest), bits)
+    cached = lut is not None
+    if lut is None:
+        lut = ColorLUT(model, bits)
+        cache.save("colors-file", digest, _store(model, lut))
+    return CachedLUT(lut, cached, time.perf_counter() - t0, digest)

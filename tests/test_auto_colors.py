@@ -1,0 +1,105 @@
+"""Colour models learned for the scenario's own person (``perception.color_model: auto``)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from humimic.paths import SCENARIOS_DIR
+from humimic.perception.blobs.config import DEFAULT_COLOR_MODEL
+from humimic.perception.cues.auto_colors import digest_of, file_lut, learned_lut, sample_ticks
+from humimic.perception.cues.color_models import ColorLUT, load_color_model
+from humimic.perception.cues.learn_colors import frame_pixels, material_geoms
+from humimic.rngs import Rngs
+from humimic.scenario import load_scenario
+from humimic.world.world import World
+
+DARK = "human.skin=[0.45,0.30,0.22]"
+
+
+@pytest.fixture
+def cache_dir(tmp_path, monkeypatch):
+    monkeypatch.setenv("HUMIMIC_CACHE_DIR", str(tmp_path))
+    return tmp_path
+
+
+def _world(*overrides: str) -> World:
+    scenario = load_scenario(SCENARIOS_DIR / "static.yaml", list(overrides), duration=0.2)
+    return World(scenario, Rngs(scenario.seed))
+
+
+def _skin_and_rest(world, noise: float = 2.0) -> tuple[np.ndarray, np.ndarray]:
+    """Skin pixels and other pixels of the full scene (an independent labelling)."""
+    geoms = material_geoms(world.scene.model, "skin")
+    pos, neg = frame_pixels(world, world.eye_cameras, np.array([0]), geoms, noise,
+                            np.random.default_rng(3), negatives_per_frame=20000)
+    return np.concatenate(pos), np.concatenate(neg)
+
+
+def test_skin_class_includes_the_face():
+    world = _world()
+    try:
+        m = world.scene.model
+        names = {m.geom(g).name for g in material_geoms(m, "skin")}
+    finally:
+        world.close()
+    assert names == {"human/head", "human/r_hand", "human/l_hand"}
+
+
+def test_dark_skin_learned_and_cached(cache_dir):
+    world = _world(DARK)
+    try:
+        cams = world.eye_cameras
+        first = learned_lut(world, cams)
+        second = learned_lut(world, cams)
+        skin, rest = _skin_and_rest(world)
+    finally:
+        world.close()
+    assert not first.cached and second.cached and first.digest == second.digest
+    assert len(list(cache_dir.glob("colors-skin-*.npz"))) == 1
+    np.testing.assert_array_equal(first.lut.table, second.lut.table)
+    # the learned model finds this person's skin and little else (measured 0.998 / 0.001)
+    assert (second.lut.lookup(skin) > 1.0).mean() >= 0.97
+    assert (second.lut.lookup(rest) > 1.0).mean() <= 0.01
+    # the shipped model, learned for the default skin, misses most of it (measured 0.22)
+    shipped = ColorLUT(load_color_model(DEFAULT_COLOR_MODEL))
+    assert (shipped.lookup(skin) > 1.0).mean() <= 0.45
+
+
+def test_noiseless_renders_give_a_usable_table(cache_dir):
+    """Without pixel noise the skin has few distinct colours: the mixture must still cover
+    them at the table's bin centres (measured 1.0; without the bin-wide floor on the
+    covariances mimic_tracked_wave detected nothing)."""
+    world = _world("cameras.noise_std=0.0")
+    try:
+        lut = learned_lut(world, world.eye_cameras).lut
+        skin, rest = _skin_and_rest(world, noise=0.0)
+    finally:
+        world.close()
+    assert (lut.lookup(skin) > 1.0).mean() >= 0.97
+    assert (lut.lookup(rest) > 1.0).mean() <= 0.01
+
+
+def test_cache_key_follows_the_person(cache_dir):
+    a, b = _world(), _world("human.skin=[0.72,0.52,0.40]")
+    try:
+        da, db = digest_of(a, a.eye_cameras), digest_of(b, b.eye_cameras)
+        assert learned_lut(a, a.eye_cameras).digest == da
+        # lights changed in the compiled model change the key too
+        a.scene.model.light_diffuse[:] *= 0.5
+        dl = digest_of(a, a.eye_cameras)
+    finally:
+        a.close()
+        b.close()
+    assert len({da, db, dl}) == 3
+
+
+def test_file_lut_cached_by_content(cache_dir, tmp_path):
+    first, second = file_lut(DEFAULT_COLOR_MODEL), file_lut(DEFAULT_COLOR_MODEL)
+    assert not first.cached and second.cached
+    np.testing.assert_array_equal(first.lut.table, ColorLUT(first.lut.model).table)
+
+
+def test_sample_ticks_cover_the_run():
+    np.testing.assert_array_equal(sample_ticks(841, 5), [0, 210, 420, 630, 840])
+    np.testing.assert_array_equal(sample_ticks(1, 8), [0])
