@@ -170,16 +170,16 @@ class GazeConfig(Section):
 class MimicConfig(Section):
     """Imitation: human targets drive robot sites through the relative-motion mapping."""
 
-    map: dict[str, str] | None = None
-    """Human target -> robot site, e.g. ``{right_hand: R_palm}``; default per mode:
-    relative ``{right_hand: R_palm}``, mirrored ``{right_hand: L_palm}``, follow
-    ``{head: R_palm}``."""
     mode: Mode = "relative"
     """relative: the robot site's displacement equals the human part's (robot base frame, the
     paper); mirrored: as a mirror image across the space between them (depth reversed);
     follow: a robot hand follows the person's head (Fig. 4); joints: the arm angles a tracker
     publishes on ``poses`` drive DB's arm joints (Menezes sec. 7.2,
     :mod:`humimic.control.joints`; ``map`` is not used)."""
+    map: dict[str, str] | None = None
+    """Human target -> robot site, e.g. ``{right_hand: R_palm}``; default per mode:
+    relative ``{right_hand: R_palm}``, mirrored ``{right_hand: L_palm}``, follow
+    ``{head: R_palm}``, joints ``{}``."""
     tracker: str | None = None
     """``joints`` mode: the name (under ``trackers:``) of the tracker whose angles drive the
     robot; default the first that publishes arm angles."""
@@ -209,9 +209,11 @@ class MimicConfig(Section):
 
     @field_validator("map")
     @classmethod
-    def _check_map(cls, value: dict[str, str] | None) -> dict[str, str] | None:
+    def _check_map(cls, value: dict[str, str] | None, info) -> dict[str, str] | None:
         if value is None:
             return None
+        if not value and info.data.get("mode") != "joints":  # joints mode maps no site
+            raise ValueError("map is empty: give at least one {human_target: robot_site}")
         seen: dict[str, str] = {}
         for target, site in value.items():
             check_human_target(target)
@@ -243,8 +245,6 @@ class MimicConfig(Section):
     def _fill_map(self) -> MimicConfig:
         if self.map is None:
             object.__setattr__(self, "map", dict(DEFAULT_MAPS[self.mode]))
-        elif not self.map and self.mode != "joints":  # joints mode maps no site (its default)
-            raise ValueError("map is empty: give at least one {human_target: robot_site}")
         if self.relative_to is not None and self.relative_to in self.map:
             raise ValueError(f"relative_to {self.relative_to!r} is also mapped: its motion "
                              "relative to itself is zero")
