@@ -25,7 +25,8 @@ import rerun as rr
 from humimic.messages import TRACK_STATES, Tracks2D
 from humimic.metrics.tracks2d import ImageTruth, project_truth, scores
 from humimic.perception.blobs.config import DEFAULT_COLOR_MODEL
-from humimic.perception.cues.color_models import ColorLUT, load_color_model
+from humimic.perception.cues.auto_colors import NotInView, file_lut, learned_lut
+from humimic.perception.cues.color_models import ColorLUT
 from humimic.pipeline.stage import Stage
 from humimic.scenario.errors import ScenarioError
 from humimic.sensors.camera_model import invert_transform
@@ -40,17 +41,24 @@ def where(scenario) -> str:
     return f"scenario {scenario.name!r}"
 
 
-def skin_model_lut(scenario, key: str, bits: int = 6) -> ColorLUT:
-    """The skin colour model perception uses (``perception.color_model``, default
-    ``models/colors/skin.json``) as a :class:`ColorLUT`; ``key`` names the tracker in errors."""
+def skin_model_lut(scenario, world, cameras, key: str, bits: int = 6) -> ColorLUT:
+    """The skin colour model as a :class:`ColorLUT`: the file ``perception.color_model`` names,
+    or (``auto``, the default, and without a ``perception`` section) the model learned for
+    this scenario's person as ``cameras`` see them (:func:`~humimic.perception.cues.
+    auto_colors.learned_lut`, cached on disk). ``key`` names the tracker in errors."""
     cfg = getattr(scenario, "perception", None)
-    path = Path(cfg.color_model if cfg is not None and cfg.color_model else DEFAULT_COLOR_MODEL)
+    source = cfg.color_model if cfg is not None else "auto"
     try:
-        return ColorLUT(load_color_model(path), bits)
+        if source == "auto":
+            return learned_lut(world, list(cameras), "skin", "rgb", bits).lut
+        return file_lut(Path(source), bits).lut
+    except NotInView as err:
+        raise ScenarioError(where(scenario), key, f"cannot learn the skin colours: {err}",
+                            "auto", f"perception.color_model: {DEFAULT_COLOR_MODEL}") from None
     except (OSError, ValueError) as err:
         raise ScenarioError(where(scenario), key, f"skin colour model unreadable: {err}",
-                            str(path), "a file written by humimic.perception.cues.learn_colors"
-                            ) from None
+                            str(source), "a file written by humimic.perception.cues."
+                            "learn_colors") from None
 
 
 def check_cameras(scenario, world, name: str, cameras, needed: int) -> tuple[str, ...]:

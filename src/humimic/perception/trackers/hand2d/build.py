@@ -16,7 +16,7 @@ def hand2d_stage(name, cfg, scenario, world, rngs, rlog) -> Hand2DStage:
         raise ScenarioError(f"scenario {scenario.name!r}", f"trackers.{name}.beta",
                             "alpha + beta must not exceed 1", cfg.beta,
                             f"at most {1.0 - cfg.alpha:g}")
-    lut = skin_model_lut(scenario, f"trackers.{name}")
+    lut = skin_model_lut(scenario, world, [camera], f"trackers.{name}")
     width, height = scenario.cameras.resolution
     tracker = Hand2DTracker(cfg, lut, width, height, rngs[f"trackers.{name}"],
                             FaceDetector())
