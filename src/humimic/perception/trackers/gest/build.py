@@ -8,5 +8,5 @@ from humimic.perception.trackers.gest.stage import GestStage
 
 def gest_stage(name, cfg, scenario, world, rngs, rlog) -> GestStage:
     cams = check_cameras(scenario, world, name, cfg.cameras, 2)
-    lut = skin_model_lut(scenario, f"trackers.{name}")
+    lut = skin_model_lut(scenario, world, list(cams), f"trackers.{name}")
     return GestStage(name, cfg, cams, lut, world, rngs[f"trackers.{name}"], rlog)

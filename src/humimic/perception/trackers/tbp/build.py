@@ -19,7 +19,7 @@ def tbp_stage(name, cfg, scenario, world, rngs, rlog) -> TbpStage:
                                 "torso: head needs perception measuring the head "
                                 "(perception.targets with head)", cfg.torso,
                                 "truth (an oracle), or add perception: {targets: [head]}")
-    lut = skin_model_lut(scenario, f"trackers.{name}")
+    lut = skin_model_lut(scenario, world, [camera], f"trackers.{name}")
     try:
         limits = cfg.limits.to_limits()
     except ValueError as err:
