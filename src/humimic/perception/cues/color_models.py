@@ -137,7 +137,8 @@ def fit_gmm(
     X: np.ndarray, n_components: int, rng: np.random.Generator, circular: bool = False,
     max_iter: int = 300, tol: float = 1e-7, reg_covar: float = 1e-6,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[float]]:
-    """Maximum-likelihood GMM by EM; k-means++ seeding from ``rng``.
+    """Maximum-likelihood GMM by EM; k-means++ seeding from ``rng``. Hand-written because hue
+    is circular: ``cv2.ml.EM`` and ``cv2.kmeans`` have no wrapped dimension.
 
     Returns ``(weights, means, covs, mean_loglik_per_iteration)``. ``reg_covar`` is added to each
     covariance diagonal (about 8-bit quantisation noise, (1/255)^2/12 ~ 1.3e-6). With ``circular``
