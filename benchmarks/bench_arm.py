@@ -23,7 +23,10 @@ import tempfile
 import time
 from pathlib import Path
 
-import humimic  # noqa: F401
+from humimic import select_gl_backend
+
+select_gl_backend()  # before anything imports mujoco
+
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))

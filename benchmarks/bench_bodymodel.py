@@ -28,7 +28,10 @@ import platform
 import time
 from pathlib import Path
 
-import humimic  # noqa: F401  (headless GL before mujoco)
+from humimic import select_gl_backend
+
+select_gl_backend()  # before anything imports mujoco
+
 import numpy as np
 from rich.console import Console
 from rich.table import Table

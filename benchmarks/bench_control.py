@@ -24,7 +24,10 @@ import numpy as np
 from rich.console import Console
 from rich.table import Table
 
-import humimic  # noqa: F401  (headless GL before mujoco)
+from humimic import select_gl_backend
+
+select_gl_backend()  # before anything imports mujoco
+
 from humimic.control.config import IKConfig
 from humimic.control.ik import MimicIK, build_robot_model
 

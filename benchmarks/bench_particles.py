@@ -20,7 +20,10 @@ import argparse
 import sys
 from pathlib import Path
 
-import humimic  # noqa: F401
+from humimic import select_gl_backend
+
+select_gl_backend()  # before anything imports mujoco
+
 import numpy as np
 from rich.console import Console
 

@@ -39,7 +39,10 @@ from _synth_vision import (  # noqa: E402
     stereo_head,
 )
 
-import humimic  # noqa: E402,F401  (OpenGL backend before mujoco)
+from humimic import select_gl_backend
+
+select_gl_backend()  # before anything imports mujoco
+
 from humimic.estimation.random_jerk import RandomJerkFilter  # noqa: E402
 from humimic.perception.blobs.em_blobs import BlobTracker  # noqa: E402
 from humimic.perception.blobs.stereo import StereoRig  # noqa: E402

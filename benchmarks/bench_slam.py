@@ -25,7 +25,10 @@ import os
 import platform
 from pathlib import Path
 
-import humimic  # noqa: F401
+from humimic import select_gl_backend
+
+select_gl_backend()  # before anything imports mujoco
+
 import numpy as np
 from rich.console import Console
 from rich.table import Table

@@ -12,7 +12,10 @@ import sys
 import tempfile
 from pathlib import Path
 
-import humimic  # noqa: F401
+from humimic import select_gl_backend
+
+select_gl_backend()  # before anything imports mujoco
+
 import numpy as np
 
 from _harness import Row, per_call, row, skipped

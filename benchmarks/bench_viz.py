@@ -17,7 +17,10 @@ import tempfile
 import time
 from pathlib import Path
 
-import humimic  # noqa: F401
+from humimic import select_gl_backend
+
+select_gl_backend()  # before anything imports mujoco
+
 import mujoco
 import numpy as np
 

@@ -15,7 +15,10 @@ import statistics
 import tempfile
 from pathlib import Path
 
-import humimic  # noqa: F401  (headless GL before mujoco)
+from humimic import select_gl_backend
+
+select_gl_backend()  # before anything imports mujoco
+
 import mujoco
 import numpy as np
 from rich.console import Console

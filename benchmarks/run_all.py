@@ -24,7 +24,10 @@ import sys
 import time
 from pathlib import Path
 
-import humimic  # noqa: F401
+from humimic import select_gl_backend
+
+select_gl_backend()  # before anything imports mujoco
+
 import numpy as np
 from rich.console import Console
 from rich.table import Table

@@ -6,7 +6,10 @@ from pathlib import Path
 
 import pytest
 
-import humimic  # noqa: F401
+from humimic import select_gl_backend
+
+select_gl_backend()  # before anything imports mujoco
+
 
 ROOT = Path(__file__).resolve().parent.parent
 DATA = ROOT / "data"

@@ -19,7 +19,7 @@ from humimic.bodymodel.raster import label_mask, part_masks
 from humimic.motion import quat
 from humimic.motion.avatar import QPOS_SLICES, AvatarGeometry, zero_qpos
 from humimic.sensors.camera_model import invert_transform
-from humimic.sensors.cameras import CULLED_GROUP, CameraRig, CameraSpec
+from humimic.sensors.cameras import CameraRig, CameraSpec
 from humimic.world.names import HUMAN_PREFIX
 from humimic.world.scene import SceneOptions, build_scene
 
@@ -68,13 +68,7 @@ def views(request):
             cam = rig.camera_model("L_wide")
             alone = {}
             for part, geoms in ids.items():
-                others = np.setdiff1d(np.arange(m.ngeom), geoms)
-                saved = m.geom_group[others].copy()
-                m.geom_group[others] = CULLED_GROUP
-                try:
-                    seg = rig.render_ideal("L_wide", segmentation=True)[..., 0]
-                finally:
-                    m.geom_group[others] = saved
+                seg = rig.render_ideal("L_wide", segmentation=True, only=geoms)[..., 0]
                 alone[part] = np.isin(seg, geoms)
             full = rig.render_ideal("L_wide", segmentation=True)[..., 0]
             state = truth.state_from_qpos(qpos[None], T_base_avatar, g)

@@ -79,7 +79,7 @@ def test_color_sum_counts_probability_mass(skin_lut):
 
 def test_detects_appearing_blob_and_reacquires_after_one_second(skin_lut):
     visible = lambda t: (0.8 <= t < 2.0) or t >= 3.0  # noqa: E731
-    log, det = _run(skin_lut, DetectionParams(phase_one_s=0.5), visible, 4.0)
+    log, det = _run(skin_lut, DetectionParams(period=0.5), visible, 4.0)
     states = {round(t, 3): s for t, s, *_ in log}
     assert all(s == TargetState.SEARCHING for t, s in states.items() if t < 0.8 - 1e-9)
     t_first = min(t for t, s, *_ in log if s == TargetState.TRACKING)
@@ -97,8 +97,8 @@ def test_detects_appearing_blob_and_reacquires_after_one_second(skin_lut):
 def test_uniform_proposals_and_phase_one_restart(skin_lut):
     """The paper's uniform random search (slower) and the restart-from-phase-one option."""
     visible = lambda t: t < 2.0 or t >= 3.0  # noqa: E731
-    params = DetectionParams(phase_one_s=0.5, proposal="uniform", restart_phase=1,
-                             n_hypotheses=32)
+    params = DetectionParams(period=0.5, proposal="uniform", restart_phase=1,
+                             hypotheses=32)
     log, _ = _run(skin_lut, params, visible, 5.0)
     lost = [t for t, s, *_ in log if s == TargetState.LOST]
     assert lost and min(lost) >= 2.0
@@ -108,11 +108,11 @@ def test_uniform_proposals_and_phase_one_restart(skin_lut):
 
 
 def test_black_frames_and_absent_target_never_crash_or_nan(skin_lut):
-    log, det = _run(skin_lut, DetectionParams(phase_one_s=0.2), lambda t: False, 1.0,
+    log, det = _run(skin_lut, DetectionParams(period=0.2), lambda t: False, 1.0,
                     frame=np.zeros((240, 320, 3), np.uint8))
     assert all(s == TargetState.SEARCHING for _, s, *_ in log)
     assert log[-1][4] == 0.0  # the learnt threshold over black frames
-    log, _ = _run(skin_lut, DetectionParams(phase_one_s=0.2), lambda t: False, 1.0)
+    log, _ = _run(skin_lut, DetectionParams(period=0.2), lambda t: False, 1.0)
     assert all(s == TargetState.SEARCHING for _, s, *_ in log)  # clutter never passes
 
 
@@ -135,7 +135,7 @@ def test_three_skin_targets_found_on_distinct_blobs(skin_lut):
 
     for seed in (1, 2):
         det = DetectingTracker(["head", "left_hand", "right_hand"], [skin_lut] * 3,
-                               np.random.default_rng(seed), DetectionParams(phase_one_s=0.3))
+                               np.random.default_rng(seed), DetectionParams(period=0.3))
         for i in range(90):
             t = i * DT
             img = bg.copy()
@@ -189,7 +189,7 @@ def test_group_searches_once_per_frame_and_backs_off(skin_lut, monkeypatch):
     real = D.color_sums
     monkeypatch.setattr(D, "color_sums", lambda *a, **k: calls.append(1) or real(*a, **k))
     bg = clutter_background(np.random.default_rng(10))
-    params = DetectionParams(phase_one_s=0.2, backoff_s=0.5, backoff_every=3)
+    params = DetectionParams(period=0.2, backoff_s=0.5, backoff_every=3)
     det = DetectingTracker(["a", "b", "c"], [skin_lut] * 3, np.random.default_rng(0), params)
     counts = []
     for i in range(90):

@@ -93,7 +93,7 @@ def test_strided_samples_estimate_full_resolution_moments():
 
 
 def test_roi_samples_bounded_and_without_duplicates():
-    p = EMParams(n_side=20)
+    p = EMParams(roi_side=20)
     centres, covs = _blobs()
     for H, W in ((240, 320), (1080, 1920)):
         img = np.zeros((H, W, 3), np.uint8)

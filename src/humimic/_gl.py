@@ -1,4 +1,5 @@
-"""Pick MuJoCo's OpenGL backend before ``mujoco`` is imported.
+"""Pick MuJoCo's OpenGL backend before ``mujoco`` is imported (entry points call
+:func:`select_gl_backend`; importing humimic changes no environment variable).
 
 MuJoCo reads ``MUJOCO_GL`` once, at import. With no display (a server, CI) the default GLFW
 backend cannot open a window, so we choose EGL (Mesa renders on the CPU) and fall back to
@@ -17,16 +18,28 @@ import ctypes.util
 import os
 
 
+def headless_backend() -> str | None:
+    """The first headless OpenGL backend whose library is installed: ``egl``, else ``osmesa``."""
+    for backend, lib in (("egl", "EGL"), ("osmesa", "OSMesa")):
+        if ctypes.util.find_library(lib):
+            return backend
+    return None
+
+
 def select_gl_backend() -> str | None:
-    """Set ``MUJOCO_GL`` (and ``PYOPENGL_PLATFORM``) if unset and headless; return the choice."""
+    """Set ``MUJOCO_GL`` (and ``PYOPENGL_PLATFORM``, ``LP_NUM_THREADS``) if the user has not and
+    there is no display; return the backend in use (``None``: MuJoCo's default).
+
+    Entry points call this before anything imports ``mujoco``, which reads ``MUJOCO_GL`` once,
+    at import; importing :mod:`humimic` does not.
+    """
     if os.environ.get("MUJOCO_GL"):
         return os.environ["MUJOCO_GL"]
     if os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"):
         return None  # a display exists: MuJoCo's default (GLFW) works
-    for backend, lib in (("egl", "EGL"), ("osmesa", "OSMesa")):
-        if ctypes.util.find_library(lib):
-            os.environ["MUJOCO_GL"] = backend
-            os.environ.setdefault("PYOPENGL_PLATFORM", backend)
-            os.environ.setdefault("LP_NUM_THREADS", "0")
-            return backend
-    return None
+    backend = headless_backend()
+    if backend is not None:
+        os.environ["MUJOCO_GL"] = backend
+        os.environ.setdefault("PYOPENGL_PLATFORM", backend)
+        os.environ.setdefault("LP_NUM_THREADS", "0")
+    return backend

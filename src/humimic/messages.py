@@ -14,6 +14,8 @@ topic          value                                       producer -> consumer
 ``commands``   :class:`RobotCommand`                       commands -> robot follower
 ``measurements`` :class:`Measurements` (robot base frame)  perception -> filter
 ``estimates``  :class:`Estimates` (robot base frame)       filter / oracle -> control
+``poses``      :class:`PoseEstimate` (robot base frame)    gest, tbp, kpf -> mimic, metrics
+``tracks2d``   :class:`Tracks2D` (image px, one camera)    2-D trackers -> report
 =============  ==========================================  ===========================
 
 Perception's positions are in the robot base frame (m), velocities m/s, accelerations m/s^2.
@@ -151,3 +153,66 @@ class RobotCommand:
     """When it went out (s)."""
     seq: int
     """Its number among the commands of its kind (0, 1, ...)."""
+
+
+@dataclass(frozen=True)
+class PoseEstimate:
+    """One articulated (or free-part) pose estimate of one tracker (topic ``poses``), stamped
+    with the photon time of the frame it came from."""
+
+    tracker: str
+    """The tracker's name (its key under ``trackers:``)."""
+    kind: str
+    """The tracker's kind (``gest``, ``tbp``, ``kpf``)."""
+    state: np.ndarray
+    """(d,) the MMSE estimate of the tracker's own state vector (``state_names``)."""
+    state_names: tuple[str, ...]
+    cov: np.ndarray | None = None
+    """(d, d) weighted particle covariance of the state (the particles' spread)."""
+    joints: dict[str, np.ndarray] = field(default_factory=dict)
+    """Joint / part positions in the robot base frame (m) by name (``r_elbow``, ``r_wrist``,
+    ``r_hand`` ... as :data:`humimic.bodymodel.kinematics.JOINT_SEGMENT`)."""
+    angles: dict[str, float] = field(default_factory=dict)
+    """Arm joint angles (rad, DB's convention ``R_SFE`` ... ``L_EB``) where estimated."""
+    status: str = "tracking"
+    """``tracking``, ``searching`` (no target yet or re-initialising) or ``lost``."""
+
+
+TRACK_STATES = ("init", "tracking", "lost")
+"""States of an image-space track: ``init`` (waiting for the detectors to agree), ``tracking``
+and ``lost`` (the target's likelihood collapsed; the tracker re-initialises)."""
+
+
+@dataclass(frozen=True)
+class Track2D:
+    """One image-space track (Menezes sec. 5): the MMSE state of a particle filter."""
+
+    target: str
+    """What is tracked: a human target (``right_hand``) or a person (``person``)."""
+    u: float
+    """Centre, pixels (OpenCV: u right, v down)."""
+    v: float
+    scale: float
+    """The target's size in pixels (hand width, head width)."""
+    angle: float = 0.0
+    """In-plane rotation (rad, clockwise on the image)."""
+    state: str = "tracking"
+    """One of :data:`TRACK_STATES`."""
+    identity: str = ""
+    """Who the tracker believes it follows (a face identity), '' when unknown."""
+    confidence: float = float("nan")
+    """Recognition probability of ``identity`` (NaN without recognition)."""
+    spread_px: float = float("nan")
+    """Particle spread: sqrt of the trace of the (u, v) covariance (px)."""
+
+
+@dataclass(frozen=True)
+class Tracks2D:
+    """A tracker's tracks in one camera frame (topic ``tracks2d``)."""
+
+    tracker: str
+    """The tracker's name (its key under the scenario's ``trackers:``)."""
+    camera: str
+    tracks: tuple[Track2D, ...]
+    state: str = ""
+    """The tracker's own state (e.g. the ICU state machine's, Menezes Fig. 15)."""

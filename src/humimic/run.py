@@ -7,13 +7,18 @@ prints one line and exits with status 2.
 
 from __future__ import annotations
 
+from humimic import select_gl_backend
+
+select_gl_backend()  # an entry point: MuJoCo's OpenGL backend, before anything imports mujoco
+
 import argparse
 import json
 import sys
 import time
 from pathlib import Path
 
-import humimic  # noqa: F401  (selects the OpenGL backend before mujoco is imported)
+import numpy as np
+
 from humimic.errors import InputError
 from humimic.metrics.summary import print_summary, verdict_warning
 from humimic.pipeline.build import build_stages
@@ -38,8 +43,7 @@ def run_one(scenario: Scenario, out_dir: str | Path | None = None, rerun: str | 
             progress: bool = True) -> dict:
     """Run ``scenario`` (its own seed) and return the metrics written to ``metrics.json``."""
     wall0 = time.perf_counter()
-    out = Path(out_dir) if out_dir is not None else default_out_dir(scenario)
-    out.mkdir(parents=True, exist_ok=True)
+    out = prepare_out_dir(Path(out_dir) if out_dir is not None else default_out_dir(scenario))
     (out / "scenario.resolved.yaml").write_text(dump_scenario(scenario))
     mode = rerun or scenario.output.rerun
     rngs = Rngs(scenario.seed)
@@ -77,6 +81,37 @@ def run_one(scenario: Scenario, out_dir: str | Path | None = None, rerun: str | 
     if scenario.output.plots:
         _plots(out, world, stages, result.ticks_done)
     return metrics
+
+
+def check_out_dir(out: Path) -> None:
+    """:class:`InputError` if ``out`` exists and is not a directory."""
+    if out.exists() and not out.is_dir():
+        raise InputError(f"--out {out}: exists and is not a directory")
+
+
+def prepare_out_dir(out: Path) -> Path:
+    """Create the output directory; :class:`InputError` if ``out`` is a file or cannot be made."""
+    check_out_dir(out)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise InputError(f"--out {out}: cannot create the directory ({exc.strerror})") from None
+    return out
+
+
+def dry_run(scenario: Scenario) -> None:
+    """Everything a run does before its first step -- build the world (scene, motion, ground
+    truth, sensors) and the stages -- then close them: no simulation, no output files."""
+    rngs = Rngs(scenario.seed)
+    world = World(scenario, rngs)
+    stages: list = []
+    try:
+        with RerunLog(world.scene, "off", None, recording_id=scenario.name) as rlog:
+            stages = build_stages(scenario, world, rngs, rlog)
+    finally:
+        for stage in stages:
+            stage.close()
+        world.close()
 
 
 def _metrics(scenario, world, stages, result, setup_s, wall0) -> dict:
@@ -125,8 +160,9 @@ def _log_ground_truth(rlog, world, ticks: int) -> None:
     # Every ground-truth site as points in the 3-D view (names on hover), at the pose rate.
     gt = world.gt
     step = max(1, round(world.scenario.timing.physics_rate / world.scenario.output.pose_rate))
-    for k in range(0, ticks, step):
-        rlog.log_points(float(gt.t[k]), f"{TRUTH}/sites", gt.pos[k], colors=[40, 200, 40],
+    ks = np.arange(0, ticks, step)
+    for k, pos in zip(ks, gt.pos[ks], strict=True):
+        rlog.log_points(float(gt.t[k]), f"{TRUTH}/sites", pos, colors=[40, 200, 40],
                         radii=0.01, labels=list(gt.targets))
 
 
@@ -140,8 +176,16 @@ def _plots(out: Path, world, stages, ticks: int) -> None:
     write_report(out)
 
 
+class OneLineParser(argparse.ArgumentParser):
+    """An argument parser whose errors are one line on stderr (exit 2), like a bad scenario's;
+    ``--help`` shows the usage."""
+
+    def error(self, message: str):
+        self.exit(2, f"error: {self.prog}: {message} (see --help)\n")
+
+
 def _parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="python -m humimic.run", description=__doc__.split("\n")[0])
+    p = OneLineParser(prog="python -m humimic.run", description=__doc__.split("\n")[0])
     p.add_argument("scenario", type=Path, help="scenario YAML file")
     p.add_argument("--out", type=Path, default=None, help="output directory")
     p.add_argument("--seed", type=int, default=None, help="override the scenario's seed")
@@ -151,6 +195,9 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--set", dest="overrides", action="append", default=[],
                    metavar="KEY=VALUE", help="override a scenario key, e.g. human.distance=1.5")
     p.add_argument("--quiet", action="store_true", help="no progress bar or summary table")
+    p.add_argument("--dry-run", action="store_true",
+                   help="load and check the scenario, build the world and the stages, then stop "
+                        "(no simulation, nothing written)")
     return p
 
 
@@ -159,9 +206,14 @@ def main(argv: list[str] | None = None) -> int:
     try:
         scenario = load_scenario(args.scenario, args.overrides, seed=args.seed,
                                  duration=args.duration)
+        if args.dry_run:
+            if args.out is not None:
+                check_out_dir(args.out)
+            dry_run(scenario)
+            return 0
         metrics = run_one(scenario, args.out, args.rerun, progress=not args.quiet)
     except InputError as err:
-        print(f"error: {err}", file=sys.stderr)
+        print(f"error: {' '.join(str(err).split())}", file=sys.stderr)  # always one line
         return 2
     if not args.quiet:
         print_summary(metrics, args.out or default_out_dir(scenario))

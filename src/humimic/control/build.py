@@ -17,6 +17,17 @@ def check_mimic(scenario) -> None:
         if abs(ratio - round(ratio)) > 1e-9 or ratio < 1:
             raise ScenarioError(where, "mimic.servo_rate", "must divide timing.servo_rate",
                                 cfg.servo_rate, f"{base:g} Hz divided by a whole number")
+    if cfg.mode == "joints":
+        angles = [n for n, t in getattr(scenario, "trackers", {}).items()
+                  if t.kind in ("tbp", "kpf")]
+        if cfg.tracker is None and not angles:
+            raise ScenarioError(where, "mimic.mode", "joints mode needs a tracker that "
+                                "estimates arm angles (trackers: with kind tbp or kpf)",
+                                "joints", "relative, or add a tbp tracker")
+        if cfg.tracker is not None and cfg.tracker not in getattr(scenario, "trackers", {}):
+            raise ScenarioError(where, "mimic.tracker", "no such tracker in trackers:",
+                                cfg.tracker, ", ".join(angles) or None)
+        return
     if cfg.perception == "tracked" and getattr(scenario, "filter", None) is None:
         raise ScenarioError(where, "mimic.perception",
                             "tracked perception needs the scenario's perception and filter "
@@ -28,6 +39,10 @@ def mimic_stages(scenario, world, rngs, rlog) -> list[Stage]:
     """The oracle (when ``mimic.perception`` is ``oracle``) and the mimic stage."""
     check_mimic(scenario)
     cfg = scenario.mimic
+    if cfg.mode == "joints":                    # imitation from tracked joint angles
+        from humimic.control.joints import JointMimicStage
+
+        return [JointMimicStage(world, cfg)]
     stages: list[Stage] = []
     if cfg.perception == "oracle":
         stages.append(OracleStage(world, cfg.targets, cfg.oracle, rngs["oracle"]))

@@ -36,13 +36,14 @@ UNDRIVABLE_SITES = {
     "head": "is kept still (the eyes' base) so the stereo calibration stays valid",
     "base": "is the fixed pelvis",
 }
-Mode = Literal["relative", "mirrored", "follow"]
+Mode = Literal["relative", "mirrored", "follow", "joints"]
 
 #: The map used when a scenario gives none, per mode.
 DEFAULT_MAPS: dict[str, dict[str, str]] = {
     "relative": {"right_hand": "R_palm"},
     "mirrored": {"right_hand": "L_palm"},
     "follow": {"head": "R_palm"},
+    "joints": {},
 }
 
 
@@ -176,7 +177,12 @@ class MimicConfig(Section):
     mode: Mode = "relative"
     """relative: the robot site's displacement equals the human part's (robot base frame, the
     paper); mirrored: as a mirror image across the space between them (depth reversed);
-    follow: a robot hand follows the person's head (Fig. 4)."""
+    follow: a robot hand follows the person's head (Fig. 4); joints: the arm angles a tracker
+    publishes on ``poses`` drive DB's arm joints (Menezes sec. 7.2,
+    :mod:`humimic.control.joints`; ``map`` is not used)."""
+    tracker: str | None = None
+    """``joints`` mode: the name (under ``trackers:``) of the tracker whose angles drive the
+    robot; default the first that publishes arm angles."""
     scale: float | Literal["auto"] = "auto"
     """Displacement scale at the start: a number, or ``auto``: the driven robot arm's length
     over the person's (shoulder to palm; shoulder to elbow for an elbow site). ``fit`` may

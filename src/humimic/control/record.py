@@ -1,6 +1,10 @@
 """What the mimic stage records for scoring: preallocated arrays, one row per servo tick, plus
 every estimate and measurement as it arrived. Positions in the robot base frame (m).
 
+The per-tick arrays are :class:`~humimic.spill.SpillArray` (written and sliced like numpy
+arrays, rows before the current block on disk) and arrivals are packed ``array('d')`` columns,
+so a long run's record does not grow the process's memory.
+
 Time conventions: row ``k`` is written at servo time ``t[k]``. The physical robot (``p_robot``,
 ``q_robot``, head and camera poses) is the state *at* ``t[k]``; the command, the IK solution
 and the estimate used are for the *end* of the servo period, ``t[k] + dt``.
@@ -8,24 +12,33 @@ and the estimate used are for the *end* of the servo period, ``t[k] + dt``.
 
 from __future__ import annotations
 
+from array import array
 from collections import defaultdict
 from dataclasses import dataclass, field
 
 import numpy as np
+
+from humimic.spill import SpillArray
 
 
 @dataclass
 class Arrivals:
     """Values of one target as they arrived on a topic."""
 
-    t: list[float] = field(default_factory=list)
+    t: array = field(default_factory=lambda: array("d"))
     """Photon times (s)."""
-    t_ready: list[float] = field(default_factory=list)
-    p: list[np.ndarray] = field(default_factory=list)
+    t_ready: array = field(default_factory=lambda: array("d"))
+    p: array = field(default_factory=lambda: array("d"))
+    """Positions, three values per arrival."""
+
+    def add(self, t: float, t_ready: float, p: np.ndarray) -> None:
+        self.t.append(t)
+        self.t_ready.append(t_ready)
+        self.p.extend(np.asarray(p, float).ravel()[:3])
 
     def arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        p = np.array(self.p) if self.p else np.zeros((0, 3))
-        return np.array(self.t), np.array(self.t_ready), p
+        return (np.array(self.t), np.array(self.t_ready),
+                np.array(self.p, float).reshape(-1, 3))
 
 
 class MimicRecord:
@@ -34,38 +47,39 @@ class MimicRecord:
     def __init__(self, n: int, sites: list[str], nq: int, dt: float):
         s = len(sites)
         self.sites, self.dt, self.n = list(sites), dt, 0
-        self.t = np.zeros(n)
-        self.p_cmd = np.full((n, s, 3), np.nan)
+        self.t = SpillArray(n)
+        self.p_cmd = SpillArray(n, (s, 3), fill=np.nan)
         """Commanded site position (after mapping and clamping)."""
-        self.p_cmd_raw = np.full((n, s, 3), np.nan)
+        self.p_cmd_raw = SpillArray(n, (s, 3), fill=np.nan)
         """The command before clamping into the reachable shell."""
-        self.p_cmd_alt = np.full((n, s, 3), np.nan)
+        self.p_cmd_alt = SpillArray(n, (s, 3), fill=np.nan)
         """Command the *other* interpolation mode would have given (comparison only)."""
-        self.p_ik = np.zeros((n, s, 3))
+        self.p_ik = SpillArray(n, (s, 3))
         """Site position at the IK's solution."""
-        self.p_robot = np.zeros((n, s, 3))
+        self.p_robot = SpillArray(n, (s, 3))
         """Physical site position."""
-        self.p_est = np.full((n, s, 3), np.nan)
+        self.p_est = SpillArray(n, (s, 3), fill=np.nan)
         """Mapped position of the estimate in use (its photon time in ``t_est``)."""
-        self.t_est = np.full((n, s), np.nan)
-        self.scale = np.full((n, s), np.nan)
+        self.t_est = SpillArray(n, (s,), fill=np.nan)
+        self.scale = SpillArray(n, (s,), fill=np.nan)
         """Mapping scale in use (``mimic.fit`` may shrink it)."""
-        self.clamped = np.zeros((n, s), bool)
-        self.lost = np.zeros((n, s), bool)
-        self.active = np.zeros((n, s), bool)
-        self.q_ik = np.zeros((n, nq))
-        self.qdot_ik = np.zeros((n, nq))
-        self.ctrl = np.zeros((n, nq))
-        self.q_robot = np.zeros((n, nq))
-        self.p_head = np.zeros((n, 3))
-        self.R_head = np.zeros((n, 9))
-        self.cam_pos = np.zeros((n, 2, 3))
-        self.cam_mat = np.zeros((n, 2, 9))
-        self.ik_s = np.zeros(n)
+        self.clamped = SpillArray(n, (s,), bool, False)
+        self.lost = SpillArray(n, (s,), bool, False)
+        self.active = SpillArray(n, (s,), bool, False)
+        self.q_ik = SpillArray(n, (nq,))
+        self.qdot_ik = SpillArray(n, (nq,))
+        self.ctrl = SpillArray(n, (nq,))
+        self.q_robot = SpillArray(n, (nq,))
+        self.p_head = SpillArray(n, (3,))
+        self.R_head = SpillArray(n, (9,))
+        self.cam_pos = SpillArray(n, (2, 3))
+        self.cam_mat = SpillArray(n, (2, 9))
+        self.ik_s = SpillArray(n)
         self.estimates: dict[str, Arrivals] = defaultdict(Arrivals)
         self.measurements: dict[str, Arrivals] = defaultdict(Arrivals)
-        self.first_use: dict[str, list[tuple[float, float, float]]] = defaultdict(list)
-        """Per target: (photon time, t_ready, servo time of first use) of each estimate."""
+        self.first_use: dict[str, array] = defaultdict(lambda: array("d"))
+        """Per target: (photon time, t_ready, servo time of first use) of each estimate, three
+        values per estimate."""
 
     def trimmed(self, name: str) -> np.ndarray:
         """The first ``n`` rows of an array attribute."""

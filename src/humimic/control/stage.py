@@ -166,18 +166,12 @@ class MimicStage(Stage):
         for target, est in msg.value.targets.items():
             if target in self.wanted:
                 self.latest[target] = (msg.t, est, msg.t_ready)
-                a = self.rec.estimates[target]
-                a.t.append(msg.t)
-                a.t_ready.append(msg.t_ready)
-                a.p.append(np.asarray(est.p_base, float).copy())
+                self.rec.estimates[target].add(msg.t, msg.t_ready, est.p_base)
 
     def _on_measurements(self, topic: str, msg) -> None:
         for target, meas in msg.value.targets.items():
             if target in self.wanted:
-                a = self.rec.measurements[target]
-                a.t.append(msg.t)
-                a.t_ready.append(msg.t_ready)
-                a.p.append(np.asarray(meas.p_base, float).copy())
+                self.rec.measurements[target].add(msg.t, msg.t_ready, meas.p_base)
 
     # ---- servo ----------------------------------------------------------------------------
     def servo(self, t: float, bus) -> None:
@@ -238,7 +232,7 @@ class MimicStage(Stage):
             rec.active[k, i] = True
             if ch.last_used is not est:
                 ch.last_used = est
-                rec.first_use[ch.target].append((t_est, t_ready, t))
+                rec.first_use[ch.target].extend((t_est, t_ready, t))
         rec.p_cmd[k] = p_base
         return p_base
 

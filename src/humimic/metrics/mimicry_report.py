@@ -257,7 +257,8 @@ def latency_metrics(stage) -> dict:
     def ms(chunks, fn=np.mean) -> float | None:
         return _mm(float(fn(np.concatenate(chunks)))) if chunks else None
 
-    use = [np.array(v) for v in rec.first_use.values() if v]  # (photon, ready, servo tick)
+    # (photon, ready, servo tick) rows
+    use = [np.array(v).reshape(-1, 3) for v in rec.first_use.values() if v]
     perception, estimate = ms(ages(rec.measurements)), ms(ages(rec.estimates))
     return {"perception": perception,
             "filter": None if perception is None or estimate is None else estimate - perception,

@@ -13,6 +13,7 @@ are angles in degrees composed left to right in the order listed, ``R = R_c1 R_c
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -23,6 +24,9 @@ from humimic.motion import quat
 
 CHANNELS = {f"{a}{k}" for a in "XYZ" for k in ("position", "rotation")}
 _ROT = {"X": quat.rot_x, "Y": quat.rot_y, "Z": quat.rot_z}
+#: Frame times accepted (s): motion capture runs at 2 kHz at most (playback samples the clip at
+#: its frame rate, so a header claiming 1 ns frames would mean billions of samples).
+FRAME_TIME_S = (5e-4, 10.0)
 
 
 class BVHError(InputError, ValueError):
@@ -110,11 +114,9 @@ class _Tokens:
         out = []
         for _ in range(count):
             tok, line = self.next(f"{count} numbers after {after}")
-            try:
-                out.append(float(tok))
-            except ValueError:
-                raise self.error(line, f"expected {count} numbers after {after}, got {tok!r}"
-                                 ) from None
+            if not _is_finite_number(tok):
+                raise self.error(line, f"expected {count} numbers after {after}, got {tok!r}")
+            out.append(float(tok))
         return np.array(out)
 
 
@@ -130,7 +132,7 @@ def _parse_joint(tk: _Tokens, joints: list[BVHJoint], parent: int, ncol: int) ->
     if tok != "CHANNELS":
         raise tk.error(line, f"expected 'CHANNELS' after the OFFSET of {name}, got {tok!r}")
     count_tok, line = tk.next("the channel count")
-    if not count_tok.isdigit():
+    if not count_tok.isdecimal():
         raise tk.error(line, f"expected the number of channels after CHANNELS, got {count_tok!r}")
     channels = []
     for _ in range(int(count_tok)):
@@ -185,18 +187,17 @@ def parse_bvh(text: str, source: str = "<string>") -> BVH:
         return text_i[len(label):].strip(), i
 
     value, i = header(line, "Frames:")
-    if not value.isdigit():
+    if not value.isdecimal():
         raise tk.error(i + 1, f"expected a non-negative integer after 'Frames:', got {value!r}")
     n_frames = int(value)
     value, i = header(i + 1, "Frame Time:")
-    try:
-        frame_time = float(value)
-    except ValueError:
-        frame_time = -1.0
-    if not frame_time > 0:
-        raise tk.error(i + 1, f"expected a positive number after 'Frame Time:', got {value!r}")
+    frame_time = float(value) if _is_finite_number(value) else -1.0
+    if not FRAME_TIME_S[0] <= frame_time <= FRAME_TIME_S[1]:
+        raise tk.error(i + 1, f"expected a frame time of {FRAME_TIME_S[0]:g} to "
+                              f"{FRAME_TIME_S[1]:g} s after 'Frame Time:', got {value!r}")
 
-    motion = np.empty((n_frames, ncol))
+    # never more rows than the file has lines (a header may claim any number of frames)
+    motion = np.empty((min(n_frames, len(lines) - i - 1), ncol))
     f = 0
     for k in range(i + 1, len(lines)):
         words = lines[k].split()
@@ -207,11 +208,10 @@ def parse_bvh(text: str, source: str = "<string>") -> BVH:
         if len(words) != ncol:
             raise tk.error(k + 1, f"expected {ncol} channel values in frame {f}, "
                                   f"got {len(words)}")
-        try:
-            motion[f] = np.array(words, dtype=float)
-        except ValueError:
-            bad = next(w for w in words if not _is_float(w))
-            raise tk.error(k + 1, f"expected a number in frame {f}, got {bad!r}") from None
+        bad = next((w for w in words if not _is_finite_number(w)), None)
+        if bad is not None:
+            raise tk.error(k + 1, f"expected a number in frame {f}, got {bad!r}")
+        motion[f] = np.array(words, dtype=float)
         f += 1
     if f != n_frames:
         raise tk.error(len(lines), f"expected {n_frames} frame lines ('Frames: {n_frames}'), "
@@ -219,21 +219,27 @@ def parse_bvh(text: str, source: str = "<string>") -> BVH:
     return BVH(tuple(joints), frame_time, motion, source)
 
 
-def _is_float(w: str) -> bool:
+def _is_finite_number(w: str) -> bool:
+    """Whether ``w`` reads as a finite float (not ``nan``, ``inf`` or text)."""
     try:
-        float(w)
+        return math.isfinite(float(w))
     except ValueError:
         return False
-    return True
 
 
 def load_bvh(path: str | Path) -> BVH:
     """Read and parse a BVH file (errors name the file as given)."""
     path = Path(path)
     try:
-        text = path.read_text()
+        raw = path.read_bytes()
     except OSError as e:
         raise BVHError(f"{path}: cannot read BVH file ({e.strerror})") from None
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as e:
+        line = raw.count(b"\n", 0, e.start) + 1
+        raise BVHError(f"{path.name} line {line}: not a text (UTF-8) BVH file: byte "
+                       f"{raw[e.start]:#04x} at offset {e.start}") from None
     return parse_bvh(text, path.name)
 
 

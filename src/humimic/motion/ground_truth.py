@@ -197,40 +197,56 @@ def _chunk(m: mujoco.MjModel, d: mujoco.MjData, sq: slice, sv: slice, sites: np.
     return p, v, a, cvel[..., :3], xmat.reshape(n, len(oriented), 3, 3), sensordata
 
 
+class GroundTruthSampler:
+    """Evaluates the ground truth at any times, reusing one private ``MjData`` (``scene.data``
+    is not touched): the one implementation behind :func:`compute_ground_truth` and
+    :class:`humimic.motion.lazy_ground_truth.LazyGroundTruth`."""
+
+    def __init__(self, scene: Scene, trajectory: JointTrajectory):
+        self.scene, self.trajectory = scene, trajectory
+        m = self.model = scene.model
+        self.data = mujoco.MjData(m)
+        self.data.qpos[:] = scene.data.qpos  # the robot's pose does not affect the avatar's
+        self.targets = tuple(HUMAN_TARGETS)
+        self.sites = np.array([scene.human_site(k) for k in self.targets])
+        self.oriented = self.sites[[self.targets.index(k) for k in ORIENTED_TARGETS]]
+        self.sensor_cols = {}
+        for name in SENSORS:
+            sid = m.sensor(HUMAN_PREFIX + name).id
+            adr = int(m.sensor_adr[sid])
+            self.sensor_cols[name] = slice(adr, adr + int(m.sensor_dim[sid]))
+
+    def sample(self, times: np.ndarray) -> GroundTruth:
+        """Ground truth at ``times`` (s), evaluated in chunks of :data:`CHUNK` samples."""
+        times = np.asarray(times, float)
+        m, n, traj, scene = self.model, len(times), self.trajectory, self.scene
+        qpos, qvel = np.empty((n, traj.nq)), np.empty((n, traj.nv))
+        pos, vel, acc, angvel = (np.empty((n, len(self.sites), 3)) for _ in range(4))
+        R_imu = np.empty((n, len(self.oriented), 3, 3))
+        sensordata = np.empty((n, m.nsensordata))
+        for start in range(0, n, CHUNK):
+            c = slice(start, min(n, start + CHUNK))
+            qpos[c], qvel[c], qacc = traj.evaluate(times[c])
+            pos[c], vel[c], acc[c], angvel[c], R_imu[c], sensordata[c] = _chunk(
+                m, self.data, scene.human_qpos, scene.human_dof, self.sites, self.oriented,
+                qpos[c], qvel[c], qacc)
+        sensors = {name: sensordata[:, cols].copy() for name, cols in self.sensor_cols.items()}
+        return GroundTruth(t=times.copy(), qpos=qpos, qvel=qvel, targets=self.targets, pos=pos,
+                           vel=vel, acc=acc, angvel=angvel, R_imu=R_imu, sensors=sensors,
+                           T_world_base=scene.T_world_base.copy(),
+                           T_world_W=scene.T_world_W.copy(), gravity=m.opt.gravity.copy())
+
+
 def compute_ground_truth(scene: Scene, trajectory: JointTrajectory | HumanMotion,
                          times: np.ndarray) -> GroundTruth:
     """Ground truth at ``times`` (s) for the avatar following ``trajectory`` in ``scene``.
 
     A :class:`HumanMotion` is first fitted with :meth:`JointTrajectory.from_motion` over
-    ``[0, max(times)]``. Uses its own ``MjData``; ``scene.data`` is not touched.
+    ``[0, max(times)]``. Uses its own ``MjData``; ``scene.data`` is not touched. Holds every
+    sample in memory (~1.9 kB each): a whole run uses
+    :class:`~humimic.motion.lazy_ground_truth.LazyGroundTruth` instead.
     """
     times = np.asarray(times, float)
     if not isinstance(trajectory, JointTrajectory):
         trajectory = JointTrajectory.from_motion(trajectory, float(np.max(times)))
-    m = scene.model
-    d = mujoco.MjData(m)
-    d.qpos[:] = scene.data.qpos  # the robot's pose does not affect the avatar's readings
-    n = len(times)
-    targets = tuple(HUMAN_TARGETS)
-    sites = np.array([scene.human_site(k) for k in targets])
-    oriented = sites[[targets.index(k) for k in ORIENTED_TARGETS]]
-
-    qpos, qvel = np.empty((n, trajectory.nq)), np.empty((n, trajectory.nv))
-    pos, vel, acc, angvel = (np.empty((n, len(sites), 3)) for _ in range(4))
-    R_imu = np.empty((n, len(oriented), 3, 3))
-    sensordata = np.empty((n, m.nsensordata))
-    for start in range(0, n, CHUNK):
-        c = slice(start, min(n, start + CHUNK))
-        qpos[c], qvel[c], qacc = trajectory.evaluate(times[c])
-        pos[c], vel[c], acc[c], angvel[c], R_imu[c], sensordata[c] = _chunk(
-            m, d, scene.human_qpos, scene.human_dof, sites, oriented, qpos[c], qvel[c], qacc)
-
-    sensors = {}
-    for name in SENSORS:
-        sid = m.sensor(HUMAN_PREFIX + name).id
-        adr, dim = m.sensor_adr[sid], m.sensor_dim[sid]
-        sensors[name] = sensordata[:, adr:adr + dim].copy()
-    return GroundTruth(t=times.copy(), qpos=qpos, qvel=qvel, targets=targets, pos=pos,
-                       vel=vel, acc=acc, angvel=angvel, R_imu=R_imu, sensors=sensors,
-                       T_world_base=scene.T_world_base.copy(), T_world_W=scene.T_world_W.copy(),
-                       gravity=m.opt.gravity.copy())
+    return GroundTruthSampler(scene, trajectory).sample(times)

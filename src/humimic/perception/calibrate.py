@@ -23,6 +23,10 @@ resolution, blob size and speed (measured on the shipped scenarios: 0.15-0.31 px
 
 from __future__ import annotations
 
+from humimic import select_gl_backend
+
+select_gl_backend()  # an entry point: MuJoCo's OpenGL backend, before anything imports mujoco
+
 import argparse
 import sys
 from pathlib import Path

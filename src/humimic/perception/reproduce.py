@@ -1,7 +1,8 @@
 """Reproduce Ude & Atkeson's Table 2, Table 3 and Fig. 1 and print them beside the paper's.
 
 ``python -m humimic.perception.reproduce table2|table3|fig1 [--out DIR] [--seed N]
-[--duration S] [--archive tracking.npz]``
+[--duration S] [--archive tracking.npz]``; ``schmidt-table1`` is Schmidt et al.'s Table 1
+(:mod:`humimic.perception.trackers.kpf.table1`).
 
 Each runs its scenario (``scenarios/ude_table2_static_object.yaml``,
 ``ude_table3_static_hand.yaml``, ``ude_fig1_axes.yaml``; rerun off) into ``--out`` (default
@@ -11,6 +12,10 @@ camera frame (x right, y down, z along the optical axis = depth), as the paper's
 """
 
 from __future__ import annotations
+
+from humimic import select_gl_backend
+
+select_gl_backend()  # an entry point: MuJoCo's OpenGL backend, before anything imports mujoco
 
 import argparse
 import sys
@@ -165,6 +170,11 @@ def run_scenario(which: str, out: Path | None, seed: int | None,
 
 
 def main(argv: list[str] | None = None) -> int:
+    argv = sys.argv[1:] if argv is None else argv
+    if argv[:1] == ["schmidt-table1"]:  # Schmidt et al.'s Table 1 (the kpf tracker's sweep)
+        from humimic.perception.trackers.kpf.table1 import main as schmidt_table1
+
+        return schmidt_table1(argv[1:])
     p = argparse.ArgumentParser(prog="python -m humimic.perception.reproduce",
                                 description=__doc__.split("\n")[0])
     p.add_argument("which", choices=sorted(SCENARIOS))

@@ -18,6 +18,10 @@ def build_stages(scenario, world, rngs, rlog) -> list[Stage]:
         from humimic.perception.blobs.build import perception_stages
 
         stages.extend(perception_stages(scenario, world, rngs, rlog))
+    if getattr(scenario, "trackers", None):  # Menezes' and Schmidt's trackers (poses, tracks2d)
+        from humimic.perception.trackers.build import tracker_stages
+
+        stages.extend(tracker_stages(scenario, world, rngs, rlog))
     if getattr(scenario, "slam", None) is not None:  # the wearable's head pose (Sugiyama)
         from humimic.estimation.ekf.build import slam_stages
 

@@ -2,10 +2,13 @@
 
 from __future__ import annotations
 
+from humimic import select_gl_backend
+
+select_gl_backend()  # an entry point: MuJoCo's OpenGL backend, before anything imports mujoco
+
 import argparse
 import sys
 
-import humimic  # noqa: F401  (headless GL before mujoco)
 from humimic.errors import InputError
 from humimic.report.page import write_report
 

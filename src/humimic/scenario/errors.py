@@ -70,17 +70,25 @@ def _tag_of(model: type[BaseModel]) -> str | None:
     return args[0] if args else None
 
 
+def _tagged(models: list[type[BaseModel]], part: Any) -> type[BaseModel] | None:
+    """The union member whose ``kind`` tag ``part`` is: pydantic puts the tag in a
+    discriminated union's error locations (a one-member union's too)."""
+    if not isinstance(part, str) or (len(models) == 1 and part in models[0].model_fields):
+        return None
+    match = [m for m in models if _tag_of(m) == part]
+    return match[0] if match else None
+
+
 def model_at(root: type[BaseModel], loc: tuple) -> type[BaseModel] | None:
     """The pydantic model that owns the last element of ``loc`` (for listing allowed keys)."""
     current: Any = root
     for part in loc[:-1]:
         models = _models_in(current)
         if models and isinstance(part, str):
-            if len(models) > 1:  # discriminated union: the location names the tag
-                match = [m for m in models if _tag_of(m) == part]
-                if match:
-                    current = match[0]
-                    continue
+            tagged = _tagged(models, part)  # discriminated union: the location names the tag
+            if tagged is not None:
+                current = tagged
+                continue
             model = models[0]
             if part in model.model_fields:
                 current = model.model_fields[part].annotation
@@ -103,8 +111,9 @@ def _dotted(loc: tuple, root: type[BaseModel]) -> str:
     current: Any = root
     for part in loc:
         models = _models_in(current)
-        if len(models) > 1 and isinstance(part, str) and any(_tag_of(m) == part for m in models):
-            current = next(m for m in models if _tag_of(m) == part)
+        tagged = _tagged(models, part)
+        if tagged is not None:
+            current = tagged
             continue
         parts.append(str(part))
         if models and isinstance(part, str) and part in models[0].model_fields:
@@ -130,7 +139,8 @@ def yaml_line(text: str, key_path: list[str]) -> int | None:
                     break
             else:
                 return line
-        elif isinstance(node, yaml.SequenceNode) and part.isdigit() and int(part) < len(node.value):
+        elif (isinstance(node, yaml.SequenceNode) and part.isdecimal()
+              and int(part) < len(node.value)):
             node = node.value[int(part)]
             line = node.start_mark.line + 1
         else:
@@ -138,21 +148,34 @@ def yaml_line(text: str, key_path: list[str]) -> int | None:
     return line
 
 
+def command_line_source(key: str, overridden: dict[str, str] | set[str]) -> str | None:
+    """The command-line option that set ``key``, a key inside it or a section holding it."""
+    options = overridden if isinstance(overridden, dict) else dict.fromkeys(overridden, "--set")
+    for k, option in options.items():
+        if key == k or key.startswith(k + ".") or k.startswith(key + "."):
+            return option
+    return None
+
+
 _BOUNDS = {"greater_than": "> {gt}", "greater_than_equal": ">= {ge}", "less_than": "< {lt}",
            "less_than_equal": "<= {le}"}
 
 
 def from_validation_error(err: ValidationError, root: type[BaseModel], file: str | Path,
-                          text: str = "", overridden: set[str] | None = None) -> ScenarioError:
-    """The first error of ``err`` as a :class:`ScenarioError`."""
+                          text: str = "", overridden: dict[str, str] | set[str] | None = None
+                          ) -> ScenarioError:
+    """The first error of ``err`` as a :class:`ScenarioError`. ``overridden`` maps keys set on
+    the command line to the option that set them (``{"duration": "--duration"}``; a set means
+    ``--set``): an error at, inside or above such a key names the option, not a file line."""
     e = err.errors()[0]
     loc, kind, ctx = tuple(e["loc"]), e["type"], e.get("ctx", {}) or {}
     key = _dotted(loc, root)
     value = e.get("input")
     line = yaml_line(text, key.split(".")) if text else None
     source = file
-    if overridden and any(key == k or key.startswith(k + ".") for k in overridden):
-        source, line = f"{file} (--set)", None
+    option = command_line_source(key, overridden or {})
+    if option:
+        source, line = f"{file} ({option})", None
 
     def suggest(word: str, options: list[str]) -> str | None:
         close = difflib.get_close_matches(str(word), [str(o) for o in options], n=1, cutoff=0.5)

@@ -25,21 +25,32 @@ def parse_override(text: str) -> tuple[str, Any]:
 
 
 def apply_override(data: dict, key: str, value: Any) -> None:
-    """Set ``data[a][b][c] = value`` for ``key = "a.b.c"`` (list indices as numbers)."""
+    """Set ``data[a][b][c] = value`` for ``key = "a.b.c"`` (list indices as numbers).
+
+    A missing or scalar section on the way becomes a mapping (``robot.pose.R_EB=1`` over
+    ``pose: ready``); a path through a list needs an index within it, else a
+    :class:`ScenarioError` naming the ``--set`` key."""
     parts = key.split(".")
+    if not all(parts):
+        raise ScenarioError("--set", key, "empty part in the dotted key", None,
+                            "dotted.key=value, e.g. human.distance=1.5")
     node: Any = data
-    for part in parts[:-1]:
-        if isinstance(node, list) and part.isdigit():
-            node = node[int(part)]
+    for depth, part in enumerate(parts):
+        if isinstance(node, list):
+            if not (part.isdecimal() and int(part) < len(node)):
+                where = ".".join(parts[:depth])
+                raise ScenarioError("--set", key, f"{where} is a list of {len(node)}: no item "
+                                    f"{part!r}", None, f"an index 0..{len(node) - 1}")
+            index: Any = int(part)
+            child = node[index]
         else:
-            if not isinstance(node.get(part), (dict, list)):
-                node[part] = {}
-            node = node[part]
-    last = parts[-1]
-    if isinstance(node, list) and last.isdigit():
-        node[int(last)] = value
-    else:
-        node[last] = value
+            index, child = part, node.get(part)
+        if depth == len(parts) - 1:
+            node[index] = value
+            return
+        if not isinstance(child, (dict, list)):
+            child = node[index] = {}
+        node = child
 
 
 def load_scenario(path: str | Path, overrides: list[str] | None = None,
@@ -58,12 +69,25 @@ def read_yaml_mapping(path: Path, what: str, hint: str) -> tuple[str, dict]:
     with the line number for a syntax error) if it is missing, not YAML or not a mapping."""
     if not path.is_file():
         raise ScenarioError(path, "", f"{what} file not found", str(path), hint)
-    text = path.read_text()
+    try:
+        raw = path.read_bytes()
+    except OSError as exc:
+        raise ScenarioError(path, "", f"cannot read the {what} file ({exc.strerror})") from None
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise ScenarioError(path, "", f"not a text file: byte {raw[exc.start]:#04x} at offset "
+                            f"{exc.start} is not UTF-8", None, hint,
+                            line=raw.count(b"\n", 0, exc.start) + 1) from None
     try:
         data = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
+    except yaml.reader.ReaderError as exc:  # a character YAML does not allow
+        raise ScenarioError(path, "", f"not valid YAML: character #x{exc.character:04x} is not "
+                            "allowed", line=text.count("\n", 0, exc.position) + 1) from None
+    except (yaml.YAMLError, RecursionError) as exc:
         mark = getattr(exc, "problem_mark", None)
-        raise ScenarioError(path, "", f"not valid YAML: {getattr(exc, 'problem', exc)}",
+        problem = " ".join(str(getattr(exc, "problem", exc)).split())
+        raise ScenarioError(path, "", f"not valid YAML: {problem}",
                             line=mark.line + 1 if mark else None) from None
     if not isinstance(data, dict):
         raise ScenarioError(path, "", f"a {what} must be a mapping of keys", data, hint)
@@ -74,15 +98,16 @@ def validate_scenario(data: dict, path: str | Path = "<scenario>", text: str = "
                       overrides: list[str] | None = None, **replace: Any) -> Scenario:
     """Validate a scenario given as a dict (see :func:`load_scenario`)."""
     path = Path(path)
-    overridden: set[str] = set()
+    overridden: dict[str, str] = {}
+    """Keys set on the command line -> the option that set them (for error messages)."""
     for item in overrides or []:
         key, value = parse_override(item)
         apply_override(data, key, value)
-        overridden.add(key)
+        overridden[key] = "--set"
     for key, value in replace.items():
         if value is not None:
             data[key] = value
-            overridden.add(key)
+            overridden[key] = f"--{key}"
     try:
         scenario = Scenario.model_validate(data)
     except ValidationError as err:

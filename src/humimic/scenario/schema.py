@@ -17,6 +17,7 @@ from humimic.estimation.config import FilterConfig
 from humimic.estimation.ekf.arm_config import ArmConfig
 from humimic.estimation.ekf.slam_config import SlamConfig
 from humimic.perception.blobs.config import PerceptionConfig
+from humimic.perception.trackers.config import TrackerConfig
 from humimic.scenario.base import Section
 from humimic.sensors.config import Cameras, Sensors, Timing
 from humimic.viz.config import Output
@@ -31,10 +32,14 @@ class Scenario(Section):
     duration: float = Field(8.0, gt=0.0, le=600.0)
     """Simulated seconds."""
     seed: int = Field(0, ge=0)
-    room: Literal["lab", "sugiyama"] = "lab"
+    room: Literal["lab", "sugiyama", "lab_clutter"] = "lab"
     """The room (``models/``): ``lab``, Ude & Atkeson's, the person ``human.distance`` in front
     of the robot; ``sugiyama``, Sugiyama & Miura's wearable room (Fig. 5), the person starting
-    at the paper's W (0, -2.5) facing the screen, the robot 2 m to their right."""
+    at the paper's W (0, -2.5) facing the screen, the robot 2 m to their right;
+    ``lab_clutter``, the lab with heavy clutter behind the person (Menezes Figs. 11, 13)."""
+    clutter: bool = False
+    """A cluttered background behind the person (a busy poster wall and objects; Menezes
+    Fig. 5): edges everywhere for the shape cues (lab room only)."""
     human: Human = Field(default_factory=Human)
     robot: Robot = Field(default_factory=Robot)
     cameras: Cameras = Field(default_factory=Cameras)
@@ -58,11 +63,17 @@ class Scenario(Section):
     commands: CommandsConfig | None = None
     """Robot commands from the wearer's motion and the robot following them (Sugiyama &
     Miura sec. V-C, :mod:`humimic.control.commands_config`); excludes ``mimic``."""
+    trackers: dict[str, TrackerConfig] = Field(default_factory=dict)
+    """Tracker stages by name, each with a ``kind`` (:mod:`humimic.perception.trackers`);
+    several may run side by side on the same frames; scored as ``trackers.<name>.*``."""
 
     @model_validator(mode="after")
     def _placement_fits_the_room(self) -> Scenario:
-        if self.room != "lab":
-            given = [k for k in ("distance", "lateral") if k in self.human.model_fields_set]
+        if self.room not in ("lab", "lab_clutter"):
+            fields = Human.model_fields  # a resolved file repeats the defaults: not "given"
+            given = [k for k in ("distance", "lateral", "people")
+                     if k in self.human.model_fields_set and getattr(self.human, k)
+                     != fields[k].get_default(call_default_factory=True)]
             if given:
                 raise ValueError(f"human.{given[0]} does not apply in room {self.room!r}: the "
                                  "room places the person (move them with human.motion)")

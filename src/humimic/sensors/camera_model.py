@@ -35,6 +35,32 @@ def fovy_from_hfov(hfov_rad: float, width: int, height: int) -> float:
     return 2.0 * math.atan(math.tan(hfov_rad / 2.0) * height / width)
 
 
+#: Least slope ``d r_d / d r`` of the radial distortion accepted over an image: its inverse
+#: (undistortion) then exists and its slope is at most 4, so it stays well conditioned.
+MIN_DISTORTION_SLOPE = 0.25
+
+
+def max_invertible_radius(k1: float, k2: float, min_slope: float = MIN_DISTORTION_SLOPE
+                          ) -> float:
+    """The largest distorted normalised radius ``r_d = r (1 + k1 r^2 + k2 r^4)`` reached while
+    the distortion's slope ``1 + 3 k1 r^2 + 5 k2 r^4`` stays at least ``min_slope`` (``inf`` if
+    it always does): every distorted point within it has one undistorted preimage."""
+    # slope == min_slope  <=>  5 k2 u^2 + 3 k1 u + (1 - min_slope) = 0 with u = r^2
+    roots = np.roots([5.0 * k2, 3.0 * k1, 1.0 - min_slope])  # leading zeros are trimmed
+    u = [z.real for z in roots if abs(z.imag) <= 1e-12 * abs(z) and z.real > 0]
+    if not u:
+        return math.inf
+    r2 = min(u)
+    return math.sqrt(r2) * (1.0 + k1 * r2 + k2 * r2 * r2)
+
+
+def corner_radius(hfov_rad: float, width: int, height: int) -> float:
+    """Normalised radius of the image corner (pixel centre) of a camera with horizontal field of
+    view ``hfov_rad`` at ``width x height`` (square pixels, principal point at the centre)."""
+    intr = Intrinsics.from_fovy(fovy_from_hfov(hfov_rad, width, height), width, height)
+    return math.hypot(intr.cx / intr.fx, intr.cy / intr.fy)
+
+
 @dataclass(frozen=True)
 class Intrinsics:
     """Pinhole intrinsics plus radial distortion, in pixels (OpenCV conventions)."""

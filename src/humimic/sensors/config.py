@@ -2,11 +2,40 @@
 
 from __future__ import annotations
 
+import math
 from typing import Literal
 
 from pydantic import Field, model_validator
 
 from humimic.scenario.base import Section
+from humimic.sensors.camera_model import corner_radius, max_invertible_radius
+from humimic.world.names import EYE_HFOV_DEG
+
+#: Image sizes a camera may have (width, height in pixels).
+MIN_RESOLUTION, MAX_RESOLUTION = (16, 16), (1920, 1440)
+
+
+def check_resolution(resolution: tuple[int, int]) -> None:
+    """ValueError unless ``resolution`` is within :data:`MIN_RESOLUTION` ..
+    :data:`MAX_RESOLUTION`."""
+    (w, h), (w0, h0), (w1, h1) = resolution, MIN_RESOLUTION, MAX_RESOLUTION
+    if not (w0 <= w <= w1 and h0 <= h <= h1):
+        raise ValueError(f"resolution must be within {w0}x{h0} .. {w1}x{h1}, got {w}x{h}")
+
+
+def check_distortion(distortion: tuple[float, float], hfov_deg: float,
+                     resolution: tuple[int, int]) -> None:
+    """ValueError unless the radial distortion can be undistorted over the whole image (see
+    :func:`~humimic.sensors.camera_model.max_invertible_radius`)."""
+    k1, k2 = distortion
+    r_corner = corner_radius(math.radians(hfov_deg), *resolution)
+    r_max = max_invertible_radius(k1, k2)
+    if r_max < r_corner:
+        w, h = resolution
+        raise ValueError(f"distortion [{k1:g}, {k2:g}] cannot be undistorted over a "
+                         f"{hfov_deg:g} deg {w}x{h} image (it folds over at normalised radius "
+                         f"{max(r_max, 0.0):.2f}, the corner is at {r_corner:.2f}); e.g. "
+                         f"k1 >= -0.05 for the wide eyes, -0.15 for the head camera")
 
 
 class CoveredWindow(Section):
@@ -58,9 +87,8 @@ class Cameras(Section):
 
     @model_validator(mode="after")
     def _check_resolution(self) -> Cameras:
-        w, h = self.resolution
-        if not (16 <= w <= 1920 and 16 <= h <= 1440):
-            raise ValueError(f"resolution must be within 16x16 .. 1920x1440, got {w}x{h}")
+        check_resolution(self.resolution)
+        check_distortion(self.distortion, EYE_HFOV_DEG[self.which], self.resolution)
         return self
 
 
@@ -77,6 +105,12 @@ class HeadCamera(Section):
     distortion: tuple[float, float] = (-0.15, 0.02)
     """Radial distortion k1, k2 (OpenCV convention, :mod:`humimic.sensors.camera_model`)."""
     noise_std: float = Field(0.0, ge=0.0, le=50.0)
+
+    @model_validator(mode="after")
+    def _check_image(self) -> HeadCamera:
+        check_resolution(self.resolution)
+        check_distortion(self.distortion, self.hfov_deg, self.resolution)
+        return self
 
 
 class Inertial(Section):

@@ -9,6 +9,10 @@ runs. Exit status 1 when some runs failed (they are listed in the summary), 0 ot
 
 from __future__ import annotations
 
+from humimic import select_gl_backend
+
+select_gl_backend()  # an entry point: MuJoCo's OpenGL backend, before anything imports mujoco
+
 import argparse
 import sys
 from pathlib import Path

@@ -9,13 +9,16 @@ A run that raises leaves ``error.txt`` (the traceback) and is reported, never pr
 
 from __future__ import annotations
 
+from humimic import select_gl_backend
+
+select_gl_backend()  # also the entry of a sweep's worker processes (before mujoco is imported)
+
 import json
 import time
 import traceback
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import humimic  # noqa: F401  (headless GL before mujoco, also in worker processes)
 from humimic.run import run_one
 from humimic.scenario import Scenario, dump_scenario
 

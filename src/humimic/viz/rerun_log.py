@@ -399,3 +399,9 @@ class RerunLog:
         self.logged.add(entity)
         self._rec.set_time(TIMELINE, duration=t)
         self._rec.log(entity, rr.TextLog(text, level=level))
+
+    def log(self, t: float, entity: str, *archetypes) -> None:
+        """Any rerun archetypes at ``t`` (overlays the methods above do not cover)."""
+        if self._rec is not None:
+            self._rec.set_time(TIMELINE, duration=t)
+            self._rec.log(entity, *archetypes)

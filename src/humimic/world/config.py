@@ -11,6 +11,8 @@ from humimic.motion.config import MotionConfig, StaticMotion
 from humimic.scenario.base import RGB, Section, Vec3
 from humimic.world.faces import DEFAULT_IDENTITY, IDENTITY_NAMES
 from humimic.world.names import HUMAN_TARGETS, ROBOT_JOINTS
+from humimic.world.people import Person
+from humimic.world.robot_limits import robot_joint_ranges
 
 
 class Human(Section):
@@ -29,20 +31,29 @@ class Human(Section):
     """The person's face: a name of :data:`humimic.world.faces.IDENTITY_NAMES` or its index."""
     motion: MotionConfig = Field(default_factory=lambda: StaticMotion(kind="static"))
 
+    people: list[Person] = Field(default_factory=list, max_length=3)
+    """Other people in the room (lab only), each with a face, clothes and a walk
+    (:mod:`humimic.world.people`)."""
+
     @field_validator("identity", mode="before")
     @classmethod
     def _known_identity(cls, v):
-        if isinstance(v, int) and not isinstance(v, bool):
-            if 0 <= v < len(IDENTITY_NAMES):
-                return IDENTITY_NAMES[v]
-            raise PydanticCustomError("less_than", "identity index out of range",
-                                      {"lt": len(IDENTITY_NAMES)})
-        if v not in IDENTITY_NAMES:
-            expected = ", ".join(f"'{n}'" for n in IDENTITY_NAMES)
-            raise PydanticCustomError("literal_error", "unknown identity",
-                                      {"expected": f"{expected} or an index 0.."
-                                                   f"{len(IDENTITY_NAMES) - 1}"})
-        return v
+        return check_identity(v)
+
+
+def check_identity(v):
+    """An identity name (or index into :data:`IDENTITY_NAMES`) checked for a validator."""
+    if isinstance(v, int) and not isinstance(v, bool):
+        if 0 <= v < len(IDENTITY_NAMES):
+            return IDENTITY_NAMES[v]
+        raise PydanticCustomError("less_than", "identity index out of range",
+                                  {"lt": len(IDENTITY_NAMES)})
+    if v not in IDENTITY_NAMES:
+        expected = ", ".join(f"'{n}'" for n in IDENTITY_NAMES)
+        raise PydanticCustomError("literal_error", "unknown identity",
+                                  {"expected": f"{expected} or an index 0.."
+                                               f"{len(IDENTITY_NAMES) - 1}"})
+    return v
 
 
 class Robot(Section):
@@ -55,9 +66,23 @@ class Robot(Section):
     velocity actuators, driven by :class:`humimic.control.base.BaseController`, at most
     0.4 m/s as Sugiyama & Miura's robot)."""
     pose: Literal["ready", "zero"] | dict[Literal[ROBOT_JOINTS], float] = "ready"
-    """Initial joint configuration: a named pose or ``{joint: angle_rad}`` over the ready pose."""
+    """Initial joint configuration: a named pose or ``{joint: angle_rad}`` over the ready pose
+    (each angle within the joint's limits in ``models/db_humanoid.xml``)."""
     look_at: Literal[tuple(HUMAN_TARGETS)] | Vec3 | None = None
     """Point the eyes (then the head) at a human target or a world point (m) at t = 0."""
+
+
+    @field_validator("pose")
+    @classmethod
+    def _pose_within_limits(cls, pose):
+        if isinstance(pose, dict):
+            ranges = robot_joint_ranges()
+            for joint, angle in pose.items():
+                lo, hi = ranges[joint]
+                if not lo <= angle <= hi:
+                    raise ValueError(f"{joint} = {angle:g} rad is outside the joint's limits "
+                                     f"[{lo:g}, {hi:g}]")
+        return pose
 
 
 class Lighting(Section):

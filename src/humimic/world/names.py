@@ -32,6 +32,9 @@ EYE_CAMERAS = {
     ("right", "foveal"): "R_foveal",
 }
 
+#: Horizontal field of view (deg) of each kind of eye camera.
+EYE_HFOV_DEG = {"wide": 100.0, "foveal": 24.0}
+
 #: The avatar's joints in qpos order and their types.
 HUMAN_JOINTS: tuple[tuple[str, str], ...] = (
     ("root_x", "slide"), ("root_y", "slide"), ("root_z", "slide"), ("root_rot", "ball"),

@@ -12,6 +12,10 @@ the room's detail lives in a few large textured boxes.
 
 from __future__ import annotations
 
+from humimic import select_gl_backend
+
+select_gl_backend()  # an entry point: MuJoCo's OpenGL backend, before anything imports mujoco
+
 import argparse
 
 import cv2

@@ -1,9 +1,11 @@
-"""The world at run time: the scene, the person's precomputed motion and ground truth, the
-robot's initial posture, and the sensors that sample it.
+"""The world at run time: the scene, the person's motion and ground truth, the robot's initial
+posture, and the sensors that sample it.
 
-Everything about the person is known before the loop starts (the avatar is kinematic), so the
-ground truth of every site at every physics step and the true inertial readings are computed
-once, vectorised; the loop only writes the avatar's state into the scene each step.
+Everything about the person is known before the loop starts (the avatar is kinematic): the
+ground truth of every site at every physics step is evaluated on demand, a chunk of ticks at a
+time (:class:`~humimic.motion.lazy_ground_truth.LazyGroundTruth`, so memory does not grow with
+the run's duration), and the true inertial readings at their sample ticks once; the loop writes
+the avatar's state into the scene each step.
 """
 
 from __future__ import annotations
@@ -14,7 +16,8 @@ import mujoco
 import numpy as np
 
 from humimic.control.base import BaseController
-from humimic.motion import MotionContext, compute_ground_truth, make_motion
+from humimic.motion import MotionContext, make_motion
+from humimic.motion.lazy_ground_truth import LazyGroundTruth
 from humimic.sensors.camera_model import CameraImage
 from humimic.sensors.cameras import CameraRig, CameraSpec
 from humimic.sensors.clock import Clock, Schedule
@@ -23,6 +26,7 @@ from humimic.sensors.inertial import simulate_inertial, simulate_orientation
 from humimic.sensors.visibility import Visibility
 from humimic.world.gaze import pan_tilt_to
 from humimic.world.names import EYE_CAMERAS, ROBOT_JOINTS, ROBOT_PREFIX
+from humimic.world.people import PeopleMotion
 from humimic.world.scene import SceneOptions, build_scene
 
 
@@ -38,6 +42,7 @@ def scene_options(scenario) -> SceneOptions:
         ambient=light.ambient, diffuse=light.diffuse, shadows=light.shadows, msaa=light.msaa,
         show_wiimote=h.wiimote, room=scenario.room, base=scenario.robot.base,
         identity=h.identity, show_headcam=scenario.sensors.head_camera.enabled,
+        clutter=getattr(scenario, "clutter", False), people=tuple(h.people),
     )
 
 
@@ -57,11 +62,16 @@ class World:
         m.opt.timestep = 1.0 / scenario.timing.physics_rate
         self.clock = Clock(scenario.timing.physics_rate)
         self.n_ticks = self.clock.ticks_for(scenario.duration)
-        self.times = np.arange(self.n_ticks) / self.clock.physics_rate
 
         ctx = MotionContext.from_scene(self.scene, scenario.duration, rngs["motion"])
         self.motion = make_motion(scenario.human.motion, ctx)
-        self.gt = compute_ground_truth(self.scene, self.motion, self.times)
+        self.gt = LazyGroundTruth.for_run(self.scene, self.motion, self.n_ticks,
+                                          self.clock.physics_rate)
+        """Ground truth at every physics tick, evaluated on demand (flat memory in duration)."""
+        self.times = self.gt.t
+        self.people = (PeopleMotion(m, scenario.human.people) if scenario.human.people
+                       else None)
+        """The other people's walks and head truth (``human.people``), or None."""
         self.set_robot_pose()
         self.base = BaseController(self.scene) if scenario.robot.base == "planar" else None
         """The planar base's controller (``robot.base: planar``), stepped by the simulation
@@ -114,6 +124,8 @@ class World:
         d, s = self.scene.data, self.scene
         d.qpos[s.human_qpos] = self.gt.qpos[tick]
         d.qvel[s.human_dof] = self.gt.qvel[tick]
+        if self.people is not None:
+            self.people.apply(d.qpos, self.times[tick])
 
     def _inertial(self, which: str, cfg, rng):
         if not cfg.enabled:

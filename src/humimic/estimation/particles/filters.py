@@ -235,7 +235,8 @@ def icondensation_step(particles: np.ndarray, log_weights: np.ndarray, dynamics:
 
 def apf_step(particles: np.ndarray, log_weights: np.ndarray, dynamics: Dynamics,
              log_likelihood: LogLikelihood, rng: np.random.Generator,
-             resample_below: float = math.inf, method: Method = "systematic") -> Step:
+             resample_below: float = math.inf, method: Method = "systematic",
+             first_stage: LogLikelihood | None = None) -> Step:
     """The auxiliary particle filter (Pitt & Shephard 1999), Menezes Table 2.
 
     First stage: ``lambda_i ∝ w_{k-1}^i p(z_k|mu_i)`` with ``mu_i = E[x_k|x_{k-1}^i]``;
@@ -244,11 +245,16 @@ def apf_step(particles: np.ndarray, log_weights: np.ndarray, dynamics: Dynamics,
     ``sum_i w_i p(z|mu_i) * (1/N) sum_i p(z|x_i)/p(z|mu_{s(i)})``. If no ``mu`` has any
     likelihood the first stage falls back to the old weights (a plain SIR cycle). Resamples
     the result every cycle by default (the second bootstrap of Table 2).
+
+    ``first_stage`` (default: ``log_likelihood``) is the function the auxiliary weights use,
+    ``lambda_i ∝ w_{k-1}^i g(mu_i)``; any positive ``g`` gives a consistent filter when the
+    second stage divides it out, ``p(z_k|x_k) / g(mu_{s(i)})`` (Menezes' two-arm tracker uses
+    a cheap skin cue in the first stage, the full likelihood in the second).
     """
     x_prev = np.asarray(particles, float)
     lw_prev = normalize(log_weights).log_weights
     n = len(x_prev)
-    log_mu_lik = np.asarray(log_likelihood(dynamics.mean(x_prev)), float)
+    log_mu_lik = np.asarray((first_stage or log_likelihood)(dynamics.mean(x_prev)), float)
     log_mu_lik = np.where(np.isnan(log_mu_lik), -np.inf, log_mu_lik)
     first = lw_prev + log_mu_lik
     first_total = logsumexp(first)

@@ -32,9 +32,10 @@ import numpy as np
 from humimic.messages import Measurement, Measurements
 from humimic.perception.blobs.detection import DetectingTracker, DetectionParams, TargetState
 from humimic.perception.blobs.em_blobs import EMParams
-from humimic.perception.blobs.identity import Blob, assign, stereo_evidence
+from humimic.perception.blobs.identity import Blob, assign, clipped_by_border, stereo_evidence
 from humimic.perception.blobs.record import STATE_CODE
 from humimic.perception.blobs.stereo import StereoParams, StereoRig
+from humimic.scenario.base import pass_through
 
 #: Identities are re-decided, and a target may be measured, once its blobs have been tracked
 #: this many frames (a new blob starts from a random hypothesis; its centre and shape, which the
@@ -43,24 +44,18 @@ SETTLE_FRAMES = 6
 
 
 def detection_params(cfg) -> DetectionParams:
-    d = cfg.detection
-    return DetectionParams(phase_one_s=d.period, lam=d.lam, n_hypotheses=d.hypotheses,
-                           sigma_min_px=d.sigma_min_px, sigma_max_px=d.sigma_max_px,
-                           proposal=d.proposal, score=d.score, restart_phase=d.restart_phase,
-                           min_fill=d.min_fill, lost_frames=d.lost_frames,
-                           backoff_s=d.backoff_s, backoff_every=d.backoff_every)
+    """The ``perception.detection`` section, every key passed through under its own name."""
+    return pass_through(DetectionParams, cfg.detection)
 
 
 def em_params(cfg) -> EMParams:
-    return EMParams(k_sigma=cfg.roi_k_sigma, n_side=cfg.roi_side, max_iter=cfg.em_iterations,
-                    tol_px=cfg.em_tol_px)
+    """The ``perception`` section's EM keys (``roi_side``, ``roi_k_sigma``, ``em_*``)."""
+    return pass_through(EMParams, cfg)
 
 
 def stereo_params(cfg) -> StereoParams:
-    s = cfg.stereo
-    return StereoParams(template_half=s.template_half, template_sigma=s.template_sigma,
-                        min_score=s.min_zncc, box_sigma=s.box_sigma,
-                        prefilter_sigma=s.prefilter_sigma, fine_steps=s.fine_steps)
+    """The ``perception.stereo`` section (``color_mask`` is the core's: which images to match)."""
+    return pass_through(StereoParams, cfg.stereo)
 
 
 @dataclass(frozen=True)
@@ -119,8 +114,10 @@ class PerceptionCore:
         """Track, identify, match and triangulate one stereo frame (``{camera: CameraImage}``)."""
         il, ir = images[self.cameras[0]], images[self.cameras[1]]
         reports = [self.trackers[0].process(t, il.image), self.trackers[1].process(t, ir.image)]
-        tracked = [{k: Blob(k, r.centre, r.cov) for k, r in enumerate(reps)
-                    if r.state == TargetState.TRACKING} for reps in reports]
+        tracked = [{k: Blob(k, r.centre, r.cov, clipped_by_border(r.centre, r.cov, w, h))
+                    for k, r in enumerate(reps) if r.state == TargetState.TRACKING}
+                   for reps, (h, w) in zip(reports, (il.image.shape[:2], ir.image.shape[:2]),
+                                           strict=True)]
         rig = StereoRig(il.camera, ir.camera, self.stereo)
         keys = [frozenset(tr) for tr in tracked]
         settled = any(int(t.tracker.age[k]) == SETTLE_FRAMES

@@ -2,7 +2,7 @@
 
 Random blob hypotheses (centre, covariance with axes within ``[sigma_min, sigma_max]``) are
 scored by the sum of colour probabilities over a fixed-size window warped onto the hypothesis
-(eq. 8). Phase one samples these sums for ``phase_one_s`` seconds and sets the threshold
+(eq. 8). Phase one samples these sums for ``period`` seconds and sets the threshold
 ``r_l = (1 - lambda) E f + lambda max f`` (eq. 9). Phase two keeps drawing hypotheses until one
 passes ``r_l``, then hands it to the EM tracker. A tracked blob whose fill ratio (assigned pixels
 over its ellipse area) stays below ``min_fill``, or whose support vanishes or that leaves the
@@ -57,9 +57,9 @@ class TargetState(enum.Enum):
 
 @dataclass(frozen=True)
 class DetectionParams:
-    phase_one_s: float = 5.0
+    period: float = 5.0
     lam: float = 0.67
-    n_hypotheses: int = 16
+    hypotheses: int = 16
     """Hypotheses per target per frame."""
     sigma_min_px: float = 3.0
     sigma_max_px: float = 30.0
@@ -268,7 +268,7 @@ class DetectingTracker:
             if p.proposal == "color":
                 lik = g.lut.lookup(image[step // 2::step, step // 2::step]).astype(np.float64)
                 lik.ravel()[~self._gate(_grid_points(H, W, step))] = 0.0
-            centres, uniform = propose_centres(self.rng, p.n_hypotheses, (H, W), lik, step)
+            centres, uniform = propose_centres(self.rng, p.hypotheses, (H, W), lik, step)
             keep = self._gate(centres)
             centres, uniform = centres[keep], uniform[keep]
             covs = random_hypotheses(self.rng, centres, p.sigma_min_px, p.sigma_max_px)
@@ -283,7 +283,7 @@ class DetectingTracker:
                 g.f_sum += float(f[uniform].sum())
                 g.f_count += int(uniform.sum())
                 g.f_max = max(g.f_max, float(f.max(initial=0.0)))
-                if t - g.t_phase_start >= p.phase_one_s:
+                if t - g.t_phase_start >= p.period:
                     g.threshold = detection_threshold(g.f_sum / max(g.f_count, 1), g.f_max,
                                                       p.lam)
                     g.phase = 2

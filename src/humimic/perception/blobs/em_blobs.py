@@ -3,17 +3,17 @@
 K blob processes, each a 2-D Gaussian shape (centre ``x_l``, covariance ``Sigma_l``, eq. 5) times
 a fixed colour model ``p(I|Theta_l)`` (eqs. 6-7), plus a uniform outlier process Theta_0 (eq. 1).
 Per frame, E-steps (posteriors, eq. 2) and M-steps (posterior-weighted mean and covariance of
-pixel positions, mixture weights) alternate until the centres move less than ``tol_px``,
+pixel positions, mixture weights) alternate until the centres move less than ``em_tol_px``,
 starting from the previous frame's blobs (optionally advanced by their image velocity).
 
 Region of interest (the paper warps an ROI per blob onto a fixed-size window; the equivalent
-here): for each blob an axis-aligned box of +-(``k_sigma`` sigma + ``margin_px``) around its
+here): for each blob an axis-aligned box of +-(``roi_k_sigma`` sigma + ``margin_px``) around its
 predicted centre, sampled on a grid with an integer stride chosen so that no box has more than
-``n_side`` samples per side. Each sample stands for a ``stride x stride`` cell: it carries the
+``roi_side`` samples per side. Each sample stands for a ``stride x stride`` cell: it carries the
 area ``stride^2`` as a weight in the M-step and the cell's internal position variance
 ``(stride^2 - 1)/12`` is added to the covariance, so estimates match full-resolution ones. Where
 boxes overlap, the samples of the later box are dropped. The number of processed pixels is
-therefore at most ``K n_side^2``, whatever the image size. The outlier density is uniform over
+therefore at most ``K roi_side^2``, whatever the image size. The outlier density is uniform over
 the sampled area and over colour space (unit volume): ``1 / A_roi``.
 """
 
@@ -31,11 +31,11 @@ _TWO_PI = 2.0 * np.pi
 
 @dataclass(frozen=True)
 class EMParams:
-    k_sigma: float = 3.0
+    roi_k_sigma: float = 3.0
     margin_px: float = 4.0
-    n_side: int = 20
-    max_iter: int = 6
-    tol_px: float = 1.0
+    roi_side: int = 20
+    em_iterations: int = 6
+    em_tol_px: float = 1.0
     """Stop iterating when no centre moved more than this (px). The first M-step from a
     well-predicted start lands within ~0.1 px of convergence, so 1 px mostly means 1 EM
     iteration per frame (measured: same accuracy as iterating to 0.05 px)."""
@@ -163,7 +163,8 @@ class RoiSamples:
 
 def roi_samples(image: np.ndarray, centres: np.ndarray, covs: np.ndarray,
                 params: EMParams) -> RoiSamples:
-    """Sample each blob's box (+-(k_sigma sigma + margin)) with a stride capping it at n_side^2.
+    """Sample each blob's box (+-(roi_k_sigma sigma + margin)) with a stride capping it at
+    roi_side^2.
 
     Samples of a box inside an earlier blob's box are dropped (each pixel counted once).
     """
@@ -172,15 +173,15 @@ def roi_samples(image: np.ndarray, centres: np.ndarray, covs: np.ndarray,
     pix, us, vs, ss = [], [], [], []
     for (cx, cy), (vxx, vyy) in zip(centres.tolist(), covs[:, [0, 1], [0, 1]].tolist(),
                                     strict=True):
-        hx = params.k_sigma * math.sqrt(max(vxx, 0.0)) + params.margin_px
-        hy = params.k_sigma * math.sqrt(max(vyy, 0.0)) + params.margin_px
+        hx = params.roi_k_sigma * math.sqrt(max(vxx, 0.0)) + params.margin_px
+        hy = params.roi_k_sigma * math.sqrt(max(vyy, 0.0)) + params.margin_px
         if not (math.isfinite(cx + cy + hx + hy)):
             continue
         x0, x1 = max(0, math.floor(cx - hx)), min(W - 1, math.ceil(cx + hx))
         y0, y1 = max(0, math.floor(cy - hy)), min(H - 1, math.ceil(cy + hy))
         if x1 < x0 or y1 < y0:
             continue
-        s = max(1, -(-max(x1 - x0 + 1, y1 - y0 + 1) // params.n_side))
+        s = max(1, -(-max(x1 - x0 + 1, y1 - y0 + 1) // params.roi_side))
         x0 += (x1 - x0) % s // 2  # centre the grid in the box
         y0 += (y1 - y0) % s // 2
         xs = np.arange(x0, x1 + 1, s)
@@ -303,7 +304,7 @@ class BlobTracker:
         weights /= weights.sum()
         support = np.zeros(idx.size)
         loglik, it = 0.0, 0
-        for it in range(1, p.max_iter + 1):  # noqa: B007
+        for it in range(1, p.em_iterations + 1):  # noqa: B007
             post, loglik = e_step(roi.uv, color_lik, centres, covs, weights, outlier_density,
                                   roi.area, with_loglik=False, features=features)
             c_new, s_new, weights, support = m_step(post, features, roi.area)
@@ -317,7 +318,7 @@ class BlobTracker:
             shift = float(np.abs(c_new - centres).max())
             centres, covs = c_new, s_new
             np.maximum(weights, 1e-6, out=weights)
-            if shift < p.tol_px:
+            if shift < p.em_tol_px:
                 break
         self.velocity[idx] = centres - self.centres[idx]
         self.centres[idx], self.covs[idx] = centres, covs

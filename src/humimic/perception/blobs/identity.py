@@ -20,7 +20,9 @@ targets under:
   avatar's head (ellipsoid half-axes 78 x 115 mm seen from the front) measures ~47 mm, a hand
   (45 x 80 mm palm-on, 22 x 80 mm edge-on) 20-35 mm: ``+1`` for a head smaller than
   :data:`HEAD_MIN_RADIUS_M` or a hand larger than :data:`HAND_MAX_RADIUS_M`. This names a lone
-  blob, which the image rules cannot;
+  blob, which the image rules cannot. A blob cut by the image border (``Blob.clipped``) is
+  only part of its object: it is never "too small to be the head" (area or size rule), so a
+  head in a corner of a foveal view stays the head;
 * continuity: ``-keep`` per blob that keeps its current identity, so tracked blobs keep their
   names (one rule against is not enough to swap; two are).
 
@@ -62,6 +64,9 @@ class Blob:
     slot: int
     centre: np.ndarray
     cov: np.ndarray
+    clipped: bool = False
+    """The blob's 2-sigma ellipse reaches past the image border: it is only part of its object
+    (a head cut by the border looks smaller than it is, see :func:`clipped_by_border`)."""
 
     @property
     def area(self) -> float:
@@ -77,6 +82,9 @@ class PairEvidence:
     """(n_left, n_right) bool: the two centres cannot be one object."""
     radius_m: np.ndarray
     """(n_left, n_right) metric sigma radius (m) of consistent pairs, NaN otherwise."""
+    clipped: np.ndarray | None = None
+    """(n_left, n_right) bool: either blob is cut by its image border (its radius is then
+    only a lower bound)."""
 
 
 def image_rule_cost(assigned: dict[str, Blob]) -> float:
@@ -84,8 +92,9 @@ def image_rule_cost(assigned: dict[str, Blob]) -> float:
     cost = 0.0
     head = assigned.get("head")
     right, left = assigned.get("right_hand"), assigned.get("left_hand")
-    for hand in (right, left):
-        if head is not None and hand is not None and hand.area > head.area:
+    for hand in (right, left):  # a head cut by the border may look smaller than a hand
+        if (head is not None and hand is not None and not head.clipped
+                and hand.area > head.area):
             cost += AREA_RULE
     if right is not None and left is not None and right.centre[0] > left.centre[0]:
         cost += ORDER_RULE
@@ -97,11 +106,12 @@ def image_rule_cost(assigned: dict[str, Blob]) -> float:
     return cost
 
 
-def size_rule_cost(name: str, radius_m: float) -> float:
-    """``+1`` when a consistent pair's metric size contradicts the name (NaN: no evidence)."""
+def size_rule_cost(name: str, radius_m: float, clipped: bool = False) -> float:
+    """``+1`` when a consistent pair's metric size contradicts the name (NaN: no evidence).
+    A ``clipped`` pair's size is a lower bound: it cannot show a head too small."""
     if not math.isfinite(radius_m):
         return 0.0
-    if name == "head" and radius_m < HEAD_MIN_RADIUS_M:
+    if name == "head" and radius_m < HEAD_MIN_RADIUS_M and not clipped:
         return SIZE_RULE
     if name in HANDS and radius_m > HAND_MAX_RADIUS_M:
         return SIZE_RULE
@@ -119,8 +129,10 @@ def stereo_evidence(rig: StereoRig, cam_left, cam_right, left: list[Blob], right
     """
     incons = np.ones((len(left), len(right)), bool)
     radius = np.full((len(left), len(right)), np.nan)
+    clipped = np.array([[a.clipped or b.clipped for b in right] for a in left],
+                       bool).reshape(len(left), len(right))
     if not left or not right:
-        return PairEvidence(incons, radius)
+        return PairEvidence(incons, radius, clipped)
     pairs = list(itertools.product(range(len(left)), range(len(right))))
     uvl = np.array([left[i].centre for i, _ in pairs], float)
     uvr = np.array([right[j].centre for _, j in pairs], float)
@@ -140,7 +152,16 @@ def stereo_evidence(rig: StereoRig, cam_left, cam_right, left: list[Blob], right
         else:
             incons[i, j] = False
             radius[i, j] = 0.5 * (sizes[0] + sizes[1])
-    return PairEvidence(incons, radius)
+    return PairEvidence(incons, radius, clipped)
+
+
+def clipped_by_border(centre: np.ndarray, cov: np.ndarray, width: int, height: int,
+                      n_sigma: float = 2.0) -> bool:
+    """Whether the blob's ``n_sigma`` ellipse (its axis-aligned extent) leaves the image."""
+    half = n_sigma * np.sqrt(np.maximum(np.diag(np.asarray(cov, float)), 0.0))
+    c = np.asarray(centre, float)
+    return bool(c[0] - half[0] < 0 or c[1] - half[1] < 0 or c[0] + half[0] > width - 1
+                or c[1] + half[1] > height - 1)
 
 
 def _maps(blobs: list[Blob], targets: list[str]):
@@ -181,7 +202,9 @@ def assign(targets: list[str], left: list[Blob], right: list[Blob],
                     if evidence.inconsistent[i, j]:
                         cost += STEREO_RULE
                     else:
-                        cost += size_rule_cost(name, float(evidence.radius_m[i, j]))
+                        cost += size_rule_cost(
+                            name, float(evidence.radius_m[i, j]),
+                            evidence.clipped is not None and bool(evidence.clipped[i, j]))
                         cost -= PAIR_BONUS
             options.append((cost - kept, cost, names_l, names_r))
     best = min(range(len(options)), key=lambda k: (options[k][0], k))

@@ -64,7 +64,7 @@ class StereoParams:
     z_min: float = 0.1
     z_max: float = 20.0
     """Depth range (m, along the left ray) of the epipolar search."""
-    min_score: float = 0.5
+    min_zncc: float = 0.5
     """ZNCC below this fails with reason 'low_zncc'."""
     prefilter_sigma: float = 0.8
     """Least Gaussian blur (px) of the images before they are sampled, growing to half the
@@ -322,7 +322,7 @@ class StereoRig:
             off = np.where(curv < 0, np.clip(0.5 * (f_m - f_p) / curv, -1.0, 1.0), 0.0)
         s_star = s_f[ar, b] + off * d / F
         qr = q0 + s_star[:, None] * t
-        good = best >= p.min_score
+        good = best >= p.min_zncc
         for r in np.flatnonzero(~good).tolist():
             i = jobs[r][0]
             why = "few_target_pixels" if few[r] else "low_zncc"

@@ -48,14 +48,20 @@ def distance_transform(edges: np.ndarray, cap: float = DT_CAP_PX) -> np.ndarray:
     return np.minimum(dt, np.float32(cap))
 
 
-def edge_maps(image: np.ndarray, low: float = 50.0, high: float = 150.0,
-              blur_sigma: float = 1.0, cap: float = DT_CAP_PX) -> EdgeMaps:
-    """Canny edges (after a small Gaussian blur against pixel noise) and their distance
-    transform for an RGB or grey uint8 image."""
+def canny(image: np.ndarray, low: float = 50.0, high: float = 150.0,
+          blur_sigma: float = 1.0) -> np.ndarray:
+    """Canny edges (uint8 0/255) of an RGB or grey uint8 image, after a small Gaussian blur
+    against pixel noise."""
     g = grey(image)
     if blur_sigma > 0:
         g = cv2.GaussianBlur(g, (0, 0), blur_sigma)
-    edges = cv2.Canny(g, low, high, L2gradient=True)
+    return cv2.Canny(g, low, high, L2gradient=True)
+
+
+def edge_maps(image: np.ndarray, low: float = 50.0, high: float = 150.0,
+              blur_sigma: float = 1.0, cap: float = DT_CAP_PX) -> EdgeMaps:
+    """:func:`canny` edges and their distance transform for an RGB or grey uint8 image."""
+    edges = canny(image, low, high, blur_sigma)
     return EdgeMaps(edges, distance_transform(edges, cap))
 
 
@@ -113,21 +119,30 @@ def normal_offsets(search_px: int) -> np.ndarray:
     return np.concatenate([[0], np.stack([-k, k], axis=1).ravel()]).astype(np.float64)
 
 
+def probe_along_normal(image: np.ndarray, points: np.ndarray, normals: np.ndarray,
+                       search_px: int) -> tuple[np.ndarray, np.ndarray]:
+    """Values of a uint8 ``image`` at the probes ``x(j) + o n(j)`` for the offsets ``o`` of
+    :func:`normal_offsets` (nearest first), for points ``(..., 2)``: ``(|o| (K,), values
+    (K, M))`` with ``M`` the number of points (probes off the image read 0)."""
+    off = normal_offsets(search_px).astype(np.float32)[:, None]
+    p = np.asarray(points, np.float32).reshape(-1, 2)
+    n = np.asarray(normals, np.float32).reshape(-1, 2)
+    # probes (K, M): the offsets outermost, so numpy loops over long contiguous rows
+    u = p[:, 0] + off * n[:, 0]
+    v = p[:, 1] + off * n[:, 1]
+    return np.abs(off[:, 0]).astype(np.float64), remap_uv(image, u, v, 0, cv2.INTER_NEAREST)
+
+
 def nearest_along_normal(mask: np.ndarray, points: np.ndarray, normals: np.ndarray,
                          search_px: int) -> np.ndarray:
     """Distance (px) from each point to the nearest set pixel of ``mask`` along its normal
     within ``search_px``; ``inf`` where there is none. ``(N, N_p, 2)`` -> ``(N, N_p)``."""
-    off = normal_offsets(search_px).astype(np.float32)[:, None]
-    p = np.asarray(points, np.float32).reshape(-1, 2)
-    n = np.asarray(normals, np.float32).reshape(-1, 2)
-    # probes (K, N * N_p): the offsets outermost, so numpy loops over long contiguous rows
-    u = p[:, 0] + off * n[:, 0]
-    v = p[:, 1] + off * n[:, 1]
     src = mask if mask.dtype == np.uint8 else (mask > 0).astype(np.uint8)
-    hit = remap_uv(src, u, v, 0, cv2.INTER_NEAREST) > 0
+    dist, values = probe_along_normal(src, points, normals, search_px)
+    hit = values > 0
     first = np.argmax(hit, axis=0)
-    dist = np.where(hit.any(axis=0), np.abs(off[:, 0].astype(np.float64))[first], np.inf)
-    return dist.reshape(np.shape(points)[:-1])
+    out = np.where(hit.any(axis=0), dist[first], np.inf)
+    return out.reshape(np.shape(points)[:-1])
 
 
 def normal_edge_distance(edges: np.ndarray, points: np.ndarray, normals: np.ndarray,

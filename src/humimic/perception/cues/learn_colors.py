@@ -18,6 +18,10 @@ material pixels and of all other pixels whose colour density exceeds the uniform
 
 from __future__ import annotations
 
+from humimic import select_gl_backend
+
+select_gl_backend()  # an entry point: MuJoCo's OpenGL backend, before anything imports mujoco
+
 import argparse
 import sys
 from dataclasses import dataclass
@@ -26,7 +30,6 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
-import humimic  # noqa: F401  (OpenGL backend before mujoco renders)
 from humimic.errors import InputError
 from humimic.paths import SCENARIOS_DIR
 from humimic.perception.cues.color_models import ColorModel, fit_color_model, save_color_model

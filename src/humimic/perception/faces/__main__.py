@@ -13,6 +13,10 @@ acceptance, and writes the ROC to ``DIR/faces_roc.png``.
 
 from __future__ import annotations
 
+from humimic import select_gl_backend
+
+select_gl_backend()  # an entry point: MuJoCo's OpenGL backend, before anything imports mujoco
+
 import argparse
 import sys
 from pathlib import Path
@@ -22,7 +26,6 @@ from rich.console import Console
 from rich.table import Table
 from tqdm import tqdm
 
-import humimic  # noqa: F401  (OpenGL backend before mujoco)
 from humimic.perception.faces import training
 from humimic.perception.faces.rates import detection_rates
 from humimic.world.faces import IDENTITY_NAMES
@@ -92,12 +95,12 @@ def recognition(args) -> int:
 
 
 def _plot(rocs: dict, tau: float, path: Path) -> None:
-    import matplotlib
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(5, 4))
+    fig = Figure(figsize=(5, 4))  # its own Agg canvas: matplotlib's backend is left alone
+    FigureCanvasAgg(fig)
+    ax = fig.subplots()
     for label, r in rocs.items():
         ax.plot(r.false_accept, r.correct, label=label)
         i = int(np.argmin(np.abs(r.tau - tau)))
@@ -111,7 +114,6 @@ def _plot(rocs: dict, tau: float, path: Path) -> None:
     ax.legend()
     fig.tight_layout()
     fig.savefig(path, dpi=120)
-    plt.close(fig)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -44,18 +44,23 @@ class FaceDetector:
         if self._cascade.empty():
             raise RuntimeError(f"OpenCV could not load {params.cascade}")
 
-    def detect(self, image: np.ndarray) -> np.ndarray:
-        """Boxes of the faces in an RGB or grey uint8 ``image``."""
+    def detect(self, image: np.ndarray, sizes: tuple[float, float] | None = None
+               ) -> np.ndarray:
+        """Boxes of the faces in an RGB or grey uint8 ``image``; ``sizes`` (min, max) px
+        narrows the searched face sizes for this call (a tracker expecting a face of known
+        size: fewer scales, much less time)."""
         p = self.params
         grey = image if image.ndim == 2 else cv2.cvtColor(image, cv2.COLOR_RGB2GRAY)
         if p.upscale != 1.0:
             grey = cv2.resize(grey, None, fx=p.upscale, fy=p.upscale,
                               interpolation=cv2.INTER_LINEAR)
         s = p.upscale
+        lo, hi = sizes if sizes is not None else (p.min_size, p.max_size)
+        lo = max(lo, p.min_size)
         boxes = self._cascade.detectMultiScale(
             grey, scaleFactor=p.scale_factor, minNeighbors=p.min_neighbors,
-            minSize=(round(p.min_size * s),) * 2,
-            maxSize=(round(p.max_size * s),) * 2 if p.max_size else (0, 0))
+            minSize=(round(lo * s),) * 2,
+            maxSize=(round(hi * s),) * 2 if hi else (0, 0))
         boxes = np.asarray(boxes, dtype=np.float64).reshape(-1, 4)
         return boxes / s
 

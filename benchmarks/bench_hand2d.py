@@ -1,0 +1,137 @@
+"""Per-frame cost of the 2-D hand tracker (Menezes sec. 5.1; goal >= 500 fps at 320 x 240,
+excluding rendering) on the Fig. 5 scenario's frames, whole and by part.
+
+Run from the project root::
+
+    .venv/bin/python benchmarks/bench_hand2d.py [--repeats 7] [--quick] [--clock cpu]
+
+Frames: ``scenarios/menezes_fig5_hand.yaml`` (left foveal camera, cluttered wall, the hand
+~35 px wide) rendered once for 2 s at 60 Hz. "tracking frame" replays the sequence through a
+tracker that is tracking (detection frames -- skin blobs, template, the face check -- are
+timed apart: they run only until the hand is found and after a loss).
+"""
+
+# ruff: noqa: I001  -- humimic must be imported before mujoco (headless GL)
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+import humimic  # noqa: F401
+import mujoco
+import numpy as np
+from rich.console import Console
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from _harness import Row, per_call, row  # noqa: E402
+from run_all import print_table  # noqa: E402
+
+from humimic.paths import SCENARIOS_DIR  # noqa: E402
+from humimic.perception.blobs.config import DEFAULT_COLOR_MODEL  # noqa: E402
+from humimic.perception.cues.color_models import ColorLUT, load_color_model  # noqa: E402
+from humimic.perception.cues.edges import canny, grey  # noqa: E402
+from humimic.perception.cues.motion import OpticalFlow  # noqa: E402
+from humimic.perception.faces.detect import FaceDetector  # noqa: E402
+from humimic.perception.trackers.hand2d.likelihood import (  # noqa: E402
+    frame_cues,
+    log_likelihood,
+    roi_of,
+)
+from humimic.perception.trackers.hand2d.tracker import Hand2DTracker  # noqa: E402
+from humimic.rngs import Rngs  # noqa: E402
+from humimic.scenario import load_scenario  # noqa: E402
+from humimic.world.world import World  # noqa: E402
+
+G = "hand2d"
+
+
+def render(seconds: float = 2.0, scenario: str = "menezes_fig5_hand.yaml",
+           tracker: str = "hand", camera: str = "L_foveal") -> tuple[list[np.ndarray], object]:
+    """A scenario's frames of one camera at 60 Hz for ``seconds``, and a tracker's config."""
+    sc = load_scenario(SCENARIOS_DIR / scenario)
+    world = World(sc, Rngs(sc.seed))
+    try:
+        world.eye_rig.prepare()
+        frames = []
+        for tick in range(0, int(seconds * 840), 14):
+            world.apply_human(tick)
+            mujoco.mj_forward(world.scene.model, world.scene.data)
+            frames.append(world.eye_rig.capture(tick / 840.0)[camera].image)
+    finally:
+        world.close()
+    return frames, sc.trackers[tracker]
+
+
+def bench(repeats: int, clock: str = "wall") -> list[Row]:
+    frames, base = render()
+    lut = ColorLUT(load_color_model(DEFAULT_COLOR_MODEL))
+    rows = []
+    for label, cues in (("shape+motion (eq. 4)", ["shape", "motion"]),
+                        ("all fused", ["shape", "motion", "colour"]),
+                        ("shape+motion (eq. 5, dt)", ["shape", "motion"])):
+        cfg = base.model_copy(update={"cues": tuple(cues)})
+        if "dt" in label:
+            cfg = cfg.model_copy(update={"similarity": "dt"})
+        tracker = Hand2DTracker(cfg, lut, 320, 240, np.random.default_rng(0), FaceDetector())
+        it = iter(range(10**9))
+
+        def frame(tracker=tracker, it=it):
+            k = next(it) % (2 * len(frames) - 2)  # forwards, then backwards: no jump
+            k = k if k < len(frames) else 2 * len(frames) - 2 - k
+            tracker.step(frames[k])
+            if tracker.state != "tracking":  # keep timing tracking frames
+                tracker.step(frames[k])
+
+        tracker.step(frames[0])
+        rows.append(row(G, f"tracking frame, {label}, N={cfg.n_particles}",
+                        per_call(frame, repeats, len(frames), clock=clock), "ms", 1e3,
+                        note="goal >= 500 fps (2 ms)"))
+    # parts, at the tracker's state on the middle frame
+    cfg = base
+    tracker = Hand2DTracker(cfg, lut, 320, 240, np.random.default_rng(0), FaceDetector())
+    for f in frames[:31]:
+        tracker.step(f)
+    img, prev = frames[31], grey(frames[30])
+    g = grey(img)
+    pts, _ = tracker.template.place(tracker.pf.particles)
+    roi = roi_of(pts, cfg.roi_margin_px + cfg.search_px + 18, 320, 240)
+    x0, y0, x1, y1 = roi
+    gr, pr = np.ascontiguousarray(g[y0:y1, x0:x1]), np.ascontiguousarray(prev[y0:y1, x0:x1])
+    flow = OpticalFlow()
+    fl = flow(pr, gr)
+    cues = frame_cues(gr, fl, (x0, y0), tracker.params, cfg.min_flow_px, None)
+    x = tracker.pf.particles
+    size = f"ROI {x1 - x0}x{y1 - y0}"
+    for name, fn in ((f"Canny, {size}", lambda: canny(gr)),
+                     (f"optical flow (DIS), {size}", lambda: flow(pr, gr)),
+                     (f"cue maps (edges + moving edges), {size}",
+                      lambda: frame_cues(gr, fl, (x0, y0), tracker.params, 0.5, None)),
+                     ("likelihood eq. 4, N=100, Np=30",
+                      lambda: log_likelihood(cues, x, tracker.template, tracker.params, None)),
+                     ("skin mask, whole image (detection frames)", lambda: lut.posterior(img)),
+                     ("detection frame (search)", lambda: _search(tracker, img, g))):
+        rows.append(row(G, name, per_call(fn, repeats, 20, clock=clock), "us", 1e6))
+    return rows
+
+
+def _search(tracker, img, g):
+    tracker.state = "lost"
+    tracker._search(img, g)
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--repeats", type=int, default=7)
+    ap.add_argument("--quick", action="store_true", help="3 repeats")
+    ap.add_argument("--clock", choices=("wall", "cpu"), default="wall",
+                    help="cpu: process CPU time (a shared, loaded machine)")
+    args = ap.parse_args(argv)
+    rows = bench(3 if args.quick else args.repeats, args.clock)
+    print_table(Console(), rows, [], "hand2d tracker: per-frame cost (no rendering)")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,110 @@
+"""Per-frame cost of the ICU tracker (Menezes sec. 5.2; goal >= 200 fps at 320 x 240 with
+detection and recognition every frame, excluding rendering), whole and by part: Haar on the
+whole frame and in the window around the estimate, recognition, edges, likelihood,
+ICONDENSATION.
+
+Run from the project root::
+
+    .venv/bin/python benchmarks/bench_icu.py [--repeats 7] [--quick] [--clock cpu]
+
+Frames: the first 2 s of ``scenarios/menezes_fig10_crossing.yaml`` (left foveal camera, the
+tutor's face ~47 px at 2.5 m, the other person walking in).
+"""
+
+# ruff: noqa: I001  -- humimic must be imported before mujoco (headless GL)
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+import humimic  # noqa: F401
+import numpy as np
+from rich.console import Console
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from _harness import Row, per_call, row  # noqa: E402
+from bench_hand2d import render  # noqa: E402
+from run_all import print_table  # noqa: E402
+
+from humimic.perception.cues.edges import edge_maps, grey  # noqa: E402
+from humimic.perception.cues.histograms import quantize  # noqa: E402
+from humimic.perception.faces.detect import DetectorParams, FaceDetector, crop_faces  # noqa: E402
+from humimic.perception.faces.training import RenderSpec, trained_model  # noqa: E402
+from humimic.perception.trackers.icu.likelihood import log_likelihood  # noqa: E402
+from humimic.perception.trackers.icu.tracker import (  # noqa: E402
+    FACE_TO_HEAD,
+    WINDOW_SIZES,
+    IcuTracker,
+)
+from humimic.world.faces import IDENTITY_NAMES  # noqa: E402
+
+G = "icu"
+
+
+def bench(repeats: int, clock: str = "wall") -> list[Row]:
+    frames, cfg = render(2.0, "menezes_fig10_crossing.yaml", "icu")
+    params = DetectorParams(min_size=cfg.min_face_px)
+    known = list(dict.fromkeys(["ben", "cyd", *IDENTITY_NAMES]))[: cfg.enrolled]
+    model = trained_model(known, RenderSpec(per_identity=cfg.views), params)
+    rows = []
+    for label, every in (("face window every 3rd frame", 3), ("face window every frame", 1)):
+        c = cfg.model_copy(update={"detect_every": every})
+        tracker = IcuTracker(c, 320, 240, np.random.default_rng(0), FaceDetector(params),
+                             model, 0)
+        tracker.step(frames[0])
+        k = iter(range(10**9))
+
+        def frame(tracker=tracker, k=k):
+            i = next(k) % (2 * len(frames) - 2)
+            tracker.step(frames[i if i < len(frames) else 2 * len(frames) - 2 - i])
+
+        rows.append(row(G, f"tracking frame, {label}, N={c.n_particles}",
+                        per_call(frame, repeats, len(frames), clock=clock), "ms", 1e3,
+                        note="goal >= 200 fps (5 ms), detection + recognition every frame"))
+    tracker = IcuTracker(cfg, 320, 240, np.random.default_rng(0), FaceDetector(params),
+                         model, 0)
+    for f in frames[:30]:
+        tracker.step(f)
+    img = frames[30]
+    g, q = grey(img), quantize(img, cfg.bins)
+    window = tracker._window(tracker.pf.mean)
+    s = tracker.pf.mean[2]
+    sizes = (WINDOW_SIZES[0] * s / FACE_TO_HEAD, WINDOW_SIZES[1] * s / FACE_TO_HEAD)
+    boxes = tracker.detector.detect(g)
+    dt = edge_maps(g).dt
+    x = tracker.pf.particles
+    size = f"{window[2] - window[0]}x{window[3] - window[1]}"
+    parts = (("Haar, whole frame", lambda: tracker.detector.detect(g)),
+             (f"Haar, window {size}, all sizes", lambda: tracker.faces(g, window)),
+             (f"Haar, window {size}, faces {sizes[0]:.0f}-{sizes[1]:.0f} px",
+              lambda: tracker.faces(g, window, sizes)),
+             ("recognition of 1 face (crop, equalise, DFFS)",
+              lambda: model.probabilities(crop_faces(g, boxes[:1]))),
+             ("Canny + distance transform, whole frame", lambda: edge_maps(g)),
+             ("quantise RGB (32 bins)", lambda: quantize(img, cfg.bins)),
+             ("likelihood eq. 3 + eq. 6, N=150",
+              lambda: log_likelihood(dt, q, x, tracker.template, tracker.refs, cfg.sigma_s,
+                                     cfg.sigma_c)),
+             ("ICONDENSATION step, N=150 (cheap likelihood)",
+              lambda: tracker.pf.step(lambda s: np.zeros(len(s)), tracker.rng)))
+    for name, fn in parts:
+        rows.append(row(G, name, per_call(fn, repeats, 10, clock=clock), "us", 1e6))
+    return rows
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--repeats", type=int, default=7)
+    ap.add_argument("--quick", action="store_true", help="3 repeats")
+    ap.add_argument("--clock", choices=("wall", "cpu"), default="wall",
+                    help="cpu: process CPU time (a shared, loaded machine)")
+    args = ap.parse_args(argv)
+    rows = bench(3 if args.quick else args.repeats, args.clock)
+    print_table(Console(), rows, [], "ICU tracker: per-frame cost (no rendering)")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,80 @@
+"""Peak memory against simulated duration: does a long closed-loop run stay flat?
+
+Runs ``scenarios/mimic_tracked_wave.yaml`` (stereo colour blobs, Kalman filter, mimicry; default
+rates, rerun recording and plots as the scenario has them) once per duration, each in a fresh
+subprocess, and prints its peak resident set size (``ru_maxrss`` of the run's own process, and
+separately of its child processes, the perception worker) and the slope in MB per simulated
+minute fitted over the durations. The issue's goal: a 10-minute run within 15 % of a 5-second
+one.
+
+    python benchmarks/bench_memory.py                   # 5 s, 60 s, 120 s
+    python benchmarks/bench_memory.py --durations 5 600 # the goal itself (~10 min of wall time)
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+SCENARIO = ROOT / "scenarios" / "mimic_tracked_wave.yaml"
+
+_CHILD = """
+import json, resource, sys
+from humimic.run import main
+code = main([sys.argv[1], "--duration", sys.argv[2], "--out", sys.argv[3], "--quiet"])
+print(json.dumps({"code": code,
+                  "self_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
+                  "children_mb": resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024}))
+"""
+
+
+def peak_rss(duration: float, scenario: Path = SCENARIO) -> dict:
+    """Peak RSS (MiB) of one run of ``scenario`` for ``duration`` simulated seconds."""
+    with tempfile.TemporaryDirectory() as out:
+        proc = subprocess.run([sys.executable, "-c", _CHILD, str(scenario), str(duration),
+                               str(Path(out) / "run")], capture_output=True, text=True,
+                              check=True)
+        result = json.loads(proc.stdout.strip().splitlines()[-1])
+        metrics = json.loads((Path(out) / "run" / "metrics.json").read_text())
+    result.update(duration_s=duration, wall_s=metrics["wall_time_s"])
+    return result
+
+
+def slope_mb_per_min(rows: list[dict]) -> float:
+    """Least-squares slope of the run's peak RSS against duration (MiB per simulated minute)."""
+    import numpy as np
+
+    d = np.array([r["duration_s"] for r in rows]) / 60.0
+    m = np.array([r["self_mb"] for r in rows])
+    return float(np.polyfit(d, m, 1)[0]) if len(rows) > 1 else float("nan")
+
+
+def main(argv: list[str] | None = None) -> None:
+    p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    p.add_argument("--durations", type=float, nargs="+", default=[5.0, 60.0, 120.0])
+    p.add_argument("--json", type=Path, default=None, help="also write the rows here")
+    args = p.parse_args(argv)
+    rows = []
+    print(f"{'sim s':>7} {'wall s':>7} {'peak MiB':>9} {'worker MiB':>10}")
+    for duration in args.durations:
+        r = peak_rss(duration)
+        rows.append(r)
+        print(f"{duration:7.0f} {r['wall_s']:7.1f} {r['self_mb']:9.1f} {r['children_mb']:10.1f}",
+              flush=True)
+    slope = slope_mb_per_min(rows)
+    base = rows[0]["self_mb"]
+    at_10 = base + slope * (600.0 - rows[0]["duration_s"]) / 60.0
+    print(f"slope {slope:.2f} MiB per simulated minute; a 10-minute run extrapolates to "
+          f"{at_10:.0f} MiB, {100 * (at_10 / base - 1):+.1f} % over the {rows[0]['duration_s']:.0f}"
+          f"-s run (goal: within 15 %)")
+    if args.json:
+        args.json.write_text(json.dumps({"rows": rows, "slope_mb_per_min": slope}, indent=2))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,201 @@
+"""The kernel particle filter (Schmidt, Fritsch & Kwolek sec. 5.2, after Chang & Ansari 2005):
+kernel density estimate of the weighted particle set with the Epanechnikov kernel, mean-shift
+mode seeking with a shrinking bandwidth, reweighting after each shift, the dominant mode, and
+mixed propagation (a linear motion model for part of the particles, random walk for the rest).
+
+Bandwidths are per dimension (``h`` a ``(d,)`` vector, Schmidt's ``h0 = D``): distances are
+``||(x - s) / h||``, i.e. the kernel of eq. 11 in coordinates scaled by ``h``. Everything is
+pure and vectorised over particles; randomness comes in as a ``numpy.random.Generator``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+import numpy as np
+
+from humimic.estimation.particles.resampling import resample_indices
+from humimic.estimation.particles.weights import weights
+
+
+def sq_distances(x: np.ndarray, s: np.ndarray, h: np.ndarray) -> np.ndarray:
+    """``(M, N)`` squared scaled distances ``||(x_m - s_n) / h||^2`` (one matrix product)."""
+    a, b = x / h, s / h
+    d2 = np.sum(a * a, 1)[:, None] + np.sum(b * b, 1)[None, :] - 2.0 * a @ b.T
+    return np.maximum(d2, 0.0)
+
+
+def epanechnikov_norm(d: int) -> float:
+    """``c_d``, the volume of the unit ``d``-ball (Schmidt eq. 12's normalisation)."""
+    return math.pi ** (d / 2) / math.gamma(d / 2 + 1)
+
+
+def epanechnikov(r2: np.ndarray, d: int) -> np.ndarray:
+    """Schmidt eq. 12: ``K_E(x) = (d + 2) / (2 c_d) (1 - ||x||^2)`` inside the unit ball, of
+    the squared norm ``r2``; it integrates to one over R^d."""
+    return (d + 2) / (2.0 * epanechnikov_norm(d)) * np.maximum(1.0 - r2, 0.0)
+
+
+def _bandwidth(h, d: int) -> np.ndarray:
+    return np.broadcast_to(np.asarray(h, float), (d,))
+
+
+#: Weights below this fraction of the largest are left out of weighted sums (their share of
+#: any sum is below N times it): mean shift and weighted KDEs then cost N x (heavy particles).
+NEGLIGIBLE = 1e-7
+
+
+def heavy(w: np.ndarray, rel: float = NEGLIGIBLE) -> np.ndarray:
+    """Indices of the weights above ``rel`` times the largest."""
+    return np.flatnonzero(w > rel * np.max(w, initial=0.0))
+
+
+def kde(x: np.ndarray, particles: np.ndarray, w: np.ndarray, h: np.ndarray) -> np.ndarray:
+    """Schmidt eq. 11: ``p(x) = sum_n K_h(x - s_n) w_n`` with ``K_h(u) = K(u / h) / prod(h)``
+    (normalised weights ``w``), at points ``x (M, d)`` (negligible weights left out)."""
+    d = particles.shape[1]
+    h = _bandwidth(h, d)
+    keep = heavy(np.asarray(w, float))
+    return epanechnikov(sq_distances(x, particles[keep], h), d) @ np.asarray(w)[keep] / np.prod(h)
+
+
+def mean_shift(particles: np.ndarray, w: np.ndarray, h: np.ndarray) -> np.ndarray:
+    """Schmidt eq. 13: every particle moved to ``m(s) = sum H(s_i - s) w_i s_i / sum H w_i``.
+    ``H``'s profile is ``-k'``: for the Epanechnikov kernel a constant inside the bandwidth
+    (the flat kernel), so ``m(s)`` is the weighted mean of the particles within ``h`` of ``s``
+    (a particle with no weighted particle in its window stays put)."""
+    keep = heavy(w)
+    src, wk = particles[keep], w[keep]
+    inside = (sq_distances(particles, src, _bandwidth(h, particles.shape[1])) <= 1.0
+              ).astype(float)                                               # (N, K)
+    num = inside @ (wk[:, None] * src)
+    den = inside @ wk
+    stay = den <= 0.0
+    out = num / np.where(stay, 1.0, den)[:, None]
+    out[stay] = particles[stay]
+    return out
+
+
+def kernel_log_weights(log_lik: np.ndarray, shifted: np.ndarray, prior: np.ndarray,
+                       h: np.ndarray, stride: int = 1) -> np.ndarray:
+    """Reweighting after a mean shift (Chang & Ansari eq. 9, which Schmidt follows): shifted
+    samples are no longer drawn from the prior, so ``w ∝ p(y|s) p(s) / q(s)`` with the prior
+    ``p`` the KDE (eq. 11) of the predicted particles ``prior`` (equally weighted, before any
+    shift) and the proposal ``q`` the KDE of the shifted ones. Unnormalised log-weights
+    (``-inf`` where the prior's KDE is 0). ``stride > 1`` estimates both KDEs from every
+    ``stride``-th particle (a Monte Carlo estimate, ``N / stride`` kernels per point instead of
+    N), keeping each sample's own kernel in ``q`` so it stays positive."""
+    n, d = shifted.shape
+    h = _bandwidth(h, d)
+    ref_p, ref_q = prior[::stride], shifted[::stride]
+    p = kde(shifted, ref_p, np.full(len(ref_p), 1.0 / len(ref_p)), h)
+    q = kde(shifted, ref_q, np.full(len(ref_q), 1.0 / len(ref_q)), h)   # > 0 when stride 1
+    if stride > 1:
+        q = q * (1.0 - 1.0 / n) + epanechnikov(0.0, d) / np.prod(h) / n
+    with np.errstate(divide="ignore"):
+        return log_lik + np.log(p) - np.log(q)
+
+
+def dominant_mode(particles: np.ndarray, w: np.ndarray, h: np.ndarray, window: np.ndarray
+                  ) -> tuple[np.ndarray, int]:
+    """The dominant mode (Schmidt sec. 5.2): the particle where the posterior's KDE (eq. 11)
+    peaks, then the weighted mean of the particles within ``window`` (scaled distance <= 1) of
+    it. Returns the mode ``(d,)`` and the peak particle's index. Only particles of
+    non-negligible weight are candidates for the peak (the others' KDE value is no larger)."""
+    keep = heavy(w)
+    peak = int(keep[np.argmax(kde(particles[keep], particles, w, h))])
+    near = sq_distances(particles[peak:peak + 1], particles, window)[0] <= 1.0
+    wn = w * near
+    if wn.sum() <= 0.0:
+        return particles[peak].copy(), peak
+    return wn @ particles / wn.sum(), peak
+
+
+def motion_share(w: np.ndarray, moved: np.ndarray, min_random: float) -> float:
+    """Share of next step's particles for the motion model: its group's cumulated posterior
+    weight, leaving the random group at least ``min_random`` (Schmidt sec. 5.2)."""
+    total = w.sum()
+    share = float(w[moved].sum() / total) if total > 0 else 0.5
+    return min(max(share, 0.0), 1.0 - min_random)
+
+
+def mixed_propagate(particles: np.ndarray, velocity: np.ndarray, share: float, D: np.ndarray,
+                    rng: np.random.Generator, valid: Callable[[np.ndarray], np.ndarray],
+                    motion_scale: float = 0.25, retries: int = 10
+                    ) -> tuple[np.ndarray, np.ndarray]:
+    """Schmidt sec. 5.2's mixed propagation of resampled particles ``(N, d)``: the first
+    ``round(share N)`` through the linear motion model ``s + velocity`` (velocity: the last
+    two best modes' difference) with uniform noise of half-width ``motion_scale D``, the rest
+    by a random walk with uniform noise of half-width ``D`` (the paper's "variance D", read as
+    the noise's extent); a particle outside ``valid`` is re-drawn (up to ``retries`` times,
+    then left to the caller's clamp). Returns the particles and the motion-model mask."""
+    n = len(particles)
+    moved = np.arange(n) < int(round(share * n))
+    half = np.where(moved[:, None], motion_scale * D, D)
+    base = particles + np.where(moved[:, None], velocity, 0.0)
+    out = base + rng.uniform(-1.0, 1.0, base.shape) * half
+    for _ in range(retries):
+        bad = ~valid(out)
+        if not bad.any():
+            break
+        out[bad] = base[bad] + rng.uniform(-1.0, 1.0, (int(bad.sum()), base.shape[1])) * half[bad]
+    return out, moved
+
+
+def kpf_modes(particles: np.ndarray, log_lik_fn: Callable[[np.ndarray], np.ndarray],
+              h0: np.ndarray, iterations: int, tol: float = 1e-3, shrink: float = 0.8,
+              reweight: bool = True, groups: list[np.ndarray] | None = None,
+              stride: int = 1) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+    """Mean-shift mode seeking of a predicted particle set (Schmidt sec. 5.2): weight by the
+    likelihood, then up to ``iterations`` times shift every particle (eq. 13, bandwidth
+    ``h = shrink^i h0``) and reweight (:func:`kernel_log_weights` with ``stride``, or the
+    likelihood alone with ``reweight=False``); stop early when the best particle moves less
+    than ``tol`` (scaled by ``h0``).
+
+    ``groups`` (default: one group of every dimension) partitions the dimensions; then
+    ``log_lik_fn`` returns ``(N, G)``, column ``g`` the log-likelihood terms that group ``g``'s
+    dimensions affect (e.g. a torso group with the whole pose's, an arm group with that arm's
+    limbs), and each group is shifted and reweighted with its own weights over its own
+    dimensions (a product kernel). Returns particles, normalised weights ``(N, G)``,
+    log-likelihoods ``(N, G)`` and the iterations done."""
+    d = particles.shape[1]
+    groups = [np.arange(d)] if groups is None else [np.asarray(g) for g in groups]
+    h0 = _bandwidth(h0, d)
+
+    def lik_of(x):
+        return np.asarray(log_lik_fn(x), float).reshape(len(x), len(groups))
+
+    lik = lik_of(particles)
+    W = np.stack([weights(lik[:, g]) for g in range(len(groups))], axis=1)
+    prior = particles
+    done = 0
+    for i in range(iterations):
+        h = shrink ** i * h0
+        best = particles[np.argmax(W, axis=0), :]
+        shifted = particles.copy()
+        for k, g in enumerate(groups):
+            shifted[:, g] = mean_shift(particles[:, g], W[:, k], h[g])
+        lik = lik_of(shifted)
+        for k, g in enumerate(groups):
+            lw = (kernel_log_weights(lik[:, k], shifted[:, g], prior[:, g], h[g], stride)
+                  if reweight else lik[:, k])
+            W[:, k] = weights(lw)
+        particles, done = shifted, i + 1
+        moved = [np.linalg.norm((particles[int(np.argmax(W[:, k])), g] - best[k, g]) / h0[g])
+                 for k, g in enumerate(groups)]
+        if max(moved) < tol:
+            break
+    return particles, W, lik, done
+
+
+def partitioned_resample(particles: np.ndarray, W: np.ndarray, groups: list[np.ndarray],
+                         rng: np.random.Generator) -> np.ndarray:
+    """Resample each group's dimensions with its own weights ``W[:, g]`` (systematic), the
+    groups independently: partitioned sampling's recombination (MacCormick & Isard 2000) for
+    groups whose likelihood terms do not interact."""
+    out = np.empty_like(particles)
+    for k, g in enumerate(groups):
+        idx = resample_indices(np.log(np.maximum(W[:, k], 1e-300)), rng)
+        out[:, g] = particles[idx][:, g]
+    return out

@@ -1,0 +1,119 @@
+"""Scenario configuration of Menezes et al.'s 3-D hand tracker GEST (sec. 6.1, Table 5)."""
+
+from __future__ import annotations
+
+import math
+from typing import Literal
+
+from pydantic import Field, model_validator
+
+from humimic.scenario.base import Section, Vec3
+
+
+class GestConfig(Section):
+    """A hand as a free ellipsoid (9-D state: centre, yaw pitch roll, semi-axes) tracked by
+    ICONDENSATION with an importance function from stereo skin blobs; defaults from Table 5."""
+
+    kind: Literal["gest"] = "gest"
+    hand: Literal["right", "left"] = "right"
+    """The hand scored (the tracker follows whichever hand it locks on; the importance function
+    proposes every hand-sized skin blob)."""
+    cameras: tuple[str, str] | None = None
+    """(left, right) eye cameras; default the rendered pair."""
+    views: Literal[1, 2] = 2
+    """Images the likelihood is evaluated in: 1 = the left image only (the paper), 2 = both
+    (depth from the shape cue's disparity as well as the projected size)."""
+    n: int = Field(100, ge=1, le=20000)
+    """Particles N."""
+    alpha: float = Field(0.3, ge=0.0, le=1.0)
+    """Share of particles drawn from the stereo importance function."""
+    beta: float = Field(0.6, ge=0.0, le=1.0)
+    """Share drawn from the dynamics (the rest from the prior)."""
+    sigma_position: float = Field(0.02, gt=0.0, le=0.5)
+    """Random-walk standard deviation of the centre per frame (m). Table 5: 1 cm (at 25 Hz);
+    a reaching hand moves 5-10 mm per frame at 30 Hz, and with 1 cm the estimate trails it by
+    4-6 cm (menezes_gest_reach: 57 mm RMS against 29 mm with 2 cm)."""
+    sigma_angle_deg: float = Field(1.0, gt=0.0, le=90.0)
+    """Random-walk standard deviation of yaw, pitch, roll per frame (deg); Table 5: 1."""
+    sigma_axes: float = Field(1e-4, gt=0.0, le=0.05)
+    """Random-walk standard deviation of the semi-axes per frame (m); Table 5: 1e-4."""
+    reset: float = Field(0.05, gt=0.0, lt=1.0)
+    """Probability per frame that the hand re-appears anywhere in the workspace, orientation
+    and size kept (what lets a
+    particle proposed by the importance function far from the others keep its weight)."""
+    n_points: int = Field(20, ge=4, le=200)
+    """Contour points N_p of the shape cue (eq. 3)."""
+    sigma_s: float = Field(1.5, gt=0.0)
+    """Shape-cue standard deviation (px, mean distance-transform value, eq. 3)."""
+    sigma_c: float = Field(0.3, gt=0.0)
+    """Colour-cue standard deviation (Bhattacharyya distance, eq. 6). Table 5 gives 0.03;
+    with a hand 15-30 px wide the patch's histogram (a few dozen pixels in 32 bins per
+    channel) is far from the reference even at the true pose (D ~ 0.3), and 0.03 makes the
+    colour noise outweigh every other cue by hundreds of nats: 0.3 (Table 6's value)."""
+    sigma_k: float = Field(0.3, gt=0.0)
+    """Skin inside/outside cue's standard deviation (an addition, see
+    :mod:`humimic.perception.trackers.gest.likelihood`)."""
+    stereo_cue: bool = True
+    """Use the triangulated skin blobs in the likelihood too (an addition, ibid.)."""
+    stereo_outlier: float = Field(0.05, gt=0.0, le=1.0)
+    """Weight of the uniform outlier (over both images) in the stereo cue."""
+    bins: Literal[8, 16, 32, 64] = 32
+    kappa: float = Field(0.1, ge=0.0, le=1.0)
+    """Reference-histogram update rate (eq. 13)."""
+    axes: Vec3 = (0.045, 0.022, 0.08)
+    """Nominal semi-axes (m) of the hand ellipsoid; the prior spans +-``axes_spread`` of it."""
+    axes_spread: float = Field(0.2, ge=0.0, lt=1.0)
+    workspace_low: Vec3 = (0.3, -0.8, 0.5)
+    """Workspace box (robot base frame, m) of the prior over the centre."""
+    workspace_high: Vec3 = (2.0, 0.8, 1.9)
+    blob_size: tuple[float, float] = (0.04, 0.14)
+    """Physical size range (m, sqrt of the blob's area times depth / focal length) of a skin
+    blob the importance function accepts: a head is larger."""
+    blob_subsample: int = Field(2, ge=1, le=4)
+    """Subsampling of the skin mask before its connected components (sec. 4.2.2)."""
+    max_epipolar_px: float = Field(4.0, gt=0.0)
+    """Largest reprojection residual (px) of a left-right blob match."""
+    blob_sigma_scale: float = Field(0.5, gt=0.0)
+    """Blob position covariance (eq. 17) = ``scale^2`` times the blob box's inertia."""
+    orientation_sigma_deg: float = Field(90.0, gt=0.0)
+    """Spread (deg) of the start density's orientation about the last estimate (the
+    orientation is unknown when the filter (re-)starts)."""
+    fresh_orientation: float = Field(0.5, ge=0.0, le=1.0)
+    """Share of the importance function's draws whose orientation is uniform (explores
+    orientations away from the current hypotheses); the rest continue the particles'."""
+    centroid_px: float = Field(0.5, gt=0.0)
+    """Standard deviation (px) of a blob centroid against the projected ellipse's centre (the
+    stereo cue)."""
+    init: Literal["raised", "any"] = "raised"
+    """Which stereo candidate (re-)initialises the filter: ``raised``, the highest (the hand
+    held up to the robot; the other hand hangs), or ``any`` (the whole importance function)."""
+    init_centroid: bool = True
+    """(Re-)start from the triangulated centroids' covariance (``centroid_px``) rather than
+    eq. 17's (the blobs' spread, ~10x wider in depth)."""
+    lost_px: float = Field(5.0, gt=0.0)
+    """The estimate is ``lost`` when its mean contour distance to edges exceeds this (px) or
+    it left the image; then the filter re-initialises from the importance function."""
+    lost_m: float = Field(0.1, gt=0.0)
+    """... or when no stereo candidate lies within this distance (m) of it ...
+    """
+    lost_frames: int = Field(3, ge=1)
+    """... for this many frames in a row."""
+    latency: float = Field(0.0, ge=0.0, le=1.0)
+    """Declared processing latency (s) of the published pose."""
+
+    @model_validator(mode="after")
+    def _check(self) -> GestConfig:
+        if self.alpha + self.beta > 1.0 + 1e-12:
+            raise ValueError(f"alpha + beta must be <= 1, got {self.alpha} + {self.beta}")
+        if any(h <= lo for lo, h in zip(self.workspace_low, self.workspace_high, strict=True)):
+            raise ValueError("workspace_high must exceed workspace_low on every axis")
+        if min(self.axes) <= 0:
+            raise ValueError(f"axes must be > 0 m, got {self.axes}")
+        if not 0 < self.blob_size[0] < self.blob_size[1]:
+            raise ValueError(f"blob_size must be 0 < min < max, got {self.blob_size}")
+        return self
+
+    @property
+    def sigma_walk(self) -> list[float]:
+        a = math.radians(self.sigma_angle_deg)
+        return [self.sigma_position] * 3 + [a] * 3 + [self.sigma_axes] * 3

@@ -1,0 +1,105 @@
+"""The GEST pipeline stage: both eye images -> the hand's pose on ``poses``; scores against
+the avatar's hand ellipsoid (``trackers.<name>.*``).
+
+Scores are over the frames in which the true hand centre projects into the left image
+(``in_view``): ``position_rmse_mm`` (3-D, frames the tracker reports ``tracking``),
+``orientation_rmse_deg`` (geodesic angle, modulo the ellipsoid's symmetries: a half turn
+about any of its axes looks the same), ``axes_rmse_mm``, ``within_30mm_fraction`` and
+``tracked_in_view_fraction``; ``tracking_out_of_view_fraction`` counts frames it claims a hand
+that is not in view.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from humimic.bodymodel.avatar import truth_hand_state
+from humimic.bodymodel.kinematics import ypr_matrix
+from humimic.maths.stats import rmse
+from humimic.messages import PoseEstimate
+from humimic.perception.trackers.common import PoseTrackerStage
+from humimic.perception.trackers.gest.tracker import GestResult, GestTracker
+from humimic.sensors.camera_model import invert_transform
+
+STATE_NAMES = ("x", "y", "z", "yaw", "pitch", "roll", "sigma_x", "sigma_y", "sigma_z")
+#: The ellipsoid's proper symmetries (half turns about its axes).
+FLIPS = np.array([np.diag(d) for d in ((1, 1, 1), (1, -1, -1), (-1, 1, -1), (-1, -1, 1))],
+                 float)
+
+
+def orientation_error_deg(ypr_est: np.ndarray, ypr_true: np.ndarray) -> np.ndarray:
+    """Geodesic angle (deg) between estimated and true ellipsoid orientations ``(T, 3)``, the
+    smallest over the ellipsoid's symmetries."""
+    Re, Rt = ypr_matrix(*ypr_est.T), ypr_matrix(*ypr_true.T)
+    rel = np.swapaxes(Rt, -1, -2)[:, None] @ Re[:, None] @ FLIPS[None]      # (T, 4, 3, 3)
+    cos = np.clip((np.trace(rel, axis1=-2, axis2=-1) - 1.0) / 2.0, -1.0, 1.0)
+    return np.degrees(np.arccos(cos)).min(axis=1)
+
+
+class GestStage(PoseTrackerStage):
+    kind = "gest"
+
+    def __init__(self, name: str, cfg, cameras: tuple[str, str], lut, world, rng, rlog=None):
+        super().__init__(name, cfg.latency)
+        self.cfg, self.cameras, self.world, self.rng, self.rlog = cfg, cameras, world, rng, rlog
+        self.tracker = GestTracker(cfg, lut)
+        self.side = "R" if cfg.hand == "right" else "L"
+        self.results: list[GestResult | None] = []
+        self.left_cams: list = []
+
+    def track(self, t: float, images: dict):
+        left, right = images.get(self.cameras[0]), images.get(self.cameras[1])
+        if left is None or right is None:
+            self.results.append(None)
+            self.left_cams.append(None)
+            return None
+        res = self.tracker.step(left, right, self.rng)
+        self.results.append(res)
+        self.left_cams.append(left.camera)
+        if res.mean is None:
+            return PoseEstimate(self.tracker_name, self.kind, np.full(9, np.nan), STATE_NAMES,
+                                None, {}, {}, res.status)
+        return PoseEstimate(self.tracker_name, self.kind, res.mean, STATE_NAMES, res.cov,
+                            {f"{self.side.lower()}_hand": res.mean[:3]}, {}, res.status)
+
+    def scores(self) -> dict:
+        if not self.times:
+            return {}
+        gt = self.world.gt
+        truth = truth_hand_state(self.world, gt.index_of(np.asarray(self.times)), self.side,
+                                 "base")
+        in_view = np.array([_in_view(c, p) for c, p in zip(self.left_cams, truth[:, :3],
+                                                              strict=True)])
+        tracking = np.array([r is not None and r.status == "tracking" for r in self.results])
+        est = np.array([r.mean if r is not None and r.mean is not None else np.full(9, np.nan)
+                        for r in self.results])
+        use = in_view & tracking
+        out = {"in_view_frames": int(in_view.sum()),
+               "tracked_in_view_fraction": _frac(use, in_view),
+               "tracking_out_of_view_fraction": _frac(tracking & ~in_view, ~in_view)}
+        if use.any():
+            err = est[use, :3] - truth[use, :3]
+            dist = np.linalg.norm(err, axis=1)
+            out.update({
+                "position_rmse_mm": 1e3 * rmse(err),
+                "position_median_mm": 1e3 * float(np.median(dist)),
+                "within_30mm_fraction": float(np.mean(dist <= 0.03)),
+                "orientation_rmse_deg": float(np.sqrt(np.mean(
+                    orientation_error_deg(est[use, 3:6], truth[use, 3:6]) ** 2))),
+                "axes_rmse_mm": 1e3 * float(np.sqrt(np.mean((est[use, 6:] - truth[use, 6:]) ** 2))),
+            })
+        return out
+
+
+def _frac(a: np.ndarray, of: np.ndarray) -> float | None:
+    return float(a.sum() / of.sum()) if of.any() else None
+
+
+def _in_view(camera, p_base: np.ndarray) -> bool:
+    if camera is None:
+        return False
+    p_cam = invert_transform(camera.T_base_cam) @ np.r_[p_base, 1.0]
+    if p_cam[2] <= 0.05:
+        return False
+    u, v = camera.intrinsics.project(p_cam[:3])
+    return bool(0 <= u < camera.intrinsics.width and 0 <= v < camera.intrinsics.height)

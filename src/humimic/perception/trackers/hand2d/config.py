@@ -1,0 +1,88 @@
+"""The 2-D hand tracker's scenario section (``trackers.<name>`` with ``kind: hand2d``).
+
+Defaults are Menezes et al.'s Table 3 (CONDENSATION, N = 100, sigma_s = 36 over N_p = 30
+model points, i.e. a *sum* of distances, penalty rho = 0.12 for static edges); the rest
+(dynamics, detection, loss) are ours and documented per key. Units: px, rad, frames.
+"""
+
+from __future__ import annotations
+
+from typing import Literal
+
+from pydantic import Field, field_validator
+
+from humimic.perception.trackers.fields import Bins
+from humimic.scenario.base import Section
+
+CUES = ("shape", "motion", "colour")
+HAND_TARGETS = ("right_hand", "left_hand")
+
+
+class Hand2DConfig(Section):
+    """Menezes sec. 5.1: a hand template tracked in one camera's images, state (u, v, s,
+    theta): centre (px), hand width (px), in-plane rotation (rad)."""
+
+    kind: Literal["hand2d"]
+    camera: str | None = None
+    """Eye camera (scene name, e.g. ``L_foveal``); None: the first rendered eye."""
+    target: Literal[HAND_TARGETS] = "right_hand"
+    """The hand it is scored against (ground truth); the tracker itself takes the moving
+    skin blob that fits the hand template."""
+    filter: Literal["condensation", "icondensation"] = "condensation"
+    """``condensation`` (Table 3); ``icondensation`` adds skin blobs as importance function."""
+    n_particles: int = Field(100, ge=1, le=5000)
+    cues: tuple[Literal[CUES], ...] = ("shape", "motion")
+    """Fused cues (eq. 7): ``shape`` (eq. 2 / 3), ``motion`` (with shape: eq. 4 / 5; alone
+    not allowed), ``colour`` (eq. 6, one patch on the palm, reference updated by eq. 13)."""
+    similarity: Literal["normal", "dt"] = "normal"
+    """Edge distance along the template normals (eqs. 2, 4) or by distance transform (3, 5)."""
+    sigma_s: float = Field(36.0, gt=0.0, le=1e4)
+    """Shape likelihood's standard deviation (px), over the *sum* of the points' distances."""
+    n_points: int = Field(30, ge=4, le=200)
+    rho: float = Field(0.12, ge=0.0, le=100.0)
+    """Eq. 4's penalty (px) for a static edge."""
+    K: float = Field(0.5, gt=0.0, le=1.0)
+    """Eq. 5's weight of the moving edges' distance transform (dt similarity)."""
+    search_px: int = Field(10, ge=1, le=60)
+    """Half length of the search along each normal (px)."""
+    min_flow_px: float = Field(0.5, ge=0.0, le=20.0)
+    """Optical flow (px/frame) above which an edge is moving."""
+    sigma_c: float = Field(0.2, gt=0.0, le=10.0)
+    """Colour likelihood's standard deviation over the Bhattacharyya distance (eq. 6); 0.2
+    fused best on the Fig. 5 sequence (0.1: the colour cue overrode the shape)."""
+    bins: Bins = 16
+    """Histogram bins per RGB channel (must divide 256)."""
+    kappa: float = Field(0.05, ge=0.0, le=1.0)
+    """Eq. 13's reference update rate."""
+    dynamics: tuple[float, float, float, float] = (6.0, 6.0, 1.0, 0.05)
+    """Random-walk standard deviations of (u, v, s, theta) per frame (px, px, px, rad)."""
+    alpha: float = Field(0.3, ge=0.0, le=1.0)
+    """ICONDENSATION: share of particles from the importance function."""
+    beta: float = Field(0.6, ge=0.0, le=1.0)
+    """ICONDENSATION: share from the dynamics (the rest from the prior)."""
+    min_hand_px: float = Field(8.0, gt=0.0, le=200.0)
+    """Smallest hand width (px) the detector starts on."""
+    init_edge_px: float = Field(3.0, gt=0.0, le=30.0)
+    """Detection: the hand template placed on a skin blob must lie within this mean edge
+    distance (px) for the detectors to agree."""
+    lost_edge_px: float = Field(4.0, gt=0.0, le=30.0)
+    """Loss: the estimate's mean edge distance (px) above which a frame counts as bad."""
+    min_skin: float = Field(0.3, ge=0.0, le=1.0)
+    """Loss: the least fraction of skin pixels inside the estimated hand."""
+    lost_frames: int = Field(3, ge=1, le=1000)
+    """Bad frames in a row after which the track is lost and detection starts again."""
+    roi_margin_px: int = Field(12, ge=0, le=320)
+    """Edges and flow are computed in the particles' bounding box plus this margin."""
+    latency: float = Field(0.0, ge=0.0, le=1.0)
+    """Declared processing latency (s) of the ``tracks2d`` messages."""
+
+    @field_validator("cues")
+    @classmethod
+    def _cues(cls, v):
+        if not v:
+            raise ValueError("at least one cue is needed")
+        if len(set(v)) != len(v):
+            raise ValueError("a cue is listed twice")
+        if "motion" in v and "shape" not in v:
+            raise ValueError("motion filters the shape cue's edges: add shape")
+        return v

@@ -1,0 +1,35 @@
+"""Build an ICU stage from its scenario section (cross-section checks: exit 2 naming the key)."""
+
+from __future__ import annotations
+
+from humimic.perception.faces.detect import DetectorParams, FaceDetector
+from humimic.perception.trackers.common import check_camera
+from humimic.perception.trackers.icu.stage import IcuStage
+from humimic.perception.trackers.icu.tracker import IcuTracker
+from humimic.scenario.errors import ScenarioError
+from humimic.world.faces import IDENTITY_NAMES
+
+
+def icu_stage(name, cfg, scenario, world, rngs, rlog) -> IcuStage:
+    where = f"scenario {scenario.name!r}"
+    camera = check_camera(scenario, world, name, cfg.camera)
+    identity = cfg.identity or scenario.human.identity
+    if identity not in IDENTITY_NAMES:
+        raise ScenarioError(where, f"trackers.{name}.identity", "unknown identity", identity,
+                            ", ".join(IDENTITY_NAMES))
+    if cfg.alpha + cfg.beta > 1.0:
+        raise ScenarioError(where, f"trackers.{name}.beta", "alpha + beta must not exceed 1",
+                            cfg.beta, f"at most {1.0 - cfg.alpha:g}")
+    params = DetectorParams(min_size=cfg.min_face_px)
+    recogniser, tutor = None, 0
+    if cfg.recognition:
+        from humimic.perception.faces.training import RenderSpec, trained_model
+
+        people = [p.identity for p in scenario.human.people]
+        known = list(dict.fromkeys([identity, *people, *IDENTITY_NAMES]))[: cfg.enrolled]
+        recogniser = trained_model(known, RenderSpec(per_identity=cfg.views), params)
+    width, height = scenario.cameras.resolution
+    tracker = IcuTracker(cfg, width, height, rngs[f"trackers.{name}"], FaceDetector(params),
+                         recogniser, tutor)
+    return IcuStage(name, cfg, camera, tracker, identity, world.gt, rlog,
+                    getattr(world, "people", None))

@@ -1,0 +1,69 @@
+"""The ICU tracker's scenario section (``trackers.<name>`` with ``kind: icu``).
+
+Defaults are Menezes et al.'s Table 4 (ICONDENSATION, N = 150, sigma_s = 1.5 over N_p = 15
+points, two colour patches of 32 bins, sigma_c = 0.03, kappa 0.1 / 0.05); the rest (dynamics,
+detection rate, loss, the state machine's thresholds) are ours, documented per key.
+"""
+
+from __future__ import annotations
+
+from typing import Literal
+
+from pydantic import Field, field_validator
+
+from humimic.perception.trackers.fields import Bins
+from humimic.scenario.base import Section
+
+
+class IcuConfig(Section):
+    """Menezes sec. 5.2: one person (the tutor) tracked in one camera's images, state
+    (u, v, s): head centre (px) and head width (px)."""
+
+    kind: Literal["icu"]
+    camera: str | None = None
+    """Eye camera (scene name, e.g. ``L_foveal``); None: the first rendered eye."""
+    identity: str | None = None
+    """The tutor's face (a :data:`humimic.world.faces.IDENTITY_NAMES` name); None: the
+    scenario's ``human.identity``."""
+    recognition: bool = False
+    """Weigh faces by the eigenface recogniser's probability of the tutor (eq. 12). It is
+    trained on the ``enrolled`` identities on first use (minutes; then cached)."""
+    enrolled: int = Field(4, ge=2, le=16)
+    """How many identities the recogniser knows: the tutor, the other people in the room,
+    then the first names of :data:`IDENTITY_NAMES`."""
+    views: int = Field(40, ge=5, le=500)
+    """Rendered training views per identity (the recogniser's training cost: ~0.1 s each,
+    once per machine, then cached)."""
+    min_confidence: float = Field(0.5, ge=0.0, le=1.0)
+    """Recognition probability of the tutor a face needs to start the tracker."""
+    n_particles: int = Field(150, ge=1, le=5000)
+    cues: tuple[Literal["shape", "colour"], ...] = ("shape", "colour")
+    """Fused cues (eq. 7): the head-and-shoulders silhouette (eq. 3) and the head and torso
+    colour (eq. 6); the colour references are kept either way (the loss test uses them)."""
+    sigma_s: float = Field(1.5, gt=0.0, le=100.0)
+    """Shape likelihood's standard deviation (px) over the *mean* distance (eq. 3)."""
+    n_points: int = Field(15, ge=4, le=200)
+    sigma_c: float = Field(0.03, gt=0.0, le=10.0)
+    bins: Bins = 32
+    kappa: tuple[float, float] = (0.1, 0.05)
+    """Eq. 13's reference update rates of the head and torso patches."""
+    alpha: float = Field(0.3, ge=0.0, le=1.0)
+    beta: float = Field(0.6, ge=0.0, le=1.0)
+    dynamics: tuple[float, float, float] = (6.0, 6.0, 1.0)
+    """Random-walk standard deviations of (u, v, s) per frame (px)."""
+    detect_every: int = Field(3, ge=1, le=100)
+    """While tracking, the face detector runs every this many frames, only around the
+    estimate (it costs ~20 ms on a whole 320 x 240 frame); while searching, every frame."""
+    min_face_px: int = Field(20, ge=8, le=200)
+    lost_colour: float = Field(0.5, gt=0.0, le=1.0)
+    """Loss: Bhattacharyya distance (the worse of head and torso) above which a frame is
+    bad."""
+    lost_frames: int = Field(4, ge=1, le=1000)
+    latency: float = Field(0.0, ge=0.0, le=1.0)
+
+    @field_validator("cues")
+    @classmethod
+    def _cues(cls, v):
+        if not v or len(set(v)) != len(v):
+            raise ValueError("give each cue once, at least one")
+        return v

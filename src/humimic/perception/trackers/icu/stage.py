@@ -1,0 +1,66 @@
+"""The ICU tracker as a pipeline stage: one camera's frames -> ``tracks2d`` (the tutor, with
+the state machine's state), scored as ``trackers.<name>.*`` against the projected true head."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from humimic.messages import Track2D, Tracks2D
+from humimic.perception.trackers.common import HEAD_WIDTH_M, ImageTrackerStage, Overlay
+
+
+class IcuStage(ImageTrackerStage):
+    def __init__(self, name: str, cfg, camera: str, tracker, identity: str, gt, rlog=None,
+                 people=None):
+        super().__init__(name, camera, "head", HEAD_WIDTH_M, gt, rlog, cfg.latency, people)
+        self.tracker, self.identity = tracker, identity
+        self.faces: list[tuple[int, np.ndarray, np.ndarray]] = []
+        """(frame index, face boxes, their probabilities of being the tutor) per frame."""
+
+    def track(self, t: float, image: np.ndarray):
+        s = self.tracker.step(image)
+        if len(s.faces):
+            self.faces.append((len(self.times), s.faces, s.probabilities))
+        u, v, scale = (float(x) for x in s.mean)
+        state = "tracking" if s.state == "tracking" else s.state
+        tracks = Tracks2D(self.tracker_name, self.camera, (Track2D(
+            "person", u, v, scale, 0.0, state, self.identity, s.confidence, s.spread_px),),
+            s.state)
+        contour = None
+        if np.all(np.isfinite(s.mean)):
+            contour = self.tracker.template.place(s.mean)[0][0]
+        good = s.state == "tracking" and not (np.isfinite(s.confidence) and s.confidence < 0.5)
+        overlay = Overlay(None if s.particles is None else s.particles[:, :2], s.weights,
+                          contour, good, s.faces)
+        return tracks, overlay
+
+    def metrics(self) -> dict:
+        out = super().metrics()
+        if self.tracker.recogniser is not None and self.times:
+            _, _, _, truth = self.arrays()
+            out["trackers"][self.tracker_name]["recognition"] = recognition_counts(
+                self.faces, truth, self.others(), self.tracker.cfg.min_confidence)
+        return out
+
+
+def recognition_counts(faces, truth, others, threshold: float) -> dict[str, int]:
+    """Confusion counts of the detected faces: whose face each is (the projected head within
+    half a head width of the box centre: the tutor, another person, or nobody -- a false
+    detection) against whether it was taken for the tutor (probability >= ``threshold``)."""
+    out = dict.fromkeys(("tutor_accepted", "tutor_rejected", "other_accepted",
+                         "other_rejected", "false_detection"), 0)
+    for k, boxes, p in faces:
+        centres = boxes[:, :2] + boxes[:, 2:] / 2.0
+        for c, prob in zip(centres, p, strict=True):
+            yes = "accepted" if prob >= threshold else "rejected"
+            if _near(c, truth, k):
+                out[f"tutor_{yes}"] += 1
+            elif any(_near(c, o, k) for o in others):
+                out[f"other_{yes}"] += 1
+            else:
+                out["false_detection"] += 1
+    return out
+
+
+def _near(c: np.ndarray, truth, k: int) -> bool:
+    return bool(truth.depth[k] > 0 and np.hypot(*(c - truth.uv[k])) < 0.5 * truth.size_px[k])

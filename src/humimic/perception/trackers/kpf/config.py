@@ -1,0 +1,106 @@
+"""Scenario config of Schmidt, Fritsch & Kwolek's kernel-particle-filter tracker (``kind: kpf``).
+
+Defaults are the paper's experiment (sec. 6): cues torso {edge, colour}, upper arm {edge,
+ridge, colour}, forearm {edge, ridge}, hand and head {skin}; M_E = 20, M_R = 30, B_arm = 3,
+B_torso = 4; D_arm = [22, 20, 35, 25] deg (shoulder SFE, SAA, HR, elbow; the text is garbled
+around the degree signs, we read the four numbers as degrees), D_torso 2 deg and 3 cm (the
+paper: "1-3 deg" and "1-5 cm"); h0 = D, h = 0.8^i h0, the mode window 0.25 D; the motion model's
+noise 0.25 D.
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Literal
+
+from pydantic import Field
+
+from humimic.scenario.base import Section
+
+#: One arm DOF's propagation extent (deg).
+ArmExtent = Annotated[float, Field(gt=0.0, le=180.0)]
+
+
+class KpfCues(Section):
+    """Cues per limb type (Schmidt sec. 6)."""
+
+    torso: list[Literal["edge", "ridge", "color"]] = Field(
+        default_factory=lambda: ["edge", "color"])
+    upper_arm: list[Literal["edge", "ridge", "color"]] = Field(
+        default_factory=lambda: ["edge", "ridge", "color"])
+    forearm: list[Literal["edge", "ridge"]] = Field(default_factory=lambda: ["edge", "ridge"])
+    hand: list[Literal["skin"]] = Field(default_factory=lambda: ["skin"])
+    head: list[Literal["skin"]] = Field(default_factory=lambda: ["skin"])
+
+
+class KpfSigma(Section):
+    """Eq. 9's standard deviations of each cue's cost: the floor under the spread of the
+    responses over the particles (``sigma_from_spread``), or the value itself."""
+
+    edge: float = Field(0.15, gt=0.0, le=10.0)
+    ridge: float = Field(0.3, gt=0.0, le=10.0)
+    color: float = Field(0.1, gt=0.0, le=10.0)
+    skin: float = Field(0.3, gt=0.0, le=10.0)
+
+
+class KpfConfig(Section):
+    """Kernel particle filter 14-DOF upper-body tracker (Schmidt sec. 5.2)."""
+
+    kind: Literal["kpf"] = "kpf"
+    camera: str | None = None
+    """Eye camera it watches (default: the first rendered one)."""
+    filter: Literal["kpf", "condensation"] = "kpf"
+    """``kpf``: mean shift and mixed propagation; ``condensation``: plain CONDENSATION (random
+    walk of the same extent, weighted mean), the paper's baseline."""
+    particles: int = Field(1000, gt=0, le=20000)
+    iterations: int = Field(3, gt=0, le=20)
+    """Maximum mean-shift iterations per frame."""
+    D_arm_deg: list[ArmExtent] = Field(default_factory=lambda: [22.0, 20.0, 35.0, 25.0],
+                                   min_length=4, max_length=4)
+    """Propagation extent per arm DOF: SFE, SAA, HR, EB (deg)."""
+    D_torso_deg: float = Field(2.0, gt=0.0, le=45.0)
+    D_torso_m: float = Field(0.03, gt=0.0, le=0.5)
+    shrink: float = Field(0.8, gt=0.0, lt=1.0)
+    """Bandwidth factor per iteration, h = shrink^i D."""
+    window: float = Field(0.25, gt=0.0, le=2.0)
+    """Dominant-mode window, as a fraction of D."""
+    motion_noise: float = Field(0.25, gt=0.0, le=1.0)
+    """The motion model's noise extent, as a fraction of D."""
+    min_random: float = Field(0.2, ge=0.0, le=1.0)
+    """Smallest share of randomly propagated particles."""
+    tol: float = Field(0.01, ge=0.0)
+    """Stop mean shift when the best particle moves less than this (scaled by D)."""
+    reweight: Literal["kernel", "likelihood"] = "kernel"
+    """After each shift: ``kernel`` (likelihood x prior KDE / proposal KDE, Chang & Ansari) or
+    ``likelihood`` alone."""
+    partitioned: bool = False
+    """Our extension: the torso and each arm are shifted, weighted and resampled with their
+    own limbs' likelihood terms (partitioned sampling), instead of the whole pose's."""
+    torso_prior_m: float | None = Field(None, gt=0.0, le=10.0)
+    """Our extension: a Gaussian prior (this standard deviation, m) keeping the torso near its
+    start (a person standing in front of the robot); None: off, as the paper."""
+    torso_prior_deg: float = Field(5.0, gt=0.0, le=180.0)
+    """The prior's standard deviation of the torso's rotations (deg), with ``torso_prior_m``."""
+    kde_stride: int = Field(1, ge=1, le=100)
+    """The reweighting's KDEs from every k-th particle (1: all, exact; more: faster)."""
+    cues: KpfCues = Field(default_factory=KpfCues)
+    edge_points: int = Field(20, ge=2, le=200, multiple_of=2)
+    """M_E, even."""
+    ridge_points: int = Field(30, ge=1, le=200)
+    bands_arm: int = Field(3, ge=1, le=10)
+    bands_torso: int = Field(4, ge=1, le=10)
+    sigma: KpfSigma = Field(default_factory=KpfSigma)
+    sigma_from_spread: bool = True
+    adapt: float = Field(0.2, ge=0.0, le=1.0)
+    """Eq. 7's adaptation factor of the mean colours."""
+    lost_cost: float = Field(0.75, gt=0.0, le=2.0)
+    """Lost when the best mode's mean cue cost exceeds this."""
+    latency: float = Field(0.0, ge=0.0, le=5.0)
+    """Declared processing delay of a pose estimate (s)."""
+
+    def D(self) -> list[float]:
+        """The 14 propagation extents (m, rad) in :data:`humimic.bodymodel.DOF_NAMES` order."""
+        import math
+
+        t, r = self.D_torso_m, math.radians(self.D_torso_deg)
+        arm = [math.radians(a) for a in self.D_arm_deg]
+        return [t, t, t, r, r, r] + arm + arm

@@ -1,0 +1,138 @@
+"""The pose likelihood of Schmidt, Fritsch & Kwolek (eqs. 9-10) for N particles at once.
+
+Every particle's body model is projected (:mod:`humimic.bodymodel`), the feature points of all
+limbs are sampled from the frame's :class:`~humimic.perception.trackers.kpf.cues.CueMaps` in one
+pass per cue, each limb's response becomes a cost ``e``, and
+
+    log p(y | x) = sum_l 1/N_l sum_{c in cues(l)} -e_{c,l}^2 / (2 sigma_c^2)        (eqs. 9-10)
+
+with ``N_l`` the number of cues on limb ``l`` (the balancing factor). ``sigma_c`` is the spread
+of cue ``c``'s costs over the particles (standard deviation), floored by the configured value.
+A limb off the image or seen end-on costs 1 in every cue.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from humimic import bodymodel as bm
+from humimic.perception.trackers.kpf import cues as C
+
+CUE_NAMES = ("edge", "ridge", "color", "skin")
+
+
+def limb_type(part: str) -> str:
+    """``torso``, ``head``, ``upper_arm``, ``forearm`` or ``hand`` of a part name."""
+    return part[2:] if part[:2] in ("r_", "l_") else part
+
+
+@dataclass
+class Evaluation:
+    """Per-particle costs ``(N, parts)`` per cue (NaN where the cue is not used on the part),
+    the log-likelihoods and the band colours (for eq. 7's adaptation)."""
+
+    cost: dict[str, np.ndarray]
+    terms: np.ndarray
+    """(N, parts) each part's eq.-10 factor (log): ``1/N_l sum_c log p(c, l)``."""
+    colours: dict[str, np.ndarray]
+    """Part name -> (N, B, 3) mean band colours."""
+
+    @property
+    def log_lik(self) -> np.ndarray:
+        """(N,) eq. 10 (log)."""
+        return self.terms.sum(axis=1)
+
+    def mean_cost(self, i: int) -> float:
+        """Mean cost over the used (part, cue) pairs of particle ``i``."""
+        vals = np.concatenate([c[i][np.isfinite(c[i])] for c in self.cost.values()])
+        return float(vals.mean()) if len(vals) else 1.0
+
+
+class Likelihood:
+    """Eqs. 9-10 for one body model, camera and cue configuration ``cfg``
+    (:class:`~humimic.perception.trackers.kpf.config.KpfConfig`)."""
+
+    def __init__(self, body: bm.BodyModel, intrinsics, cfg):
+        self.body, self.intr, self.cfg = body, intrinsics, cfg
+        self.parts = body.part_names
+        self.use = {p: tuple(getattr(cfg.cues, limb_type(p))) for p in self.parts}
+        self.floor = {c: getattr(cfg.sigma, c) for c in CUE_NAMES}
+        self.bands = {p: cfg.bands_torso if limb_type(p) == "torso" else cfg.bands_arm
+                      for p in self.parts}
+        self.references: dict[str, np.ndarray] = {}
+        """Part name -> (B, 3) adapted mean colours (eq. 7); empty until :meth:`adapt`."""
+
+    def evaluate(self, q: np.ndarray, maps: C.CueMaps, T_cam_base: np.ndarray) -> Evaluation:
+        """Costs and log-likelihoods of full states ``q (N, 14)``."""
+        cfg = self.cfg
+        n = len(q)
+        view = bm.project(self.body, self.body.forward(q), self.intr, T_cam_base)
+        cost = {c: np.full((n, len(self.parts)), np.nan) for c in CUE_NAMES}
+        limbs = list(view.limb_names)
+        col = [self.parts.index(p) for p in limbs]
+        need = {c for p in limbs for c in self.use[p]}
+        if "edge" in need:
+            e = bm.limb_edges(view, cfg.edge_points)
+            f = np.where(e.ok, C.edge_response(maps, e.uv, e.angle), 0.0)
+            cost["edge"][:, col] = 1.0 - f
+        if "ridge" in need:
+            r = bm.limb_ridges(view, cfg.ridge_points)
+            f = C.ridge_response(maps, r.uv, r.width.mean(-1), r.angle)
+            cost["ridge"][:, col] = 1.0 - np.where(r.ok, f, 0.0)
+        colours = {}
+        if "color" in need:
+            ok = view.valid[:, view.cone_idx] & view.generators
+            for b in sorted({self.bands[p] for p in limbs if "color" in self.use[p]}):
+                quads = bm.limb_bands(view, b, 0.2)
+                for j, p in enumerate(limbs):
+                    if "color" in self.use[p] and self.bands[p] == b:
+                        colours[p] = C.band_colours(maps, quads[:, j])
+                        ref = self.references.get(p)
+                        f = (np.zeros(n) if ref is None
+                             else C.colour_response(colours[p][:, None], ref[None])[:, 0])
+                        cost["color"][:, col[j]] = np.where(ok[:, j], f, 1.0)
+        ell = [self.parts[i] for i in view.ellipsoid_idx]
+        if any("skin" in self.use[p] for p in ell):
+            centre, axes, angle = view.ellipses_px()
+            f = C.skin_response(maps, centre, axes, angle)
+            ok = view.valid[:, view.ellipsoid_idx]
+            for j, p in enumerate(ell):
+                if "skin" in self.use[p]:
+                    cost["skin"][:, self.parts.index(p)] = 1.0 - np.where(ok[:, j], f[:, j], 0.0)
+        for c in CUE_NAMES:   # cues not configured on a part do not count
+            unused = [i for i, p in enumerate(self.parts) if c not in self.use[p]]
+            cost[c][:, unused] = np.nan
+        return Evaluation(cost, self.combine(cost), colours)
+
+    def sigmas(self, cost: dict[str, np.ndarray]) -> dict[str, float]:
+        """Eq. 9's ``sigma_c``: the spread of each cue's costs over the particles (mean over
+        parts of the standard deviation), floored by the configured value."""
+        out = {}
+        for c, e in cost.items():
+            floor = self.floor[c]
+            used = np.isfinite(e[0]) if len(e) else np.zeros(0, bool)
+            if self.cfg.sigma_from_spread and used.any() and len(e) > 1:
+                out[c] = max(float(np.mean(np.std(e[:, used], axis=0))), floor)
+            else:
+                out[c] = floor
+        return out
+
+    def combine(self, cost: dict[str, np.ndarray]) -> np.ndarray:
+        """Schmidt eqs. 9-10 per part ``l``: ``1/N_l sum_c -e^2 / (2 sigma_c^2)``, ``(N, parts)``
+        (their sum over parts is the pose's log-likelihood)."""
+        sig = self.sigmas(cost)
+        n_l = np.array([max(len(self.use[p]), 1) for p in self.parts], float)
+        total = 0.0
+        for c, e in cost.items():
+            total = total + np.nan_to_num(-(e * e) / (2.0 * sig[c] ** 2) / n_l)
+        return np.asarray(total)
+
+    def adapt(self, colours: dict[str, np.ndarray]) -> None:
+        """Schmidt eq. 7 from the best mode's band colours ``{part: (B, 3)}``:
+        ``C_ref = alpha C_mode + (1 - alpha) C_ref`` (the first call sets them)."""
+        a = self.cfg.adapt
+        for p, c in colours.items():
+            ref = self.references.get(p)
+            self.references[p] = c.copy() if ref is None else a * c + (1 - a) * ref

@@ -1,0 +1,88 @@
+"""Scores of a ``kpf`` tracker against the avatar's ground truth (``trackers.<name>.*``).
+
+Per frame the true joints are the body model's forward kinematics of the avatar's true state
+(the model's skeleton is the avatar's, so they are the avatar's joints). The wrist error is
+Schmidt's: the distance between the true wrist and the end of the model's forearm, averaged
+over frames (Table 1); it is split in the camera frame into its image-plane (``lateral``) and
+depth components. ``lost_fraction``: frames with the wrist more than :data:`LOST_M` off.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from humimic import bodymodel as bm
+
+ENDPOINTS = ("r_shoulder", "r_elbow", "r_wrist", "l_shoulder", "l_elbow", "l_wrist")
+#: A frame whose wrist error exceeds this counts as lost (issue 14).
+LOST_M = 0.2
+ARM = slice(6, 14)
+
+
+@dataclass
+class KpfRecord:
+    t: list = field(default_factory=list)
+    q: list = field(default_factory=list)
+    ends: list = field(default_factory=list)
+    lost: list = field(default_factory=list)
+    compute_s: list = field(default_factory=list)
+    iterations: list = field(default_factory=list)
+    T_cam_base: list = field(default_factory=list)
+
+    def add(self, t, q, ends, lost, compute_s, iterations, T_cam_base) -> None:
+        self.t.append(t)
+        self.q.append(np.asarray(q, float))
+        self.ends.append(np.stack([ends[j] for j in ENDPOINTS]))
+        self.lost.append(bool(lost))
+        self.compute_s.append(compute_s)
+        self.iterations.append(iterations)
+        self.T_cam_base.append(T_cam_base)
+
+
+def truth(world, body: bm.BodyModel, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """True states ``(T, 14)`` and joints ``(T, len(ENDPOINTS), 3)`` (base frame) at times
+    ``t``."""
+    q = np.atleast_2d(bm.truth_state(world, world.gt.index_of(np.asarray(t)), "base"))
+    pose = body.forward(q)
+    return q, np.stack([pose.joint(j) for j in ENDPOINTS], axis=1)
+
+
+def wrap(a: np.ndarray) -> np.ndarray:
+    return (a + np.pi) % (2 * np.pi) - np.pi
+
+
+def errors(rec: KpfRecord, world, body: bm.BodyModel) -> dict[str, np.ndarray]:
+    """Per-frame errors: ``wrist``, ``elbow`` (m), ``lateral`` and ``depth`` wrist components
+    (m, camera frame), ``angles`` (T, 8) arm-angle errors (rad)."""
+    q_true, j_true = truth(world, body, np.asarray(rec.t))
+    ends = np.stack(rec.ends)
+    wi, ei = ENDPOINTS.index("r_wrist"), ENDPOINTS.index("r_elbow")
+    d = ends[:, wi] - j_true[:, wi]                                       # base frame
+    R = np.stack(rec.T_cam_base)[:, :3, :3]
+    d_cam = np.einsum("tij,tj->ti", R, d)
+    return {"wrist": np.linalg.norm(d, axis=1),
+            "elbow": np.linalg.norm(ends[:, ei] - j_true[:, ei], axis=1),
+            "lateral": np.linalg.norm(d_cam[:, :2], axis=1), "depth": np.abs(d_cam[:, 2]),
+            "angles": wrap(np.stack(rec.q)[:, ARM] - q_true[:, ARM])}
+
+
+def kpf_metrics(rec: KpfRecord, world, body: bm.BodyModel, camera: str) -> dict:
+    if not rec.t:
+        return {"frames": 0, "frames_per_s": 0.0, "lost_fraction": 1.0}
+    e = errors(rec, world, body)
+    mm = 1e3
+    return {
+        "frames": len(rec.t),
+        "frames_per_s": float(len(rec.t) / max(sum(rec.compute_s), 1e-9)),
+        "lost_fraction": float(np.mean(e["wrist"] > LOST_M)),
+        "reported_lost_fraction": float(np.mean(rec.lost)),
+        "wrist_error_mm": mm * float(e["wrist"].mean()),
+        "wrist_lateral_mm": mm * float(e["lateral"].mean()),
+        "wrist_depth_mm": mm * float(e["depth"].mean()),
+        "elbow_error_mm": mm * float(e["elbow"].mean()),
+        "joint_rmse_deg": float(np.degrees(np.sqrt(np.mean(e["angles"] ** 2)))),
+        "right_arm_rmse_deg": float(np.degrees(np.sqrt(np.mean(e["angles"][:, :4] ** 2)))),
+        "iterations_mean": float(np.mean(rec.iterations)),
+    }

@@ -1,0 +1,190 @@
+"""The stateful tracker around the kernel particle filter's pure maths
+(:mod:`humimic.estimation.particles.kernel`) and the likelihood (eqs. 9-10).
+
+One frame (Schmidt sec. 5.2): resample the posterior, propagate a share of the particles with
+the linear motion model (velocity from the last two best modes) and the rest randomly, seek the
+modes by mean shift with reweighting, take the dominant mode as the estimate, set next frame's
+motion share from each group's cumulated posterior, and adapt the mean colours from the mode's
+back-projection (eq. 7). ``filter: condensation`` runs plain CONDENSATION instead (the same
+likelihood; a random walk of the same extent; the weighted mean).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from threadpoolctl import ThreadpoolController
+
+from humimic import bodymodel as bm
+from humimic.estimation.particles import kernel as kpf
+from humimic.estimation.particles.densities import Gaussian
+from humimic.estimation.particles.filters import condensation_step
+from humimic.estimation.particles.weights import uniform_log_weights
+from humimic.perception.trackers.kpf.cues import CueMaps
+from humimic.perception.trackers.kpf.likelihood import Likelihood
+
+_BLAS = ThreadpoolController()
+#: The state's partition (``partitioned``): torso, right arm, left arm DOFs.
+GROUPS = [np.arange(0, 6), np.arange(6, 10), np.arange(10, 14)]
+#: Mean-shift modes reported per frame (the heaviest distinct ones), for display.
+MAX_MODES = 8
+
+
+@dataclass(frozen=True)
+class ClampedWalk:
+    """CONDENSATION's dynamics: uniform noise of half-width ``D`` (as the KPF's random group),
+    clamped into the joint limits."""
+
+    D: np.ndarray
+    limits: bm.JointLimits
+
+    def sample(self, x: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+        return self.limits.clamp(x + rng.uniform(-1.0, 1.0, x.shape) * self.D)
+
+    def log_density(self, x_new: np.ndarray, x_old: np.ndarray) -> np.ndarray:
+        raise NotImplementedError("CONDENSATION samples from the dynamics only")
+
+    def mean(self, x: np.ndarray) -> np.ndarray:
+        return x
+
+
+@dataclass(frozen=True)
+class FrameResult:
+    mode: np.ndarray
+    """(14,) the estimate."""
+    particles: np.ndarray
+    weights: np.ndarray
+    spread: np.ndarray
+    """(14,) weighted standard deviation of the particles."""
+    lost: bool
+    cost: float
+    """Mean cue cost of the estimate."""
+    iterations: int
+    modes: np.ndarray
+    """(M, 14) distinct mean-shift modes (the particles' converged positions, deduplicated)."""
+
+
+def kpf_body(model=None) -> bm.BodyModel:
+    """Schmidt's 14-DOF model of the avatar (elliptic-cylinder torso), the torso's yaw free
+    over +-360 deg (a person facing the robot has yaw 180 deg in the base frame: a +-180 deg
+    limit would clamp half the particles)."""
+    from humimic.world.names import HUMAN_PREFIX
+
+    limits = bm.JointLimits.default(torso_yaw=(-2 * np.pi, 2 * np.pi))
+    if model is None:
+        return bm.avatar_body(limits=limits, torso="cylinder")
+    return bm.avatar_body(model, HUMAN_PREFIX, limits=limits, torso="cylinder")
+
+
+class KpfTracker:
+    """Schmidt et al.'s 14-DOF upper-body tracker; ``cfg`` a
+    :class:`~humimic.perception.trackers.kpf.config.KpfConfig`."""
+
+    def __init__(self, body: bm.BodyModel, intrinsics, cfg, rng: np.random.Generator):
+        self.body, self.cfg, self.rng = body, cfg, rng
+        self.lik = Likelihood(body, intrinsics, cfg)
+        self.D = np.asarray(cfg.D(), float)
+        self.limits = body.free_limits
+        self.particles: np.ndarray | None = None
+        self.w = np.zeros(0)
+        self.mode = self.mode_prev = None
+        self.share = 0.5
+        self.torso_prior: Gaussian | None = None
+
+    def start(self, q0: np.ndarray, maps: CueMaps, T_cam_base: np.ndarray) -> None:
+        """Initialise at a known pose (the paper fits the model by hand): every particle at
+        ``q0`` and the colour references from its back-projection."""
+        n = self.cfg.particles
+        self.mode = self.mode_prev = self.limits.clamp(np.asarray(q0, float))
+        c = self.cfg
+        self.torso_prior = None if c.torso_prior_m is None else Gaussian(
+            self.mode[:6], np.diag([c.torso_prior_m ** 2] * 3
+                                   + [np.radians(c.torso_prior_deg) ** 2] * 3))
+        self.particles = np.repeat(self.mode[None], n, axis=0)
+        self.w = np.full(n, 1.0 / n)
+        self.W = np.full((n, len(GROUPS)), 1.0 / n)
+        self.lik.adapt({p: c[0] for p, c in
+                        self.lik.evaluate(self.mode[None], maps, T_cam_base).colours.items()})
+
+    def _prior(self, q: np.ndarray) -> np.ndarray:
+        """Log-prior of the torso pose (0 without ``torso_prior_m``)."""
+        return 0.0 if self.torso_prior is None else self.torso_prior.log_density(q[:, :6])
+
+    def _log_lik(self, maps, T_cam_base):
+        return lambda q: self.lik.evaluate(q, maps, T_cam_base).log_lik + self._prior(q)
+
+    def _group_log_lik(self, maps, T_cam_base):
+        """``(N, 3)``: the whole pose's log-likelihood (torso group), the right arm's limbs',
+        the left arm's."""
+        cols = [self.lik.parts.index(p) for p in self.lik.parts]
+        side = [np.array([c for c, p in zip(cols, self.lik.parts, strict=True) if p[:2] == s])
+                for s in ("r_", "l_")]
+
+        def f(q):
+            t = self.lik.evaluate(q, maps, T_cam_base).terms
+            return np.column_stack([t.sum(1) + self._prior(q), t[:, side[0]].sum(1),
+                                    t[:, side[1]].sum(1)])
+        return f
+
+    def step(self, maps: CueMaps, T_cam_base: np.ndarray) -> FrameResult:
+        """Track one frame (BLAS on one thread: the N x N products are small, and threads
+        spinning on a shared 2-core machine made them 5x slower)."""
+        if self.particles is None:
+            raise RuntimeError("KpfTracker.step before start")
+        with _BLAS.limit(limits=1, user_api="blas"):
+            return self._step(maps, T_cam_base)
+
+    def _step(self, maps: CueMaps, T_cam_base: np.ndarray) -> FrameResult:
+        if self.cfg.filter == "condensation":
+            mode, iters, modes = self._condensation(maps, T_cam_base), 0, None
+        else:
+            mode, iters, modes = self._kpf(maps, T_cam_base)
+        ev = self.lik.evaluate(mode[None], maps, T_cam_base)
+        cost = ev.mean_cost(0)
+        lost = not cost <= self.cfg.lost_cost
+        if lost:   # keep the particles; no velocity, no colour adaptation
+            self.mode_prev = self.mode
+        else:
+            self.mode_prev, self.mode = self.mode, mode
+            self.lik.adapt({p: c[0] for p, c in ev.colours.items()})
+        mean = self.w @ self.particles
+        spread = np.sqrt(np.maximum(self.w @ (self.particles - mean) ** 2, 0.0))
+        if modes is None:
+            modes = mode[None]
+        return FrameResult(mode, self.particles, self.w, spread, lost, cost, iters, modes)
+
+    def _kpf(self, maps, T_cam_base):
+        cfg, rng = self.cfg, self.rng
+        groups = GROUPS if cfg.partitioned else [np.arange(len(self.D))]
+        resampled = kpf.partitioned_resample(self.particles, self.W, groups, rng)
+        velocity = self.mode - self.mode_prev
+        pred, moved = kpf.mixed_propagate(resampled, velocity, self.share, self.D,
+                                          rng, self.limits.inside, cfg.motion_noise)
+        pred = self.limits.clamp(pred)
+        lik = (self._group_log_lik if cfg.partitioned else self._log_lik)(maps, T_cam_base)
+        parts, W, _, iters = kpf.kpf_modes(pred, lik, self.D, cfg.iterations, cfg.tol,
+                                           cfg.shrink, cfg.reweight == "kernel", groups,
+                                           cfg.kde_stride)
+        h = cfg.shrink ** max(iters - 1, 0) * self.D
+        win = cfg.window * self.D
+        mode = np.empty(len(self.D))
+        for k, g in enumerate(groups):
+            mode[g], _ = kpf.dominant_mode(parts[:, g], W[:, k], h[g], win[g])
+        w = W[:, 0]
+        self.share = kpf.motion_share(w, moved, cfg.min_random)
+        self.particles, self.w, self.W = parts, w, W
+        _, first = np.unique(np.round(parts / (cfg.window * self.D)), axis=0,
+                             return_index=True)
+        return mode, iters, parts[first[np.argsort(-w[first])][:MAX_MODES]]
+
+    def _condensation(self, maps, T_cam_base):
+        n = len(self.particles)
+        step = condensation_step(self.particles, uniform_log_weights(n) if self.w is None
+                                 else np.log(np.maximum(self.w, 1e-300)),
+                                 ClampedWalk(self.D, self.limits),
+                                 self._log_lik(maps, T_cam_base), self.rng)
+        # the weighted set before resampling is gone: keep the resampled, equally weighted one
+        self.particles, self.w = step.particles, np.full(n, 1.0 / n)
+        self.W = np.repeat(self.w[:, None], len(GROUPS), axis=1)
+        return self.limits.clamp(step.mean)

@@ -1,0 +1,63 @@
+"""Scenario configuration of Menezes et al.'s two-arm tracker TBP (secs. 6.2-6.3, Table 6)."""
+
+from __future__ import annotations
+
+from typing import Literal
+
+from pydantic import Field, model_validator
+
+from humimic.scenario.base import Section
+
+
+class TbpConfig(Section):
+    """Eight arm angles (``SFE SAA HR EB`` per arm, DB's convention) from one camera; defaults
+    from Table 6 unless a key says otherwise."""
+
+    kind: Literal["tbp"] = "tbp"
+    camera: str | None = None
+    """The eye camera (default the left rendered one)."""
+    torso: Literal["head", "truth"] = "head"
+    """Where the shoulders come from: ``head``, the head position perception measures
+    (``measurements``, target ``head``; the torso upright and facing the robot, as the paper
+    assumes a coarsely fronto-parallel torso placed from the face tracker); ``truth``, the
+    avatar's true torso pose -- an ORACLE, reported as such in the metrics."""
+    n: int = Field(400, ge=1, le=20000)
+    """Particles N."""
+    sigma_deg: float = Field(3.0, gt=0.0, le=45.0)
+    """Process noise of the constant-velocity model per frame (deg, each angle)."""
+    sigma_s: float = Field(1.0, gt=0.0)
+    """Shape-cue standard deviation (px, eq. 5's distance)."""
+    K: float = Field(0.5, gt=0.0, le=1.0)
+    """Moving-edge weight in eq. 5."""
+    cap_px: float = Field(5.0, gt=0.0, le=30.0)
+    """Largest distance (px) one contour point contributes to eq. 5 (not in the paper)."""
+    n_points: int = Field(12, ge=4, le=100)
+    """Contour points per part for the shape cue."""
+    lambda_s: tuple[float, float] = (10.0, 1.0)
+    """Shape-cue weight for a plain and a cluttered first frame (the paper: 10 and 0.1)."""
+    edge_density: float = Field(0.06, gt=0.0, lt=1.0)
+    """Edge-pixel fraction of the first frame above which the scene counts as cluttered."""
+    sigma_c: float = Field(0.3, gt=0.0)
+    """Colour-patch standard deviation (eq. 6)."""
+    lambda_c: tuple[float, float] = (0.1, 1.0)
+    """Colour-patch weight for a non-discriminant and a discriminant patch (the paper)."""
+    patch_confidence: float = Field(0.5, gt=0.0, lt=1.0)
+    """A patch whose reference histogram is within this Bhattacharyya distance of the uniform
+    one counts as discriminant (textured)."""
+    sigma_k: float = Field(0.3, gt=0.0)
+    """Skin cue (hands) standard deviation (first stage)."""
+    lambda_st: float = Field(0.5, ge=0.0)
+    """Stabiliser towards the rest pose (eq. 19 prior, per rad^2)."""
+    lambda_co: float = Field(0.5, ge=0.0)
+    """Collision prior (eq. 18)."""
+    rest_deg: tuple[float, float, float, float] = (5.0, 5.0, 0.0, 10.0)
+    """Rest pose ``SFE SAA HR EB`` (deg) of each arm: the stabiliser's x_def and the start."""
+    init_sigma_deg: float = Field(10.0, gt=0.0)
+    bins: Literal[8, 16, 32, 64] = 32
+    latency: float = Field(0.0, ge=0.0, le=1.0)
+
+    @model_validator(mode="after")
+    def _check(self) -> TbpConfig:
+        if min(self.lambda_s) < 0 or min(self.lambda_c) < 0:
+            raise ValueError("lambda_s and lambda_c must be >= 0")
+        return self

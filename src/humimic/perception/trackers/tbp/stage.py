@@ -1,0 +1,114 @@
+"""The TBP pipeline stage: one eye image (+ the torso pose) -> eight arm angles on ``poses``;
+scores against the avatar (``trackers.<name>.*``): ``joint_rmse_deg`` (all eight angles and
+per DOF), ``elbow_rmse_mm``, ``wrist_rmse_mm`` (both arms pooled, 3-D, base frame),
+``wrist_within_10cm_fraction`` and ``torso_source`` (``truth`` is an oracle).
+
+With ``torso: head`` the torso is placed from the latest ``head`` measurement on the bus
+(upright, facing the robot: the paper's coarsely fronto-parallel torso with shoulders deduced
+from the face); until one arrives the stage publishes ``searching``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from humimic.bodymodel.avatar import truth_state
+from humimic.bodymodel.kinematics import DOF_NAMES, JOINT_SEGMENT, ypr_matrix
+from humimic.maths.stats import rmse
+from humimic.messages import PoseEstimate
+from humimic.perception.trackers.common import PoseTrackerStage
+from humimic.perception.trackers.tbp.tracker import ARM_NAMES, TbpTracker
+
+JOINTS = ("r_shoulder", "r_elbow", "r_wrist", "l_shoulder", "l_elbow", "l_wrist")
+
+
+def torso_from_head(p_head: np.ndarray, head_offset: np.ndarray) -> np.ndarray:
+    """Torso pose ``(x y z yaw pitch roll)`` (base frame) of an upright person whose head
+    centre is at ``p_head`` and who faces the robot (at the base origin); ``head_offset`` is
+    the head centre in the torso frame."""
+    yaw = math.atan2(-p_head[1], -p_head[0])
+    R = ypr_matrix(np.array(yaw), np.array(0.0), np.array(0.0))
+    return np.r_[p_head - R @ head_offset, yaw, 0.0, 0.0]
+
+
+class TbpStage(PoseTrackerStage):
+    kind = "tbp"
+
+    def __init__(self, name: str, cfg, camera: str, body, lut, world, rng):
+        super().__init__(name, cfg.latency)
+        self.cfg, self.camera, self.world, self.rng = cfg, camera, world, rng
+        self.tracker = TbpTracker(cfg, body, lut)
+        head = body.part("head")
+        self.head_offset = body.skeleton.neck + head.p_seg_part
+        self.head: np.ndarray | None = None
+        self.torsos: list = []
+        self.means: list = []
+
+    def attach(self, bus, timer) -> None:
+        super().attach(bus, timer)
+        if self.cfg.torso == "head":
+            bus.subscribe("measurements", self._on_measurements)
+
+    def _on_measurements(self, topic: str, msg) -> None:
+        m = msg.value.targets.get("head")
+        if m is not None:
+            self.head = np.asarray(m.p_base, float)
+
+    def _torso(self, t: float) -> np.ndarray | None:
+        if self.cfg.torso == "truth":                                   # ORACLE
+            return truth_state(self.world, self.world.gt.index_of(t), "base")[:6]
+        return None if self.head is None else torso_from_head(self.head, self.head_offset)
+
+    def track(self, t: float, images: dict):
+        frame, torso = images.get(self.camera), self._torso(t)
+        if frame is None or torso is None:
+            self.torsos.append(None)
+            self.means.append(None)
+            return PoseEstimate(self.tracker_name, self.kind, np.full(8, np.nan), ARM_NAMES,
+                                status="searching")
+        mean, cov, ok = self.tracker.step(frame, torso, self.rng)
+        self.torsos.append(torso)
+        self.means.append(mean)
+        pose = self.tracker.body.forward(mean[None], fixed=torso)
+        joints = {j: pose.joint(j)[0] for j in JOINTS}
+        return PoseEstimate(self.tracker_name, self.kind, mean, ARM_NAMES, cov, joints,
+                            dict(zip(ARM_NAMES, map(float, mean), strict=True)),
+                            "tracking" if ok else "lost")
+
+    def scores(self) -> dict:
+        use = [i for i, m in enumerate(self.means) if m is not None]
+        out = {"torso_source": "truth (oracle)" if self.cfg.torso == "truth" else "head",
+               "restarts": self.tracker.restarts}
+        w = self.tracker.weights
+        if w is not None:
+            out.update({"lambda_s": w["lambda_s"], "cluttered": w["cluttered"],
+                        "first_edge_density": w["edge_density"],
+                        "lambda_c": [float(v) for v in w["lambda_c"]]})
+        if not use:
+            return out
+        ticks = self.world.gt.index_of(np.asarray(self.times)[use])
+        truth = truth_state(self.world, ticks, "base")
+        est = np.array([self.means[i] for i in use])
+        err = np.degrees((est - truth[:, 6:] + np.pi) % (2 * np.pi) - np.pi)
+        body = self.tracker.body.with_free(DOF_NAMES)
+        p_true = body.forward(truth)
+        torsos = np.array([self.torsos[i] for i in use])
+        p_est = body.forward(np.hstack([torsos, est]))
+        def joint_err(name):
+            return p_est.joint(name) - p_true.joint(name)
+        elbow = np.vstack([joint_err("r_elbow"), joint_err("l_elbow")])
+        wrist = np.vstack([joint_err("r_wrist"), joint_err("l_wrist")])
+        out.update({
+            "joint_rmse_deg": float(np.sqrt(np.mean(err ** 2))),
+            "joint_rmse_deg_per_dof": {n: float(np.sqrt(np.mean(err[:, k] ** 2)))
+                                       for k, n in enumerate(ARM_NAMES)},
+            "elbow_rmse_mm": 1e3 * rmse(elbow), "wrist_rmse_mm": 1e3 * rmse(wrist),
+            "right_wrist_rmse_mm": 1e3 * rmse(joint_err("r_wrist")),
+            "wrist_within_10cm_fraction": float(np.mean(np.linalg.norm(wrist, axis=1) <= 0.1)),
+        })
+        return out
+
+
+__all__ = ["JOINT_SEGMENT", "TbpStage", "torso_from_head"]

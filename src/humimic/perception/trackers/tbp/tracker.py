@@ -1,0 +1,117 @@
+"""TBP, Menezes et al.'s two-arm tracker (secs. 6.2-6.3, Table 6), one monocular frame at a
+time.
+
+State: ``x' = [q_k, q_{k-1}]`` (16 values, ``q`` the eight arm angles ``R_SFE ... L_EB``),
+constant-velocity AR dynamics ``x'_k = A x'_{k-1} + w_k`` (``q_k = 2 q_{k-1} - q_{k-2} +
+w``). The auxiliary particle filter (:func:`humimic.estimation.particles.apf_step`, Table 2)
+picks predecessors by the skin cue of their predicted hands (first stage) and weights the new
+particles by eq. 19 (second stage, :mod:`.likelihood`). Samples outside the joint limits are
+clamped to them, not rejected. Cue weights are set on the first frame: ``lambda_s`` from its
+edge density (plain or cluttered), each patch's ``lambda_c`` from how far its reference
+histogram is from a uniform one. If every particle has zero likelihood the set restarts from
+the rest pose.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from humimic.bodymodel.kinematics import ARM_DOFS
+from humimic.bodymodel.model import BodyModel
+from humimic.estimation.particles import LinearGaussian, apf_step, weighted_cov
+from humimic.estimation.particles.weights import uniform_log_weights
+from humimic.perception.cues.edges import shape_log_likelihood
+from humimic.perception.cues.histograms import bhattacharyya
+from humimic.perception.cues.motion import OpticalFlow
+from humimic.perception.trackers.tbp.config import TbpConfig
+from humimic.perception.trackers.tbp.likelihood import (
+    ArmView,
+    arm_view,
+    full_log_likelihood,
+    patch_histograms_all,
+    project_arms,
+    skin_distance,
+)
+
+ARM_NAMES = ARM_DOFS["R"] + ARM_DOFS["L"]
+
+
+def cv_dynamics(n: int, sigma: float) -> LinearGaussian:
+    """Constant-velocity AR model on ``[q_k, q_{k-1}]`` (``n`` angles, noise ``sigma`` rad on
+    ``q_k``; a negligible one on the copied ``q_{k-1}`` keeps ``Q`` positive definite)."""
+    I, Z = np.eye(n), np.zeros((n, n))
+    F = np.block([[2 * I, -I], [I, Z]])
+    Q = np.diag(np.r_[np.full(n, sigma ** 2), np.full(n, 1e-12)])
+    return LinearGaussian(F, Q)
+
+
+class TbpTracker:
+    def __init__(self, cfg: TbpConfig, body: BodyModel, lut):
+        self.cfg, self.body, self.lut = cfg, body.with_free(ARM_NAMES), lut
+        self.q_def = np.radians(np.tile(cfg.rest_deg, 2))
+        self.dynamics = cv_dynamics(8, math.radians(cfg.sigma_deg))
+        self.flow = OpticalFlow()
+        self.prev_image = None
+        self.particles: np.ndarray | None = None
+        self.log_weights: np.ndarray | None = None
+        self.refs: np.ndarray | None = None
+        self.weights: dict | None = None
+        self.restarts = 0
+
+    def _start(self, rng: np.random.Generator) -> None:
+        q = self.body.clamp(self.q_def + rng.normal(0, math.radians(self.cfg.init_sigma_deg),
+                                                    (self.cfg.n, 8)))
+        self.particles = np.hstack([q, q])
+        self.log_weights = uniform_log_weights(self.cfg.n)
+
+    def _first_frame(self, view: ArmView, torso: np.ndarray) -> None:
+        """Cue weights from the first frame (sec. 6.3.1) and the patches' references."""
+        cfg = self.cfg
+        cluttered = view.edge_density > cfg.edge_density
+        q0 = self.q_def[None]
+        refs = patch_histograms_all(project_arms(self.body, q0, torso, view, 4), view.qimage)[0]
+        uniform = np.full(refs.shape[-1], 1.0 / refs.shape[-1])
+        d_uniform = bhattacharyya(refs, uniform).mean(axis=-1)                # (6,)
+        lam_c = np.where(d_uniform < cfg.patch_confidence, cfg.lambda_c[1], cfg.lambda_c[0])
+        self.refs = refs
+        self.weights = {"lambda_s": cfg.lambda_s[1] if cluttered else cfg.lambda_s[0],
+                        "sigma_s": cfg.sigma_s, "K": cfg.K, "cap_px": cfg.cap_px,
+                        "sigma_c": cfg.sigma_c,
+                        "lambda_c": lam_c, "sigma_k": cfg.sigma_k, "lambda_st": cfg.lambda_st,
+                        "lambda_co": cfg.lambda_co, "q_def": self.q_def,
+                        "cluttered": bool(cluttered), "edge_density": view.edge_density}
+
+    def step(self, frame, torso: np.ndarray, rng: np.random.Generator):
+        """One frame: returns ``(mean (8,), cov (8, 8), ok)``."""
+        cfg = self.cfg
+        flow = None if self.prev_image is None else self.flow(self.prev_image, frame.image)
+        self.prev_image = frame.image
+        view = arm_view(frame, flow, self.lut, cfg.bins)
+        if self.particles is None:
+            self._start(rng)
+            self._first_frame(view, torso)
+        body, w, refs = self.body, self.weights, self.refs
+
+        def first(x):                                           # skin cue of the hands
+            q = body.clamp(x[:, :8])
+            proj = project_arms(body, q, torso, view, 4)
+            return shape_log_likelihood(skin_distance(proj, view.skin), cfg.sigma_k)
+
+        def second(x):
+            q = body.clamp(x[:, :8])
+            proj = project_arms(body, q, torso, view, cfg.n_points)
+            return full_log_likelihood(proj, view, q, body, w, refs)
+
+        s = apf_step(self.particles, self.log_weights, self.dynamics, second, rng,
+                     first_stage=first)
+        x = s.particles.copy()
+        x[:, :8] = body.clamp(x[:, :8])                          # clamped, not rejected
+        self.particles, self.log_weights = x, s.log_weights
+        if not s.ok:
+            self.restarts += 1
+            self._start(rng)
+        mean = body.clamp(s.mean[None, :8])[0]
+        cov = weighted_cov(x[:, :8], s.log_weights)
+        return mean, cov, s.ok

@@ -1,0 +1,105 @@
+"""Per-tick records that live on disk: memory stays flat however long the run.
+
+A :class:`SpillArray` has the shape ``(n, *tail)`` of a preallocated numpy array and is
+written the same way, row by row as the run advances (``a[k] = row``, ``a[k, i] = value``), but
+only a window of :data:`BLOCK` rows is in memory; when a write moves past the window, the window
+is appended to an unnamed temporary file. Reading (``a[k0:n, i]``, ``a[:n]``, ``a[k]``) gathers
+just the requested entries block by block, so a column of a long run costs the column's size,
+not the record's. Rows never written read as ``fill``.
+"""
+
+from __future__ import annotations
+
+import tempfile
+
+import numpy as np
+
+#: Rows held in memory (and read back per step).
+BLOCK = 4096
+
+
+class SpillArray:
+    """``(n, *tail)`` array whose rows before the write window are on disk (see module doc)."""
+
+    def __init__(self, n: int, tail: tuple[int, ...] = (), dtype=float, fill=0.0):
+        self.shape = (int(n), *tail)
+        self.dtype = np.dtype(dtype)
+        self.fill = fill
+        self._window = np.full((BLOCK, *tail), fill, self.dtype)
+        self._base = 0  # row index of the window's first row (rows before it are in the file)
+        self._file = None
+
+    @property
+    def ndim(self) -> int:
+        return len(self.shape)
+
+    def __len__(self) -> int:
+        return self.shape[0]
+
+    # ---- writing ---------------------------------------------------------------------------
+    def _row(self, k) -> int:
+        k = int(k)
+        if not 0 <= k < self.shape[0]:
+            raise IndexError(f"row {k} outside 0..{self.shape[0] - 1}")
+        if k < self._base:
+            raise IndexError(f"row {k} is already on disk (rows are written in order)")
+        while k >= self._base + BLOCK:
+            if self._file is None:
+                self._file = tempfile.TemporaryFile()
+            self._file.seek(0, 2)
+            self._file.write(self._window.tobytes())
+            self._window.fill(self.fill)
+            self._base += BLOCK
+        return k - self._base
+
+    def __setitem__(self, key, value) -> None:
+        if isinstance(key, tuple):
+            self._window[(self._row(key[0]), *key[1:])] = value
+        else:
+            self._window[self._row(key)] = value
+
+    # ---- reading ---------------------------------------------------------------------------
+    def _block(self, b: int) -> np.ndarray:
+        """Rows ``[b, b + BLOCK)`` (the window, or read from the file)."""
+        if b == self._base:
+            return self._window
+        tail = self.shape[1:]
+        if b > self._base:  # never written
+            return np.full((BLOCK, *tail), self.fill, self.dtype)
+        row_bytes = self.dtype.itemsize * int(np.prod(tail, dtype=int))
+        self._file.seek(b * row_bytes)
+        return np.frombuffer(self._file.read(BLOCK * row_bytes), self.dtype).reshape(BLOCK, *tail)
+
+    def __getitem__(self, key):
+        first, rest = (key[0], key[1:]) if isinstance(key, tuple) else (key, ())
+        if isinstance(first, (int, np.integer)):
+            k = int(first) + (self.shape[0] if first < 0 else 0)
+            if not 0 <= k < self.shape[0]:
+                raise IndexError(f"row {first} outside 0..{self.shape[0] - 1}")
+            b = k // BLOCK * BLOCK
+            return np.array(self._block(b)[(k - b, *rest)])
+        if not isinstance(first, slice) or (first.step or 1) < 0:  # an index array: numpy's
+            rows = np.arange(self.shape[0])[first]  # rules, rows gathered one block at a time
+            out = [self._block(b)[(rows[rows // BLOCK * BLOCK == b] - b, *rest)]
+                   for b in np.unique(rows // BLOCK * BLOCK).tolist()]
+            order = np.argsort(np.argsort(rows // BLOCK, kind="stable"), kind="stable")
+            probe = np.empty((0, *self.shape[1:]), self.dtype)[(np.zeros(0, int), *rest)]
+            return np.concatenate(out)[order] if out else probe
+        start, stop, step = first.indices(self.shape[0])
+        parts = [np.empty((0, *self.shape[1:]), self.dtype)[(slice(None), *rest)]]
+        k = start
+        while k < stop:  # each block read once, sliced as numpy would slice the whole array
+            b = k // BLOCK * BLOCK
+            end = min(stop, b + BLOCK)
+            parts.append(np.array(self._block(b)[(slice(k - b, end - b, step), *rest)]))
+            k += -(-(end - k) // step) * step
+        return np.concatenate(parts)
+
+    def __array__(self, dtype=None, copy=None):
+        out = self[:]
+        return out if dtype is None else out.astype(dtype)
+
+    def close(self) -> None:
+        if self._file is not None:
+            self._file.close()
+            self._file = None

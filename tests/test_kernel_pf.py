@@ -1,0 +1,137 @@
+"""The kernel particle filter's maths (Schmidt et al. eqs. 11-13) against independent
+computations: the Epanechnikov KDE's integral (scipy quadrature) and value (a per-point loop
+with the closed-form kernel), the mean-shift vector against the KDE's numerical gradient
+(scipy), mode seeking against scipy's optimiser on the KDE, the reweighting's ratio, and the
+mixed propagation's shares and noise bounds."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy import integrate, optimize
+
+from humimic.estimation.particles import kernel as kpf
+
+
+def _kde_loop(x, s, w, h):
+    """Eq. 11 point by point: sum_n w_n (d+2)/(2 V_d) (1 - |u|^2)_+ / prod(h), V_d = the unit
+    ball's volume from its recurrence V_d = 2 pi / d V_{d-2}."""
+    d = s.shape[1]
+    vol = {0: 1.0, 1: 2.0}
+    for k in range(2, d + 1):
+        vol[k] = 2 * math.pi / k * vol[k - 2]
+    out = 0.0
+    for sn, wn in zip(s, w, strict=True):
+        r2 = float(np.sum(((x - sn) / h) ** 2))
+        if r2 < 1:
+            out += wn * (d + 2) / (2 * vol[d]) * (1 - r2)
+    return out / np.prod(h)
+
+
+@pytest.fixture
+def cloud():
+    rng = np.random.default_rng(3)
+    s = np.vstack([rng.normal([0, 0], 0.4, (60, 2)), rng.normal([2.5, 1.0], 0.3, (30, 2))])
+    w = rng.uniform(0.5, 1.5, len(s))
+    return s, w / w.sum(), np.array([0.9, 0.7])
+
+
+def test_kde_matches_loop_and_integrates_to_one(cloud):
+    s, w, h = cloud
+    x = np.array([[0.1, -0.2], [2.4, 1.1], [1.2, 0.5], [9.0, 9.0]])
+    assert np.allclose(kpf.kde(x, s, w, h), [_kde_loop(p, s, w, h) for p in x], atol=1e-12)
+    total, _ = integrate.quad(lambda u: kpf.kde(np.array([[u]]), np.array([[0.2]]), [1.0],
+                                                [0.7])[0], -0.5, 0.9)
+    assert total == pytest.approx(1.0, abs=1e-9)
+    # 2-D: midpoint rule on a fine grid over the kernel's support box
+    g = (np.arange(600) + 0.5) / 600 * 2 - 1
+    gx, gy = np.meshgrid(g * h[0], g * h[1])
+    dens = kpf.kde(np.column_stack([gx.ravel(), gy.ravel()]), np.zeros((1, 2)), [1.0], h)
+    assert dens.sum() * (2 * h[0] / 600) * (2 * h[1] / 600) == pytest.approx(1.0, abs=1e-4)
+
+
+def test_mean_shift_points_up_the_kde_gradient(cloud):
+    """Epanechnikov: m(x) - x = h^2 / (d + 2) grad p(x) / p_flat(x), so the shift is along the
+    KDE's gradient (scaled per dimension by h^2)."""
+    s, w, h = cloud
+    shifted = kpf.mean_shift(s, w, h)
+    for n in range(0, len(s), 7):
+        g = optimize.approx_fprime(s[n], lambda x: kpf.kde(x[None], s, w, h)[0], 1e-7)
+        v = (shifted[n] - s[n]) / h ** 2
+        cos = v @ g / (np.linalg.norm(v) * np.linalg.norm(g))
+        assert cos > 0.999, (n, cos)
+
+
+def test_mean_shift_iterations_reach_the_kde_maximum(cloud):
+    """A point moved by repeated mean shift over a fixed set ends where scipy's optimiser finds
+    the KDE's local maximum from the same start."""
+    s, w, h = cloud
+    x = np.array([0.5, 0.4])
+    for _ in range(200):
+        inside = np.sum(((s - x) / h) ** 2, 1) <= 1
+        x = (w * inside) @ s / (w * inside).sum()
+    best = optimize.minimize(lambda p: -kpf.kde(p[None], s, w, h)[0], np.array([0.5, 0.4]),
+                             method="Nelder-Mead", options={"xatol": 1e-6, "fatol": 1e-12})
+    assert kpf.kde(x[None], s, w, h)[0] == pytest.approx(-best.fun, rel=0.01)
+    assert np.linalg.norm(x - best.x) < 0.05
+
+
+def test_dominant_mode_is_the_heavier_cluster(cloud):
+    s, w, h = cloud
+    mode, peak = kpf.dominant_mode(s, w, h, 0.25 * h * 4)
+    assert np.linalg.norm(mode - [0, 0]) < 0.2
+    assert np.argmax(kpf.kde(s, s, w, h)) == peak
+
+
+def test_kernel_reweighting_is_likelihood_times_prior_over_proposal(cloud):
+    s, _, h = cloud
+    lik = np.linspace(-3, 0, len(s))
+    shifted = kpf.mean_shift(s, np.exp(lik) / np.exp(lik).sum(), h)
+    lw = kpf.kernel_log_weights(lik, shifted, s, h)
+    u = np.full(len(s), 1 / len(s))
+    p = np.array([_kde_loop(x, s, u, h) for x in shifted])
+    q = np.array([_kde_loop(x, shifted, u, h) for x in shifted])
+    assert np.allclose(lw, lik + np.log(p) - np.log(q))
+
+
+def test_kpf_modes_find_the_higher_of_two_peaks_where_the_mean_falls_between():
+    """Two likelihood peaks (heights 1 and 1/2): mean shift and the dominant mode land on the
+    higher one in most runs, while the weighted mean falls between them."""
+    p1, p2 = np.array([0.5, 0.1, -0.1]), np.array([-0.5, 0.0, 0.2])
+    h0 = np.full(3, 0.5)
+
+    def log_lik(x):
+        g1 = np.exp(-0.5 * np.sum(((x - p1) / 0.12) ** 2, 1))
+        g2 = np.exp(-0.5 * np.sum(((x - p2) / 0.12) ** 2, 1))
+        return np.log(g1 + 0.5 * g2 + 1e-300)
+
+    mode_err, mean_err = [], []
+    for seed in range(6):
+        x0 = np.random.default_rng(seed).uniform(-1, 1, (400, 3))
+        x, w, _, done = kpf.kpf_modes(x0, log_lik, h0, 3, tol=0.0)
+        w = w[:, 0]
+        assert done == 3
+        mode, _ = kpf.dominant_mode(x, w, 0.8 ** 2 * h0, 0.25 * h0)
+        mode_err.append(np.linalg.norm(mode - p1))
+        mean_err.append(np.linalg.norm(w @ x - p1))
+    assert np.median(mode_err) < 0.12 and np.median(mean_err) > 0.2, (mode_err, mean_err)
+    assert np.sum(np.array(mode_err) < 0.15) >= 4
+
+
+def test_mixed_propagation_shares_bounds_and_validity():
+    rng = np.random.default_rng(1)
+    x = np.zeros((1000, 2))
+    D = np.array([1.0, 2.0])
+    v = np.array([5.0, 0.0])
+    out, moved = kpf.mixed_propagate(x, v, 0.3, D, rng, lambda q: q[:, 1] > -1.0)
+    assert moved.sum() == 300
+    assert np.all(np.abs(out[moved] - v) <= 0.25 * D + 1e-12)
+    assert np.all(np.abs(out[~moved]) <= D + 1e-12)
+    assert np.all(out[:, 1] > -1.0)                                 # re-drawn until valid
+    assert np.std(out[~moved, 0]) == pytest.approx(1 / np.sqrt(3), rel=0.1)   # uniform +-D
+    w = np.where(moved, 2.0, 0.1)
+    assert kpf.motion_share(w, moved, 0.2) == pytest.approx(0.8)     # random share kept
+    assert kpf.motion_share(np.where(moved, 1.0, 3.0), moved, 0.2) == pytest.approx(
+        300 / (300 + 3 * 700))

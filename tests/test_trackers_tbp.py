@@ -1,0 +1,119 @@
+"""TBP (Menezes secs. 6.2-6.3): the auxiliary filter with its own first stage against the
+Kalman filter; the constant-velocity model, the collision prior and the torso placed from
+the head against closed forms; the likelihood peaks at the avatar's true arm angles in a
+rendered frame."""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+import pytest
+from test_particles import DYN, KF_LOGLIK, KF_MEANS, PRIOR, ZS, _loglik
+
+from humimic.bodymodel.avatar import truth_state
+from humimic.bodymodel.dimensions import avatar_body
+from humimic.estimation.particles import apf_step, initialize
+from humimic.paths import SCENARIOS_DIR
+from humimic.perception.trackers.tbp.likelihood import (
+    arm_view,
+    collision,
+    full_log_likelihood,
+    patch_histograms_all,
+    project_arms,
+)
+from humimic.perception.trackers.tbp.stage import torso_from_head
+from humimic.perception.trackers.tbp.tracker import ARM_NAMES, cv_dynamics
+from humimic.rngs import Rngs
+from humimic.scenario import load_scenario
+
+
+def test_apf_with_a_cheaper_first_stage_matches_the_kalman_filter():
+    """First stage: the likelihood tempered to a quarter (a cheaper, flatter cue); the second
+    stage divides it out, so the filter stays consistent."""
+    errs, lls = [], []
+    for r in range(4):
+        rng = np.random.default_rng(r)
+        x, lw = initialize(PRIOR, 800, rng)
+        means, total = [], 0.0
+        for z in ZS:
+            ll = _loglik(z)
+            s = apf_step(x, lw, DYN, ll, rng, first_stage=lambda x, ll=ll: 0.25 * ll(x))
+            x, lw = s.particles, s.log_weights
+            means.append(s.mean)
+            total += s.log_evidence
+        errs.append(np.array(means)[:, 0] - KF_MEANS[:, 0])
+        lls.append(total - KF_LOGLIK)
+    assert np.sqrt(np.mean(np.square(errs))) < 0.01          # measured 0.003 (posterior sd 0.07)
+    assert np.sqrt(np.mean(np.square(lls))) < 1.0            # measured 0.3 nats
+
+
+def test_constant_velocity_model():
+    dyn = cv_dynamics(8, 0.05)
+    q1, q0 = np.arange(8.0), np.arange(8.0) - 0.1
+    np.testing.assert_allclose(dyn.mean(np.r_[q1, q0][None])[0], np.r_[q1 + 0.1, q1])
+
+
+def test_collision_and_torso_from_head():
+    body = avatar_body(torso="cylinder").with_free(ARM_NAMES)
+    torso = np.array([1.5, 0.1, 0.9, np.pi, 0.0, 0.0])
+    rest = np.radians([5, 5, 0, 10] * 2)
+    across = np.radians([60, -40, 80, 120, 5, 5, 0, 10])       # right hand into the chest
+    f = collision(body.forward(np.stack([rest, across]), fixed=torso), body)
+    np.testing.assert_array_equal(f, [0.0, 1.0])
+    head = body.part("head")
+    offset = body.skeleton.neck + head.p_seg_part
+    p_head = np.array([1.6, -0.2, 1.55])
+    t = torso_from_head(p_head, offset)
+    pose = body.forward(rest[None], fixed=t)
+    R, p = pose.segment("head")
+    np.testing.assert_allclose(p[0] + R[0] @ head.p_seg_part, p_head, atol=1e-12)
+    # facing the robot: the torso's forward axis points at the base origin (horizontally)
+    fwd = pose.segment("torso")[0][0][:, 0]
+    np.testing.assert_allclose(fwd[:2] / np.linalg.norm(fwd[:2]),
+                               -p_head[:2] / np.linalg.norm(p_head[:2]), atol=1e-12)
+
+
+@pytest.fixture(scope="module")
+def rendered_pointing():
+    """fig12's pointing arm at t = 2 s (right arm raised sideways), the left eye's frame and
+    the frame before it (optical flow), the tracker's weights with truth-pose references."""
+    from humimic.perception.trackers.tbp.build import tbp_stage
+    from humimic.world.world import World
+
+    sc = load_scenario(SCENARIOS_DIR / "fig12_tbp_pointing.yaml", ["trackers.tbp.torso=truth"],
+                       duration=2.1)
+    rngs = Rngs(sc.seed)
+    world = World(sc, rngs)
+    stage = tbp_stage("tbp", sc.trackers["tbp"], sc, world, rngs, None)
+    trk, frames = stage.tracker, []
+    for t in (2.0 - 1 / 30, 2.0):
+        tick = world.gt.index_of(t)
+        world.apply_human(tick)
+        mujoco.mj_forward(world.scene.model, world.scene.data)
+        frames.append(world.eye_rig.capture(t)[stage.camera])
+    world.eye_rig.close()
+    view = arm_view(frames[1], trk.flow(frames[0].image, frames[1].image), trk.lut, 32)
+    truth = truth_state(world, tick, "base")
+    trk._first_frame(view, truth[:6])
+    refs = patch_histograms_all(project_arms(trk.body, truth[None, 6:], truth[:6], view, 4),
+                                view.qimage)[0]
+    return trk, view, truth, refs
+
+
+#: DOF index, margin (nats) of the true pose over +-20 deg on it; measured (the smaller of
+#: the two signs) with the tracker's defaults: R_SFE 0.38 (+20 deg moves the raised arm
+#: towards the camera: monocular depth), R_SAA 25, R_HR 0.99, R_EB 8.9, L_SFE 13, L_SAA 12,
+#: L_HR 0.27 (the hanging arm's twist is unobservable: the stabiliser alone), L_EB 2.8.
+MARGINS = [(0, 0.1), (1, 8.0), (2, 0.3), (3, 3.0), (4, 4.5), (5, 4.0), (6, 0.08), (7, 1.0)]
+
+
+@pytest.mark.parametrize(("dof", "margin"), MARGINS)
+def test_likelihood_peaks_at_the_true_arm_angles(rendered_pointing, dof, margin):
+    trk, view, truth, refs = rendered_pointing
+    q = truth[6:]
+    xs = np.stack([q, q, q])
+    xs[1, dof] -= np.radians(20)
+    xs[2, dof] += np.radians(20)
+    proj = project_arms(trk.body, xs, truth[:6], view, trk.cfg.n_points)
+    ll = full_log_likelihood(proj, view, xs, trk.body, trk.weights, refs)
+    assert min(ll[0] - ll[1], ll[0] - ll[2]) > margin, (ll[0] - ll[1], ll[0] - ll[2])
