@@ -27,7 +27,7 @@ import numpy as np
 from humimic.paths import SCENARIOS_DIR
 from humimic.perception.blobs.build import check_perception
 from humimic.perception.cues.auto_colors import learned_lut
-from humimic.perception.cues.learn_colors import frame_pixels, material_geoms, plain_materials
+from humimic.perception.cues.learn_colors import frame_pixels, material_geoms, trim_dark
 from humimic.rngs import Rngs
 from humimic.scenario import load_scenario
 from humimic.world.world import World
@@ -36,14 +36,13 @@ SCENARIOS = ("ude_wave_tracking", "ude_static_hand_foveal")
 
 
 def separation(world, cams, lut) -> tuple[float, float]:
-    """Fractions of skin / other pixels (full scene, noisy, 3 poses; the face's features are
-    not skin) with colour density > 1."""
+    """Fractions of skin / other pixels (full scene, noisy, 3 poses; the face's darkest
+    features are not skin: ``trim_dark``) with colour density > 1."""
     geoms = material_geoms(world.scene.model, "skin")
     ticks = np.array([0, world.n_ticks // 2, world.n_ticks - 1])
     pos, neg = frame_pixels(world, list(cams), ticks, geoms, world.scenario.cameras.noise_std,
-                            np.random.default_rng(7), negatives_per_frame=5000,
-                            plain=plain_materials(world.scene.model, "skin"))
-    return (float((lut.lookup(np.concatenate(pos)) > 1.0).mean()),
+                            np.random.default_rng(7), negatives_per_frame=5000)
+    return (float((lut.lookup(trim_dark(np.concatenate(pos))) > 1.0).mean()),
             float((lut.lookup(np.concatenate(neg)) > 1.0).mean()))
 
 

@@ -94,22 +94,26 @@ def test_static_hand_foveal_depth_sigma():
 
 # ---- wave -------------------------------------------------------------------------------------
 def test_wave_detection_rate_and_filtered_rmse():
-    m = run("ude_wave_tracking", ["perception.detection.period=0.5"], duration=4.5)[0]
+    """The wave by a person the shipped skin model misses (issue 9's hard case: very dark skin
+    and a beige, skin-like shirt); the colour model is learned for them at start-up."""
+    m = run("ude_wave_tracking", ["perception.detection.period=0.5",
+                                  "human.skin=[0.30, 0.20, 0.15]",
+                                  "human.shirt=[0.82, 0.70, 0.56]"], duration=4.5)[0]
     hand, head = m["tracking"]["right_hand"], m["tracking"]["head"]
     # over the frames the hand is visible, after detection's phase one (the first detection
     # and the blob's settling take ~10 frames): measured 0.958; from the first on: 1.0
     assert hand["visible_fraction"] == 1.0 and hand["detection_rate"] >= 0.93
     assert hand["detection_rate_from_first"] >= 0.98
-    assert hand["false_detection_rate"] <= 0.01  # measured 0.0
-    assert hand["filtered_rmse_mm"] <= 15.0  # measured 6.7 mm (raw 7.9 mm)
-    # a consistent filter: ~95 % of frames inside the band (measured 0.91)
+    assert hand["false_detection_rate"] <= 0.02  # the shirt is not the hand: measured 0.0
+    assert hand["filtered_rmse_mm"] <= 15.0  # measured 6.5 mm (raw 7.9 mm)
+    # a consistent filter: ~95 % of frames inside the band (measured 0.92)
     assert hand["filtered_nees_pos3_in_band"] >= 0.7 and not hand["biased"]
-    # the head's stereo surface lies before its centre: flagged. The colour model learned for
-    # this person covers the whole face, features included, so the blob is the whole head:
-    # raw RMSE 9.9 mm, 0.78 of frames in the band (the shipped skin.json, hands only:
-    # 14.5 mm, 0.10)
+    # the head's stereo surface lies before its centre: flagged (raw RMSE 11.2 mm)
     assert head["detection_rate"] >= 0.93  # measured 0.971
-    assert head["biased"] and head["raw_rmse_mm"] <= 13.0
+    assert head["biased"] and head["raw_rmse_mm"] <= 20.0
+    # the hand hanging still is 8 px across and never detected: the verdict says why
+    left = m["tracking"]["left_hand"]
+    assert left["verdict"] == "poor" and left["cause"].startswith("too small"), left
 
 
 # ---- hidden for ~1 s --------------------------------------------------------------------------

@@ -69,6 +69,9 @@ def test_warning_line_names_poor_targets():
                                     "cause": "too small: 8 px"}}}
     assert verdict_warning(m) == ("warning: left_hand never detected (likely cause: too "
                                   "small: 8 px)")
+    assert verdict_warning({"tracking": {"head": {"verdict": "poor", "detection_rate": None,
+                                                  "cause": "out of view"}}}) == (
+        "warning: head never visible (likely cause: out of view)")
     assert verdict_warning({"tracking": {"head": {"verdict": "ok"}}}) is None
 
 
@@ -124,3 +127,41 @@ def test_reduced_resolution_counts_scale_back(hidden_world):
     finally:
         vis.scale = 1.0
     np.testing.assert_allclose(half, full, rtol=0.15)  # measured within 7 % (the small hand)
+
+
+def test_scores_against_visibility_on_a_synthetic_record():
+    """Ten frames; the target is reported in both eyes in every frame after the first two. The
+    ground truth: visible in frames 0-5, hidden in 6-7 (both eyes), visible in 8-9 but the
+    right eye's blob there sits 40 px from it (on something else)."""
+    from humimic.metrics.visibility import visibility_scores
+    from humimic.perception.blobs.record import PerceptionRecord
+    from humimic.sensors.camera_model import Intrinsics
+
+    intr = Intrinsics(320, 240, 200.0, 200.0, 159.5, 119.5)
+    rec = PerceptionRecord(["right_hand"], ("L", "R"), (intr, intr))
+    T = np.stack([np.eye(4), np.eye(4)])
+    T[1, 0, 3] = 0.07
+    p_true = np.tile([0.1, 0.0, 1.0], (10, 1))  # 1 m ahead of the (camera-frame) base
+    uv = np.array([[179.5, 119.5], [165.5, 119.5]])  # its projections in L and R
+    for f in range(10):
+        seen = f >= 2
+        centre = uv.copy()
+        if f >= 8:
+            centre[1, 0] += 40.0
+        rec.append(f / 10, T, np.array([1]), np.array([[seen, seen]]), np.array([seen]),
+                   centre[None], np.tile(4.0 * np.eye(2), (1, 2, 1, 1)), np.array([seen]),
+                   [""], np.zeros((1, 3)), np.tile(np.eye(3), (1, 1, 1)),
+                   np.zeros((1, 2, 2)), np.zeros(1))
+    hidden = np.array([0] * 6 + [1, 1] + [0, 0], bool)
+    px = np.where(hidden, 0.0, 100.0)[:, None, None] * np.ones((10, 2, 1))
+    va = VisibilityArrays(["L", "R"], ["right_hand"], np.arange(10) / 10, px,
+                          np.full((10, 2, 1), 100.0))
+    s = visibility_scores(rec.arrays(), 0, "right_hand", va, p_true, warmup_s=0.0)
+    assert s["visible_fraction"] == 0.8 and s["visible_frames"] == 8
+    assert s["detection_rate"] == pytest.approx(6 / 8)  # frames 2-5 and 8-9 of 0-5, 8-9
+    # false reports: both eyes in 6-7 (hidden), the right eye in 8-9 (off the target)
+    assert s["false_detection_rate"] == pytest.approx(6 / 16)
+    assert s["false_detections"] == 4
+    # 6 of 16 reports false: more than FALSE_RATE, so the target is flagged all the same
+    assert s["verdict"] == "poor" and s["cause"] == "false detections: 38 % of reports"
+    assert s["median_unoccluded"] == 1.0

@@ -52,6 +52,7 @@ def verdict_warning(metrics: dict) -> str | None:
     for target, s in metrics.get("tracking", {}).items():
         if isinstance(s, dict) and s.get("verdict") == "poor":
             rate = s.get("detection_rate")
-            seen = "never detected" if not rate else f"detected on {rate:.0%} of visible frames"
+            seen = ("never visible" if rate is None else "never detected" if rate == 0.0
+                    else f"detected on {rate:.0%} of visible frames")
             poor.append(f"{target} {seen} (likely cause: {s.get('cause')})")
     return f"warning: {'; '.join(poor)}" if poor else None

@@ -14,7 +14,8 @@
 * ``median_size_px``, ``median_unoccluded``: over the frames the target is in view of both eyes;
 * ``verdict`` (``ok`` / ``poor``) and ``cause``: a target detected on less than
   :data:`POOR_RATE` of its visible frames, or never, is ``poor``, with its likely cause:
-  ``out of view``, ``occluded``, ``too small: N px`` or ``colour model mismatch``.
+  ``out of view``, ``occluded``, ``too small: N px`` or ``colour model mismatch``; so is one
+  with more than :data:`FALSE_RATE` of its reports false (``false detections: N %``).
 """
 
 from __future__ import annotations
@@ -29,6 +30,8 @@ OFF_TARGET_SIGMA = 3.0
 """A blob whose ellipse (this many standard deviations) misses the true position is false."""
 POOR_RATE = 0.5
 """A target detected on fewer of its visible frames is flagged (verdict ``poor``)."""
+FALSE_RATE = 0.1
+"""A target more of whose blob reports than this are false is flagged too."""
 SMALL_PX = 10.0
 """A target smaller than this (median diameter, px) is named too small to be detected
 (measured: ude_wave_tracking's left hand, 8 px in the wide cameras at 320x240, is never
@@ -93,15 +96,18 @@ def visibility_scores(pa, i: int, target: str, vis, p_true: np.ndarray, warmup_s
         else None
     rate = float(ok[scored].mean()) if scored.any() else None
     visible_fraction = float(visible.mean()) if len(visible) else 0.0
-    poor = rate is None or rate < POOR_RATE
+    false_rate = float(false.sum() / seen.sum()) if seen.any() else 0.0
+    poor = rate is None or rate < POOR_RATE or false_rate > FALSE_RATE
+    why = (f"false detections: {100 * false_rate:.0f} % of reports"
+           if false_rate > FALSE_RATE else cause(visible_fraction, med_unocc, med_size))
     return {
         "visible_fraction": visible_fraction,
         "visible_frames": int(visible.sum()),
         "detection_rate": rate,
-        "false_detection_rate": float(false.sum() / seen.sum()) if seen.any() else 0.0,
+        "false_detection_rate": false_rate,
         "false_detections": int(false.any(axis=1).sum()),
         "median_size_px": med_size,
         "median_unoccluded": med_unocc,
         "verdict": "poor" if poor else "ok",
-        "cause": cause(visible_fraction, med_unocc, med_size) if poor else None,
+        "cause": why if poor else None,
     }

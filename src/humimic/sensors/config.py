@@ -79,11 +79,11 @@ class Cameras(Section):
     covered: list[CoveredWindow] = Field(default_factory=list)
     """Time windows in which a camera's images are black, e.g.
     ``[{camera: left, start: 2.0, end: 3.0}]``."""
-    visibility_rate: float = Field(5.0, ge=0.1, le=240.0)
+    visibility_rate: float = Field(5.0, ge=0.0, le=240.0)
     """Samples per second (Hz) of the visibility ground truth (in view, unoccluded fraction,
     size in pixels per camera and target; :mod:`humimic.sensors.visibility`), taken at camera
     frames when a stage scores against it; each sample costs two segmentation renders per
-    camera."""
+    camera. 0: none (no visibility scores)."""
 
     @model_validator(mode="after")
     def _check_resolution(self) -> Cameras:

@@ -97,8 +97,10 @@ class World:
         (:meth:`track_visibility`); sampled by the simulation at camera frames."""
 
     def track_visibility(self) -> Visibility | None:
-        """Start (or return) the eye cameras' visibility ground truth; None without cameras."""
-        if self.visibility is None and self.eye_rig is not None:
+        """Start (or return) the eye cameras' visibility ground truth; None without cameras
+        or with ``cameras.visibility_rate: 0``."""
+        if (self.visibility is None and self.eye_rig is not None
+                and self.scenario.cameras.visibility_rate > 0.0):
             self.visibility = Visibility(self.eye_rig, list(self.eye_cameras),
                                          self.scenario.cameras.visibility_rate)
         return self.visibility

@@ -3,8 +3,9 @@
 ``perception.color_model: auto`` (the default) learns the skin model from the run's own world
 before the loop starts: the person is put in :data:`FRAMES` poses spread over its motion, the
 eye cameras perception uses render only the avatar's geoms of the colour class (``skin``: the
-hands and the head, drawn without the face's texture: its eyes and brows are not skin) with the
-scenario's pixel noise, and the segmentation labels pick the pixels
+hands and the face-textured head) with the scenario's pixel noise, and the segmentation labels
+pick the pixels, less the darkest (the face's eyes and brows are not skin:
+:func:`~humimic.perception.cues.learn_colors.trim_dark`)
 (:func:`~humimic.perception.cues.learn_colors.frame_pixels`, as ``learn_colors`` does). A
 Gaussian mixture (Ude eqs. 6-7) is fitted and tabulated
 (:class:`~humimic.perception.cues.color_models.ColorLUT`). Since the renders come from the run's
@@ -34,9 +35,9 @@ from humimic.perception.cues.color_models import (
     fit_color_model,
     load_color_model,
 )
-from humimic.perception.cues.learn_colors import frame_pixels, material_geoms, plain_materials
+from humimic.perception.cues.learn_colors import frame_pixels, material_geoms, trim_dark
 
-VERSION = 5
+VERSION = 7
 FRAMES = 8
 """Poses of the person rendered (spread evenly over the run)."""
 COMPONENTS = 3
@@ -115,9 +116,8 @@ def learn_model(world, cameras: list[str], color_class: str, space: str,
     """
     geoms = material_geoms(world.scene.model, color_class)
     noise = max((s.noise_std for s in world.eye_rig.specs if s.name in cameras), default=0.0)
-    pos, _ = frame_pixels(world, cameras, ticks, geoms, noise, rng,
-                          plain=plain_materials(world.scene.model, color_class))
-    pixels = np.concatenate(pos) if pos else np.zeros((0, 3), np.uint8)
+    pos, _ = frame_pixels(world, cameras, ticks, geoms, noise, rng)
+    pixels = trim_dark(np.concatenate(pos)) if pos else np.zeros((0, 3), np.uint8)
     if len(pixels) < MIN_PIXELS:
         raise NotInView(f"only {len(pixels)} pixels of {color_class!r} in view of "
                         f"{', '.join(cameras)} in {len(ticks)} poses of the person")

@@ -5,12 +5,12 @@
 The person of a scenario (default ``scenarios/wave.yaml``) is rendered by the robot's eye
 cameras at ``--frames`` instants spread over its motion, for each camera kind in ``--which``
 (wide and foveal by default, so the model has seen both scales). The pixels whose segmentation
-label is a geom of the avatar's colour class ``--material`` (``skin``: the hands and the head,
-drawn without the face's texture: eyes and brows are not skin) are the training set, with the
-scenario's pixel noise added as in a real capture; a Gaussian mixture (Ude eqs. 6-7) is fitted
-in ``--space`` (``rgb`` for skin, ``hs`` for coloured objects). Scenarios learn their own model
-at start-up the same way (:mod:`humimic.perception.cues.auto_colors`); this command writes one
-to a file.
+label is a geom of the avatar's colour class ``--material`` (``skin``: the hands and the face-
+textured head, without its darkest features: :data:`DARK_FRACTION`) are the training set, with
+the scenario's pixel noise added as in a real capture; a Gaussian mixture (Ude eqs. 6-7) is
+fitted in ``--space`` (``rgb`` for skin, ``hs`` for coloured objects). Scenarios learn their own
+model at start-up the same way (:mod:`humimic.perception.cues.auto_colors`); this command writes
+one to a file.
 
 It prints how well the model separates the material from the rest of the view: the fraction of
 material pixels and of all other pixels whose colour density exceeds the uniform outlier's (1).
@@ -69,20 +69,24 @@ def material_geoms(model: mujoco.MjModel, material: str) -> np.ndarray:
     return np.flatnonzero(np.isin(model.geom_matid, ids))
 
 
-def plain_materials(model: mujoco.MjModel, material: str) -> dict[int, int]:
-    """Textured geoms of a colour class -> the class's first material, untextured: the face's
-    texture draws eyes, brows and hair line on the head, which are not skin (a model learned
-    from them also takes black for skin). ``{}`` when nothing is textured or the class's first
-    material is textured too."""
-    names = COLOR_CLASSES.get(material, (material,))
-    try:
-        base = model.material(HUMAN_PREFIX + names[0]).id
-    except KeyError:
-        return {}
-    if (model.mat_texid[base] >= 0).any():
-        return {}
-    geoms = material_geoms(model, material)
-    return {int(g): base for g in geoms if (model.mat_texid[model.geom_matid[g]] >= 0).any()}
+DARK_FRACTION = 0.4
+"""Pixels darker than this fraction of the class's median brightness are left out of the training
+set: the face texture's eyes, brows and hair line are not skin, and a model that learns them
+takes black for skin (shading scales skin colours along a ray through black; at 0.3 the learned
+density at black was 1.4, above the uniform background's 1; at 0.4, 0.07). (Leaving the whole
+texture out is worse: the lips and the shading around the features fall out of the model too,
+and the head splits into blobs along its mouth, which Ude & Atkeson's identity rules cannot
+name.)"""
+
+
+def trim_dark(pixels: np.ndarray, fraction: float = DARK_FRACTION) -> np.ndarray:
+    """``pixels (N, 3)`` without those whose brightness (mean of R, G, B) is below
+    ``fraction`` times the median brightness."""
+    pixels = np.asarray(pixels)
+    if len(pixels) == 0:
+        return pixels
+    brightness = pixels.astype(np.float64).mean(axis=1)
+    return pixels[brightness >= fraction * np.median(brightness)]
 
 
 def label_mask(seg: np.ndarray, geoms: np.ndarray) -> np.ndarray:
@@ -92,19 +96,14 @@ def label_mask(seg: np.ndarray, geoms: np.ndarray) -> np.ndarray:
 
 
 def frame_pixels(world, cameras: list[str], ticks: np.ndarray, geoms: np.ndarray,
-                 noise_std: float, rng: np.random.Generator, negatives_per_frame: int = 0,
-                 plain: dict[int, int] | None = None
+                 noise_std: float, rng: np.random.Generator, negatives_per_frame: int = 0
                  ) -> tuple[list[np.ndarray], list[np.ndarray]]:
     """Pixels of ``geoms`` (and ``negatives_per_frame`` others per frame) in the ideal images of
     ``cameras`` of ``world`` at the person's poses of ``ticks`` (the robot as it is now), with
     pixel noise ``noise_std`` added. Without negatives only ``geoms`` are drawn (the others
-    would only be thrown away; ~10x faster). ``plain``: geoms drawn with another material
-    (:func:`plain_materials`). The scene's state is restored afterwards."""
+    would only be thrown away; ~10x faster). The scene's state is restored afterwards."""
     m, d = world.scene.model, world.scene.data
     qpos, qvel = d.qpos.copy(), d.qvel.copy()
-    matids = m.geom_matid.copy()
-    for g, mat in (plain or {}).items():
-        m.geom_matid[g] = mat
     only = None if negatives_per_frame else geoms
     pos, neg = [], []
     try:
@@ -123,7 +122,6 @@ def frame_pixels(world, cameras: list[str], ticks: np.ndarray, geoms: np.ndarray
                                       replace=False)
                     neg.append(rest[pick])
     finally:
-        m.geom_matid[:] = matids
         d.qpos[:], d.qvel[:] = qpos, qvel
         mujoco.mj_forward(m, d)
     return pos, neg
@@ -141,14 +139,13 @@ def collect(scenario, which: list[str], n_frames: int, rng: np.random.Generator,
             geoms = material_geoms(world.scene.model, material)
             ticks = np.linspace(0, world.n_ticks - 1, n_frames).round().astype(int)
             p, n = frame_pixels(world, world.eye_cameras, ticks, geoms, sc.cameras.noise_std,
-                                rng, negatives_per_frame,
-                                plain_materials(world.scene.model, material))
+                                rng, negatives_per_frame)
             pos += p
             neg += n
             frames += len(p)
         finally:
             world.close()
-    return Samples(np.concatenate(pos), np.concatenate(neg), frames)
+    return Samples(trim_dark(np.concatenate(pos)), np.concatenate(neg), frames)
 
 
 def separation(model: ColorModel, samples: Samples) -> tuple[float, float]:
