@@ -18,6 +18,7 @@ from humimic.metrics.tracking import FILTER_SETTLE_S, stereo_failures, target_sc
 from humimic.perception.blobs.archive import save_archive
 from humimic.perception.blobs.plots import plot_pva, plot_tracking_errors
 from humimic.pipeline.stage import Stage
+from humimic.viz.plots import MAX_POINTS
 from humimic.viz.rerun_log import AXIS_RGB, SERIES
 
 
@@ -123,6 +124,7 @@ class TrackingReport(Stage):
                 1e3 * (pa.p_base[ok, i] - p[ok]), t_est, est_err, sig))
             if fa is not None and len(pa.t):
                 k = np.arange(self.gt.index_of(pa.t[0]), self.gt.index_of(pa.t[-1]) + 1)
+                k = k[::max(1, -(-len(k) // MAX_POINTS))]  # what the plot draws
                 gt_t = self.gt.t[k]
                 paths.append(plot_pva(out / f"tracking_{target}_pva.png", target, t_est, x,
                                       gt_t, self.gt.p_base(target)[k],
