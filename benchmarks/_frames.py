@@ -7,7 +7,7 @@ the true pixel position of each target (its site projected) and the pixel mean a
 of its visible skin (MuJoCo segmentation), the latter used only to initialise trackers.
 """
 
-# ruff: noqa: I001  -- humimic must be imported before mujoco (headless GL)
+# ruff: noqa: I001  -- select_gl_backend() runs before mujoco is imported (headless GL)
 from __future__ import annotations
 
 from dataclasses import dataclass, field

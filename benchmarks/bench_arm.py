@@ -13,7 +13,7 @@ quiet machine's wall time would be (the pipeline is single-threaded: MuJoCo rend
 llvmpipe thread, OMP_NUM_THREADS=1).
 """
 
-# ruff: noqa: I001  -- humimic must be imported before mujoco (headless GL)
+# ruff: noqa: I001  -- select_gl_backend() runs before mujoco is imported (headless GL)
 from __future__ import annotations
 
 import argparse

@@ -17,7 +17,7 @@ Configurations, as the trackers will call the library:
 * ``gest`` (Menezes): one free hand ellipsoid per particle, 20 contour points.
 """
 
-# ruff: noqa: I001  -- humimic must be imported before mujoco (headless GL)
+# ruff: noqa: I001  -- select_gl_backend() runs before mujoco is imported (headless GL)
 from __future__ import annotations
 
 import argparse

@@ -8,7 +8,7 @@ Run: ``python benchmarks/bench_colors.py [--repeats N] [--scenario S ...]``. Eve
 empty cache directory for the first run, then loads the entry it wrote.
 """
 
-# ruff: noqa: I001  -- humimic must be imported before mujoco (headless GL)
+# ruff: noqa: I001  -- select_gl_backend() runs before mujoco is imported (headless GL)
 from __future__ import annotations
 
 import argparse
@@ -18,7 +18,10 @@ import tempfile
 import time
 from pathlib import Path
 
-import humimic  # noqa: F401  (headless GL before mujoco)
+from humimic import select_gl_backend
+
+select_gl_backend()  # before anything imports mujoco
+
 import numpy as np
 
 from humimic.paths import SCENARIOS_DIR

@@ -11,14 +11,17 @@ tracker that is tracking (detection frames -- skin blobs, template, the face che
 timed apart: they run only until the hand is found and after a loss).
 """
 
-# ruff: noqa: I001  -- humimic must be imported before mujoco (headless GL)
+# ruff: noqa: I001  -- select_gl_backend() runs before mujoco is imported (headless GL)
 from __future__ import annotations
 
 import argparse
 import sys
 from pathlib import Path
 
-import humimic  # noqa: F401
+from humimic import select_gl_backend
+
+select_gl_backend()  # before anything imports mujoco
+
 import mujoco
 import numpy as np
 from rich.console import Console

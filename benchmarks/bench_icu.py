@@ -11,14 +11,17 @@ Frames: the first 2 s of ``scenarios/menezes_fig10_crossing.yaml`` (left foveal 
 tutor's face ~47 px at 2.5 m, the other person walking in).
 """
 
-# ruff: noqa: I001  -- humimic must be imported before mujoco (headless GL)
+# ruff: noqa: I001  -- select_gl_backend() runs before mujoco is imported (headless GL)
 from __future__ import annotations
 
 import argparse
 import sys
 from pathlib import Path
 
-import humimic  # noqa: F401
+from humimic import select_gl_backend
+
+select_gl_backend()  # before anything imports mujoco
+
 import numpy as np
 from rich.console import Console
 

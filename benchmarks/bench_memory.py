@@ -9,6 +9,7 @@ one.
 
     python benchmarks/bench_memory.py                   # 5 s, 60 s, 120 s
     python benchmarks/bench_memory.py --durations 5 600 # the goal itself (~10 min of wall time)
+    python benchmarks/bench_memory.py --set 'output.rerun="off"'   # without the recording
 """
 
 from __future__ import annotations
@@ -26,19 +27,21 @@ SCENARIO = ROOT / "scenarios" / "mimic_tracked_wave.yaml"
 _CHILD = """
 import json, resource, sys
 from humimic.run import main
-code = main([sys.argv[1], "--duration", sys.argv[2], "--out", sys.argv[3], "--quiet"])
+args = [sys.argv[1], "--duration", sys.argv[2], "--out", sys.argv[3], "--quiet"]
+code = main(args + [a for o in sys.argv[4:] for a in ("--set", o)])
 print(json.dumps({"code": code,
                   "self_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
                   "children_mb": resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024}))
 """
 
 
-def peak_rss(duration: float, scenario: Path = SCENARIO) -> dict:
+def peak_rss(duration: float, scenario: Path = SCENARIO, overrides: tuple[str, ...] = ()
+             ) -> dict:
     """Peak RSS (MiB) of one run of ``scenario`` for ``duration`` simulated seconds."""
     with tempfile.TemporaryDirectory() as out:
         proc = subprocess.run([sys.executable, "-c", _CHILD, str(scenario), str(duration),
-                               str(Path(out) / "run")], capture_output=True, text=True,
-                              check=True)
+                               str(Path(out) / "run"), *overrides], capture_output=True,
+                              text=True, check=True)
         result = json.loads(proc.stdout.strip().splitlines()[-1])
         metrics = json.loads((Path(out) / "run" / "metrics.json").read_text())
     result.update(duration_s=duration, wall_s=metrics["wall_time_s"])
@@ -57,12 +60,14 @@ def slope_mb_per_min(rows: list[dict]) -> float:
 def main(argv: list[str] | None = None) -> None:
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     p.add_argument("--durations", type=float, nargs="+", default=[5.0, 60.0, 120.0])
+    p.add_argument("--set", dest="overrides", action="append", default=[],
+                   metavar="KEY=VALUE", help="scenario override, as humimic.run's --set")
     p.add_argument("--json", type=Path, default=None, help="also write the rows here")
     args = p.parse_args(argv)
     rows = []
     print(f"{'sim s':>7} {'wall s':>7} {'peak MiB':>9} {'worker MiB':>10}")
     for duration in args.durations:
-        r = peak_rss(duration)
+        r = peak_rss(duration, overrides=tuple(args.overrides))
         rows.append(r)
         print(f"{duration:7.0f} {r['wall_s']:7.1f} {r['self_mb']:9.1f} {r['children_mb']:10.1f}",
               flush=True)

@@ -13,7 +13,7 @@ exclude rendering. The two "tracker frame" rows add up what one frame of each tr
 run (their other costs -- bookkeeping, the bus -- come on top).
 """
 
-# ruff: noqa: I001  -- humimic must be imported before mujoco (headless GL)
+# ruff: noqa: I001  -- select_gl_backend() runs before mujoco is imported (headless GL)
 from __future__ import annotations
 
 import argparse

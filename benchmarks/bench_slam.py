@@ -16,7 +16,7 @@ Run: ``python benchmarks/bench_slam.py [--repeats 3] [--duration 27] [--json PAT
 on a shared machine are noisy: the table also gives the load average before and after.
 """
 
-# ruff: noqa: I001  -- humimic must be imported before mujoco (headless GL)
+# ruff: noqa: I001  -- select_gl_backend() runs before mujoco is imported (headless GL)
 from __future__ import annotations
 
 import argparse

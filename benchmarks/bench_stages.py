@@ -5,7 +5,7 @@ when the stage is not there yet). Physics and rendering are in ``bench_world.py`
 Run them all with ``python benchmarks/run_all.py``.
 """
 
-# ruff: noqa: I001  -- humimic must be imported before mujoco (headless GL)
+# ruff: noqa: I001  -- select_gl_backend() runs before mujoco is imported (headless GL)
 from __future__ import annotations
 
 import sys

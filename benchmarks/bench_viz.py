@@ -9,7 +9,7 @@ output settings -- stereo wide cameras at 60 Hz with ``image_every=2``, poses at
 and reports the recording's size per simulated second.
 """
 
-# ruff: noqa: I001  -- humimic must be imported before mujoco (it picks the headless GL backend)
+# ruff: noqa: I001  -- select_gl_backend() runs before mujoco is imported (headless GL)
 from __future__ import annotations
 
 import argparse

@@ -5,7 +5,7 @@ Run: ``python benchmarks/bench_world.py [--repeats N] [--json PATH]``. Prints a 
 median and spread (interquartile range) over repeats, and writes JSON.
 """
 
-# ruff: noqa: I001  -- humimic must be imported before mujoco (headless GL)
+# ruff: noqa: I001  -- select_gl_backend() runs before mujoco is imported (headless GL)
 from __future__ import annotations
 
 import argparse

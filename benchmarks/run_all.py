@@ -12,7 +12,7 @@ machine, date, versions and the load average before and after are recorded: timi
 shared machine are noisy, compare medians.
 """
 
-# ruff: noqa: I001  -- humimic must be imported before mujoco (headless GL)
+# ruff: noqa: I001  -- select_gl_backend() runs before mujoco is imported (headless GL)
 from __future__ import annotations
 
 import argparse

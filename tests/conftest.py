@@ -1,4 +1,5 @@
-"""Shared fixtures. Importing humimic first selects a headless OpenGL backend."""
+"""Shared fixtures. The test session chooses a headless OpenGL backend before any test imports
+mujoco (`select_gl_backend`, as the entry points do)."""
 
 from __future__ import annotations
 
@@ -9,7 +10,6 @@ import pytest
 from humimic import select_gl_backend
 
 select_gl_backend()  # before anything imports mujoco
-
 
 ROOT = Path(__file__).resolve().parent.parent
 DATA = ROOT / "data"

@@ -199,3 +199,16 @@ def test_bvh_frame_time_is_bounded(data_dir, frame_time):
     lines[k + 2] = f"Frame Time: {frame_time}"
     with pytest.raises(BVHError, match=f"line {k + 3}: expected a frame time of 0.0005 to 10 s"):
         parse_bvh("\n".join(lines), "fast.bvh")
+
+
+def test_a_sweep_setting_past_a_list_names_the_sweep_file(tmp_path, capsys):
+    from humimic.sweep.__main__ import main as sweep_main
+
+    path = tmp_path / "sweep.yaml"
+    path.write_text(f"scenario: {SCENARIOS_DIR / 'wave.yaml'}\n"
+                    "set: {cameras.resolution: [320, 240]}\n"
+                    "grid:\n  cameras.resolution.5: [10]\n")
+    assert sweep_main([str(path), "--out", str(tmp_path / "out"), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1
+    assert "sweep.yaml:4: grid.cameras.resolution.5: cannot be set in the scenario" in err, err

@@ -44,3 +44,15 @@ def test_non_default_values_are_passed_through():
             assert getattr(params, key) == value, key
             default = next(f.default for f in dataclasses.fields(params) if f.name == key)
             assert value != default, f"{key}: pick a non-default value for this test"
+
+
+def test_slam_frontend_keys_are_passed_through():
+    from humimic.estimation.ekf.frontend import FrontendParams
+    from humimic.estimation.ekf.slam_config import SlamConfig
+    from humimic.estimation.ekf.slam_stage import settings_from_config
+
+    keys = {"patch_px", "search_sigma", "max_search_px", "min_zncc"}
+    assert _fields(FrontendParams) & set(SlamConfig.model_fields) == keys
+    cfg = SlamConfig(patch_px=15, search_sigma=2.5, max_search_px=30, min_zncc=0.9)
+    fe = settings_from_config(cfg).frontend
+    assert (fe.patch_px, fe.search_sigma, fe.max_search_px, fe.min_zncc) == (15, 2.5, 30, 0.9)

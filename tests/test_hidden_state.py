@@ -23,30 +23,29 @@ from humimic.sensors.cameras import CameraRig, CameraSpec, add_pixel_noise, nois
 from humimic.world.scene import SceneOptions, build_scene
 
 PROBE = """
-import os, sys
+import os
 import matplotlib
 matplotlib.use("svg")
 import humimic
 after_import = os.environ.get("MUJOCO_GL")
-import humimic.report.page, humimic.viz.plots, humimic.sweep.plots
-import humimic.world.textures  # an entry point (a light one: this runs in a subprocess)
-print(after_import, os.environ.get("MUJOCO_GL"), matplotlib.get_backend())
+import humimic.run  # the entry point (it imports the report and the plots too)
+import mujoco
+print(after_import, os.environ.get("MUJOCO_GL"), mujoco.GLContext.__module__,
+      matplotlib.get_backend())
 """
-
-
-def _probe(env: dict) -> list[str]:
-    out = subprocess.run([sys.executable, "-c", PROBE], env=env, capture_output=True,
-                         text=True, timeout=120, check=True)
-    return out.stdout.split()
 
 
 def test_import_changes_nothing_and_the_entry_point_selects_the_backend():
     env = {k: v for k, v in os.environ.items()
            if k not in ("MUJOCO_GL", "PYOPENGL_PLATFORM", "DISPLAY", "WAYLAND_DISPLAY")}
-    after_import, after_entry, backend = _probe(env)
+    out = subprocess.run([sys.executable, "-c", PROBE], env=env, capture_output=True,
+                         text=True, timeout=120, check=True)
+    after_import, after_entry, gl_module, backend = out.stdout.split()
     assert after_import == "None"  # import humimic: environment untouched
     assert after_entry == str(headless_backend())  # egl here
+    assert gl_module == f"mujoco.{after_entry}"  # chosen before mujoco was imported
     assert backend == "svg"  # nothing called matplotlib.use
+    assert "GLFW" not in out.stderr
 
 
 def test_select_gl_backend_respects_the_users_choice(monkeypatch):

@@ -40,7 +40,8 @@ N_EXAMPLES = int(os.environ.get("HUMIMIC_FUZZ_EXAMPLES", "300"))
 FUZZ = settings(deadline=None, database=None, print_blob=True,
                 derandomize=not os.environ.get("HUMIMIC_FUZZ_RANDOM"),
                 suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large,
-                                       HealthCheck.function_scoped_fixture])
+                                       HealthCheck.function_scoped_fixture,
+                                       HealthCheck.large_base_example])
 
 SCENARIO_FILES = sorted(SCENARIOS_DIR.glob("*.yaml"))
 #: Every scenario fully resolved (absolute paths, every default), as a YAML mapping.

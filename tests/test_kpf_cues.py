@@ -90,3 +90,25 @@ def test_colour_and_skin_cues(lut):
     off_image = C.skin_response(maps, np.array([[[-50.0, -50.0]]]), np.array([[[5.0, 5.0]]]),
                                 np.zeros((1, 1)))
     assert off_image[0, 0] == 0.0
+
+
+def test_likelihood_is_the_balanced_product_of_cue_gaussians():
+    """Eqs. 9-10 as a product: prod_l prod_c exp(-e^2 / 2 sigma_c^2)^(1 / N_l), against the
+    log-sum the tracker uses (fixed sigmas)."""
+    from humimic.perception.trackers.kpf.config import KpfConfig
+    from humimic.perception.trackers.kpf.likelihood import CUE_NAMES, Likelihood
+    from humimic.perception.trackers.kpf.tracker import kpf_body
+    from humimic.sensors.camera_model import Intrinsics
+
+    cfg = KpfConfig(sigma_from_spread=False)
+    lik = Likelihood(kpf_body(), Intrinsics.from_fovy(0.8, 320, 240), cfg)
+    rng = np.random.default_rng(0)
+    cost = {c: np.where(lik.used[c], rng.uniform(0, 1, (5, len(lik.parts))), np.nan)
+            for c in CUE_NAMES}
+    prod = np.ones(5)
+    for j, part in enumerate(lik.parts):
+        cues = lik.use[part]
+        for c in cues:
+            sigma = getattr(cfg.sigma, c)
+            prod *= np.exp(-cost[c][:, j] ** 2 / (2 * sigma ** 2)) ** (1 / len(cues))
+    assert np.allclose(lik.combine(cost).sum(axis=1), np.log(prod))

@@ -9,6 +9,7 @@ import pytest
 from humimic.motion import JointTrajectory, MotionContext, compute_ground_truth, make_motion
 from humimic.motion import lazy_ground_truth as lazy
 from humimic.motion.config import WaveMotion
+from humimic.motion.trajectory import WindowedTrajectory
 from humimic.world.scene import build_scene
 
 RATE, N = 200.0, 300
@@ -64,3 +65,16 @@ def test_fields_sensors_and_operators(pair, small_chunks):
     assert len(gt._cache) <= lazy.CACHED_CHUNKS
     with pytest.raises(IndexError):
         gt.p_world("head")[N]
+
+
+def test_windowed_trajectory_matches_whole_run_fit():
+    """Windows of 3 s with 1 s margins against one spline over 10 s: the same to rounding."""
+    scene = build_scene()
+    ctx = MotionContext.from_scene(scene, 10.0, np.random.default_rng(0))
+    motion = make_motion(WaveMotion(period=1.3), ctx)
+    whole = JointTrajectory.from_motion(motion, 10.0)
+    windowed = WindowedTrajectory(motion, 10.0, window=3.0, margin=1.0)
+    t = np.linspace(0.0, 10.0, 2001)
+    for got, want, scale in zip(windowed.evaluate(t), whole.evaluate(t), (1.0, 10.0, 100.0),
+                                strict=True):
+        np.testing.assert_allclose(got, want, atol=1e-9 * scale)

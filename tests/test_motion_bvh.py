@@ -125,7 +125,7 @@ def _write(tmp_path: Path, text: str) -> Path:
         ("1 2 3 90 0 0 0 0 90 1 0 0", "1 2 3 90 0 0 0 x 90 1 0 0", 25,
          "expected a number in frame 1, got 'x'"),
         ("Frames: 2", "Frames: two", 22, "expected a non-negative integer after 'Frames:'"),
-        ("Frame Time: 0.5", "Frame Time: -1", 23, "expected a positive number"),
+        ("Frame Time: 0.5", "Frame Time: -1", 23, "expected a frame time of 0.0005 to 10 s"),
         ("Frames: 2", "Frames: 3", 25, "expected 3 frame lines"),
         ("Frames: 2", "Frames: 1", 25, "more frame lines than 'Frames: 1'"),
         ("MOTION", "MOTIONS", 21, "expected 'MOTION'"),

@@ -136,9 +136,7 @@ def test_size_thresholds_separate_the_avatars_parts(root):
 def test_a_head_cut_by_the_border_stays_the_head(head):
     """A head in a corner of the view is only partly seen: its blob is smaller than the hand's
     and its metric size under the head's minimum. Cut by the border, it keeps its name (and
-    the hand its own); the same small blob inside the image is (rightly) not called the head.
-    (Measured on ude_static_hand_foveal: right-hand detection with identities ada, kip, oli
-    0-2 % before, 96-100 % after.)"""
+    the hand its own); the same small blob inside the image is (rightly) not called the head."""
     cam_l, cam_r, rig = head
     small = {"head": 0.6 * HEAD_MIN_RADIUS_M, "right_hand": 0.030}
     names = ["head", "right_hand"]

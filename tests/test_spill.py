@@ -27,3 +27,18 @@ def test_spill_array_matches_numpy(monkeypatch):
     np.testing.assert_array_equal(flags[:41].mean(axis=0), ref_flags[:41].mean(axis=0))
     np.testing.assert_array_equal(np.asarray(a), ref)
     assert a.shape == ref.shape and len(a) == n
+    assert a.truncate(41).shape == (41, 2, 3)
+    np.testing.assert_array_equal(a[:], ref[:41])
+
+
+def test_spill_rows_stack_like_a_list(monkeypatch):
+    monkeypatch.setattr(spill, "BATCH", 4)
+    rng = np.random.default_rng(2)
+    rows = [(float(k), rng.standard_normal((2, 3)), ["", "lost"][k % 2], k % 3 == 0)
+            for k in range(11)]
+    log = spill.SpillRows()
+    for r in rows:
+        log.append(r)
+    assert len(log) == 11 and [r[0] for r in log] == [r[0] for r in rows]
+    for got, want in zip(log.columns(), zip(*rows, strict=True), strict=True):
+        np.testing.assert_array_equal(got, np.array(want))

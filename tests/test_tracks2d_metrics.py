@@ -71,16 +71,3 @@ def test_track_messages():
     tr = Track2D("right_hand", 10.0, 20.0, 15.0, state="lost")
     msg = Tracks2D("hand", "L_wide", (tr,))
     assert msg.tracks[0].state in TRACK_STATES and np.isnan(tr.confidence)
-
-
-def test_a_nearer_person_hides_the_target():
-    n = 4
-    target = ImageTruth(np.tile([100.0, 100.0], (n, 1)), np.full(n, 20.0), np.ones(n, bool),
-                        np.full(n, 2.5))
-    ou = np.array([[300.0, 100.0], [130.0, 100.0], [100.0, 100.0], [100.0, 100.0]])
-    depth = np.array([1.8, 1.8, 1.8, 3.0])  # the last one is behind the target
-    other = ImageTruth(ou, np.full(n, 25.0), np.ones(n, bool), depth)
-    from humimic.metrics.tracks2d import hide_occluded
-
-    # covered when |du| < 1.5 * 25 + 0.5 * 20 = 47.5 px and the occluder is nearer
-    assert hide_occluded(target, [other]).visible.tolist() == [True, False, False, True]

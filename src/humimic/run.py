@@ -27,7 +27,7 @@ from humimic.report import write_report
 from humimic.rngs import Rngs
 from humimic.scenario import Scenario, dump_scenario, load_scenario
 from humimic.viz.blueprint import run_layout
-from humimic.viz.plots import plot_trajectories
+from humimic.viz.plots import MAX_POINTS, plot_trajectories
 from humimic.viz.rerun_log import SERIES, TRUTH, RerunLog, camera_entity
 from humimic.world.world import World
 
@@ -153,23 +153,23 @@ def _warnings(world) -> dict[str, int]:
 
 
 def _log_ground_truth(rlog, world, ticks: int) -> None:
-    t = world.times[:ticks]
-    for target in GT_TARGETS:
-        rlog.log_series(f"{SERIES}/ground_truth/{target}", t, world.gt.p_base(target)[:ticks],
-                        names=[f"{target} {a} (m)" for a in "xyz"])
-    # Every ground-truth site as points in the 3-D view (names on hover), at the pose rate.
+    """Ground truth at the pose rate (evaluated at those ticks only: it is computed on demand):
+    the plotted targets as series, every site as points in the 3-D view (names on hover)."""
     gt = world.gt
     step = max(1, round(world.scenario.timing.physics_rate / world.scenario.output.pose_rate))
     ks = np.arange(0, ticks, step)
+    for target in GT_TARGETS:
+        rlog.log_series(f"{SERIES}/ground_truth/{target}", gt.t[ks], gt.p_base(target)[ks],
+                        names=[f"{target} {a} (m)" for a in "xyz"])
     for k, pos in zip(ks, gt.pos[ks], strict=True):
         rlog.log_points(float(gt.t[k]), f"{TRUTH}/sites", pos, colors=[40, 200, 40],
                         radii=0.01, labels=list(gt.targets))
 
 
 def _plots(out: Path, world, stages, ticks: int) -> None:
-    t = world.times[:ticks]
-    series = {target: world.gt.p_base(target)[:ticks] for target in GT_TARGETS}
-    plot_trajectories(out / "ground_truth.png", t, series,
+    ks = np.arange(0, ticks, max(1, -(-ticks // MAX_POINTS)))  # what a plot draws
+    series = {target: world.gt.p_base(target)[ks] for target in GT_TARGETS}
+    plot_trajectories(out / "ground_truth.png", world.times[ks], series,
                       title="Ground truth, robot base frame", ylabel="position (m)")
     for stage in stages:
         stage.plots(out)

@@ -10,12 +10,15 @@ not the record's. Rows never written read as ``fill``.
 
 from __future__ import annotations
 
+import pickle
 import tempfile
 
 import numpy as np
 
-#: Rows held in memory (and read back per step).
+#: Rows of a :class:`SpillArray` held in memory (and read back per step).
 BLOCK = 4096
+#: Rows of a :class:`SpillRows` held in memory (per-frame rows are larger: a few kB each).
+BATCH = 256
 
 
 class SpillArray:
@@ -99,7 +102,51 @@ class SpillArray:
         out = self[:]
         return out if dtype is None else out.astype(dtype)
 
-    def close(self) -> None:
+    def truncate(self, n: int) -> SpillArray:
+        """Keep the first ``n`` rows (in place; returns ``self``)."""
+        self.shape = (min(int(n), self.shape[0]), *self.shape[1:])
+        return self
+
+
+class SpillRows:
+    """An append-only list of per-frame row tuples whose full batches of :data:`BATCH` rows are
+    pickled to an unnamed temporary file; :meth:`columns` stacks each column batch by batch.
+    Replaces a ``list`` of rows in the records that stack them after the run."""
+
+    def __init__(self):
+        self._batch: list[tuple] = []
+        self._n = 0
+        self._file = None
+
+    def append(self, row: tuple) -> None:
+        self._batch.append(row)
+        self._n += 1
+        if len(self._batch) >= BATCH:
+            if self._file is None:
+                self._file = tempfile.TemporaryFile()
+            self._file.seek(0, 2)
+            pickle.dump(self._batch, self._file, protocol=pickle.HIGHEST_PROTOCOL)
+            self._batch = []
+
+    def __len__(self) -> int:
+        return self._n
+
+    def _batches(self):
         if self._file is not None:
-            self._file.close()
-            self._file = None
+            self._file.seek(0)
+            while True:
+                try:
+                    yield pickle.load(self._file)
+                except EOFError:
+                    break
+        if self._batch:
+            yield self._batch
+
+    def __iter__(self):
+        for batch in self._batches():
+            yield from batch
+
+    def columns(self) -> list[np.ndarray]:
+        """Column ``j`` is ``np.array([row[j] for row in rows])``, built one batch at a time."""
+        parts = [[np.array(c) for c in zip(*batch, strict=True)] for batch in self._batches()]
+        return [np.concatenate(c) for c in zip(*parts, strict=True)]

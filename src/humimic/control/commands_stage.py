@@ -53,8 +53,6 @@ class CommandStage(Stage):
         self.follower = None
         """The :class:`~humimic.control.follow.FollowStage` (read after the run, for the
         report only)."""
-        if cfg.arm_pose == "oracle" and "arm" in cfg.kinds:
-            self._arm_truth = truth_in_head(world.gt, world.gt.t)[0]
 
     def attach(self, bus, timer) -> None:
         self._bus, self._timer = bus, timer
@@ -69,7 +67,7 @@ class CommandStage(Stage):
 
     def _latest_arm(self, t: float) -> tuple[float, np.ndarray] | None:
         if self.cfg.arm_pose == "oracle":
-            return t, self._arm_truth[self.world.gt.index_of(t)]
+            return t, truth_in_head(self.world.gt, np.array([t]))[0][0]  # at its nearest tick
         return self.arm
 
     def servo(self, t: float, bus) -> None:

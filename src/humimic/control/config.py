@@ -170,16 +170,16 @@ class GazeConfig(Section):
 class MimicConfig(Section):
     """Imitation: human targets drive robot sites through the relative-motion mapping."""
 
-    map: dict[str, str] | None = None
-    """Human target -> robot site, e.g. ``{right_hand: R_palm}``; default per mode:
-    relative ``{right_hand: R_palm}``, mirrored ``{right_hand: L_palm}``, follow
-    ``{head: R_palm}``."""
     mode: Mode = "relative"
     """relative: the robot site's displacement equals the human part's (robot base frame, the
     paper); mirrored: as a mirror image across the space between them (depth reversed);
     follow: a robot hand follows the person's head (Fig. 4); joints: the arm angles a tracker
     publishes on ``poses`` drive DB's arm joints (Menezes sec. 7.2,
     :mod:`humimic.control.joints`; ``map`` is not used)."""
+    map: dict[str, str] | None = None
+    """Human target -> robot site, e.g. ``{right_hand: R_palm}``; default per mode:
+    relative ``{right_hand: R_palm}``, mirrored ``{right_hand: L_palm}``, follow
+    ``{head: R_palm}``, joints ``{}``."""
     tracker: str | None = None
     """``joints`` mode: the name (under ``trackers:``) of the tracker whose angles drive the
     robot; default the first that publishes arm angles."""
@@ -209,10 +209,10 @@ class MimicConfig(Section):
 
     @field_validator("map")
     @classmethod
-    def _check_map(cls, value: dict[str, str] | None) -> dict[str, str] | None:
+    def _check_map(cls, value: dict[str, str] | None, info) -> dict[str, str] | None:
         if value is None:
             return None
-        if not value:
+        if not value and info.data.get("mode") != "joints":  # joints mode maps no site
             raise ValueError("map is empty: give at least one {human_target: robot_site}")
         seen: dict[str, str] = {}
         for target, site in value.items():

@@ -16,8 +16,6 @@ pose arrived.
 
 from __future__ import annotations
 
-import time
-
 import numpy as np
 
 from humimic.bodymodel.avatar import truth_angles
@@ -87,11 +85,12 @@ class JointMimicStage(Stage):
             self.latest = np.array([est.angles[n] for n in ARM_NAMES])
 
     def servo(self, t: float, bus) -> None:
-        call = self._calls
         self._calls += 1
-        if call % self.every:
-            return
-        t0 = time.perf_counter()
+        if (self._calls - 1) % self.every == 0:
+            with self._timer.time(self.name):
+                self._tick(t)
+
+    def _tick(self, t: float) -> None:
         if self.latest is not None:
             target = joint_targets(self.latest, self.lower, self.upper,
                                    self.cfg.ik.limit_margin)
@@ -105,7 +104,6 @@ class JointMimicStage(Stage):
         q_d, v_d = self.q0.copy(), np.zeros(len(self.q0))
         q_d[JOINT_IDX], v_d[JOINT_IDX] = self.q_cmd, self.v_cmd
         self.servo_out.command(q_d, v_d, np.zeros(len(self.q0)))
-        self._timer.add(self.name, time.perf_counter() - t0)
 
     def metrics(self) -> dict:
         out: dict = {"mode": "joints", "ticks": len(self.t)}

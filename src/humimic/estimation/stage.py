@@ -26,6 +26,7 @@ import numpy as np
 from humimic.estimation.random_jerk import RandomJerkFilter
 from humimic.messages import Estimates, TargetEstimate
 from humimic.pipeline.stage import Stage
+from humimic.spill import SpillRows
 from humimic.viz.rerun_log import BASE, EVENTS, OTHER_COLOR, TARGET_COLORS
 
 
@@ -49,7 +50,8 @@ class FilterArrays:
 @dataclass
 class FilterRecord:
     targets: list[str]
-    rows: list[tuple] = field(default_factory=list)
+    rows: SpillRows = field(default_factory=SpillRows)
+    """One row per frame, batches on disk (memory flat in the run's duration)."""
 
     def arrays(self) -> FilterArrays:
         n = len(self.targets)
@@ -57,9 +59,8 @@ class FilterRecord:
             z = np.zeros
             return FilterArrays(list(self.targets), z(0), z((0, n), bool), z((0, n), bool),
                                 z((0, n, 9)), z((0, n, 9, 9)), z((0, n)))
-        cols = list(zip(*self.rows, strict=True))
-        return FilterArrays(list(self.targets), np.array(cols[0], float),
-                            *(np.stack(c) for c in cols[1:]))
+        cols = self.rows.columns()
+        return FilterArrays(list(self.targets), cols[0].astype(float), *cols[1:])
 
 
 class FilterStage(Stage):

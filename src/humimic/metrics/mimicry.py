@@ -16,6 +16,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.signal import correlate, savgol_filter
 
+from humimic.maths.stats import rmse
+
 
 def xcorr_lag(reference: np.ndarray, signal: np.ndarray, dt: float,
               max_lag: float = 0.3) -> float:
@@ -60,7 +62,7 @@ def rms_jerk(p: np.ndarray, dt: float, window_s: float = 0.08) -> float:
     if len(p) < w:
         return float("nan")
     j = savgol_filter(p, w, polyorder=5, deriv=3, delta=dt, axis=0, mode="interp")
-    return float(np.sqrt(np.mean(np.sum(j.reshape(len(j), -1) ** 2, axis=1))))
+    return rmse(j)
 
 
 #: Stage terms of :func:`error_terms`, in pipeline order.

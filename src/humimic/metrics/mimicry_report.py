@@ -89,17 +89,20 @@ def site_series(stage, i: int, ch):
     n = rec.n
     k0 = int(np.argmax(rec.active[:n, i]))
     rate = world.scenario.timing.physics_rate
-    P = world.gt.p_base(ch.target)
-    if ch.ref is not None:
-        P = P - world.gt.p_base(ch.ref)
-    N = len(P)
+    N = len(world.gt.t)
+
+    def truth(times) -> np.ndarray:  # the ground truth only at the ticks used
+        k = _idx(times, rate, N)
+        p = world.gt.p_base(ch.target)[k]
+        return p - world.gt.p_base(ch.ref)[k] if ch.ref is not None else p
+
     M, p0r = ch.M, ch.p0_robot
     scale = rec.scale[k0:n - 1, i, None]
-    origin = P[_idx(ch.t0, rate, N)]
+    origin = truth(ch.t0)
     t = rec.t[k0 + 1:n]
-    true_now = scale * ((P[_idx(t, rate, N)] - origin) @ M.T)
+    true_now = scale * ((truth(t) - origin) @ M.T)
     t_ph = rec.t_est[k0:n - 1, i]
-    true_ph = scale * ((P[_idx(t_ph, rate, N)] - origin) @ M.T)
+    true_ph = scale * ((truth(t_ph) - origin) @ M.T)
     s = {
         "t": t,
         "true_now": true_now,

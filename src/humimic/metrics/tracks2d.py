@@ -8,10 +8,10 @@ whether it is in view). A frame is
   ``max(gate_px, gate_size * true size)`` of the projected truth;
 * *lost* when the target is visible but the tracker is not on it (reporting ``lost``/``init``,
   or ``tracking`` something else: a track far off the target is not counted as tracking);
-* *on the wrong person* when the target is in view (and not hidden by a nearer person, see
-  :func:`hide_occluded`) and the tracker reports ``tracking``, is off its target, and is
-  within the gate of another person's projected head (people given by ``others``). While the
-  target is hidden, such frames count as ``on_other_while_hidden_frames`` instead.
+* *on the wrong person* when the target is visible and the tracker reports ``tracking``, is
+  off its target, and is within the gate of another person's projected head (people given by
+  ``others``). While the target is hidden, such frames count as
+  ``on_other_while_hidden_frames`` instead.
 
 Scores (:func:`scores`): ``frames``, ``visible_frames``, ``center_rmse_px`` /
 ``center_median_px`` (over visible frames the tracker reports ``tracking``, wherever it is),
@@ -48,8 +48,8 @@ class ImageTruth:
     size_px: np.ndarray
     """(F,) apparent size of the physical size (px)."""
     visible: np.ndarray
-    """(F,) bool: in front of the camera and the centre inside the image (and, after
-    :func:`hide_occluded`, not behind a nearer person)."""
+    """(F,) bool: in front of the camera and the centre inside the image (a stage may use
+    the world's visibility ground truth instead: in view and unoccluded)."""
     depth: np.ndarray | None = None
     """(F,) distance along the optical axis (m)."""
 
@@ -75,21 +75,6 @@ def project_truth(cameras: list[CameraModel], p_base: np.ndarray, size_m: float,
         vis[k] = (margin_px <= uv[k, 0] < intr.width - margin_px
                   and margin_px <= uv[k, 1] < intr.height - margin_px)
     return ImageTruth(uv, size, vis, depth)
-
-
-def hide_occluded(target: ImageTruth, occluders: list[ImageTruth], half_width: float = 1.5
-                  ) -> ImageTruth:
-    """The target made invisible where a nearer occluder covers it: horizontally within
-    ``half_width`` occluder sizes (a person's shoulders are ~1.5 head widths either side of
-    the head) plus half the target's size, and not above the occluder's head."""
-    hidden = np.zeros(len(target.visible), bool)
-    for o in occluders:
-        with np.errstate(invalid="ignore"):
-            du = np.abs(target.uv[:, 0] - o.uv[:, 0])
-            covers = du < half_width * o.size_px + 0.5 * target.size_px
-            below = target.uv[:, 1] > o.uv[:, 1] - 0.5 * o.size_px
-            hidden |= (o.depth < target.depth) & covers & below
-    return ImageTruth(target.uv, target.size_px, target.visible & ~hidden, target.depth)
 
 
 def gate(size_px: np.ndarray, gate_px: float = GATE_PX, gate_size: float = GATE_SIZE

@@ -20,7 +20,7 @@ import numpy as np
 from numpy.lib.mixins import NDArrayOperatorsMixin
 
 from humimic.motion.ground_truth import GroundTruth, GroundTruthSampler
-from humimic.motion.trajectory import JointTrajectory
+from humimic.motion.trajectory import JointTrajectory, WindowedTrajectory
 
 #: Ticks per cached chunk (~4 MB of ground truth each).
 CHUNK = 2048
@@ -61,8 +61,8 @@ class LazyArray(NDArrayOperatorsMixin):
         if np.any((flat < 0) | (flat >= self._n)):
             raise IndexError(f"index out of range for a lazy array of length {self._n}")
         out = np.empty((len(flat), *self._tail))
-        for s in range(0, len(flat), CHUNK * 4):  # bounded temporaries for whole-run requests
-            out[s:s + CHUNK * 4] = self._fetch(flat[s:s + CHUNK * 4])
+        for s in range(0, len(flat), CHUNK // 2):  # bounded temporaries for whole-run requests
+            out[s:s + CHUNK // 2] = self._fetch(flat[s:s + CHUNK // 2])
         return out.reshape(*idx.shape, *self._tail)
 
     def __getitem__(self, key):
@@ -117,7 +117,7 @@ class LazyGroundTruth:
         """Ground truth of ``motion`` (a :class:`HumanMotion` or fitted trajectory) at ``n``
         physics ticks of ``rate`` Hz."""
         traj = (motion if isinstance(motion, JointTrajectory)
-                else JointTrajectory.from_motion(motion, max(n - 1, 1) / rate))
+                else WindowedTrajectory(motion, max(n - 1, 1) / rate))
         return cls(GroundTruthSampler(scene, traj), n, rate)
 
     # ---- evaluation ------------------------------------------------------------------------
@@ -134,6 +134,14 @@ class LazyGroundTruth:
 
     def at(self, idx: np.ndarray) -> GroundTruth:
         """An eager :class:`GroundTruth` of the ticks ``idx`` (1-D int array), in that order."""
+        parts, order = self._parts(idx)
+        if len(parts) == 1:
+            return parts[0]
+        return _take(_concat(parts), np.argsort(np.concatenate(order), kind="stable"))
+
+    def _parts(self, idx: np.ndarray) -> tuple[list[GroundTruth], list[np.ndarray]]:
+        """``idx`` split by chunk: each chunk's ticks as a :class:`GroundTruth` (from the cache,
+        a newly cached chunk, or evaluated alone) and their positions in ``idx``."""
         idx = np.asarray(idx, dtype=np.int64)
         chunk = idx // CHUNK
         ids, counts = np.unique(chunk, return_counts=True)
@@ -145,14 +153,23 @@ class LazyGroundTruth:
             else:
                 parts.append(self._sampler.sample(self.t[idx[where]]))
             order.append(where)
-        if len(parts) == 1:
-            return parts[0]
-        inverse = np.argsort(np.concatenate(order), kind="stable")
-        return _take(_concat(parts), inverse)
+        return parts, order
+
+    def _values(self, idx: np.ndarray, get: Callable[[GroundTruth], np.ndarray]) -> np.ndarray:
+        """``get`` of the ground truth at ``idx``, chunk by chunk (only ``get``'s values are
+        gathered, not every field)."""
+        parts, order = self._parts(idx)
+        values = [get(p) for p in parts]
+        if len(values) == 1:
+            return values[0]
+        out = np.empty((len(idx), *values[0].shape[1:]))
+        for where, v in zip(order, values, strict=True):
+            out[where] = v
+        return out
 
     def _lazy(self, method: str, *args) -> LazyArray:
         return LazyArray(len(self.t), _ACCESSORS[method],
-                         lambda idx: getattr(self.at(idx), method)(*args))
+                         lambda idx: self._values(idx, lambda gt: getattr(gt, method)(*args)))
 
     def _field(self, name: str, key: str | None = None) -> LazyArray:
         def get(gt: GroundTruth) -> np.ndarray:
@@ -164,7 +181,7 @@ class LazyGroundTruth:
             c0 = int(c[0]) if len(c) else 0
             if len(c) and np.all(c == c0) and (c0 in self._cache or len(c) >= DENSE):
                 return get(self._chunk(c0))[idx - c0 * CHUNK]  # the loop's path: one field
-            return get(self.at(idx))
+            return self._values(idx, get)
 
         s = self._sampler
         tail = {"qpos": (s.trajectory.nq,), "qvel": (s.trajectory.nv,),

@@ -72,7 +72,7 @@ class JointTrajectory:
         self.t0, self.t1 = float(times[0]), float(times[-1])
         self.degree = k
         self._spline = make_interp_spline(times, qpos, k=k, axis=0) if k > 0 else None
-        self._q_end = (qpos[0], qpos[-1])
+        self._q_end = (qpos[0].copy(), qpos[-1].copy())  # not views: qpos is not kept
 
     @classmethod
     def from_motion(cls, motion: HumanMotion, duration: float, rate: float | None = None,
@@ -117,3 +117,51 @@ class JointTrajectory:
 
     def qacc(self, t: np.ndarray | float) -> np.ndarray:
         return self.evaluate(t)[2]
+
+
+class WindowedTrajectory:
+    """:meth:`JointTrajectory.from_motion` over a long run, fitted a window at a time so its
+    memory does not grow with the duration (a whole-run spline holds ~100 kB per second).
+
+    Window ``i`` covers ``[i W, (i + 1) W)`` and is an interpolating spline through the motion's
+    samples on the same grid as the whole-run fit, ``margin`` seconds wider on each side: the
+    B-spline's dependence on far samples decays geometrically, so inside a window it matches
+    the whole-run fit to rounding. The two most recent windows are kept. A run no longer than
+    one window is a single :class:`JointTrajectory`, exactly the whole-run fit.
+    """
+
+    nq = NQ
+    nv = NV
+
+    def __init__(self, motion: HumanMotion, duration: float, window: float = 30.0,
+                 margin: float = 2.0, degree: int = 5):
+        self.motion, self.duration, self.degree = motion, float(duration), degree
+        self.window, self.margin = float(window), float(margin)
+        self.rate = float(motion.sample_rate)
+        self._fits: dict[int, JointTrajectory] = {}
+        self._single = (JointTrajectory.from_motion(motion, duration, degree=degree)
+                        if duration <= window + margin else None)
+
+    def _fit(self, i: int) -> JointTrajectory:
+        fit = self._fits.get(i)
+        if fit is None:
+            n_all = int(np.ceil(self.duration * self.rate)) + 4  # from_motion's sample grid
+            lo = max(0, int(np.floor((i * self.window - self.margin) * self.rate)))
+            hi = min(n_all, int(np.ceil(((i + 1) * self.window + self.margin) * self.rate)) + 1)
+            t = np.arange(lo, hi) / self.rate
+            fit = JointTrajectory(t, self.motion.sample(t), self.degree)
+            if len(self._fits) >= 2:
+                self._fits.pop(next(iter(self._fits)))
+            self._fits[i] = fit
+        return fit
+
+    def evaluate(self, t: np.ndarray | float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        if self._single is not None:
+            return self._single.evaluate(t)
+        t = np.atleast_1d(np.asarray(t, float))
+        qpos, qvel, qacc = np.empty((len(t), NQ)), np.empty((len(t), NV)), np.empty((len(t), NV))
+        win = np.clip(np.floor(t / self.window), 0, None).astype(int)
+        for i in np.unique(win).tolist():
+            sel = win == i
+            qpos[sel], qvel[sel], qacc[sel] = self._fit(i).evaluate(t[sel])
+        return qpos, qvel, qacc

@@ -27,6 +27,7 @@ from humimic.messages import InertialReading
 from humimic.pipeline.bus import Bus
 from humimic.pipeline.stage import Stage, StageTimer
 from humimic.sensors.clock import Schedule
+from humimic.spill import SpillArray
 from humimic.stamped import Stamped
 
 
@@ -38,8 +39,8 @@ class SimResult:
     interrupted: bool
     timer: StageTimer
     frames_published: int
-    robot_qpos: np.ndarray = field(repr=False)
-    """(n_servo, 30) robot joint positions sampled at the servo rate."""
+    robot_qpos: SpillArray = field(repr=False)
+    """(n_servo, 30) robot joint positions sampled at the servo rate (on disk: index it)."""
     servo_t: np.ndarray = field(repr=False)
 
 
@@ -74,7 +75,7 @@ def simulate(world, stages: list[Stage], rlog, bus: Bus | None = None,
     quality = scenario.output.jpeg_quality
 
     n_servo = (world.n_ticks + servo_every - 1) // servo_every
-    robot_qpos = np.zeros((n_servo, len(world.scene.robot_qpos)))
+    robot_qpos = SpillArray(n_servo, (len(world.scene.robot_qpos),))
     servo_t = np.zeros(n_servo)
     frames = head_frames = 0
     tick = 0
@@ -151,4 +152,4 @@ def simulate(world, stages: list[Stage], rlog, bus: Bus | None = None,
     wall = time.perf_counter() - wall0
     n_done = (tick + servo_every - 1) // servo_every
     return SimResult(tick, tick / phys_rate, wall, interrupted, timer, frames,
-                     robot_qpos[:n_done], servo_t[:n_done])
+                     robot_qpos.truncate(n_done), servo_t[:n_done])

@@ -37,9 +37,6 @@ class Scenario(Section):
     of the robot; ``sugiyama``, Sugiyama & Miura's wearable room (Fig. 5), the person starting
     at the paper's W (0, -2.5) facing the screen, the robot 2 m to their right;
     ``lab_clutter``, the lab with heavy clutter behind the person (Menezes Figs. 11, 13)."""
-    clutter: bool = False
-    """A cluttered background behind the person (a busy poster wall and objects; Menezes
-    Fig. 5): edges everywhere for the shape cues (lab room only)."""
     human: Human = Field(default_factory=Human)
     robot: Robot = Field(default_factory=Robot)
     cameras: Cameras = Field(default_factory=Cameras)

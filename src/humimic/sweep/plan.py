@@ -54,7 +54,7 @@ def build_scenario(sweep: Sweep, data: dict, path: Path, spec: RunSpec, text: st
     for o in spec.overrides:
         try:
             apply_override(data, o.key, copy.deepcopy(o.value))
-        except (AttributeError, IndexError, KeyError, TypeError, ValueError):
+        except (ScenarioError, AttributeError, IndexError, KeyError, TypeError, ValueError):
             raise sweep.error(list(o.where), o.label, "cannot be set in the scenario "
                               f"{_rel(path)} (a part of the key is not a mapping or the "
                               "list index is out of range)", o.value) from None

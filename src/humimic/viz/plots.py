@@ -40,10 +40,15 @@ def _label(quantity: str, unit: str) -> str:
     return f"{quantity} [{unit}]" if " " not in unit.strip() else f"{quantity}, {unit}"
 
 
+#: Points drawn per line at most (a longer series is drawn every k-th sample: a 10-minute run
+#: at 840 Hz would otherwise hold half a million points per line in matplotlib).
+MAX_POINTS = 6000
+
+
 def _split(times: np.ndarray, series: Series) -> tuple[np.ndarray, np.ndarray]:
-    if isinstance(series, tuple):
-        return np.asarray(series[0], dtype=float), np.asarray(series[1], dtype=float)
-    return np.asarray(times, dtype=float), np.asarray(series, dtype=float)
+    t, v = (series if isinstance(series, tuple) else (times, series))
+    step = max(1, -(-len(t) // MAX_POINTS))
+    return np.asarray(t[::step], dtype=float), np.asarray(v[::step], dtype=float)
 
 
 def plot_trajectories(path: Path | str, times: np.ndarray, series: Mapping[str, Series],

@@ -38,7 +38,6 @@ from __future__ import annotations
 
 from collections import defaultdict
 from pathlib import Path
-from typing import Literal
 
 import cv2
 import mujoco
@@ -46,6 +45,24 @@ import numpy as np
 import rerun as rr
 
 from humimic.sensors.camera_model import CameraImage, make_transform
+from humimic.viz.entities import (  # noqa: F401 -- the names every logger uses, re-exported
+    AXIS_RGB,
+    BASE,
+    CAMERAS,
+    ESTIMATES,
+    EVENTS,
+    OTHER_COLOR,
+    ROOM,
+    SERIES,
+    TARGET_COLORS,
+    TIMELINE,
+    TRUTH,
+    WORLD,
+    Mode,
+    body_entity,
+    camera_entity,
+    image_entity,
+)
 from humimic.viz.geometry import (
     ellipse_points,
     ellipsoid_axes,
@@ -54,43 +71,7 @@ from humimic.viz.geometry import (
     rigid_root,
 )
 
-#: Display colour (RGB) of each tracked target, everywhere it is drawn.
-TARGET_COLORS = {"head": (255, 210, 0), "right_hand": (230, 40, 40),
-                 "left_hand": (40, 200, 60)}
-OTHER_COLOR = (200, 200, 200)
-#: Line colours of x, y, z in time series.
-AXIS_RGB = ((214, 39, 40), (44, 160, 44), (31, 119, 180))
-
-TIMELINE = "sim_time"
-WORLD = "world"
-ROOM = "world/room"
-BASE = "world/base"
-CAMERAS = "world/cameras"
-TRUTH = "world/truth"
-ESTIMATES = "world/estimates"
-SERIES = "series"
-EVENTS = "events"
-
-Mode = Literal["off", "save", "spawn"]
 _PIXEL_CENTRE_SHIFT = 0.5  # OpenCV pixel centre (0, 0) -> rerun (0.5, 0.5)
-
-
-def camera_entity(name: str) -> str:
-    """Entity of an eye camera's pose, e.g. ``world/cameras/L_wide``."""
-    return f"{CAMERAS}/{name}"
-
-
-def image_entity(name: str) -> str:
-    """Entity of a camera's pinhole and image (the origin of its 2-D view)."""
-    return f"{camera_entity(name)}/image"
-
-
-def body_entity(model: mujoco.MjModel, body_id: int) -> str:
-    """Entity path of a MuJoCo body: ``world/db/torso``, ``world/room/screen``, ``world/room``."""
-    if body_id == 0:
-        return ROOM
-    name = model.body(body_id).name.strip("/") or f"body{body_id}"
-    return f"{WORLD}/{name}" if "/" in name else f"{ROOM}/{name}"
 
 
 class RerunLog:

@@ -63,7 +63,8 @@ is one skin blob; a head cut by the image border can split along its dark featur
 parts looked too small to be the head, so the rules could not name the hand
 (``ude_static_hand_foveal``, the chin in a corner of the foveal view, lost the hand with ada,
 hal, ivo, kip, ned and oli). Blobs cut by the border are now exempt from the too-small rules
-(:mod:`humimic.perception.blobs.identity`): right-hand detection 96-100 % with each of them."""
+(:mod:`humimic.perception.blobs.identity`; with the colour handling of the time: right-hand
+detection 0-2 % -> 96-100 % for ada, kip, oli); the scenario now tracks the hand alone."""
 
 
 def resolve_identity(key: str | int) -> Identity:

@@ -78,8 +78,6 @@ class SceneOptions:
     in front of the robot) or ``sugiyama`` (the wearable room; the person starts at its
     ``person_start`` site and ``distance``/``lateral`` do not apply)."""
     max_render_size: tuple[int, int] = field(default=(1280, 960))
-    clutter: bool = False
-    """A cluttered background behind the person (:func:`add_clutter`)."""
     people: tuple = ()
     """Other people (:class:`humimic.world.people.Person`), attached after the tutor."""
 
@@ -145,38 +143,11 @@ def compose(opts: SceneOptions) -> mjcf.RootElement:
     frame = room.attach(human)
     frame.pos = [eye_x + opts.distance + head_x_in_avatar, opts.lateral, 0.0]
     frame.euler = [0.0, 0.0, math.pi]  # face the robot (avatar +x points to world -x)
-    if opts.clutter:
-        add_clutter(room, eye_x + opts.distance + 0.7, opts.lateral)
     if opts.people:
         from humimic.world.people import attach_people
 
         attach_people(room, opts.people, eye_x, add_face)
     return room
-
-
-def add_clutter(room: mjcf.RootElement, x: float, y: float) -> None:
-    """A busy background at world ``x`` (behind the person, facing the robot) centred on
-    ``y``: a 3 x 2 m wall of random marks on a checker, and boxes and poles of several colours
-    in front of it (Menezes Fig. 5's "heavy cluttered background")."""
-    tex = room.asset.add("texture", name="clutter", type="2d", builtin="checker",
-                         rgb1=[0.15, 0.15, 0.2], rgb2=[0.7, 0.78, 0.72], width=64, height=64,
-                         mark="random", random=0.15, markrgb=[0.1, 0.1, 0.1])
-    mat = room.asset.add("material", name="clutter", texture=tex, texrepeat=[18, 12])
-    room.worldbody.add("geom", name="clutter_wall", type="box", size=[0.02, 1.5, 1.0],
-                       pos=[x, y, 1.2], material=mat, contype=0, conaffinity=0)
-    rng = np.random.default_rng(5)  # a fixed arrangement
-    for i in range(14):
-        rgba = [*rng.uniform(0.1, 0.9, 3), 1.0]
-        py, pz = y + rng.uniform(-1.3, 1.3), rng.uniform(0.6, 1.9)
-        if i % 2:
-            room.worldbody.add("geom", name=f"clutter_pole{i}", type="cylinder",
-                               size=[0.015, rng.uniform(0.1, 0.3)], pos=[x - 0.1, py, pz],
-                               rgba=rgba, contype=0, conaffinity=0)
-        else:
-            room.worldbody.add("geom", name=f"clutter_box{i}", type="box",
-                               size=rng.uniform(0.03, 0.12, 3), pos=[x - 0.15, py, pz],
-                               euler=[rng.uniform(-0.5, 0.5), 0, rng.uniform(-0.8, 0.8)],
-                               rgba=rgba, contype=0, conaffinity=0)
 
 
 def add_face(human: mjcf.RootElement, identity: str) -> None:

@@ -42,7 +42,7 @@ def scene_options(scenario) -> SceneOptions:
         ambient=light.ambient, diffuse=light.diffuse, shadows=light.shadows, msaa=light.msaa,
         show_wiimote=h.wiimote, room=scenario.room, base=scenario.robot.base,
         identity=h.identity, show_headcam=scenario.sensors.head_camera.enabled,
-        clutter=getattr(scenario, "clutter", False), people=tuple(h.people),
+        people=tuple(h.people),
     )
 
 

@@ -28,14 +28,14 @@ MEASURED, FAILED, NOT_SELECTED = 0, 1, 2
 
 @dataclass(frozen=True)
 class FrontendParams:
-    patch: int = 11
+    patch_px: int = 11
     """Side of the square patch (px, odd)."""
-    n_sigma: float = 3.0
-    """Search inside the ``n_sigma`` ellipse of the innovation covariance."""
+    search_sigma: float = 3.0
+    """Search inside the ``search_sigma`` ellipse of the innovation covariance."""
     max_search_px: int = 48
     """Half-size cap of a search window (px): a very uncertain prediction is searched near
     its centre only (after a long coast the filter would otherwise search the whole image)."""
-    min_score: float = 0.8
+    min_zncc: float = 0.8
     """ZNCC a match must reach."""
     min_distance_px: int = 18
     """New features keep this far from predicted ones and from each other."""
@@ -118,8 +118,8 @@ class Frontend:
     def cut(self, grey: np.ndarray, uv: np.ndarray) -> list[np.ndarray | None]:
         """Patches centred on the sub-pixel positions ``uv (k, 2)`` (bilinear,
         ``cv2.getRectSubPix``); None where one does not fit in the image."""
-        r = self.params.patch // 2
-        s = self.params.patch
+        r = self.params.patch_px // 2
+        s = self.params.patch_px
         h, w = grey.shape
         out: list[np.ndarray | None] = []
         for u, v in np.asarray(uv, float).tolist():
@@ -145,22 +145,22 @@ class Frontend:
     def match(self, grey: np.ndarray, fids: np.ndarray, uv: np.ndarray, S: np.ndarray,
               mask: np.ndarray | None = None, select: np.ndarray | None = None) -> Matches:
         """Search each predicted feature (ids ``fids``, pixels ``uv``, innovation covariances
-        ``S (k, 2, 2)``) inside its ``n_sigma`` ellipse; ``select`` (bool, k) limits which are
+        ``S (k, 2, 2)``) inside its ``search_sigma`` ellipse; ``select`` (bool, k) limits which are
         searched (the rest are NOT_SELECTED), ``mask`` (bool image) marks pixels not to match
         in. A feature is measured where its best ZNCC inside the ellipse reaches
-        ``min_score``."""
+        ``min_zncc``."""
         prm = self.params
         k = len(fids)
         status = np.full(k, NOT_SELECTED)
         idx, out_uv, score = [], [], []
         if k == 0:
             return Matches(np.zeros(0, int), np.zeros((0, 2)), np.zeros(0), status)
-        r = prm.patch // 2
+        r = prm.patch_px // 2
         h, w = grey.shape
-        half = search_box(uv, S, prm.n_sigma, prm.max_search_px).tolist()
+        half = search_box(uv, S, prm.search_sigma, prm.max_search_px).tolist()
         S_inv = np.linalg.inv(S).reshape(k, 4).tolist()
         centre = uv.tolist()
-        lim = prm.n_sigma**2
+        lim = prm.search_sigma**2
         for i in range(k):
             if select is not None and not select[i]:
                 continue
@@ -188,7 +188,7 @@ class Frontend:
                 if mask is not None:
                     res[mask[y0:y1 + 1, x0:x1 + 1]] = -1.0
                 _, best, _, (ix, iy) = cv2.minMaxLoc(res)
-            if not best >= prm.min_score:  # also rejects NaN (a flat window)
+            if not best >= prm.min_zncc:  # also rejects NaN (a flat window)
                 continue
             dx, dy = subpixel_peak(res, iy, ix)
             idx.append(i)
@@ -207,7 +207,7 @@ class Frontend:
             return np.zeros((0, 2))
         prm = self.params
         h, w = grey.shape
-        r = prm.patch // 2 + 2
+        r = prm.patch_px // 2 + 2
         allowed = np.zeros((h, w), np.uint8)
         allowed[r:h - r, r:w - r] = 255
         if mask is not None:

@@ -16,6 +16,7 @@ import numpy as np
 from humimic.maths.stats import chi2_band, finite_or_none, nees, rmse
 from humimic.maths.trajectory import ape, rpe
 from humimic.motion import quat
+from humimic.spill import SpillRows
 
 #: Relative pose error over this many frames (1 s at the head camera's 30 Hz).
 RPE_DELTA_FRAMES = 30
@@ -25,7 +26,7 @@ RPE_DELTA_FRAMES = 30
 class SlamRecord:
     """Rows appended by the stage, one per head-camera frame."""
 
-    rows: list[tuple] = field(default_factory=list)
+    rows: SpillRows = field(default_factory=SpillRows)
 
     def add(self, t: float, x: np.ndarray, P: np.ndarray, report, added_on_arm: int = 0
             ) -> None:
@@ -40,8 +41,7 @@ class SlamRecord:
                  "converted", "map_size", "cycle_s", "cycle_cpu_s", "added_on_arm")
         if not self.rows:
             return {n: np.zeros(0) for n in names}
-        cols = list(zip(*self.rows, strict=True))
-        return {n: np.array(c) for n, c in zip(names, cols, strict=True)}
+        return dict(zip(names, self.rows.columns(), strict=True))
 
 
 def heading(R_W_I: np.ndarray) -> np.ndarray:

@@ -42,6 +42,7 @@ from humimic.estimation.ekf.slam_record import SlamRecord, slam_metrics
 from humimic.messages import HeadPose
 from humimic.motion import quat
 from humimic.pipeline.stage import Stage
+from humimic.scenario.base import pass_through
 from humimic.sensors.camera_model import CameraImage, CameraModel, make_transform
 from humimic.world.frames import GRAVITY_W, R_CV_I, SCREEN_CORNERS_W
 
@@ -59,8 +60,7 @@ def settings_from_config(cfg) -> EstimatorSettings:
                       sigma_accel=nz.accel, sigma_gyro=nz.gyro, sigma_px=nz.pixel,
                       orientation_tilt_yaw=orient,
                       rho0=1.0 / cfg.init_depth, sigma_rho=cfg.init_inverse_depth_std)
-    fe = FrontendParams(patch=cfg.patch_px, n_sigma=cfg.search_sigma,
-                        max_search_px=cfg.max_search_px, min_score=cfg.min_zncc)
+    fe = pass_through(FrontendParams, cfg)  # patch_px, search_sigma, max_search_px, min_zncc
     return EstimatorSettings(use_camera=cfg.mode != "inertial", use_accel=cfg.mode != "camera",
                              use_gyro=cfg.use_gyro and cfg.mode != "camera",
                              use_orientation=cfg.use_orientation and cfg.mode != "camera",
@@ -178,7 +178,7 @@ class SlamStage(Stage):
             if len(report.fids):
                 colors = [STATUS_COLORS[int(s)] for s in report.status]
                 rl.log_ellipses_2d(t, f"{SLAM}/camera/image/features", report.uv, report.S,
-                                   n_sigma=self.settings.frontend.n_sigma, colors=colors)
+                                   n_sigma=self.settings.frontend.search_sigma, colors=colors)
         else:
             rl.log_transform(t, f"{SLAM}/camera", T_W_cam)
         ids, pts, covs = f.feature_points()

@@ -13,6 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from humimic.maths.stats import rmse
+
 #: Table II: user's position (x_u, z_u), estimated (x_I, z_I), error (m).
 PAPER_TABLE2 = (((1.25, -2.50), (1.22, -2.32), 0.18), ((1.25, 0.00), (1.31, 0.07), 0.09),
                 ((0.00, -2.50), (0.19, -2.43), 0.20), ((-1.25, 0.00), (-1.03, -0.09), 0.24))
@@ -80,7 +82,7 @@ def table2(tr: dict, stands: list[Stand], settle_s: float = 0.3) -> list[Table2R
         rows.append(Table2Row(user, paper_est, paper_err, head, est,
                               float(np.linalg.norm(e.mean(axis=0))),
                               float(np.linalg.norm(est - np.asarray(user))),
-                              float(np.sqrt(np.mean(np.sum(e * e, axis=1)))), int(sel.sum())))
+                              rmse(e), int(sel.sum())))
     return rows
 
 

@@ -11,6 +11,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from humimic.sensors.camera_model import CameraModel, Intrinsics
+from humimic.spill import SpillRows
 
 STATES = ("searching", "tracking", "lost")
 STATE_CODE = {s: i for i, s in enumerate(STATES)}
@@ -64,7 +65,8 @@ class PerceptionRecord:
     targets: list[str]
     cameras: tuple[str, str]
     intrinsics: tuple[Intrinsics, Intrinsics] | None = None
-    rows: list[tuple] = field(default_factory=list)
+    rows: SpillRows = field(default_factory=SpillRows)
+    """One row per frame, batches on disk (memory flat in the run's duration)."""
 
     def append(self, t: float, T_base_cam: np.ndarray, state: np.ndarray, seen: np.ndarray,
                confirmed: np.ndarray, centre: np.ndarray, cov: np.ndarray, ok: np.ndarray,
@@ -86,9 +88,9 @@ class PerceptionRecord:
                                     z((0, n), bool),
                                     np.empty((0, n), object), z((0, n, 3)), z((0, n, 3, 3)),
                                     z((0, n, 2, 2)), z((0, n)))
-        cols = list(zip(*self.rows, strict=True))
+        cols = self.rows.columns()
         reason = np.empty((len(self.rows), n), object)
-        reason[:] = [list(r) for r in cols[8]]
-        arrays = [np.stack(c) for c in cols[1:8]] + [reason] + [np.stack(c) for c in cols[9:]]
+        reason[:] = cols[8].tolist()
+        arrays = [*cols[1:8], reason, *cols[9:]]
         return PerceptionArrays(list(self.targets), self.cameras, self.intrinsics,
-                                np.array(cols[0], float), *arrays)
+                                cols[0].astype(float), *arrays)

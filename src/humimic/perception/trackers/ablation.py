@@ -12,6 +12,10 @@ scenarios/menezes_fig10_crossing.yaml --tracker icu``.
 
 from __future__ import annotations
 
+from humimic import select_gl_backend
+
+select_gl_backend()  # an entry point: MuJoCo's OpenGL backend, before anything imports mujoco
+
 import argparse
 import sys
 from pathlib import Path

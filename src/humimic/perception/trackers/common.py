@@ -7,8 +7,10 @@ watches, the scenario's skin colour model as a lookup table, the stage classes w
   returning a :class:`~humimic.messages.PoseEstimate` (published on ``poses``) and ``scores()``.
 * :class:`ImageTrackerStage` (image-space kinds): implement ``track(t, image)`` returning
   ``(Tracks2D, Overlay | None)``; published on ``tracks2d``, scored against projected ground
-  truth (:mod:`humimic.metrics.tracks2d`), drawn in rerun (particles coloured by weight, the
-  estimate green while tracking and red otherwise, detections in yellow, the state over time).
+  truth (:mod:`humimic.metrics.tracks2d`; visibility from :mod:`humimic.sensors.visibility`:
+  in view and unoccluded, so another person in front hides the target), drawn in rerun
+  (particles coloured by weight, the estimate green while tracking and red otherwise,
+  detections in yellow, the state over time).
 """
 
 from __future__ import annotations
@@ -21,9 +23,10 @@ import numpy as np
 import rerun as rr
 
 from humimic.messages import TRACK_STATES, Tracks2D
-from humimic.metrics.tracks2d import hide_occluded, project_truth, scores
+from humimic.metrics.tracks2d import ImageTruth, project_truth, scores
 from humimic.perception.blobs.config import DEFAULT_COLOR_MODEL
-from humimic.perception.cues.color_models import ColorLUT, load_color_model
+from humimic.perception.cues.auto_colors import NotInView, file_lut, learned_lut
+from humimic.perception.cues.color_models import ColorLUT
 from humimic.pipeline.stage import Stage
 from humimic.scenario.errors import ScenarioError
 from humimic.sensors.camera_model import invert_transform
@@ -38,17 +41,24 @@ def where(scenario) -> str:
     return f"scenario {scenario.name!r}"
 
 
-def skin_model_lut(scenario, key: str, bits: int = 6) -> ColorLUT:
-    """The skin colour model perception uses (``perception.color_model``, default
-    ``models/colors/skin.json``) as a :class:`ColorLUT`; ``key`` names the tracker in errors."""
+def skin_model_lut(scenario, world, cameras, key: str, bits: int = 6) -> ColorLUT:
+    """The skin colour model as a :class:`ColorLUT`: the file ``perception.color_model`` names,
+    or (``auto``, the default, and without a ``perception`` section) the model learned for
+    this scenario's person as ``cameras`` see them (:func:`~humimic.perception.cues.
+    auto_colors.learned_lut`, cached on disk). ``key`` names the tracker in errors."""
     cfg = getattr(scenario, "perception", None)
-    path = Path(cfg.color_model if cfg is not None and cfg.color_model else DEFAULT_COLOR_MODEL)
+    source = cfg.color_model if cfg is not None else "auto"
     try:
-        return ColorLUT(load_color_model(path), bits)
+        if source == "auto":
+            return learned_lut(world, list(cameras), "skin", "rgb", bits).lut
+        return file_lut(Path(source), bits).lut
+    except NotInView as err:
+        raise ScenarioError(where(scenario), key, f"cannot learn the skin colours: {err}",
+                            "auto", f"perception.color_model: {DEFAULT_COLOR_MODEL}") from None
     except (OSError, ValueError) as err:
         raise ScenarioError(where(scenario), key, f"skin colour model unreadable: {err}",
-                            str(path), "a file written by humimic.perception.cues.learn_colors"
-                            ) from None
+                            str(source), "a file written by humimic.perception.cues."
+                            "learn_colors") from None
 
 
 def check_cameras(scenario, world, name: str, cameras, needed: int) -> tuple[str, ...]:
@@ -155,12 +165,15 @@ class ImageTrackerStage(Stage):
     ground truth of ``target`` (a site of physical size ``size_m``)."""
 
     def __init__(self, name: str, camera: str, target: str, size_m: float, gt, rlog=None,
-                 latency: float = 0.0, people=None):
+                 latency: float = 0.0, people=None, visibility=None):
         self.name = f"trackers.{name}"
         self.tracker_name, self.camera, self.target, self.size_m = name, camera, target, size_m
         self.gt, self.rlog, self.latency = gt, rlog, float(latency)
         self.people = people
         """The other people's motion (:class:`humimic.world.people.PeopleMotion`) or None."""
+        self.visibility = visibility
+        """The world's :class:`~humimic.sensors.visibility.Visibility` (None: the target is
+        visible whenever its centre projects into the image)."""
         self.times: list[float] = []
         self.cameras: list = []
         self.tracks: list[Tracks2D] = []
@@ -236,7 +249,12 @@ class ImageTrackerStage(Stage):
                 uv[k], scale[k], tracking[k] = (a.u, a.v), a.scale, a.state == "tracking"
         idx = self.gt.index_of(np.array(self.times))
         truth = project_truth(self.cameras, self.gt.p_base(self.target)[idx], self.size_m)
-        return uv, scale, tracking, hide_occluded(truth, self.others())
+        vis = self.visibility.arrays() if self.visibility is not None else None
+        if vis is not None and len(vis.t) and self.target in vis.targets:
+            seen = vis.visible[vis.at(np.array(self.times)), vis.camera(self.camera),
+                               vis.target(self.target)]
+            truth = ImageTruth(truth.uv, truth.size_px, seen & (truth.depth > 0), truth.depth)
+        return uv, scale, tracking, truth
 
     def others(self) -> list:
         """Projected head truths of the other people in the room (``human.people``), for

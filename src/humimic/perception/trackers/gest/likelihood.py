@@ -36,43 +36,21 @@ from humimic.bodymodel.features import resample
 from humimic.bodymodel.hand import hand_ellipsoids, to_camera
 from humimic.bodymodel.projection import project_ellipsoids
 from humimic.perception.cues.color_models import ColorLUT
-from humimic.perception.cues.edges import (
-    DT_CAP_PX,
-    dt_distance,
-    edge_maps,
-    sample,
-    shape_log_likelihood,
-)
-from humimic.perception.cues.histograms import (
-    QuantizedImage,
-    color_log_likelihood,
-    patch_histograms,
-    quantize,
-)
-from humimic.sensors.camera_model import CameraImage, Intrinsics, invert_transform
+from humimic.perception.cues.edges import DT_CAP_PX, dt_distance, sample, shape_log_likelihood
+from humimic.perception.cues.histograms import color_log_likelihood, patch_histograms
+from humimic.perception.trackers.frame_cues import FrameCues, frame_cues
+from humimic.sensors.camera_model import CameraImage
 
 #: One square patch centred on the ellipse, ``s`` = its side (px) (histograms' patch units).
 INSCRIBED = np.array([[0.0, 0.0, 1.0, 1.0]])
 OFF_IMAGE = -1.0e6
 
 
-@dataclass(frozen=True)
-class HandView:
-    """One camera's per-frame data for the likelihood (computed once per frame)."""
-
-    intrinsics: Intrinsics
-    T_cam_base: np.ndarray
-    dt: np.ndarray
-    """Distance transform of the Canny edges (px, capped)."""
-    qimage: QuantizedImage
-    skin: np.ndarray | None
-    """float32 skin posterior per pixel (None: no skin cue)."""
+HandView = FrameCues
 
 
 def hand_view(frame: CameraImage, bins: int, lut: ColorLUT | None = None) -> HandView:
-    return HandView(frame.camera.intrinsics, invert_transform(frame.camera.T_base_cam),
-                    edge_maps(frame.image).dt, quantize(frame.image, bins),
-                    None if lut is None else lut.posterior(frame.image))
+    return frame_cues(frame, bins, lut)
 
 
 @dataclass(frozen=True)
@@ -87,12 +65,18 @@ class HandProjection:
     """(N,) bool."""
 
 
+def hand_outlines(states: np.ndarray, intrinsics, T_cam_base: np.ndarray, n: int = 16):
+    """Eq. 15 for hand states ``(N, 9)``: the outlines (one part each) and image conics."""
+    R, c, axes = hand_ellipsoids(states)
+    R, c = to_camera(T_cam_base, R, c)
+    outline, _, conic = project_ellipsoids(R[:, None], c[:, None], axes[:, None],
+                                           intrinsics, n)              # Menezes eq. 15
+    return outline, conic
+
+
 def project_hands(states: np.ndarray, view: HandView, n_points: int) -> HandProjection:
     """Eq. 15 for every particle's ellipsoid, and its contour points and colour patch."""
-    R, c, axes = hand_ellipsoids(states)
-    R, c = to_camera(view.T_cam_base, R, c)
-    outline, _, conic = project_ellipsoids(R[:, None], c[:, None], axes[:, None],
-                                           view.intrinsics, 16)        # Menezes eq. 15
+    outline, conic = hand_outlines(states, view.intrinsics, view.T_cam_base)
     pts = resample(outline, n_points)
     valid = outline.valid[:, 0]
     uv = np.where(valid[:, None, None], pts.uv[:, 0], OFF_IMAGE)

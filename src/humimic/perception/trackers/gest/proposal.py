@@ -40,9 +40,8 @@ class PoseReset:
 
     def sample(self, x: np.ndarray, rng: np.random.Generator) -> np.ndarray:
         out = self.walk.sample(x, rng)
-        reset = rng.random(len(x)) < self.eps
-        if reset.any():
-            out[reset, POSE] = self.box.sample(int(reset.sum()), rng)
+        idx = np.flatnonzero(rng.random(len(x)) < self.eps)
+        out[idx, POSE] = self.box.sample(len(idx), rng)
         return out
 
     def _axes(self) -> RandomWalk:

@@ -12,14 +12,19 @@ that is not in view.
 from __future__ import annotations
 
 import numpy as np
+import rerun as rr
 
 from humimic.bodymodel.avatar import truth_hand_state
 from humimic.bodymodel.kinematics import ypr_matrix
 from humimic.maths.stats import rmse
 from humimic.messages import PoseEstimate
-from humimic.perception.trackers.common import PoseTrackerStage
+from humimic.perception.trackers.common import BAD, GOOD, PoseTrackerStage
+from humimic.perception.trackers.gest.likelihood import hand_outlines
 from humimic.perception.trackers.gest.tracker import GestResult, GestTracker
 from humimic.sensors.camera_model import invert_transform
+from humimic.viz.rerun_log import ESTIMATES, image_entity
+
+PARTICLE = (90, 120, 255)
 
 STATE_NAMES = ("x", "y", "z", "yaw", "pitch", "roll", "sigma_x", "sigma_y", "sigma_z")
 #: The ellipsoid's proper symmetries (half turns about its axes).
@@ -46,21 +51,52 @@ class GestStage(PoseTrackerStage):
         self.side = "R" if cfg.hand == "right" else "L"
         self.results: list[GestResult | None] = []
         self.left_cams: list = []
+        self.samples: list = []
+        """Per frame, every ``n // 20``-th particle (for the recording)."""
 
     def track(self, t: float, images: dict):
         left, right = images.get(self.cameras[0]), images.get(self.cameras[1])
         if left is None or right is None:
             self.results.append(None)
             self.left_cams.append(None)
+            self.samples.append(None)
             return None
         res = self.tracker.step(left, right, self.rng)
         self.results.append(res)
         self.left_cams.append(left.camera)
+        pf = self.tracker.pf
+        self.samples.append(None if pf.particles is None else
+                            pf.particles[::max(1, len(pf.particles) // 20)].copy())
         if res.mean is None:
             return PoseEstimate(self.tracker_name, self.kind, np.full(9, np.nan), STATE_NAMES,
                                 None, {}, {}, res.status)
         return PoseEstimate(self.tracker_name, self.kind, res.mean, STATE_NAMES, res.cov,
                             {f"{self.side.lower()}_hand": res.mean[:3]}, {}, res.status)
+
+    def log(self, rlog) -> None:
+        """Over the left image: the MMSE ellipse (green tracking, red otherwise) and a sample
+        of particles (blue); in 3-D, the estimated centre beside the avatar."""
+        if rlog is None or not rlog.enabled:
+            return
+        base = f"{image_entity(self.cameras[0])}/{self.tracker_name}"
+        T = self.world.gt.T_world_base
+        for t, res, cam, sample in zip(self.times, self.results, self.left_cams, self.samples,
+                                       strict=True):
+            if res is None or res.mean is None:
+                continue
+            states = np.vstack([res.mean[None], sample])
+            states[:, 6:] = np.maximum(states[:, 6:], 1e-3)
+            outline, _ = hand_outlines(states, cam.intrinsics, invert_transform(cam.T_base_cam))
+            strips = [np.vstack([o, o[:1]]) + 0.5 for o in outline.uv[:, 0]
+                      if np.isfinite(o).all()]
+            if not strips:
+                continue
+            rlog.log(t, f"{base}/particles", rr.LineStrips2D(strips[1:], colors=PARTICLE,
+                                                              radii=0.5))
+            rlog.log(t, f"{base}/estimate", rr.LineStrips2D(
+                strips[:1], colors=GOOD if res.status == "tracking" else BAD, radii=1.0))
+            rlog.log_points(t, f"{ESTIMATES}/{self.tracker_name}",
+                            (T[:3, :3] @ res.mean[:3] + T[:3, 3])[None], colors=GOOD)
 
     def scores(self) -> dict:
         if not self.times:

@@ -133,12 +133,12 @@ class GestTracker:
     def step(self, left: CameraImage, right: CameraImage, rng: np.random.Generator
              ) -> GestResult:
         cfg = self.cfg
-        blobs = [skin_blobs(skin_mask(f.image, self.lut), subsample=cfg.blob_subsample)
-                 for f in (left, right)]
+        views = [hand_view(f, cfg.bins, self.lut) for f in (left, right)]
+        blobs = [skin_blobs((v.skin > 0.5).astype(np.uint8), subsample=cfg.blob_subsample)
+                 for v in views]
         p, cov, cen, pairs = stereo_candidates(blobs[0], blobs[1], left.camera, right.camera,
                                         cfg.max_epipolar_px, cfg.blob_size,
                                         cfg.blob_sigma_scale, cfg.centroid_px)
-        views = [hand_view(f, cfg.bins, self.lut) for f in (left, right)]
         if not self.locked:
             if len(p) == 0:
                 return GestResult(None, None, "searching", p, math.nan)

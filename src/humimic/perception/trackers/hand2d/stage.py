@@ -14,8 +14,10 @@ HAND_WIDTH_M = 0.09
 
 
 class Hand2DStage(ImageTrackerStage):
-    def __init__(self, name: str, cfg, camera: str, tracker: Hand2DTracker, gt, rlog=None):
-        super().__init__(name, camera, cfg.target, HAND_WIDTH_M, gt, rlog, cfg.latency)
+    def __init__(self, name: str, cfg, camera: str, tracker: Hand2DTracker, gt, rlog=None,
+                 visibility=None):
+        super().__init__(name, camera, cfg.target, HAND_WIDTH_M, gt, rlog, cfg.latency,
+                         visibility=visibility)
         self.cfg, self.tracker = cfg, tracker
 
     def track(self, t: float, image: np.ndarray):

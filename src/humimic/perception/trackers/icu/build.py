@@ -32,4 +32,5 @@ def icu_stage(name, cfg, scenario, world, rngs, rlog) -> IcuStage:
     tracker = IcuTracker(cfg, width, height, rngs[f"trackers.{name}"], FaceDetector(params),
                          recogniser, tutor)
     return IcuStage(name, cfg, camera, tracker, identity, world.gt, rlog,
-                    getattr(world, "people", None))
+                    getattr(world, "people", None),
+                    getattr(world, "track_visibility", lambda: None)())

@@ -11,8 +11,9 @@ from humimic.perception.trackers.common import HEAD_WIDTH_M, ImageTrackerStage, 
 
 class IcuStage(ImageTrackerStage):
     def __init__(self, name: str, cfg, camera: str, tracker, identity: str, gt, rlog=None,
-                 people=None):
-        super().__init__(name, camera, "head", HEAD_WIDTH_M, gt, rlog, cfg.latency, people)
+                 people=None, visibility=None):
+        super().__init__(name, camera, "head", HEAD_WIDTH_M, gt, rlog, cfg.latency, people,
+                         visibility)
         self.tracker, self.identity = tracker, identity
         self.faces: list[tuple[int, np.ndarray, np.ndarray]] = []
         """(frame index, face boxes, their probabilities of being the tutor) per frame."""

@@ -8,5 +8,6 @@ from humimic.perception.trackers.kpf.stage import KpfStage
 
 def kpf_stage(name: str, cfg, scenario, world, rngs, rlog) -> list:
     camera = check_camera(scenario, world, name, cfg.camera)
-    lut = skin_model_lut(scenario, f"trackers.{name}")
-    return [KpfStage(name, cfg, camera, world, lut, rngs[f"trackers.{name}"], rlog)]
+    lut = skin_model_lut(scenario, world, [camera], f"trackers.{name}")
+    return [KpfStage(name, cfg, camera, world, lut, rngs[f"trackers.{name}"], rlog,
+                     scenario.cameras.rate)]

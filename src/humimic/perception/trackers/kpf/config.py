@@ -59,6 +59,9 @@ class KpfConfig(Section):
     """Propagation extent per arm DOF: SFE, SAA, HR, EB (deg)."""
     D_torso_deg: float = Field(2.0, gt=0.0, le=45.0)
     D_torso_m: float = Field(0.03, gt=0.0, le=0.5)
+    D_rate: float = Field(7.5, gt=0.0, le=240.0)
+    """The frame rate (Hz) the extents D are for (the paper's 7.5 Hz); at another camera rate
+    they scale by ``sqrt(D_rate / rate)``, a random walk's spread over the same time."""
     shrink: float = Field(0.8, gt=0.0, lt=1.0)
     """Bandwidth factor per iteration, h = shrink^i D."""
     window: float = Field(0.25, gt=0.0, le=2.0)
@@ -97,10 +100,12 @@ class KpfConfig(Section):
     latency: float = Field(0.0, ge=0.0, le=5.0)
     """Declared processing delay of a pose estimate (s)."""
 
-    def D(self) -> list[float]:
-        """The 14 propagation extents (m, rad) in :data:`humimic.bodymodel.DOF_NAMES` order."""
+    def D(self, frame_rate: float | None = None) -> list[float]:
+        """The 14 propagation extents (m, rad) in :data:`humimic.bodymodel.DOF_NAMES` order,
+        for frames at ``frame_rate`` (Hz; None: ``D_rate``)."""
         import math
 
-        t, r = self.D_torso_m, math.radians(self.D_torso_deg)
-        arm = [math.radians(a) for a in self.D_arm_deg]
+        k = 1.0 if frame_rate is None else math.sqrt(self.D_rate / frame_rate)
+        t, r = k * self.D_torso_m, k * math.radians(self.D_torso_deg)
+        arm = [k * math.radians(a) for a in self.D_arm_deg]
         return [t, t, t, r, r, r] + arm + arm

@@ -23,6 +23,7 @@ the cost.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import cv2
 import numpy as np
@@ -57,6 +58,11 @@ class CueMaps:
     def shape(self) -> tuple[int, int]:
         return self.rgb.shape[:2]
 
+    @cached_property
+    def hessian_flat(self) -> np.ndarray:
+        """(3, sum of the levels' pixels): the levels' planes raveled end to end."""
+        return np.concatenate([hm.reshape(3, -1) for hm in self.hessian], axis=1)
+
 
 def cue_maps(image: np.ndarray, skin_lut: ColorLUT, levels: int = 3, k_edge: float = 0.15,
              k_ridge: float = 0.05) -> CueMaps:
@@ -79,14 +85,15 @@ def cue_maps(image: np.ndarray, skin_lut: ColorLUT, levels: int = 3, k_edge: flo
     return CueMaps(_normalise(grad, k_edge), tuple(hess), image.astype(np.float32) / 255.0, skin)
 
 
-def _pixels(uv: np.ndarray, shape: tuple[int, int], scale: float = 1.0
+def _pixels(u: np.ndarray, v: np.ndarray, shape: tuple[int, int]
             ) -> tuple[np.ndarray, np.ndarray]:
-    """Flat pixel indices (nearest) of points ``(..., 2)`` and whether they fall inside."""
+    """Flat pixel indices (nearest) of points ``(u, v)`` and whether they fall inside (NaN
+    points do not)."""
     h, w = shape
-    u = np.rint(uv[..., 0] * scale).astype(np.intp)
-    v = np.rint(uv[..., 1] * scale).astype(np.intp)
-    inside = (u >= 0) & (u < w) & (v >= 0) & (v < h)
-    return np.where(inside, v * w + u, 0), inside
+    with np.errstate(invalid="ignore"):
+        ui, vi = np.rint(u).astype(np.intp), np.rint(v).astype(np.intp)
+    inside = (ui >= 0) & (ui < w) & (vi >= 0) & (vi < h) & np.isfinite(u) & np.isfinite(v)
+    return np.where(inside, vi * w + ui, 0), inside
 
 
 def _mean_inside(values: np.ndarray, inside: np.ndarray, outside: float) -> np.ndarray:
@@ -98,9 +105,10 @@ def _mean_inside(values: np.ndarray, inside: np.ndarray, outside: float) -> np.n
 def edge_response(maps: CueMaps, uv: np.ndarray, angle: np.ndarray) -> np.ndarray:
     """Schmidt eqs. 1-2: ``(N, L)`` mean ``|g_v cos a - g_u sin a|`` over the points
     ``uv (N, L, M, 2)`` of limbs at image angles ``angle (N, L)``."""
-    idx, inside = _pixels(uv, maps.shape)
+    idx, inside = _pixels(uv[..., 0], uv[..., 1], maps.shape)
     gu, gv = maps.grad[0].ravel()[idx], maps.grad[1].ravel()[idx]
-    c, s = np.cos(angle)[..., None], np.sin(angle)[..., None]
+    c = np.cos(angle)[..., None].astype(np.float32)
+    s = np.sin(angle)[..., None].astype(np.float32)
     return _mean_inside(np.abs(gv * c - gu * s), inside, 0.0)
 
 
@@ -115,21 +123,24 @@ def ridge_level(width_px: np.ndarray, levels: int) -> np.ndarray:
 def ridge_response(maps: CueMaps, uv: np.ndarray, width_px: np.ndarray, angle: np.ndarray
                    ) -> np.ndarray:
     """Schmidt eqs. 3-4: ``(N, L)`` mean ridge response over the axis points ``uv (N, L, M, 2)``
-    at the pyramid level of each limb's mean width ``width_px (N, L)``."""
-    mu = ridge_level(width_px, len(maps.hessian))
-    c, s = np.cos(angle)[..., None], np.sin(angle)[..., None]
-    out = np.zeros(angle.shape)
-    for level, hm in enumerate(maps.hessian):
-        sel = mu == level
-        if not sel.any():
-            continue
-        idx, inside = _pixels(uv[sel], hm.shape[1:], 0.5 ** level)
-        uu, uv_, vv = hm[0].ravel()[idx], hm[1].ravel()[idx], hm[2].ravel()[idx]
-        cs, sn = c[sel], s[sel]
-        across = np.abs(sn * sn * uu + cs * cs * vv - 2 * sn * cs * uv_)
-        along = np.abs(cs * cs * uu + sn * sn * vv + 2 * sn * cs * uv_)
-        out[sel] = _mean_inside(across - along, inside, 0.0)
-    return out
+    at the pyramid level of each limb's mean width ``width_px (N, L)`` (one gather from the
+    levels laid end to end)."""
+    mu = ridge_level(width_px, len(maps.hessian))[..., None]                   # (N, L, 1)
+    shapes = np.array([hm.shape[1:] for hm in maps.hessian])                   # (levels, 2)
+    offsets = np.concatenate([[0], np.cumsum(shapes[:, 0] * shapes[:, 1])[:-1]])
+    scale = 0.5 ** mu
+    u = np.rint(uv[..., 0] * scale).astype(np.intp)
+    v = np.rint(uv[..., 1] * scale).astype(np.intp)
+    h, w = shapes[mu, 0], shapes[mu, 1]
+    inside = (u >= 0) & (u < w) & (v >= 0) & (v < h)
+    idx = np.where(inside, offsets[mu] + v * w + u, 0)
+    flat = maps.hessian_flat
+    uu, uv_, vv = flat[0][idx], flat[1][idx], flat[2][idx]
+    c = np.cos(angle)[..., None].astype(np.float32)
+    s = np.sin(angle)[..., None].astype(np.float32)
+    across = np.abs(s * s * uu + c * c * vv - 2 * s * c * uv_)
+    along = np.abs(c * c * uu + s * s * vv + 2 * s * c * uv_)
+    return _mean_inside(across - along, inside, 0.0)
 
 
 #: Fractions (along, across) of a band quadrilateral where the colour is sampled (M_C = 9).
@@ -146,7 +157,8 @@ def band_points(quads: np.ndarray) -> np.ndarray:
 
 def band_colours(maps: CueMaps, quads: np.ndarray) -> np.ndarray:
     """Mean RGB ``(..., 3)`` over each quadrilateral's sample points (off-image points black)."""
-    idx, inside = _pixels(band_points(quads), maps.shape)
+    pts = band_points(quads)
+    idx, inside = _pixels(pts[..., 0], pts[..., 1], maps.shape)
     rgb = maps.rgb.reshape(-1, 3)[idx] * inside[..., None]
     return rgb.mean(axis=-2)
 
@@ -171,6 +183,6 @@ def skin_response(maps: CueMaps, centre: np.ndarray, axes: np.ndarray, angle: np
     c, s = np.cos(angle)[..., None], np.sin(angle)[..., None]
     x = _DISC[:, 0] * axes[..., :1]
     y = _DISC[:, 1] * axes[..., 1:]
-    uv = np.stack([centre[..., :1] + c * x - s * y, centre[..., 1:] + s * x + c * y], -1)
-    idx, inside = _pixels(np.nan_to_num(uv, nan=-1.0), maps.shape)
+    idx, inside = _pixels(centre[..., :1] + c * x - s * y, centre[..., 1:] + s * x + c * y,
+                          maps.shape)
     return _mean_inside(maps.skin.ravel()[idx], inside, 0.0)

@@ -61,6 +61,11 @@ class Likelihood:
         self.floor = {c: getattr(cfg.sigma, c) for c in CUE_NAMES}
         self.bands = {p: cfg.bands_torso if limb_type(p) == "torso" else cfg.bands_arm
                       for p in self.parts}
+        self.used = {c: np.array([c in self.use[p] for p in self.parts]) for c in CUE_NAMES}
+        """Cue -> (parts,) bool: the cue is configured on the part."""
+        n_l = np.array([max(len(self.use[p]), 1) for p in self.parts], float)
+        self.balance = {c: self.used[c] / n_l for c in CUE_NAMES}
+        """Eq. 10's 1 / N_l where the cue is used, else 0."""
         self.references: dict[str, np.ndarray] = {}
         """Part name -> (B, 3) adapted mean colours (eq. 7); empty until :meth:`adapt`."""
 
@@ -102,8 +107,7 @@ class Likelihood:
                 if "skin" in self.use[p]:
                     cost["skin"][:, self.parts.index(p)] = 1.0 - np.where(ok[:, j], f[:, j], 0.0)
         for c in CUE_NAMES:   # cues not configured on a part do not count
-            unused = [i for i, p in enumerate(self.parts) if c not in self.use[p]]
-            cost[c][:, unused] = np.nan
+            cost[c][:, ~self.used[c]] = np.nan
         return Evaluation(cost, self.combine(cost), colours)
 
     def sigmas(self, cost: dict[str, np.ndarray]) -> dict[str, float]:
@@ -112,7 +116,7 @@ class Likelihood:
         out = {}
         for c, e in cost.items():
             floor = self.floor[c]
-            used = np.isfinite(e[0]) if len(e) else np.zeros(0, bool)
+            used = self.used[c]
             if self.cfg.sigma_from_spread and used.any() and len(e) > 1:
                 out[c] = max(float(np.mean(np.std(e[:, used], axis=0))), floor)
             else:
@@ -123,10 +127,11 @@ class Likelihood:
         """Schmidt eqs. 9-10 per part ``l``: ``1/N_l sum_c -e^2 / (2 sigma_c^2)``, ``(N, parts)``
         (their sum over parts is the pose's log-likelihood)."""
         sig = self.sigmas(cost)
-        n_l = np.array([max(len(self.use[p]), 1) for p in self.parts], float)
         total = 0.0
         for c, e in cost.items():
-            total = total + np.nan_to_num(-(e * e) / (2.0 * sig[c] ** 2) / n_l)
+            if self.used[c].any():
+                e = np.where(self.used[c], e, 0.0)
+                total = total - (e * e) * (self.balance[c] / (2.0 * sig[c] ** 2))
         return np.asarray(total)
 
     def adapt(self, colours: dict[str, np.ndarray]) -> None:

@@ -28,15 +28,17 @@ class KpfRecord:
     ends: list = field(default_factory=list)
     lost: list = field(default_factory=list)
     compute_s: list = field(default_factory=list)
+    cpu_s: list = field(default_factory=list)
     iterations: list = field(default_factory=list)
     T_cam_base: list = field(default_factory=list)
 
-    def add(self, t, q, ends, lost, compute_s, iterations, T_cam_base) -> None:
+    def add(self, t, q, ends, lost, compute_s, cpu_s, iterations, T_cam_base) -> None:
         self.t.append(t)
         self.q.append(np.asarray(q, float))
         self.ends.append(np.stack([ends[j] for j in ENDPOINTS]))
         self.lost.append(bool(lost))
         self.compute_s.append(compute_s)
+        self.cpu_s.append(cpu_s)
         self.iterations.append(iterations)
         self.T_cam_base.append(T_cam_base)
 
@@ -76,6 +78,7 @@ def kpf_metrics(rec: KpfRecord, world, body: bm.BodyModel, camera: str) -> dict:
     return {
         "frames": len(rec.t),
         "frames_per_s": float(len(rec.t) / max(sum(rec.compute_s), 1e-9)),
+        "frames_per_cpu_s": float(len(rec.t) / max(sum(rec.cpu_s), 1e-9)),
         "lost_fraction": float(np.mean(e["wrist"] > LOST_M)),
         "reported_lost_fraction": float(np.mean(rec.lost)),
         "wrist_error_mm": mm * float(e["wrist"].mean()),

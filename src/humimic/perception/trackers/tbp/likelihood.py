@@ -26,15 +26,15 @@ from humimic.bodymodel.features import contour_points
 from humimic.bodymodel.model import BodyModel, Cone, Pose
 from humimic.bodymodel.projection import project
 from humimic.perception.cues.color_models import ColorLUT
-from humimic.perception.cues.edges import DT_CAP_PX, edge_maps, sample, shape_log_likelihood
+from humimic.perception.cues.edges import DT_CAP_PX, sample, shape_log_likelihood
 from humimic.perception.cues.histograms import (
     QuantizedImage,
     color_log_likelihood,
     patch_histograms,
-    quantize,
 )
-from humimic.perception.cues.motion import MotionEdgeMaps, motion_edge_maps, sample_pair
-from humimic.sensors.camera_model import CameraImage, Intrinsics, invert_transform
+from humimic.perception.cues.motion import MotionEdgeMaps, sample_pair
+from humimic.perception.trackers.frame_cues import FrameCues, frame_cues
+from humimic.sensors.camera_model import CameraImage
 
 ARM_PARTS = ("r_upper_arm", "r_forearm", "r_hand", "l_upper_arm", "l_forearm", "l_hand")
 HANDS = ("r_hand", "l_hand")
@@ -42,25 +42,11 @@ INSCRIBED = np.array([[0.0, 0.0, 1.0, 1.0]])
 OFF_IMAGE = -1.0e6
 
 
-@dataclass(frozen=True)
-class ArmView:
-    """One frame's data for the likelihood (computed once per frame)."""
-
-    intrinsics: Intrinsics
-    T_cam_base: np.ndarray
-    maps: MotionEdgeMaps
-    skin: np.ndarray
-    """float32 skin posterior per pixel."""
-    qimage: QuantizedImage
-    edge_density: float
-    """Fraction of edge pixels."""
+ArmView = FrameCues
 
 
 def arm_view(frame: CameraImage, flow: np.ndarray | None, lut: ColorLUT, bins: int) -> ArmView:
-    maps = edge_maps(frame.image)
-    return ArmView(frame.camera.intrinsics, invert_transform(frame.camera.T_base_cam),
-                   motion_edge_maps(maps, flow), lut.posterior(frame.image),
-                   quantize(frame.image, bins), float(np.mean(maps.edges > 0)))
+    return frame_cues(frame, bins, lut, flow)
 
 
 @dataclass(frozen=True)
@@ -109,6 +95,18 @@ def project_arms(body: BodyModel, q: np.ndarray, torso: np.ndarray, view: ArmVie
     return ArmProjection(pose, uv, pts.visible[:, idx] & ok[..., None], hand_inner, patches)
 
 
+def hand_interiors(hands: BodyModel, q: np.ndarray, torso: np.ndarray, view: ArmView,
+                   shrink: float = 0.6) -> np.ndarray:
+    """``(N, 2, V, 2)`` the hands' outlines shrunk towards their centroids (px), from a model
+    ``hands`` holding only the two hand parts (the first stage's cheap projection)."""
+    bv = project(hands, hands.forward(q, fixed=torso), view.intrinsics, view.T_cam_base,
+                 n_vertices=8)
+    poly = bv.outline.uv[:, [bv.index(h) for h in HANDS]]
+    c = poly.mean(axis=2, keepdims=True)
+    out = c + shrink * (poly - c)
+    return np.where(np.isfinite(out), out, OFF_IMAGE)
+
+
 def shape_motion_distance(proj: ArmProjection, maps: MotionEdgeMaps, K: float,
                           cap_px: float = DT_CAP_PX) -> np.ndarray:
     """Menezes eq. 5 over the visible arm contour points: ``(N,)`` px (``cap_px`` when none is
@@ -123,9 +121,10 @@ def shape_motion_distance(proj: ArmProjection, maps: MotionEdgeMaps, K: float,
     return np.where(n > 0, (d * w).sum(axis=(1, 2)) / np.maximum(n, 1), cap_px)
 
 
-def skin_distance(proj: ArmProjection, skin: np.ndarray) -> np.ndarray:
-    """``1 - mean skin posterior`` inside the two hands' outlines, ``(N,)`` in [0, 1]."""
-    return 1.0 - sample(skin, proj.hand_inner, 0.0).mean(axis=(1, 2))
+def skin_distance(hand_inner: np.ndarray, skin: np.ndarray) -> np.ndarray:
+    """``1 - mean skin posterior`` at the points ``(N, 2, V, 2)`` inside the two hands'
+    outlines, ``(N,)`` in [0, 1]."""
+    return 1.0 - sample(skin, hand_inner, 0.0).mean(axis=(1, 2))
 
 
 def patch_histograms_all(proj: ArmProjection, qimage: QuantizedImage) -> np.ndarray:
@@ -166,7 +165,7 @@ def full_log_likelihood(proj: ArmProjection, view: ArmView, q: np.ndarray, body:
     lambda_co, q_def``)."""
     D = shape_motion_distance(proj, view.maps, w["K"], w["cap_px"])
     out = shape_log_likelihood(D, w["sigma_s"], w["lambda_s"])                # eq. 2 with eq. 5
-    out += shape_log_likelihood(skin_distance(proj, view.skin), w["sigma_k"])
+    out += shape_log_likelihood(skin_distance(proj.hand_inner, view.skin), w["sigma_k"])
     if refs is not None:
         lam = np.repeat(w["lambda_c"][:, None], 3, axis=1)
         out += color_log_likelihood(patch_histograms_all(proj, view.qimage), refs,

@@ -13,13 +13,15 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import rerun as rr
 
 from humimic.bodymodel.avatar import truth_state
 from humimic.bodymodel.kinematics import DOF_NAMES, JOINT_SEGMENT, ypr_matrix
 from humimic.maths.stats import rmse
 from humimic.messages import PoseEstimate
-from humimic.perception.trackers.common import PoseTrackerStage
+from humimic.perception.trackers.common import GOOD, PoseTrackerStage
 from humimic.perception.trackers.tbp.tracker import ARM_NAMES, TbpTracker
+from humimic.viz.rerun_log import ESTIMATES, image_entity
 
 JOINTS = ("r_shoulder", "r_elbow", "r_wrist", "l_shoulder", "l_elbow", "l_wrist")
 
@@ -45,6 +47,7 @@ class TbpStage(PoseTrackerStage):
         self.head: np.ndarray | None = None
         self.torsos: list = []
         self.means: list = []
+        self.cams: list = []
 
     def attach(self, bus, timer) -> None:
         super().attach(bus, timer)
@@ -66,16 +69,53 @@ class TbpStage(PoseTrackerStage):
         if frame is None or torso is None:
             self.torsos.append(None)
             self.means.append(None)
+            self.cams.append(None)
             return PoseEstimate(self.tracker_name, self.kind, np.full(8, np.nan), ARM_NAMES,
                                 status="searching")
         mean, cov, ok = self.tracker.step(frame, torso, self.rng)
         self.torsos.append(torso)
         self.means.append(mean)
+        self.cams.append(frame.camera)
         pose = self.tracker.body.forward(mean[None], fixed=torso)
         joints = {j: pose.joint(j)[0] for j in JOINTS}
         return PoseEstimate(self.tracker_name, self.kind, mean, ARM_NAMES, cov, joints,
                             dict(zip(ARM_NAMES, map(float, mean), strict=True)),
                             "tracking" if ok else "lost")
+
+    def log(self, rlog) -> None:
+        """The MMSE skeleton (shoulder, elbow, wrist per arm) over the camera image and in 3-D
+        beside the avatar."""
+        if rlog is None or not rlog.enabled:
+            return
+        base = f"{image_entity(self.camera)}/{self.tracker_name}"
+        T = self.world.gt.T_world_base
+        for t, mean, torso, cam in zip(self.times, self.means, self.torsos, self.cams,
+                                       strict=True):
+            if mean is None:
+                continue
+            pose = self.tracker.body.forward(mean[None], fixed=torso)
+            arms = [np.stack([pose.joint(f"{s}_{j}")[0] for j in ("shoulder", "elbow", "wrist")])
+                    for s in ("r", "l")]
+            rlog.log(t, f"{base}/skeleton", rr.LineStrips2D(
+                [cam.project_base(a) + 0.5 for a in arms], colors=GOOD, radii=1.0))
+            rlog.log_lines_3d(t, f"{ESTIMATES}/{self.tracker_name}",
+                              [a @ T[:3, :3].T + T[:3, 3] for a in arms], colors=GOOD,
+                              radii=0.01)
+
+    def _kalman(self, times, ticks, est) -> dict:
+        from humimic.perception.trackers.tbp.kalman import (
+            KALMAN_DOFS,
+            kalman_end_stops,
+            kalman_scores,
+        )
+
+        idx = [ARM_NAMES.index(n) for n in KALMAN_DOFS]
+        lim = self.tracker.body.free_limits
+        truth = truth_state(self.world, ticks, "base")[:, 6:][:, idx]
+        kf, _ = kalman_end_stops(times, truth, lim.lower[idx], lim.upper[idx],
+                                 math.radians(self.cfg.kalman_sigma_deg), self.cfg.kalman_b,
+                                 np.random.default_rng(self.world.scenario.seed))
+        return kalman_scores(kf, est[:, idx], truth, lim.lower[idx], lim.upper[idx])
 
     def scores(self) -> dict:
         use = [i for i, m in enumerate(self.means) if m is not None]
@@ -89,6 +129,9 @@ class TbpStage(PoseTrackerStage):
         if not use:
             return out
         ticks = self.world.gt.index_of(np.asarray(self.times)[use])
+        if self.cfg.kalman:
+            out["kalman"] = self._kalman(np.asarray(self.times)[use], ticks,
+                                         np.array([self.means[i] for i in use]))
         truth = truth_state(self.world, ticks, "base")
         est = np.array([self.means[i] for i in use])
         err = np.degrees((est - truth[:, 6:] + np.pi) % (2 * np.pi) - np.pi)

@@ -6,10 +6,10 @@ constant-velocity AR dynamics ``x'_k = A x'_{k-1} + w_k`` (``q_k = 2 q_{k-1} - q
 w``). The auxiliary particle filter (:func:`humimic.estimation.particles.apf_step`, Table 2)
 picks predecessors by the skin cue of their predicted hands (first stage) and weights the new
 particles by eq. 19 (second stage, :mod:`.likelihood`). Samples outside the joint limits are
-clamped to them, not rejected. Cue weights are set on the first frame: ``lambda_s`` from its
-edge density (plain or cluttered), each patch's ``lambda_c`` from how far its reference
-histogram is from a uniform one. If every particle has zero likelihood the set restarts from
-the rest pose.
+clamped to them, not rejected. Cue weights are set on the first frame: ``lambda_s`` from the
+edge density around the person (plain or cluttered), each patch's ``lambda_c`` from how far
+its reference histogram is from a uniform one. If every particle has zero likelihood the set
+restarts from the rest pose.
 """
 
 from __future__ import annotations
@@ -20,6 +20,7 @@ import numpy as np
 
 from humimic.bodymodel.kinematics import ARM_DOFS
 from humimic.bodymodel.model import BodyModel
+from humimic.bodymodel.projection import project
 from humimic.estimation.particles import LinearGaussian, apf_step, weighted_cov
 from humimic.estimation.particles.weights import uniform_log_weights
 from humimic.perception.cues.edges import shape_log_likelihood
@@ -30,6 +31,7 @@ from humimic.perception.trackers.tbp.likelihood import (
     ArmView,
     arm_view,
     full_log_likelihood,
+    hand_interiors,
     patch_histograms_all,
     project_arms,
     skin_distance,
@@ -47,9 +49,27 @@ def cv_dynamics(n: int, sigma: float) -> LinearGaussian:
     return LinearGaussian(F, Q)
 
 
+def surround_edge_density(body: BodyModel, q: np.ndarray, torso: np.ndarray,
+                          view: ArmView) -> float:
+    """Edge-pixel fraction in the person's surroundings: the box around the body model's
+    projection at ``q`` widened by half its height on each side and above (the background the
+    arms move over, the person's own outline included)."""
+    bv = project(body, body.forward(q, fixed=torso), view.intrinsics, view.T_cam_base)
+    uv = bv.outline.uv[0].reshape(-1, 2)
+    uv = uv[np.isfinite(uv).all(axis=1)]
+    edges = view.maps.edges > 0
+    h, w = edges.shape
+    (u0, v0), (u1, v1) = uv.min(axis=0), uv.max(axis=0)
+    m = 0.5 * (v1 - v0)
+    box = edges[max(0, int(v0 - m)):min(h, int(v1)), max(0, int(u0 - m)):min(w, int(u1 + m))]
+    return float(box.mean()) if box.size else view.edge_density
+
+
 class TbpTracker:
     def __init__(self, cfg: TbpConfig, body: BodyModel, lut):
         self.cfg, self.body, self.lut = cfg, body.with_free(ARM_NAMES), lut
+        self.hands = self.body.without(*[p for p in self.body.part_names
+                                         if p not in ("r_hand", "l_hand")])
         self.q_def = np.radians(np.tile(cfg.rest_deg, 2))
         self.dynamics = cv_dynamics(8, math.radians(cfg.sigma_deg))
         self.flow = OpticalFlow()
@@ -69,8 +89,9 @@ class TbpTracker:
     def _first_frame(self, view: ArmView, torso: np.ndarray) -> None:
         """Cue weights from the first frame (sec. 6.3.1) and the patches' references."""
         cfg = self.cfg
-        cluttered = view.edge_density > cfg.edge_density
         q0 = self.q_def[None]
+        density = surround_edge_density(self.body, q0, torso, view)
+        cluttered = density > cfg.edge_density
         refs = patch_histograms_all(project_arms(self.body, q0, torso, view, 4), view.qimage)[0]
         uniform = np.full(refs.shape[-1], 1.0 / refs.shape[-1])
         d_uniform = bhattacharyya(refs, uniform).mean(axis=-1)                # (6,)
@@ -81,7 +102,7 @@ class TbpTracker:
                         "sigma_c": cfg.sigma_c,
                         "lambda_c": lam_c, "sigma_k": cfg.sigma_k, "lambda_st": cfg.lambda_st,
                         "lambda_co": cfg.lambda_co, "q_def": self.q_def,
-                        "cluttered": bool(cluttered), "edge_density": view.edge_density}
+                        "cluttered": bool(cluttered), "edge_density": density}
 
     def step(self, frame, torso: np.ndarray, rng: np.random.Generator):
         """One frame: returns ``(mean (8,), cov (8, 8), ok)``."""
@@ -95,9 +116,8 @@ class TbpTracker:
         body, w, refs = self.body, self.weights, self.refs
 
         def first(x):                                           # skin cue of the hands
-            q = body.clamp(x[:, :8])
-            proj = project_arms(body, q, torso, view, 4)
-            return shape_log_likelihood(skin_distance(proj, view.skin), cfg.sigma_k)
+            inner = hand_interiors(self.hands, body.clamp(x[:, :8]), torso, view)
+            return shape_log_likelihood(skin_distance(inner, view.skin), cfg.sigma_k)
 
         def second(x):
             q = body.clamp(x[:, :8])

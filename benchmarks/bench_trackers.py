@@ -1,0 +1,120 @@
+"""Speed of Menezes' 3-D trackers per frame, rendering excluded (issue 13's goals: GEST >= 250
+fps at N = 100, TBP >= 20 fps at N = 400, on this 2-core machine).
+
+Run: ``python benchmarks/bench_trackers.py [--frames 30] [--repeats 3]``. Renders the frames
+of ``menezes_gest_reach`` (stereo) and ``fig12_tbp_pointing`` (left eye) once, then times the
+trackers' ``step`` over them (median and interquartile range over repeats of the whole
+sequence, each from a fresh tracker), and the per-frame image preparation alone.
+"""
+
+# ruff: noqa: I001  -- humimic must be imported before mujoco (headless GL)
+from __future__ import annotations
+
+import argparse
+import time
+
+from humimic import select_gl_backend
+
+select_gl_backend()  # before anything imports mujoco
+
+import mujoco
+import numpy as np
+
+from humimic.bodymodel.avatar import truth_state
+from humimic.paths import SCENARIOS_DIR
+from humimic.rngs import Rngs
+from humimic.scenario import load_scenario
+from humimic.world.world import World
+
+GOALS_FPS = {"gest": 250.0, "tbp": 20.0}
+
+
+def render(name: str, n: int, cams: int):
+    sc = load_scenario(SCENARIOS_DIR / name, duration=n / 30 + 0.2)
+    rngs = Rngs(sc.seed)
+    world = World(sc, rngs)
+    frames = []
+    for k in range(n):
+        t = k / 30
+        tick = world.gt.index_of(t)
+        world.apply_human(tick)
+        mujoco.mj_forward(world.scene.model, world.scene.data)
+        imgs = world.eye_rig.capture(t)
+        frames.append((t, tick, [imgs[c] for c in world.eye_cameras[:cams]]))
+    return sc, world, rngs, frames
+
+
+def time_runs(make, run, repeats: int) -> list[float]:
+    out = []
+    for r in range(repeats):
+        tracker = make(r)
+        t0 = time.perf_counter()
+        n = run(tracker)
+        out.append((time.perf_counter() - t0) / n)
+    return out
+
+
+def report(name: str, secs: list[float], goal: float | None = None) -> None:
+    q = np.percentile(secs, [25, 50, 75])
+    fps = 1.0 / q[1]
+    verdict = ("" if goal is None
+               else f"  goal {goal:.0f} fps: {'met' if fps >= goal else 'NOT met'}")
+    print(f"{name:28s} {1e3 * q[1]:7.2f} ms/frame (q1-q3 {1e3 * q[0]:.2f}-{1e3 * q[2]:.2f})"
+          f"  {fps:6.1f} fps{verdict}")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--frames", type=int, default=30)
+    ap.add_argument("--repeats", type=int, default=3)
+    args = ap.parse_args()
+
+    from humimic.perception.trackers.gest.build import gest_stage
+    from humimic.perception.trackers.gest.likelihood import hand_view
+
+    sc, world, rngs, frames = render("menezes_gest_reach.yaml", args.frames, 2)
+    cfg = sc.trackers["gest"]
+    stage = gest_stage("gest", cfg, sc, world, rngs, None)
+
+    def gest_run(trk):
+        for _, _, (left, right) in frames:
+            trk.step(left, right, np.random.default_rng(0))
+        return len(frames)
+
+    from humimic.perception.trackers.gest.tracker import GestTracker
+
+    report(f"gest N={cfg.n}", time_runs(lambda r: GestTracker(cfg, stage.tracker.lut),
+                                        gest_run, args.repeats), GOALS_FPS["gest"])
+    report("  gest image prep (2 eyes)", time_runs(
+        lambda r: None, lambda _: [hand_view(f, 32, stage.tracker.lut)
+                                   for _, _, fs in frames for f in fs] and len(frames),
+        args.repeats))
+    world.eye_rig.close()
+
+    from humimic.perception.trackers.tbp.build import tbp_stage
+    from humimic.perception.trackers.tbp.likelihood import arm_view
+    from humimic.perception.trackers.tbp.tracker import TbpTracker
+
+    sc, world, rngs, frames = render("fig12_tbp_pointing.yaml", args.frames, 1)
+    cfg = sc.trackers["tbp"].model_copy(update={"torso": "truth"})
+    stage = tbp_stage("tbp", sc.trackers["tbp"], sc, world, rngs, None)
+    torsos = [truth_state(world, tick, "base")[:6] for _, tick, _ in frames]
+
+    def tbp_run(trk):
+        for (_, _, (f,)), torso in zip(frames, torsos, strict=True):
+            trk.step(f, torso, np.random.default_rng(0))
+        return len(frames)
+
+    report(f"tbp N={cfg.n}", time_runs(
+        lambda r: TbpTracker(cfg, stage.tracker.body, stage.tracker.lut), tbp_run,
+        args.repeats), GOALS_FPS["tbp"])
+    report("  tbp image prep (flow, edges)", time_runs(
+        lambda r: TbpTracker(cfg, stage.tracker.body, stage.tracker.lut),
+        lambda trk: [arm_view(f, None, trk.lut, 32) for _, _, (f,) in frames] and len(frames),
+        args.repeats))
+    world.eye_rig.close()
+    print(f"(quartiles over {args.repeats} runs of {args.frames} frames each)")
+
+
+if __name__ == "__main__":
+    main()
