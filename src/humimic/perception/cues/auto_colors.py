@@ -37,7 +37,7 @@ from humimic.perception.cues.color_models import (
 )
 from humimic.perception.cues.learn_colors import frame_pixels, material_geoms, trim_dark
 
-VERSION = 7
+VERSION = 8
 FRAMES = 8
 """Poses of the person rendered (spread evenly over the run)."""
 COMPONENTS = 3
