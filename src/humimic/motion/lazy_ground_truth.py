@@ -71,8 +71,12 @@ class LazyArray(NDArrayOperatorsMixin):
             probe = np.empty((0, *self._tail))[(slice(None), *rest)]
             return LazyArray(self._n, probe.shape[1:],
                              lambda idx: self._fetch(idx)[(slice(None), *rest)])
-        if isinstance(first, (int, np.integer)):
-            out = self.rows(np.array([first]))[0]
+        if isinstance(first, (int, np.integer)):  # the simulation loop's path: one tick
+            i = int(first) + (self._n if first < 0 else 0)
+            if not 0 <= i < self._n:
+                raise IndexError(f"index {first} out of range for a lazy array of length "
+                                 f"{self._n}")
+            out = self._fetch(np.array([i]))[0]
             return out[rest] if rest else out
         if isinstance(first, slice):
             out = self.rows(np.arange(self._n)[first])
@@ -177,6 +181,9 @@ class LazyGroundTruth:
             return value[key] if key is not None else value
 
         def fetch(idx: np.ndarray) -> np.ndarray:
+            if len(idx) == 1:  # one tick (the simulation loop walks on): from its chunk
+                c0 = int(idx[0]) // CHUNK
+                return get(self._chunk(c0))[idx - c0 * CHUNK]
             c = idx // CHUNK
             c0 = int(c[0]) if len(c) else 0
             if len(c) and np.all(c == c0) and (c0 in self._cache or len(c) >= DENSE):
