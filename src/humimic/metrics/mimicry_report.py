@@ -257,8 +257,8 @@ def latency_metrics(stage) -> dict:
     def ages(arrivals) -> list[np.ndarray]:
         return [np.array(a.t_ready) - np.array(a.t) for a in arrivals.values() if a.t]
 
-    def ms(chunks, fn=np.mean) -> float | None:
-        return _mm(float(fn(np.concatenate(chunks)))) if chunks else None
+    def ms(chunks, fn=np.mean) -> float | None:  # to the ns: tick times carry rounding
+        return round(_mm(float(fn(np.concatenate(chunks)))), 6) if chunks else None
 
     # (photon, ready, servo tick) rows
     use = [np.array(v).reshape(-1, 3) for v in rec.first_use.values() if v]
