@@ -111,9 +111,22 @@ def test_wave_detection_rate_and_filtered_rmse():
     # the head's stereo surface lies before its centre: flagged (raw RMSE 11.2 mm)
     assert head["detection_rate"] >= 0.93  # measured 0.971
     assert head["biased"] and head["raw_rmse_mm"] <= 20.0
-    # the hand hanging still is 8 px across and never detected: the verdict says why
+    # the hand hanging still against the shirt is 8 px across: found by the colour-fitted
+    # hypotheses at its own size (measured 0.946; never, while fits were at least 3 px sigma)
     left = m["tracking"]["left_hand"]
-    assert left["verdict"] == "poor" and left["cause"].startswith("too small"), left
+    assert left["detection_rate"] >= 0.85 and left["false_detection_rate"] <= 0.02, left
+
+
+def test_wave_at_two_metres():
+    """The default person 2.0 m away: the waving hand is ~9 px across (sigma ~2.2 px, under
+    the random hypotheses' 3 px floor); the colour-fitted hypotheses find it right after phase
+    one. The people sweep (6 s, seed 1): 0.970 of its visible frames, filtered 18.1 mm."""
+    hand = run("ude_wave_tracking", ["perception.detection.period=0.5", "human.distance=2.0"],
+               duration=3.0)[0]["tracking"]["right_hand"]
+    assert hand["visible_fraction"] == 1.0 and hand["median_size_px"] < 10.0
+    assert hand["detection_rate"] >= 0.85, hand  # measured 0.933 over 3 s (was 0.68)
+    assert hand["false_detection_rate"] <= 0.03  # measured 0.010
+    assert hand["filtered_rmse_mm"] <= 40.0  # the issue's goal at 2.0 m; measured 16.6 mm
 
 
 # ---- hidden for ~1 s --------------------------------------------------------------------------

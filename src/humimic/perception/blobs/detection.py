@@ -84,7 +84,8 @@ class DetectionParams:
     """Smallest axis of a fitted hypothesis (px). A fitted shape is measured, not guessed: it
     may be smaller than ``sigma_min_px`` (the random hypotheses' prior), so a target smaller
     than the prior (a hand ~9 px across at 2 m: sigma ~2.2 px) is hypothesised at its own size
-    instead of in a window it cannot fill. 1 px: the EM tracker's own floor (``min_var_px2``)."""
+    instead of in a window it cannot fill. 1 px: the EM tracker's own floor (``min_var_px2``);
+    at 2 px the hand hanging 1.2 m away (8 px, thinner across) is never found."""
     proposal_grid_px: int = 4
     """Smallest spacing (px) of the coarse colour map the 'color' proposal draws from."""
     proposal_cells: int = 80
