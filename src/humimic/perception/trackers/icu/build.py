@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from humimic.perception.faces.detect import DetectorParams, FaceDetector
-from humimic.perception.trackers.common import check_camera
+from humimic.perception.trackers.common import check_camera, skin_model_lut
 from humimic.perception.trackers.icu.stage import IcuStage
 from humimic.perception.trackers.icu.tracker import IcuTracker
 from humimic.scenario.errors import ScenarioError
@@ -20,7 +20,7 @@ def icu_stage(name, cfg, scenario, world, rngs, rlog) -> IcuStage:
     if cfg.alpha + cfg.beta > 1.0:
         raise ScenarioError(where, f"trackers.{name}.beta", "alpha + beta must not exceed 1",
                             cfg.beta, f"at most {1.0 - cfg.alpha:g}")
-    params = DetectorParams(min_size=cfg.min_face_px)
+    params = DetectorParams(min_size=cfg.min_face_px, fit_px=cfg.face_fit_px)
     recogniser, tutor = None, 0
     if cfg.recognition:
         from humimic.perception.faces.training import RenderSpec, trained_model
@@ -28,9 +28,12 @@ def icu_stage(name, cfg, scenario, world, rngs, rlog) -> IcuStage:
         people = [p.identity for p in scenario.human.people]
         known = list(dict.fromkeys([identity, *people, *IDENTITY_NAMES]))[: cfg.enrolled]
         recogniser = trained_model(known, RenderSpec(per_identity=cfg.views), params)
+    skin = None
+    if cfg.search == "skin":
+        skin = skin_model_lut(scenario, world, [camera], f"trackers.{name}.search")
     width, height = scenario.cameras.resolution
     tracker = IcuTracker(cfg, width, height, rngs[f"trackers.{name}"], FaceDetector(params),
-                         recogniser, tutor)
+                         recogniser, tutor, skin)
     return IcuStage(name, cfg, camera, tracker, identity, world.gt, rlog,
                     getattr(world, "people", None),
                     getattr(world, "track_visibility", lambda: None)())

@@ -51,10 +51,18 @@ class IcuConfig(Section):
     beta: float = Field(0.6, ge=0.0, le=1.0)
     dynamics: tuple[float, float, float] = (6.0, 6.0, 1.0)
     """Random-walk standard deviations of (u, v, s) per frame (px)."""
-    detect_every: int = Field(3, ge=1, le=100)
+    detect_every: int = Field(1, ge=1, le=100)
     """While tracking, the face detector runs every this many frames, only around the
-    estimate (it costs ~20 ms on a whole 320 x 240 frame); while searching, every frame."""
+    estimate (~1 ms CPU); while searching, every frame."""
+    search: Literal["skin", "whole"] = "skin"
+    """Where faces are searched while nobody is tracked: ``skin`` -- around the skin blobs of
+    head size (the scenario's skin model; ~1 ms per blob instead of ~16 ms CPU for the whole
+    320 x 240 frame); ``whole`` -- the whole frame at every size."""
     min_face_px: int = Field(20, ge=8, le=200)
+    face_fit_px: int = Field(0, ge=0, le=200)
+    """While tracking, shrink the face window so the smallest expected face is about this
+    many pixels (:attr:`~humimic.perception.faces.detect.DetectorParams.fit_px`: ~25 % less
+    time per frame, noisier boxes and ~1-4 px more centre error); 0: never."""
     lost_colour: float = Field(0.5, gt=0.0, le=1.0)
     """Loss: Bhattacharyya distance (the worse of head and torso) above which a frame is
     bad."""
