@@ -17,6 +17,12 @@ def icu_stage(name, cfg, scenario, world, rngs, rlog) -> IcuStage:
     if identity not in IDENTITY_NAMES:
         raise ScenarioError(where, f"trackers.{name}.identity", "unknown identity", identity,
                             ", ".join(IDENTITY_NAMES))
+    if cfg.near is not None and (cfg.near.module == name
+                                 or cfg.near.module not in (scenario.trackers or {})):
+        raise ScenarioError(where, f"trackers.{name}.near.module",
+                            "not another tracker of this scenario", cfg.near.module,
+                            ", ".join(k for k in (scenario.trackers or {}) if k != name)
+                            or "none")
     if cfg.alpha + cfg.beta > 1.0:
         raise ScenarioError(where, f"trackers.{name}.beta", "alpha + beta must not exceed 1",
                             cfg.beta, f"at most {1.0 - cfg.alpha:g}")
@@ -34,6 +40,7 @@ def icu_stage(name, cfg, scenario, world, rngs, rlog) -> IcuStage:
     width, height = scenario.cameras.resolution
     tracker = IcuTracker(cfg, width, height, rngs[f"trackers.{name}"], FaceDetector(params),
                          recogniser, tutor, skin)
+    fx = world.eye_rig.intrinsics(camera).fx if cfg.near is not None else None
     return IcuStage(name, cfg, camera, tracker, identity, world.gt, rlog,
                     getattr(world, "people", None),
-                    getattr(world, "track_visibility", lambda: None)())
+                    getattr(world, "track_visibility", lambda: None)(), fx)

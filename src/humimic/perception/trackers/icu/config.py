@@ -15,6 +15,27 @@ from humimic.perception.trackers.fields import Bins
 from humimic.scenario.base import Section
 
 
+class NearModule(Section):
+    """Fig. 15's distance switch (:mod:`humimic.perception.trackers.icu.modules`): another
+    tracker of the scenario takes over while the recognised tutor is near."""
+
+    module: str
+    """Name (a key of ``trackers:``) of the near module, e.g. a ``tbp`` or ``gest`` tracker;
+    it gets frames only while the tutor is near."""
+    enter_m: float = Field(1.5, gt=0.0, le=20.0)
+    """Switch to the near module below this distance (m; the pinhole range of the estimate's
+    head width)."""
+    leave_m: float = Field(1.8, gt=0.0, le=20.0)
+    """Back to ICU above this distance (m)."""
+
+    @field_validator("leave_m")
+    @classmethod
+    def _band(cls, v, info):
+        if v < info.data.get("enter_m", 0.0):
+            raise ValueError("leave_m must be at least enter_m")
+        return v
+
+
 class IcuConfig(Section):
     """Menezes sec. 5.2: one person (the tutor) tracked in one camera's images, state
     (u, v, s): head centre (px) and head width (px)."""
@@ -68,6 +89,8 @@ class IcuConfig(Section):
     bad."""
     lost_frames: int = Field(4, ge=1, le=1000)
     latency: float = Field(0.0, ge=0.0, le=1.0)
+    near: NearModule | None = None
+    """Fig. 15: the module that takes over near the robot (None: ICU at every distance)."""
 
     @field_validator("cues")
     @classmethod
