@@ -27,6 +27,9 @@ class NearModule(Section):
     head width)."""
     leave_m: float = Field(1.8, gt=0.0, le=20.0)
     """Back to ICU above this distance (m)."""
+    hold_s: float = Field(0.25, ge=0.0, le=10.0)
+    """The tutor counts as recognised and tracked until the ICU tracker has not been on a
+    recognised face for this long (its losses of a few frames do not reset the module)."""
 
     @field_validator("leave_m")
     @classmethod

@@ -43,10 +43,13 @@ def colour_distance(qimage: QuantizedImage, state: np.ndarray, refs: np.ndarray,
                     hists: np.ndarray | None = None) -> float:
     """Bhattacharyya distance of one state's colours (``hists``, :func:`references` of the
     state, if computed already) to the references: the larger of the head's and the torso's
-    (each the mean over the channels; 0 same, 1 disjoint or off the image), so another
-    person's shirt counts even under a matching face."""
+    (each the mean over the channels; 0 same, 1 disjoint), so another person's shirt counts
+    even under a matching face; a patch wholly off the image (the torso of a tutor close to
+    the camera) is left out, 1 if both are."""
     h = references(qimage, state) if hists is None else hists
-    return float(bhattacharyya(h, refs).mean(axis=1).max())
+    d = bhattacharyya(h, refs).mean(axis=1)
+    seen = h.sum(axis=(1, 2)) > 0  # a patch wholly off the image (the torso, close up)
+    return float(d[seen].max()) if seen.any() else 1.0
 
 
 def references(qimage: QuantizedImage, state: np.ndarray) -> np.ndarray:

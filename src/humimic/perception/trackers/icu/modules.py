@@ -7,7 +7,9 @@ upper-body tracker ICU is the module; ``near`` -- the tutor tracked and closer t
 ``enter_m``: the 3-D module named by ``near.module`` (e.g. a ``tbp`` or ``gest`` tracker) takes
 over until the tutor is farther than ``leave_m`` (hysteresis against the noise of the
 distance). The distance is the pinhole range of the ICU estimate's head width,
-``Z = f_x W / s`` (W the head's physical width). The ICU tracker keeps running in every state
+``Z = f_x W / s`` (W the head's physical width); the tutor counts as tracked until the ICU
+tracker has been off a recognised face for ``hold_s`` (the last distance kept). The ICU
+tracker keeps running in every state
 (the paper invokes it from 1 to 5 m, and its face recognition gates the switch); the near
 module gets frames only in ``near`` (:class:`GatedStage`).
 """

@@ -26,6 +26,8 @@ class IcuStage(ImageTrackerStage):
         self.tracker, self.identity = tracker, identity
         self.near, self.fx_px = cfg.near, fx_px
         self.module = "init"
+        self.last_good, self.distance = -np.inf, np.inf
+        """When the tutor was last tracked and recognised, and the distance then (m)."""
         self.modules: list[str] = []
         """Fig. 15's module per frame (:data:`MODULES`), with ``near`` configured."""
         self.faces: list[tuple[int, np.ndarray, np.ndarray]] = []
@@ -46,9 +48,12 @@ class IcuStage(ImageTrackerStage):
         good = s.state == "tracking" and not (
             np.isfinite(s.confidence) and s.confidence < self.tracker.cfg.min_confidence)
         if self.near is not None:
-            d = head_distance_m(self.fx_px, scale, HEAD_WIDTH_M) if good else np.inf
-            self.module = next_module(self.module, good, d, self.near.enter_m,
-                                      self.near.leave_m)
+            if good:
+                self.last_good, self.distance = t, head_distance_m(self.fx_px, scale,
+                                                                   HEAD_WIDTH_M)
+            tracked = t - self.last_good <= self.near.hold_s
+            self.module = next_module(self.module, tracked, self.distance,
+                                      self.near.enter_m, self.near.leave_m)
             self.modules.append(self.module)
         overlay = Overlay(None if s.particles is None else s.particles[:, :2], s.weights,
                           contour, good, s.faces)
