@@ -69,12 +69,25 @@ class GestConfig(Section):
     blob_size: tuple[float, float] = (0.04, 0.14)
     """Physical size range (m, sqrt of the blob's area times depth / focal length) of a skin
     blob the importance function accepts: a head is larger."""
-    blob_subsample: int = Field(2, ge=1, le=4)
+    blob_subsample: int = Field(1, ge=1, le=4)
     """Subsampling of the skin mask before its connected components (sec. 4.2.2)."""
+    border_px: float = Field(1.0, ge=0.0)
+    """Skin blobs whose box comes closer than this (px) to an image border are cut by it (the
+    hand leaving the view) and are not candidates."""
     max_epipolar_px: float = Field(4.0, gt=0.0)
     """Largest reprojection residual (px) of a left-right blob match."""
     blob_sigma_scale: float = Field(0.5, gt=0.0)
     """Blob position covariance (eq. 17) = ``scale^2`` times the blob box's inertia."""
+    proposal: Literal["centroid", "blob"] = "centroid"
+    """Position covariance of the importance function: ``blob``, eq. 17 with the blobs'
+    inertia (the paper; ~10x wider in depth than the centroid's error), or ``centroid``,
+    eq. 17 with an isotropic centroid error of ``proposal_px`` in each image, centred on the
+    triangulated centroids corrected by the last estimate's silhouette offset."""
+    proposal_px: float = Field(0.3, gt=0.0)
+    position_floor: float = Field(0.001, ge=0.0)
+    """Floor (m) added to the importance function's position standard deviation."""
+    roi: bool = True
+    """Compute the cue images in a box around the candidates and the last estimate only."""
     orientation_sigma_deg: float = Field(90.0, gt=0.0)
     """Spread (deg) of the start density's orientation about the last estimate (the
     orientation is unknown when the filter (re-)starts)."""
@@ -87,9 +100,15 @@ class GestConfig(Section):
     init: Literal["raised", "any"] = "raised"
     """Which stereo candidate (re-)initialises the filter: ``raised``, the highest (the hand
     held up to the robot; the other hand hangs), or ``any`` (the whole importance function)."""
-    init_centroid: bool = True
-    """(Re-)start from the triangulated centroids' covariance (``centroid_px``) rather than
-    eq. 17's (the blobs' spread, ~10x wider in depth)."""
+    gate_m: float = Field(0.15, gt=0.0)
+    """While tracking, the importance function proposes only the candidates within this
+    distance (m) of the last estimate (the other hand is not taken for this one when this one
+    leaves the view)."""
+    reacquire_m: float = Field(0.35, gt=0.0)
+    """After a loss the filter re-starts only from a candidate within this distance (m) of
+    where the hand was last tracked ..."""
+    reacquire_frames: int = Field(90, ge=0)
+    """... for this many frames; then from any (``init``)."""
     lost_px: float = Field(5.0, gt=0.0)
     """The estimate is ``lost`` when its mean contour distance to edges exceeds this (px) or
     it left the image; then the filter re-initialises from the importance function."""
