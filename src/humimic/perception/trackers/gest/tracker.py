@@ -28,6 +28,7 @@ from humimic.estimation.particles import (
     UniformBox,
 )
 from humimic.perception.cues.color_models import ColorLUT
+from humimic.perception.cues.edges import DT_CAP_PX
 from humimic.perception.cues.histograms import update_reference
 from humimic.perception.cues.importance import skin_blobs
 from humimic.perception.trackers.gest.config import GestConfig
@@ -39,7 +40,6 @@ from humimic.perception.trackers.gest.likelihood import (
     shape_distance,
 )
 from humimic.perception.trackers.gest.proposal import CandidateProposal, PoseReset
-from humimic.perception.cues.edges import DT_CAP_PX
 from humimic.perception.trackers.gest.roi import crop_frame, roi_box
 from humimic.perception.trackers.gest.stereo import (
     interior_blobs,
@@ -47,6 +47,7 @@ from humimic.perception.trackers.gest.stereo import (
     triangulate_pixels,
 )
 from humimic.sensors.camera_model import CameraImage, invert_transform
+
 
 @dataclass(frozen=True)
 class GestResult:
