@@ -164,6 +164,12 @@ def hand_log_likelihood(states: np.ndarray, views: list[HandView], ref: np.ndarr
     return out
 
 
+def reference_histogram(proj: HandProjection, view: HandView) -> np.ndarray:
+    """``(3, bins)`` histogram of the first projected state's colour patch (eq. 13's
+    observation)."""
+    return patch_histograms(view.qimage, proj.patch_state[:1], INSCRIBED, grid=8)[0, 0]
+
+
 def patch_histogram(state: np.ndarray, view: HandView) -> np.ndarray:
     """``(3, bins)`` histogram of one state's colour patch (for the reference, eq. 13)."""
     proj = project_hands(state[None], view, 8)

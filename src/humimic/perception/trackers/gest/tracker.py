@@ -35,8 +35,8 @@ from humimic.perception.trackers.gest.config import GestConfig
 from humimic.perception.trackers.gest.likelihood import (
     hand_log_likelihood,
     hand_view,
-    patch_histogram,
     project_hands,
+    reference_histogram,
     shape_distance,
 )
 from humimic.perception.trackers.gest.proposal import CandidateProposal, PoseReset
@@ -115,10 +115,12 @@ class GestTracker:
         """Where the hand was last tracked."""
         self.lost_for = 0
         """Frames since the hand was last tracked."""
+        self.offset = np.zeros(3)
+        """The last estimate's silhouette offset (:meth:`_silhouette_offset`)."""
 
-    def _ll(self, views, pairs):
+    def _ll(self, views, pairs, K):
         cfg = self.cfg
-        w, h = views[0].dt.shape[1], views[0].dt.shape[0]
+        w, h = K.width, K.height
         outlier = cfg.stereo_outlier / float(w * h) ** 2
 
         def log_likelihood(x: np.ndarray) -> np.ndarray:
@@ -136,15 +138,18 @@ class GestTracker:
         return importance_function(p, cov, self.orientation, self.cfg,
                                    self.cfg.orientation_sigma_deg)
 
-    def _silhouette_offset(self, state: np.ndarray, cams) -> np.ndarray:
-        """``x - g(c_L(x), c_R(x))``: the state's centre minus the triangulation of its
+    def _silhouette_offset(self, mean: np.ndarray, proj_left, origin_left: np.ndarray,
+                           cams) -> np.ndarray:
+        """``x - g(c_L(x), c_R(x))``: the estimate's centre minus the triangulation of its
         projected ellipses' centres (an ellipsoid's outline is not centred on the image of its
-        centre: 0.3-0.5 px here, centimetres of depth)."""
-        c = [project_hands(state[None], _Geometry(cam), 8).patch_state[0, :2] for cam in cams]
-        if not np.isfinite(np.r_[c[0], c[1]]).all() or min(abs(c[0]).max(),
-                                                            abs(c[1]).max()) > 1e5:
+        centre: 0.3-0.5 px here, centimetres of depth); ``proj_left`` its projection in the
+        (cropped) left view."""
+        c_l = proj_left.patch_state[0, :2] + origin_left
+        c_r = project_hands(mean[None], _Geometry(cams[1]), 4).patch_state[0, :2]
+        if not (proj_left.valid[0] and np.isfinite(np.r_[c_l, c_r]).all()
+                and np.abs(c_r).max() < 1e5):
             return np.zeros(3)
-        off = state[:3] - triangulate_pixels(cams[0], cams[1], c[0][None], c[1][None])[0]
+        off = mean[:3] - triangulate_pixels(cams[0], cams[1], c_l[None], c_r[None])[0]
         return off if np.linalg.norm(off) < 0.05 else np.zeros(3)
 
     def _reacquire(self, p: np.ndarray) -> np.ndarray:
@@ -184,12 +189,16 @@ class GestTracker:
             self.locked = True
         else:                                       # tracking: candidates near the hand only
             use = np.flatnonzero(np.linalg.norm(p - self.last[:3], axis=1) <= cfg.gate_m)
-        delta = (self._silhouette_offset(self.last, (left.camera, right.camera))
-                 if self.last is not None and cfg.proposal == "centroid" else np.zeros(3))
-        boxes = [self._roi(f, b, pairs[:, i] if len(pairs) else None) if cfg.roi else None
+        delta = (self.offset if self.last is not None and cfg.proposal == "centroid"
+                 else np.zeros(3))
+        # cue images where the likelihood looks (the left image only with ``views: 1``;
+        # the right camera then only places its ellipse centres for the stereo cue)
+        boxes = [self._roi(f, b, pairs[:, i] if len(pairs) else None)
+                 if cfg.roi and i < cfg.views else None
                  for i, (f, b) in enumerate(zip(frames, blobs, strict=True))]
-        views = [hand_view(crop_frame(f, b), cfg.bins, self.lut)
-                 for f, b in zip(frames, boxes, strict=True)]
+        views = [hand_view(crop_frame(f, b), cfg.bins, self.lut) if i < cfg.views
+                 else _Geometry(f.camera) for i, (f, b) in enumerate(zip(frames, boxes,
+                                                                          strict=True))]
         origin = np.array([(0, 0) if b is None else b[:2] for b in boxes], float)
         importance = None
         if len(use):
@@ -197,7 +206,8 @@ class GestTracker:
                 Mixture(tuple(Gaussian(p[j] + delta, pos_cov[j]) for j in use)),
                 self.pf.particles, self.pf.log_weights, self.walk, self.orientations,
                 cfg.fresh_orientation)
-        s = self.pf.step(self._ll(views, pairs - origin[None]), rng, importance=importance)
+        s = self.pf.step(self._ll(views, pairs - origin[None], left.camera.intrinsics), rng,
+                         importance=importance)
         mean = s.mean.copy()
         mean[6:] = np.maximum(mean[6:], 1e-3)
         proj = project_hands(mean[None], views[0], cfg.n_points)
@@ -212,7 +222,9 @@ class GestTracker:
             self.orientation = mean[3:6]
             self.last, self.anchor = mean, mean[:3]
             self.lost_for = 0
-            h = patch_histogram(mean, views[0])
+            self.offset = self._silhouette_offset(mean, proj, origin[0],
+                                                  (left.camera, right.camera))
+            h = reference_histogram(proj, views[0])
             self.ref = h if self.ref is None else update_reference(self.ref, h, cfg.kappa)
         else:
             self.last = None
