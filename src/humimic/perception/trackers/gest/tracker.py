@@ -7,10 +7,22 @@ particles the importance function proposes after the hand left the view keep the
 ICONDENSATION (:func:`humimic.estimation.particles.icondensation_step`) mixes ``alpha``
 particles from the stereo importance function (:mod:`.stereo`, :class:`.proposal.
 CandidateProposal`), ``beta`` from the dynamics and the rest from the prior; the likelihood
-is :mod:`.likelihood`'s. Initialisation is automatic: the filter starts from the importance
-function at the first frame with a hand-sized stereo skin blob, and re-starts from it
-whenever the estimate is lost (its contour off the edges by more than ``lost_px``, out of
-the image, or ``lost_frames`` frames in a row without a stereo skin blob within ``lost_m``).
+is :mod:`.likelihood`'s (shape, colour and skin cues in the left image, the stereo cue in
+both).
+
+The importance function places the centre at each full-resolution skin blob pair's
+triangulation, corrected by the last estimate's silhouette offset (the outline of an
+ellipsoid is not centred on the image of its centre), with eq. 17's covariance for the
+*centroid's* error (``proposal_px``; the paper's inertia, ``proposal: blob``, spreads the
+particles over decimetres of depth); while tracking it proposes only the candidates within
+``gate_m`` of the estimate, so the other hand is not taken for this one when it leaves.
+Blobs cut by the image border are no candidates. Initialisation is automatic: the filter
+starts from the highest candidate (``init``), and re-starts after a loss from a candidate
+near where the hand was last tracked (``reacquire_m``; any after ``reacquire_frames``).
+The estimate is ``lost`` when its centre leaves the left image, its contour is off the
+edges by more than ``lost_px``, or ``lost_frames`` frames pass without a candidate within
+``lost_m``. The cue images are computed in a box around the candidates and the last estimate
+(:mod:`.roi`).
 """
 
 from __future__ import annotations
