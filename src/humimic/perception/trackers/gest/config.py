@@ -71,10 +71,11 @@ class GestConfig(Section):
     blob_size: tuple[float, float] = (0.04, 0.14)
     """Physical size range (m, sqrt of the blob's area times depth / focal length) of a skin
     blob the importance function accepts: a head is larger."""
-    blob_subsample: int = Field(1, ge=1, le=4)
-    """Subsampling of the skin mask before its connected components (sec. 4.2.2). The
-    nearest triangulated blob alone is 10 mm RMS from the hand at full resolution, 23 mm
-    subsampled by 2 (menezes_gest_reach at 1.2 m; 16 against 73 mm at 1.5 m)."""
+    blob_subsample: int = Field(2, ge=1, le=4)
+    """Subsampling of the skin mask the blobs are found in (sec. 4.2.2); each is then measured
+    at full resolution in its box (:mod:`.blobs`). Measured at the subsampled resolution the
+    nearest triangulated blob is 23 mm RMS from the hand, at full resolution 10 mm
+    (menezes_gest_reach at 1.2 m; 73 against 16 mm at 1.5 m)."""
     border_px: float = Field(1.0, ge=0.0)
     """Skin blobs whose box comes closer than this (px) to an image border are cut by it (the
     hand leaving the view) and are not candidates."""

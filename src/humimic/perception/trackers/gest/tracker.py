@@ -42,7 +42,7 @@ from humimic.estimation.particles import (
 from humimic.perception.cues.color_models import ColorLUT
 from humimic.perception.cues.edges import DT_CAP_PX
 from humimic.perception.cues.histograms import update_reference
-from humimic.perception.cues.importance import skin_blobs
+from humimic.perception.trackers.gest.blobs import hand_blobs
 from humimic.perception.trackers.gest.config import GestConfig
 from humimic.perception.trackers.gest.likelihood import (
     hand_log_likelihood,
@@ -180,10 +180,9 @@ class GestTracker:
              ) -> GestResult:
         cfg = self.cfg
         frames = (left, right)
-        skins = [self.lut.posterior(f.image) for f in frames]
-        blobs = [interior_blobs(skin_blobs((s > 0.5).astype(np.uint8),
-                                           subsample=cfg.blob_subsample),
-                                s.shape[1], s.shape[0], cfg.border_px) for s in skins]
+        blobs = [interior_blobs(hand_blobs(f.image, self.lut, cfg.blob_subsample),
+                                f.image.shape[1], f.image.shape[0], cfg.border_px)
+                 for f in frames]
         p, cov, cen1, pairs = stereo_candidates(blobs[0], blobs[1], left.camera, right.camera,
                                                 cfg.max_epipolar_px, cfg.blob_size,
                                                 cfg.blob_sigma_scale, 1.0)
