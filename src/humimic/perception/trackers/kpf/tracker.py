@@ -71,9 +71,25 @@ def distinct(fn):
     this saves that share of the likelihood evaluations. (``sigma_from_spread`` then takes
     the spread over the distinct particles.)"""
     def f(q: np.ndarray) -> np.ndarray:
-        _, first, inverse = np.unique(q, axis=0, return_index=True, return_inverse=True)
-        return np.asarray(fn(q[first]))[inverse.reshape(-1)]
+        first, inverse = unique_rows(q)
+        return np.asarray(fn(q[first]))[inverse]
     return f
+
+
+def unique_rows(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Indices of the distinct rows of ``q (N, d)`` and, per row, which of them it equals: rows
+    keyed by a fixed random projection (a 1-D sort, ~10x faster than ``np.unique(axis=0)``),
+    checked exactly (falls back to ``np.unique(axis=0)`` if two distinct rows share a key)."""
+    key = q @ _KEY[: q.shape[1]] if q.shape[1] <= len(_KEY) else q.sum(1)
+    _, first, inverse = np.unique(key, return_index=True, return_inverse=True)
+    inverse = inverse.reshape(-1)
+    if not np.array_equal(q[first][inverse], q):
+        _, first, inverse = np.unique(q, axis=0, return_index=True, return_inverse=True)
+        inverse = inverse.reshape(-1)
+    return first, inverse
+
+
+_KEY = np.random.default_rng(20071).normal(size=64)
 
 
 def kpf_body(model=None) -> bm.BodyModel:
