@@ -22,6 +22,7 @@ from humimic.estimation.particles.densities import Gaussian
 from humimic.estimation.particles.filters import condensation_step
 from humimic.estimation.particles.weights import uniform_log_weights
 from humimic.perception.trackers.kpf.cues import CueMaps
+from humimic.perception.trackers.kpf.depth import wrist_depth_move
 from humimic.perception.trackers.kpf.likelihood import Likelihood
 
 _BLAS = ThreadpoolController()
@@ -192,6 +193,8 @@ class KpfTracker:
         pred, moved = kpf.mixed_propagate(resampled, velocity, self.share, self.D,
                                           rng, self.limits.inside, cfg.motion_noise)
         pred = self.limits.clamp(pred)
+        if cfg.depth_share > 0.0:
+            pred = self._depth_moves(pred, T_cam_base)
         lik = (self._group_log_lik if cfg.partitioned else self._log_lik)(maps, T_cam_base)
         parts, W, _, iters = kpf.kpf_modes(pred, lik, self.D, cfg.iterations, cfg.tol,
                                            cfg.shrink, cfg.reweight == "kernel", groups,
@@ -207,6 +210,16 @@ class KpfTracker:
         _, first = np.unique(np.round(parts / (cfg.window * self.D)), axis=0,
                              return_index=True)
         return mode, iters, parts[first[np.argsort(-w[first])][:MAX_MODES]]
+
+    def _depth_moves(self, pred: np.ndarray, T_cam_base: np.ndarray) -> np.ndarray:
+        """A ``depth_share`` of the particles per arm get their wrist moved along its camera
+        ray by a uniform range change of half-width ``depth_extent_m``."""
+        cfg, rng = self.cfg, self.rng
+        for side in ("R", "L"):
+            pick = np.flatnonzero(rng.random(len(pred)) < cfg.depth_share)
+            delta = rng.uniform(-1.0, 1.0, len(pick)) * cfg.depth_extent_m
+            pred[pick] = wrist_depth_move(self.body, pred[pick], side, delta, T_cam_base)
+        return pred
 
     def _condensation(self, maps, T_cam_base):
         n = len(self.particles)
