@@ -121,6 +121,8 @@ class KpfTracker:
         self.mode = self.mode_prev = None
         self.share = 0.5
         self.torso_prior: Gaussian | None = None
+        self.best_prev: float | None = None
+        """The last frame's best log-likelihood (``rescue_passes``)."""
 
     def start(self, q0: np.ndarray, maps: CueMaps, T_cam_base: np.ndarray) -> None:
         """Initialise at a known pose (the paper fits the model by hand): every particle at
@@ -196,9 +198,25 @@ class KpfTracker:
         if cfg.depth_share > 0.0:
             pred = self._depth_moves(pred, T_cam_base)
         lik = (self._group_log_lik if cfg.partitioned else self._log_lik)(maps, T_cam_base)
-        parts, W, _, iters = kpf.kpf_modes(pred, lik, self.D, cfg.iterations, cfg.tol,
-                                           cfg.shrink, cfg.reweight == "kernel", groups,
-                                           cfg.kde_stride)
+        parts, W, ll, iters = kpf.kpf_modes(pred, lik, self.D, cfg.iterations, cfg.tol,
+                                            cfg.shrink, cfg.reweight == "kernel", groups,
+                                            cfg.kde_stride)
+        best = float(np.max(ll[:, 0]))
+        for _ in range(cfg.rescue_passes):
+            # the best particle fell well below the last frame's: the search lost the pose
+            # (fast motion); search again from this frame's posterior, a random walk of extent
+            # D, and mean shift
+            if self.best_prev is None or best >= self.best_prev - cfg.rescue_drop:
+                break
+            again = kpf.partitioned_resample(parts, W, groups, rng)
+            again = self.limits.clamp(again + rng.uniform(-1.0, 1.0, again.shape) * self.D)
+            p2, W2, ll2, it2 = kpf.kpf_modes(again, lik, self.D, cfg.iterations, cfg.tol,
+                                             cfg.shrink, cfg.reweight == "kernel", groups,
+                                             cfg.kde_stride)
+            iters += it2
+            if float(np.max(ll2[:, 0])) > best:
+                parts, W, ll, best = p2, W2, ll2, float(np.max(ll2[:, 0]))
+        self.best_prev = best
         h = cfg.shrink ** max(iters - 1, 0) * self.D
         win = cfg.window * self.D
         mode = np.empty(len(self.D))
