@@ -165,3 +165,21 @@ def test_scores_against_visibility_on_a_synthetic_record():
     # 6 of 16 reports false: more than FALSE_RATE, so the target is flagged all the same
     assert s["verdict"] == "poor" and s["cause"] == "false detections: 38 % of reports"
     assert s["median_unoccluded"] == 1.0
+
+
+def test_label_counts_match_mujocos_segmentation(hidden_world):
+    """The rig's counts straight from the id colours against MuJoCo's own segmentation image
+    (Renderer's id -> (object id, type) conversion) counted per target: whole scene and
+    targets alone, full and half resolution, hand hidden and shown."""
+    vis = hidden_world.track_visibility()
+    rig, n = hidden_world.eye_rig, len(vis.targets)
+    for t in (0.5, 2.5):
+        _sample_at(hidden_world, t)
+        for cam in vis.cameras:
+            for only in (None, vis.geoms):
+                for scale in (1.0, 0.5):
+                    want = target_pixel_counts(rig.render_ideal(cam, True, only, scale),
+                                               vis.geom_target, n)
+                    got = rig.label_counts(cam, vis.geom_target, n, only, scale)
+                    np.testing.assert_array_equal(got, want)
+                    assert want.sum() > 0

@@ -84,6 +84,8 @@ def zoom_frustum(scene: mujoco.MjvScene, factor: float) -> None:
 
 _OBJ_GEOM = int(mujoco.mjtObj.mjOBJ_GEOM)
 _GEOM_NONE = int(mujoco.mjtGeom.mjGEOM_NONE)
+_RND_SEGMENT = int(mujoco.mjtRndFlag.mjRND_SEGMENT)
+_RND_IDCOLOR = int(mujoco.mjtRndFlag.mjRND_IDCOLOR)
 
 
 def distortion_maps(intr: Intrinsics, src: Intrinsics) -> tuple[np.ndarray, np.ndarray]:
@@ -197,6 +199,45 @@ class CameraRig:
         Geoms whose bounding sphere lies outside the camera's view frustum are left out of the
         render scene (they would be clipped anyway; llvmpipe pays ~30 us per drawn geom).
         """
+        r = self._updated(name, only, scale)
+        if segmentation:
+            r.enable_segmentation_rendering()
+        try:
+            return r.render()
+        finally:
+            if segmentation:
+                r.disable_segmentation_rendering()
+
+    def label_counts(self, name: str, geom_label: np.ndarray, n_labels: int,
+                     only: np.ndarray | None = None, scale: float = 1.0) -> np.ndarray:
+        """Pixels of each label ``(n_labels,)`` in the segmentation of a camera (as
+        :meth:`render_ideal` with ``segmentation``, ``only`` and ``scale``); ``geom_label[g]``
+        is the label of model geom ``g`` (-1: none). Counted straight from the id colours: no
+        per-pixel ``(H, W, 2)`` id image is made (a third of the CPU time of a segmentation
+        render at 320x240)."""
+        r = self._updated(name, only, scale)
+        scn = r.scene
+        flags = scn.flags
+        old = flags[_RND_SEGMENT], flags[_RND_IDCOLOR]
+        flags[_RND_SEGMENT] = flags[_RND_IDCOLOR] = True
+        try:
+            rgb = r.render()
+        finally:
+            flags[_RND_SEGMENT], flags[_RND_IDCOLOR] = old
+        segval = (rgb[..., 0].astype(np.int32) | (rgb[..., 1].astype(np.int32) << 8)
+                  | (rgb[..., 2].astype(np.int32) << 16))
+        counts = np.bincount(segval.ravel())
+        label = np.full(len(counts), -1, np.intp)  # id colour (segid + 1, 0: none) -> label
+        for g in scn.geoms[:scn.ngeom]:
+            if g.objtype == _OBJ_GEOM and 0 <= g.segid < len(counts) - 1:
+                label[g.segid + 1] = geom_label[g.objid]
+        keep = label >= 0
+        return np.bincount(label[keep], weights=counts[keep], minlength=n_labels)[
+            :n_labels].astype(np.int64)
+
+    def _updated(self, name: str, only: np.ndarray | None, scale: float) -> mujoco.Renderer:
+        """The renderer of ``name``'s image at ``scale`` with its scene updated to the current
+        state (the frustum-culled geoms and, with ``only``, all others drawing nothing)."""
         canvas = self._canvas[name]
         cid = self._cam_ids[name]
         d = self.scene.data
@@ -206,19 +247,13 @@ class CameraRig:
                                   d.cam_xmat[cid].reshape(3, 3), canvas)
         if only is not None:
             hidden[np.setdiff1d(np.arange(len(hidden)), only)] = True
-        if segmentation:
-            r.enable_segmentation_rendering()
-        try:
-            scn = r.scene
-            mujoco.mjv_updateScene(self.scene.model, d, self._option, None, self._mjv_cams[name],
-                                   mujoco.mjtCatBit.mjCAT_ALL, scn)
-            if self._zoom[name] != 1.0:  # the canvas is larger than the image: same focal length
-                zoom_frustum(scn, self._zoom[name])
-            hide_geoms(self._scene_geoms[size], scn.ngeom, hidden)
-            return r.render()
-        finally:
-            if segmentation:
-                r.disable_segmentation_rendering()
+        scn = r.scene
+        mujoco.mjv_updateScene(self.scene.model, d, self._option, None, self._mjv_cams[name],
+                               mujoco.mjtCatBit.mjCAT_ALL, scn)
+        if self._zoom[name] != 1.0:  # the canvas is larger than the image: same focal length
+            zoom_frustum(scn, self._zoom[name])
+        hide_geoms(self._scene_geoms[size], scn.ngeom, hidden)
+        return r
 
     def capture_one(self, name: str, t: float) -> CameraImage:
         image = self.render_ideal(name)

@@ -135,10 +135,8 @@ class Visibility:
         visible = np.zeros((len(self.cameras), n), np.int64)
         full = np.zeros_like(visible)
         for c, cam in enumerate(self.cameras):
-            visible[c] = target_pixel_counts(
-                self.rig.render_ideal(cam, True, scale=self.scale), self.geom_target, n)
-            full[c] = target_pixel_counts(
-                self.rig.render_ideal(cam, True, self.geoms, self.scale), self.geom_target, n)
+            visible[c] = self.rig.label_counts(cam, self.geom_target, n, scale=self.scale)
+            full[c] = self.rig.label_counts(cam, self.geom_target, n, self.geoms, self.scale)
         self.rows.append((t, visible / self.scale**2, full / self.scale**2))
         self._next_t = t + 1.0 / self.rate
 

@@ -120,24 +120,17 @@ def bin_variance(bits: int) -> float:
 
 
 def learn_model(world, cameras: list[str], color_class: str, space: str,
-                rng: np.random.Generator, ticks: np.ndarray, bits: int = 6) -> ColorModel:
-    """A colour model of ``color_class`` learned from the world's own renders.
+                rng: np.random.Generator, ticks: np.ndarray, bits: int = 6
+                ) -> tuple[ColorModel, np.ndarray, np.ndarray]:
+    """A colour model of ``color_class`` learned from the world's own renders; also the
+    class's pixels it was fitted to (without the darkest: with them, the face's dark features
+    would keep the shoes' bins) and the other pixels of the same renders, for
+    :func:`cut_background`.
 
     Each component's covariance is at least one LUT bin wide (:func:`bin_variance` added to
     its diagonal): the LUT evaluates the density at bin centres, and a noiseless render gives
     components so narrow that they would fall between two centres and vanish from the table.
     """
-    model, _, _ = learn_model_and_background(world, cameras, color_class, space, rng, ticks,
-                                             bits)
-    return model
-
-
-def learn_model_and_background(world, cameras: list[str], color_class: str, space: str,
-                               rng: np.random.Generator, ticks: np.ndarray, bits: int = 6
-                               ) -> tuple[ColorModel, np.ndarray, np.ndarray]:
-    """:func:`learn_model`, and the class's pixels it was fitted to (without the darkest: with
-    them, the face's dark features would keep the shoes' bins) and the other pixels of the
-    same renders (for :func:`cut_background`)."""
     geoms = material_geoms(world.scene.model, color_class)
     noise = max((s.noise_std for s in world.eye_rig.specs if s.name in cameras), default=0.0)
     pos, neg = frame_pixels(world, cameras, ticks, geoms, noise, rng,
@@ -201,8 +194,7 @@ def learned_lut(world, cameras: list[str], color_class: str = "skin", space: str
     cached = lut is not None
     if lut is None:
         rng = np.random.default_rng(int(digest[:15], 16))
-        model, seen, other = learn_model_and_background(world, cameras, color_class, space,
-                                                        rng, ticks, bits)
+        model, seen, other = learn_model(world, cameras, color_class, space, rng, ticks, bits)
         lut = ColorLUT(model, bits, cut_background(ColorLUT(model, bits).table, bits, seen,
                                                    other))
         cache.save(kind, digest, _store(model, lut))

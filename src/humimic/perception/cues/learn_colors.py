@@ -118,9 +118,9 @@ def frame_pixels(world, cameras: list[str], ticks: np.ndarray, geoms: np.ndarray
                 pos.append(image[mask])
                 if negatives_per_frame:
                     rest = image[~mask]
-                    pick = rng.choice(len(rest), min(negatives_per_frame, len(rest)),
-                                      replace=False)
-                    neg.append(rest[pick])
+                    if negatives_per_frame < len(rest):  # (all of them: no draw)
+                        rest = rest[rng.choice(len(rest), negatives_per_frame, replace=False)]
+                    neg.append(rest)
     finally:
         d.qpos[:], d.qvel[:] = qpos, qvel
         mujoco.mj_forward(m, d)
