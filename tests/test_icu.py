@@ -125,28 +125,3 @@ def test_recognition_counts_name_whose_face_it_was():
     out = recognition_counts(faces, truth(100.0), [truth(205.0)], 0.5)
     assert out == {"tutor_accepted": 1, "tutor_rejected": 1, "other_accepted": 1,
                    "other_rejected": 1, "false_detection": 1}
-
-
-def test_reports_occluded_when_only_someone_elses_face_is_on_the_tutor():
-    """Fig. 10's crossing: while every face found around the estimate is recognised as
-    someone else, the track reads ``occluded`` (the particles coast, the colour references
-    stay); the tutor's face recognised again -> ``tracking``. The recogniser is a stand-in
-    whose answer the test sets (the eigenfaces are tested in test_faces)."""
-
-    class Recogniser:
-        p = 0.9
-
-        def probabilities(self, crops):
-            return np.tile([self.p, 1.0 - self.p], (len(crops), 1))
-
-    rng, rec = np.random.default_rng(5), Recogniser()
-    tr = IcuTracker(IcuConfig(kind="icu"), W, H, np.random.default_rng(6), FaceDetector(), rec)
-    truth = (150.0, 80.0, 44.0)
-    states = [tr.step(person(rng, truth)).reported for _ in range(6)]
-    refs = tr.refs.copy()
-    rec.p = 0.1
-    states += [tr.step(person(rng, truth)).reported for _ in range(3)]
-    assert np.array_equal(refs, tr.refs)
-    rec.p = 0.9
-    states += [tr.step(person(rng, truth)).reported for _ in range(2)]
-    assert states == ["tracking"] * 6 + ["occluded"] * 3 + ["tracking"] * 2

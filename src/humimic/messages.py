@@ -178,10 +178,9 @@ class PoseEstimate:
     """``tracking``, ``searching`` (no target yet or re-initialising) or ``lost``."""
 
 
-TRACK_STATES = ("init", "tracking", "lost", "occluded")
-"""States of an image-space track: ``init`` (waiting for the detectors to agree), ``tracking``,
-``lost`` (the target's likelihood collapsed; the tracker re-initialises) and ``occluded`` (the
-target hidden behind someone, the tracker coasting on)."""
+TRACK_STATES = ("init", "tracking", "lost")
+"""States of an image-space track: ``init`` (waiting for the detectors to agree), ``tracking``
+and ``lost`` (the target's likelihood collapsed; the tracker re-initialises)."""
 
 
 @dataclass(frozen=True)

@@ -38,7 +38,7 @@ class IcuStage(ImageTrackerStage):
         if len(s.faces):
             self.faces.append((len(self.times), s.faces, s.probabilities))
         u, v, scale = (float(x) for x in s.mean)
-        state = s.reported
+        state = "tracking" if s.state == "tracking" else s.state
         tracks = Tracks2D(self.tracker_name, self.camera, (Track2D(
             "person", u, v, scale, 0.0, state, self.identity, s.confidence, s.spread_px),),
             s.state)

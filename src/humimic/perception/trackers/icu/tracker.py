@@ -62,14 +62,6 @@ class IcuStep:
     """(K,) each face's probability of being the tutor (1 without recognition)."""
     colour: float
     """Mean Bhattacharyya distance at the estimate (NaN while searching)."""
-    reported: str = ""
-    """The track's state as reported: the machine's, or ``occluded`` while tracking when every
-    face found around the estimate is recognised as someone else (the tutor hidden behind
-    another person: the particles coast on, the colour references are not updated)."""
-
-    def __post_init__(self):
-        if not self.reported:
-            object.__setattr__(self, "reported", self.state)
 
 
 class IcuTracker:
@@ -208,15 +200,11 @@ class IcuTracker:
         good = (step.ok and inside and colour <= cfg.lost_colour
                 and not self._someone_else(boxes, p, mean))
         self.bad = 0 if good else self.bad + 1
-        # Fig. 10: faces around the estimate, none of them the tutor's -- someone in front
-        hidden = bool(self.recogniser is not None and len(p)
-                      and np.all(p < cfg.min_confidence))
-        if good and not hidden:  # Menezes eq. 13, per patch (not from an occluder)
+        if good:  # Menezes eq. 13, per patch
             self.refs = update_reference(self.refs, seen, self.kappa)
         if self.bad >= cfg.lost_frames or not inside:
             self.state = "lost"
         cov = self.pf.cov
         conf = float(p.max()) if len(p) and self.recogniser is not None else np.nan
         return IcuStep(self.state, mean, float(np.sqrt(cov[0, 0] + cov[1, 1])),
-                       self.pf.particles, np.exp(self.pf.log_weights), boxes, conf, p, colour,
-                       "occluded" if hidden and self.state == "tracking" else self.state)
+                       self.pf.particles, np.exp(self.pf.log_weights), boxes, conf, p, colour)
