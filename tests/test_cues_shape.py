@@ -8,6 +8,8 @@ import pytest
 from scipy.spatial import cKDTree
 
 from humimic.perception.cues.edges import (
+    canny,
+    colour_canny,
     distance_transform,
     dt_distance,
     edge_maps,
@@ -37,6 +39,25 @@ def _brute_nearest(edges: np.ndarray, pts: np.ndarray) -> np.ndarray:
     yx = np.argwhere(edges > 0)
     d, _ = cKDTree(yx[:, ::-1].astype(float)).query(pts.reshape(-1, 2))
     return d.reshape(pts.shape[:-1])
+
+
+def test_colour_canny_sees_an_equal_brightness_boundary_grey_canny_misses():
+    """A skin-coloured disc on a grey wall of (nearly) its brightness: grey Canny finds nothing,
+    the colour gradient finds the circle's rim (every edge pixel within 1.5 px of it); on a
+    grey image both are OpenCV's Canny exactly."""
+    img = np.full((80, 80, 3), 160, np.uint8)
+    cv2.circle(img, (40, 40), 15, (230, 150, 110), -1)       # grey 169 against 160
+    assert not canny(img).any()
+    e = colour_canny(img)
+    yy, xx = np.nonzero(e)
+    r = np.hypot(xx - 40, yy - 40)
+    assert len(r) > 60 and np.abs(r - 15).max() < 1.5, (len(r), np.abs(r - 15).max())
+    grey = cv2.cvtColor(np.random.default_rng(0).integers(0, 255, (60, 70, 3), np.uint8),
+                        cv2.COLOR_RGB2GRAY)
+    g3 = np.repeat(grey[..., None], 3, axis=2)
+    blurred = cv2.GaussianBlur(grey, (0, 0), 1.0)
+    np.testing.assert_array_equal(colour_canny(g3),
+                                  cv2.Canny(blurred, 50.0, 150.0, L2gradient=True))
 
 
 def test_distance_transform_is_the_brute_force_nearest_edge_distance():

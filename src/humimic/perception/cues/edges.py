@@ -61,11 +61,31 @@ def canny(image: np.ndarray, low: float = 50.0, high: float = 150.0,
     return cv2.Canny(g, low, high, L2gradient=True)
 
 
+def colour_canny(image: np.ndarray, low: float = 50.0, high: float = 150.0,
+                 blur_sigma: float = 1.0) -> np.ndarray:
+    """Canny edges (uint8 0/255) of an RGB uint8 image on its colour gradient: per pixel, the
+    Sobel gradient of the channel where it is strongest (Di Zenzo's maximum-channel
+    approximation), fed to OpenCV's hysteresis. Finds boundaries between colours of equal
+    brightness (skin against a grey wall) that :func:`canny` on the grey image misses; on a
+    grey image (equal channels) it is :func:`canny`."""
+    if image.ndim == 2:
+        return canny(image, low, high, blur_sigma)
+    img = cv2.GaussianBlur(image, (0, 0), blur_sigma) if blur_sigma > 0 else image
+    dx = cv2.Sobel(img, cv2.CV_16S, 1, 0, ksize=3, borderType=cv2.BORDER_REPLICATE)
+    dy = cv2.Sobel(img, cv2.CV_16S, 0, 1, ksize=3, borderType=cv2.BORDER_REPLICATE)
+    mag = dx.astype(np.int32) ** 2 + dy.astype(np.int32) ** 2
+    k = np.argmax(mag, axis=2)[..., None]
+    gx = np.ascontiguousarray(np.take_along_axis(dx, k, 2)[..., 0])
+    gy = np.ascontiguousarray(np.take_along_axis(dy, k, 2)[..., 0])
+    return cv2.Canny(gx, gy, low, high, L2gradient=True)
+
+
 def edge_maps(image: np.ndarray, low: float = 50.0, high: float = 150.0,
               blur_sigma: float = 1.0, cap: float = DT_CAP_PX,
-              mask: int = cv2.DIST_MASK_PRECISE) -> EdgeMaps:
-    """:func:`canny` edges and their distance transform for an RGB or grey uint8 image."""
-    edges = canny(image, low, high, blur_sigma)
+              mask: int = cv2.DIST_MASK_PRECISE, colour: bool = False) -> EdgeMaps:
+    """:func:`canny` edges (:func:`colour_canny` with ``colour``) and their distance transform
+    for an RGB or grey uint8 image."""
+    edges = (colour_canny if colour else canny)(image, low, high, blur_sigma)
     return EdgeMaps(edges, distance_transform(edges, cap, mask))
 
 

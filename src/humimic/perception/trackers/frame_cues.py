@@ -34,10 +34,10 @@ class FrameCues:
 
 
 def frame_cues(frame: CameraImage, bins: int, lut: ColorLUT | None = None,
-               flow: np.ndarray | None = None) -> FrameCues:
-    """The cue images of ``frame``: edges (and moving edges with ``flow``), skin posterior,
-    quantised colours."""
-    maps = edge_maps(frame.image)
+               flow: np.ndarray | None = None, colour_edges: bool = False) -> FrameCues:
+    """The cue images of ``frame``: edges (on the colour gradient with ``colour_edges``; and
+    moving edges with ``flow``), skin posterior, quantised colours."""
+    maps = edge_maps(frame.image, colour=colour_edges)
     return FrameCues(frame.camera.intrinsics, invert_transform(frame.camera.T_base_cam),
                      motion_edge_maps(maps, flow), None if lut is None else
                      lut.posterior(frame.image), quantize(frame.image, bins),

@@ -26,12 +26,21 @@ class TbpConfig(Section):
     """Particles N."""
     sigma_deg: float = Field(3.0, gt=0.0, le=45.0)
     """Process noise of the constant-velocity model per frame (deg, each angle)."""
+    velocity_keep: float = Field(1.0, ge=0.0, le=1.0)
+    """Fraction of the last frame's velocity the AR model keeps (1: the paper's constant
+    velocity; below 1 a damped velocity, ``q_k = q_{k-1} + a (q_{k-1} - q_{k-2}) + w``)."""
+    sigma_k_first: float | None = Field(None, gt=0.0)
+    """Skin-cue standard deviation of the APF's first stage (default ``sigma_k``)."""
     sigma_s: float = Field(1.0, gt=0.0)
     """Shape-cue standard deviation (px, eq. 5's distance)."""
     K: float = Field(0.5, gt=0.0, le=1.0)
     """Moving-edge weight in eq. 5."""
     cap_px: float = Field(5.0, gt=0.0, le=30.0)
     """Largest distance (px) one contour point contributes to eq. 5 (not in the paper)."""
+    edges: Literal["grey", "colour"] = "colour"
+    """Canny on the grey image or on the colour gradient (the strongest channel's; finds the
+    hands against a wall of their brightness, where grey edges miss them: fig12's pointing
+    hand)."""
     n_points: int = Field(12, ge=4, le=100)
     """Contour points per part for the shape cue."""
     lambda_s: tuple[float, float] = (10.0, 1.0)

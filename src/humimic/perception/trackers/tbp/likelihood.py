@@ -45,8 +45,9 @@ OFF_IMAGE = -1.0e6
 ArmView = FrameCues
 
 
-def arm_view(frame: CameraImage, flow: np.ndarray | None, lut: ColorLUT, bins: int) -> ArmView:
-    return frame_cues(frame, bins, lut, flow)
+def arm_view(frame: CameraImage, flow: np.ndarray | None, lut: ColorLUT, bins: int,
+             colour_edges: bool = False) -> ArmView:
+    return frame_cues(frame, bins, lut, flow, colour_edges)
 
 
 @dataclass(frozen=True)

@@ -40,11 +40,13 @@ from humimic.perception.trackers.tbp.likelihood import (
 ARM_NAMES = ARM_DOFS["R"] + ARM_DOFS["L"]
 
 
-def cv_dynamics(n: int, sigma: float) -> LinearGaussian:
-    """Constant-velocity AR model on ``[q_k, q_{k-1}]`` (``n`` angles, noise ``sigma`` rad on
-    ``q_k``; a negligible one on the copied ``q_{k-1}`` keeps ``Q`` positive definite)."""
+def cv_dynamics(n: int, sigma: float, keep: float = 1.0) -> LinearGaussian:
+    """Constant-velocity AR model on ``[q_k, q_{k-1}]`` (Menezes sec. 6.3.1, ``x'_k = A
+    x'_{k-1} + w_k``; ``n`` angles, noise ``sigma`` rad on ``q_k``; a negligible one on the
+    copied ``q_{k-1}`` keeps ``Q`` positive definite). ``keep < 1`` damps the velocity:
+    ``q_k = q_{k-1} + keep (q_{k-1} - q_{k-2}) + w``."""
     I, Z = np.eye(n), np.zeros((n, n))
-    F = np.block([[2 * I, -I], [I, Z]])
+    F = np.block([[(1 + keep) * I, -keep * I], [I, Z]])
     Q = np.diag(np.r_[np.full(n, sigma ** 2), np.full(n, 1e-12)])
     return LinearGaussian(F, Q)
 
@@ -71,7 +73,7 @@ class TbpTracker:
         self.hands = self.body.without(*[p for p in self.body.part_names
                                          if p not in ("r_hand", "l_hand")])
         self.q_def = np.radians(np.tile(cfg.rest_deg, 2))
-        self.dynamics = cv_dynamics(8, math.radians(cfg.sigma_deg))
+        self.dynamics = cv_dynamics(8, math.radians(cfg.sigma_deg), cfg.velocity_keep)
         self.flow = OpticalFlow()
         self.prev_image = None
         self.particles: np.ndarray | None = None
@@ -79,6 +81,7 @@ class TbpTracker:
         self.refs: np.ndarray | None = None
         self.weights: dict | None = None
         self.restarts = 0
+        self.last_view: ArmView | None = None
 
     def _start(self, rng: np.random.Generator) -> None:
         q = self.body.clamp(self.q_def + rng.normal(0, math.radians(self.cfg.init_sigma_deg),
@@ -109,7 +112,8 @@ class TbpTracker:
         cfg = self.cfg
         flow = None if self.prev_image is None else self.flow(self.prev_image, frame.image)
         self.prev_image = frame.image
-        view = arm_view(frame, flow, self.lut, cfg.bins)
+        view = self.last_view = arm_view(frame, flow, self.lut, cfg.bins,
+                                         cfg.edges == "colour")
         if self.particles is None:
             self._start(rng)
             self._first_frame(view, torso)
@@ -117,7 +121,8 @@ class TbpTracker:
 
         def first(x):                                           # skin cue of the hands
             inner = hand_interiors(self.hands, body.clamp(x[:, :8]), torso, view)
-            return shape_log_likelihood(skin_distance(inner, view.skin), cfg.sigma_k)
+            return shape_log_likelihood(skin_distance(inner, view.skin),
+                                        cfg.sigma_k_first or cfg.sigma_k)
 
         def second(x):
             q = body.clamp(x[:, :8])
