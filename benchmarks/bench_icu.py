@@ -52,9 +52,11 @@ G = "icu"
 
 def bench(repeats: int, clock: str = "wall") -> list[Row]:
     frames, cfg = render(2.0, "menezes_fig10_crossing.yaml", "icu")
-    params = DetectorParams(min_size=cfg.min_face_px, fit_px=cfg.face_fit_px)
     known = list(dict.fromkeys(["ben", "cyd", *IDENTITY_NAMES]))[: cfg.enrolled]
-    model = trained_model(known, RenderSpec(per_identity=cfg.views), params)
+    model = trained_model(known, RenderSpec(per_identity=cfg.views),
+                          DetectorParams(min_size=cfg.min_face_px))
+    params = DetectorParams(min_size=cfg.min_face_px, scale_factor=cfg.face_scale_factor,
+                            fit_px=cfg.face_fit_px)
     lut = ColorLUT(load_color_model(DEFAULT_COLOR_MODEL))
     rows = []
     for label, every in (("face window every frame", 1), ("face window every 3rd frame", 3)):

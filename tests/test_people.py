@@ -38,9 +38,13 @@ def test_head_truth_is_where_mujoco_puts_the_head():
         for tick in (0, 200, 420, 503):
             world.apply_human(tick)
             mujoco.mj_kinematics(m, d)
-            np.testing.assert_allclose(
-                world.people.head_world(0, np.array([world.times[tick]]))[0],
-                d.site_xpos[head], atol=1e-9)
+            t = np.array([world.times[tick]])
+            np.testing.assert_allclose(world.people.head_world(0, t)[0], d.site_xpos[head],
+                                       atol=1e-9)
+            for site in ("head", "r_hand", "l_hand"):  # the skin a hand tracker may mistake
+                np.testing.assert_allclose(world.people.site_world(0, site, t)[0],
+                                           d.site_xpos[m.site(f"person1/{site}").id],
+                                           atol=1e-9)
     finally:
         world.close()
 

@@ -22,6 +22,20 @@ class Hand2DStage(ImageTrackerStage):
                          people, visibility)
         self.cfg, self.tracker = cfg, tracker
 
+    def metrics(self) -> dict:
+        """The common scores plus ``others_near_frames``: frames where another person's face
+        or hand is in view within 3 hand widths of the tutor's hand (the distraction)."""
+        out = super().metrics()
+        if self.times and self.people is not None:
+            _, _, _, truth = self.arrays()
+            near = np.zeros(len(self.times), bool)
+            for o in self.others():
+                with np.errstate(invalid="ignore"):
+                    near |= o.visible & (np.linalg.norm(o.uv - truth.uv, axis=1)
+                                         < 3.0 * truth.size_px)
+            out["trackers"][self.tracker_name]["others_near_frames"] = int(near.sum())
+        return out
+
     def others(self) -> list:
         """The other people's face and hands projected (``human.people``): the skin the
         tracker must not take for the tutor's hand (identity switches, wrong-person frames)."""

@@ -26,7 +26,7 @@ def icu_stage(name, cfg, scenario, world, rngs, rlog) -> IcuStage:
     if cfg.alpha + cfg.beta > 1.0:
         raise ScenarioError(where, f"trackers.{name}.beta", "alpha + beta must not exceed 1",
                             cfg.beta, f"at most {1.0 - cfg.alpha:g}")
-    params = DetectorParams(min_size=cfg.min_face_px, fit_px=cfg.face_fit_px)
+    params = DetectorParams(min_size=cfg.min_face_px)
     recogniser, tutor = None, 0
     if cfg.recognition:
         from humimic.perception.faces.training import RenderSpec, trained_model
@@ -38,7 +38,9 @@ def icu_stage(name, cfg, scenario, world, rngs, rlog) -> IcuStage:
     if cfg.search == "skin":
         skin = skin_model_lut(scenario, world, [camera], f"trackers.{name}.search")
     width, height = scenario.cameras.resolution
-    tracker = IcuTracker(cfg, width, height, rngs[f"trackers.{name}"], FaceDetector(params),
+    search = DetectorParams(min_size=cfg.min_face_px, scale_factor=cfg.face_scale_factor,
+                            fit_px=cfg.face_fit_px)
+    tracker = IcuTracker(cfg, width, height, rngs[f"trackers.{name}"], FaceDetector(search),
                          recogniser, tutor, skin)
     fx = world.eye_rig.intrinsics(camera).fx if cfg.near is not None else None
     return IcuStage(name, cfg, camera, tracker, identity, world.gt, rlog,
