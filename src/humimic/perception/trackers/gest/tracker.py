@@ -32,6 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from humimic.bodymodel.hand import hand_ellipsoids
 from humimic.estimation.particles import (
     Gaussian,
     Mixture,
@@ -45,6 +46,7 @@ from humimic.perception.cues.histograms import update_reference
 from humimic.perception.trackers.gest.blobs import hand_blobs
 from humimic.perception.trackers.gest.config import GestConfig
 from humimic.perception.trackers.gest.likelihood import (
+    ellipse_centres,
     hand_log_likelihood,
     hand_view,
     project_hands,
@@ -157,7 +159,7 @@ class GestTracker:
         centre: 0.3-0.5 px here, centimetres of depth); ``proj_left`` its projection in the
         (cropped) left view."""
         c_l = proj_left.patch_state[0, :2] + origin_left
-        c_r = project_hands(mean[None], _Geometry(cams[1]), 4).patch_state[0, :2]
+        c_r = ellipse_centres(hand_ellipsoids(mean[None]), _Geometry(cams[1]))[0]
         if not (proj_left.valid[0] and np.isfinite(np.r_[c_l, c_r]).all()
                 and np.abs(c_r).max() < 1e5):
             return np.zeros(3)
