@@ -43,6 +43,7 @@ from humimic.estimation.particles import (
 from humimic.perception.cues.color_models import ColorLUT
 from humimic.perception.cues.edges import DT_CAP_PX
 from humimic.perception.cues.histograms import update_reference
+from humimic.perception.cues.importance import Blobs
 from humimic.perception.trackers.gest.blobs import hand_blobs
 from humimic.perception.trackers.gest.config import GestConfig
 from humimic.perception.trackers.gest.likelihood import (
@@ -182,9 +183,7 @@ class GestTracker:
              ) -> GestResult:
         cfg = self.cfg
         frames = (left, right)
-        blobs = [interior_blobs(hand_blobs(f.image, self.lut, cfg.blob_subsample),
-                                f.image.shape[1], f.image.shape[0], cfg.border_px)
-                 for f in frames]
+        blobs = [self._blobs(f) for f in frames]
         p, cov, cen1, pairs = stereo_candidates(blobs[0], blobs[1], left.camera, right.camera,
                                                 cfg.max_epipolar_px, cfg.blob_size,
                                                 cfg.blob_sigma_scale, 1.0)
@@ -244,6 +243,29 @@ class GestTracker:
             self.lost_for += 1
             self.unsupported = 0
         return GestResult(mean, self.pf.cov, status, p, d)
+
+    def _blobs(self, frame: CameraImage) -> Blobs:
+        """The frame's skin blobs that are not cut by the image border; while tracking, only
+        in the box the gate projects to around the last estimate (blobs cut by that box too
+        are dropped): the candidates outside it would be gated out anyway."""
+        cfg = self.cfg
+        box = None
+        if self.last is not None and cfg.roi:
+            K = frame.camera.intrinsics
+            uv = frame.camera.project_base(self.last[:3])
+            depth = float(np.linalg.norm(self.last[:3] - frame.camera.T_base_cam[:3, 3]))
+            r = K.fx * (cfg.gate_m + float(np.max(self.last[6:]))) / max(depth, 0.05)
+            if np.isfinite(uv).all():
+                box = roi_box(np.array([[uv[0] - r, uv[1] - r, 2 * r, 2 * r]]), K.width,
+                              K.height, 0.0)
+        crop = crop_frame(frame, box)
+        h, w = crop.image.shape[:2]
+        b = interior_blobs(hand_blobs(crop.image, self.lut, cfg.blob_subsample), w, h,
+                           cfg.border_px)
+        if box is None:
+            return b
+        shift = np.array(box[:2], float)
+        return Blobs(b.centers + shift, b.boxes + np.r_[shift, 0.0, 0.0], b.areas)
 
     def _roi(self, frame: CameraImage, blobs, centroids) -> tuple[int, int, int, int] | None:
         """The box the cues are computed in (:mod:`.roi`): the hand-sized blobs matched in
