@@ -14,6 +14,7 @@ from humimic.bodymodel.kinematics import ypr_matrix
 from humimic.perception.blobs.config import DEFAULT_COLOR_MODEL
 from humimic.perception.cues.color_models import ColorLUT, load_color_model
 from humimic.perception.cues.importance import Blobs
+from humimic.perception.trackers.gest.blobs import hand_blobs
 from humimic.perception.trackers.gest.config import GestConfig
 from humimic.perception.trackers.gest.likelihood import hand_view, project_hands
 from humimic.perception.trackers.gest.roi import crop_frame, roi_box
@@ -75,6 +76,24 @@ def test_blobs_cut_by_the_border_are_dropped():
               np.array([200.0, 300, 900]))
     kept = interior_blobs(b, 320, 240, 1.0)
     np.testing.assert_array_equal(kept.centers, [[100, 100]])
+
+
+def test_blobs_found_subsampled_are_measured_at_full_resolution():
+    """Two skin ellipses and a speck: the centroids, boxes and areas equal those of the
+    full-resolution components (``cv2.connectedComponentsWithStats`` on the whole mask)."""
+    lut = ColorLUT(load_color_model(DEFAULT_COLOR_MODEL), 6)
+    img = np.full((240, 320, 3), 70, np.uint8)
+    cv2.ellipse(img, (101, 80), (9, 14), 30, 0, 360, SKIN_RGB, -1)
+    cv2.ellipse(img, (230, 150), (12, 7), -20, 0, 360, SKIN_RGB, -1)
+    img[20:22, 20:22] = SKIN_RGB                                  # too small to be a blob
+    got = hand_blobs(img, lut, 2)
+    mask = (lut.posterior(img) > 0.5).astype(np.uint8)
+    n, _, stats, cent = cv2.connectedComponentsWithStats(mask, connectivity=8)
+    big = [k for k in range(1, n) if stats[k, cv2.CC_STAT_AREA] >= 40]
+    order = np.argsort(got.centers[:, 0])
+    np.testing.assert_allclose(got.centers[order], cent[big][np.argsort(cent[big][:, 0])],
+                               atol=1e-9)
+    np.testing.assert_allclose(np.sort(got.areas), np.sort(stats[big, cv2.CC_STAT_AREA]))
 
 
 def test_triangulate_pixels_matches_opencv():
