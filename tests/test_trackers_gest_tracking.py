@@ -19,7 +19,7 @@ from humimic.perception.trackers.gest.config import GestConfig
 from humimic.perception.trackers.gest.likelihood import hand_view, project_hands
 from humimic.perception.trackers.gest.roi import crop_frame, roi_box
 from humimic.perception.trackers.gest.stereo import interior_blobs, triangulate_pixels
-from humimic.perception.trackers.gest.tracker import GestTracker
+from humimic.perception.trackers.gest.tracker import GestTracker, centre_update
 from humimic.sensors.camera_model import CameraImage, invert_transform
 
 HAND = np.array([1.0, 0.05, 1.15, 0.3, 0.2, 1.2, 0.045, 0.022, 0.08])
@@ -104,6 +104,24 @@ def test_triangulate_pixels_matches_opencv():
     X = cv2.triangulatePoints(P1, P2, uv_l.T, uv_r.T)
     np.testing.assert_allclose(triangulate_pixels(cam_l, cam_r, uv_l, uv_r),
                                (X[:3] / X[3]).T, atol=1e-9)
+
+
+def test_centre_update_is_filterpys_kalman_step():
+    from filterpy.kalman import KalmanFilter
+
+    rng = np.random.default_rng(3)
+    kf = KalmanFilter(dim_x=3, dim_z=3)
+    kf.x, kf.P = np.array([1.0, 0.1, 1.2]), np.diag([4e-4, 1e-4, 9e-4])
+    kf.F, kf.H, kf.Q = np.eye(3), np.eye(3), 0.02 ** 2 * np.eye(3)
+    x, P = kf.x.copy(), kf.P.copy()
+    for _ in range(4):
+        A = rng.normal(size=(3, 3)) * 0.01
+        R, z = A @ A.T + 1e-6 * np.eye(3), kf.x + rng.normal(0, 0.01, 3)
+        kf.predict()
+        kf.update(z, R=R)
+        x, P = centre_update(x, P, z, R, 0.02)
+        np.testing.assert_allclose(x, kf.x, atol=1e-12)
+        np.testing.assert_allclose(P, kf.P, atol=1e-12)
 
 
 def _draw(backgrounds, cams, hands) -> list[CameraImage]:

@@ -22,7 +22,11 @@ near where the hand was last tracked (``reacquire_m``; any after ``reacquire_fra
 The estimate is ``lost`` when its centre leaves the left image, its contour is off the
 edges by more than ``lost_px``, or ``lost_frames`` frames pass without a candidate within
 ``lost_m``. The cue images are computed in a box around the candidates and the last estimate
-(:mod:`.roi`).
+(:mod:`.roi`). The published centre is, by default (``position: kalman``), not the particles'
+mean but the centre's Gaussian posterior given the stereo measurements under the random walk
+(a Kalman update per frame: every particle shares the measurement and the linear dynamics of
+the centre, so its conditional posterior is one Gaussian; the weights, collapsed by the
+orientation and size cues, would otherwise make the estimate one random draw).
 """
 
 from __future__ import annotations
@@ -131,6 +135,8 @@ class GestTracker:
         self.lost_for = 0
         """Frames since the hand was last tracked."""
         self.offset = np.zeros(3)
+        self.centre: tuple[np.ndarray, np.ndarray] | None = None
+        """The centre's Gaussian posterior ``(mean, cov)`` (``position: kalman``)."""
         """The last estimate's silhouette offset (:meth:`_silhouette_offset`)."""
 
     def _ll(self, views, pairs, K):
@@ -236,13 +242,29 @@ class GestTracker:
             self.lost_for = 0
             self.offset = self._silhouette_offset(mean, proj, origin[0],
                                                   (left.camera, right.camera))
+            if cfg.position == "kalman" and len(use):
+                j = use[int(np.argmin(np.linalg.norm(p[use] - mean[:3], axis=1)))]
+                mean[:3] = self._centre_update(p[j] + self.offset,
+                                               cfg.centroid_px ** 2 * cen1[j])
+            elif cfg.position == "kalman" and self.centre is not None:
+                self.centre = (self.centre[0], self.centre[1]
+                               + cfg.sigma_position ** 2 * np.eye(3))
+                mean[:3] = self.centre[0]
             h = reference_histogram(proj, views[0])
             self.ref = h if self.ref is None else update_reference(self.ref, h, cfg.kappa)
         else:
-            self.last = None
+            self.last, self.centre = None, None
             self.lost_for += 1
             self.unsupported = 0
         return GestResult(mean, self.pf.cov, status, p, d)
+
+    def _centre_update(self, z: np.ndarray, R: np.ndarray) -> np.ndarray:
+        """The centre's posterior mean given this frame's stereo measurement ``z`` (the
+        candidate corrected by the estimate's silhouette offset, covariance ``R``) and the
+        last one under the centre's random walk (module docstring)."""
+        self.centre = ((z, R) if self.centre is None else
+                       centre_update(*self.centre, z, R, self.cfg.sigma_position))
+        return self.centre[0]
 
     def _blobs(self, frame: CameraImage) -> Blobs:
         """The frame's skin blobs that are not cut by the image border; while tracking, only
@@ -280,6 +302,15 @@ class GestTracker:
             boxes.append(np.array([[uv[0] - r, uv[1] - r, 2 * r, 2 * r]]))
         box = roi_box(np.concatenate(boxes), K.width, K.height, DT_CAP_PX)
         return box if box is not None else (0, 0, K.width, K.height)
+
+
+def centre_update(x: np.ndarray, P: np.ndarray, z: np.ndarray, R: np.ndarray, sigma: float
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """One Kalman cycle of the centre: the random walk ``x_k = x_{k-1} + N(0, sigma^2 I)``
+    (eq. 16's dynamics), then the direct measurement ``z = x_k + N(0, R)``."""
+    P = P + sigma ** 2 * np.eye(3)
+    K = P @ np.linalg.inv(P + R)
+    return x + K @ (z - x), (np.eye(3) - K) @ P
 
 
 def _matched(blobs, centroids) -> np.ndarray:
