@@ -20,7 +20,8 @@ Blobs cut by the image border are no candidates. Initialisation is automatic: th
 starts from the highest candidate (``init``), and re-starts after a loss from a candidate
 near where the hand was last tracked (``reacquire_m``; any after ``reacquire_frames``).
 The estimate is ``lost`` when its centre leaves the left image, its contour is off the
-edges by more than ``lost_px``, or ``lost_frames`` frames pass without a candidate within
+edges by more than ``lost_px`` while its rim does not separate skin from background either
+(``lost_skin``), or ``lost_frames`` frames pass without a candidate within
 ``lost_m``. The cue images are computed in a box around the candidates and the last estimate
 (:mod:`.roi`). The published centre is, by default (``position: kalman``), not the particles'
 mean but the centre's Gaussian posterior given the stereo measurements under the random walk
@@ -57,6 +58,7 @@ from humimic.perception.trackers.gest.likelihood import (
     project_hands,
     reference_histogram,
     shape_distance,
+    skin_distance,
 )
 from humimic.perception.trackers.gest.proposal import CandidateProposal, PoseReset
 from humimic.perception.trackers.gest.roi import crop_frame, roi_box
@@ -233,7 +235,8 @@ class GestTracker:
         support = len(use) > 0 and float(np.min(np.linalg.norm(p[use] - mean[:3], axis=1))
                                          ) <= cfg.lost_m
         self.unsupported = 0 if support else self.unsupported + 1
-        status = ("tracking" if (s.ok and proj.valid[0] and d <= cfg.lost_px
+        fits = d <= cfg.lost_px or float(skin_distance(proj, views[0])[0]) <= cfg.lost_skin
+        status = ("tracking" if (s.ok and proj.valid[0] and fits
                                  and _centre_in_image(mean, left)
                                  and self.unsupported < cfg.lost_frames) else "lost")
         if status == "tracking":
