@@ -88,7 +88,7 @@ def main() -> None:
 
     report(f"gest N={cfg.n}", time_runs(lambda r: GestTracker(cfg, stage.tracker.lut),
                                         gest_run, args.repeats), GOALS_FPS["gest"])
-    report("  gest skin blobs (2 eyes)", time_runs(
+    report("  gest skin blobs, whole frames", time_runs(
         lambda r: None, lambda _: [skin_blobs((stage.tracker.lut.posterior(f.image) > 0.5)
                                               .astype(np.uint8), subsample=cfg.blob_subsample)
                                    for _, _, fs in frames for f in fs] and len(frames),

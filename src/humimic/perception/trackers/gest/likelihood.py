@@ -1,8 +1,10 @@
 """GEST's measurement function (Menezes sec. 6.1.2): ``p(z^S, z^C | x) = p(z^S|x) p(z^C|x)``
 for hand-ellipsoid states, vectorised over particles.
 
-The ellipsoids are projected with eq. 15 (:func:`humimic.bodymodel.project_ellipsoids`);
-``n_points`` contour points (by arc length) sample the frame's distance transform (shape cue,
+The ellipsoids are projected with eq. 15 (:func:`image_ellipses`, the body model's conics);
+``n_points`` contour points (at equal steps of the ellipse's parameter, normals in closed
+form; checked against the dual-quadric projection in tests) sample the frame's distance
+transform (shape cue,
 eq. 3: ``-D^2 / (2 sigma_s^2)``); the colour cue compares the histogram of the square
 inscribed in the projected ellipse (side ``sqrt(2)`` times its semi-minor axis) with the
 reference (eq. 6, one patch). A third cue, not in the paper, gives the colour cue the
@@ -20,8 +22,10 @@ predictive density), particles proposed where the random walk cannot reach get l
 and the image cues barely see depth (5 cm at 1 m changes them by < 0.3 nats, tests), so the
 stereo data must also enter the likelihood. It compares image centres, not triangulated
 points: an off-axis ellipsoid's silhouette is not centred on its centre's image (0.3-0.5 px
-here, 3 cm of depth at 1 m). Parts behind the camera or off the image cost the distance
-transform's cap at every point.
+here, 3 cm of depth at 1 m). Its ``sigma_px`` is what sets the depth accuracy: at the true
+pose the full-resolution centroids sit 0.06-0.07 px from the ellipse centres in the rendered
+scenes (the tracker uses 0.08 px), a noisier segmentation needs a larger value. Parts behind
+the camera or off the image cost the distance transform's cap at every point.
 """
 
 from __future__ import annotations
@@ -73,21 +77,42 @@ def hand_outlines(states: np.ndarray, intrinsics, T_cam_base: np.ndarray, n: int
     return outline, conic
 
 
-def project_hands(states: np.ndarray, view: HandView, n_points: int) -> HandProjection:
-    """Eq. 15 for every particle's ellipsoid, and its contour points and colour patch.
-
-    The ``n_points`` contour points are ``centre + L (cos psi, sin psi)`` at equal steps of
-    ``psi`` (``L L^T`` the image ellipse's shape matrix), with their normals in closed form
-    (``L^-T (cos psi, sin psi)``); not resampled by arc length as the body model's outlines
-    are (that resampling was most of the likelihood's cost)."""
-    R, c, axes = hand_ellipsoids(states)
-    R, c = to_camera(view.T_cam_base, R, c)
+def image_ellipses(ellipsoids: tuple, view) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Eq. 15 for ellipsoids ``(R, centre, semi-axes)`` (base frame, as
+    :func:`~humimic.bodymodel.hand.hand_ellipsoids` gives them) in ``view``'s camera: the image
+    ellipses' centres ``(N, 2)`` and shape matrices ``(N, 2, 2)`` (normalised coordinates) and
+    whether each ellipsoid lies wholly in front of the camera."""
+    R, c = to_camera(view.T_cam_base, ellipsoids[0], ellipsoids[1])
+    axes = ellipsoids[2]
     A, b, c0 = conics.ellipsoid_quadric(R, c, axes)
     conic = conics.quadric_to_conic(A, b, c0)                           # Menezes eq. 15
     centre, M, ok = conics.conic_to_ellipse(conic)
     M = np.where(ok[:, None, None], M, np.eye(2))
     valid = ok & (c0 > 0.0) & (c[:, 2] - np.sqrt(np.sum(np.square(R[:, 2, :] * axes), -1))
                                 > Z_MIN)
+    return centre, M, valid
+
+
+def ellipse_centres(ellipsoids: tuple, view) -> np.ndarray:
+    """Pixel centres ``(N, 2)`` of the ellipsoids' image ellipses (off-image sentinel where
+    invalid): all the stereo cue needs of the right camera."""
+    centre, _, valid = image_ellipses(ellipsoids, view)
+    cu, cv = view.intrinsics.distort(centre[:, 0], centre[:, 1])
+    return np.where(valid[:, None], np.stack([cu, cv], -1), OFF_IMAGE)
+
+
+def project_hands(states: np.ndarray, view: HandView, n_points: int,
+                  ellipsoids: tuple | None = None) -> HandProjection:
+    """Eq. 15 for every particle's ellipsoid, and its contour points and colour patch
+    (``ellipsoids``: :func:`hand_ellipsoids` of ``states`` if already computed).
+
+    The ``n_points`` contour points are ``centre + L (cos psi, sin psi)`` at equal steps of
+    ``psi`` (``L L^T`` the image ellipse's shape matrix), with their normals in closed form
+    (``L^-T (cos psi, sin psi)``); not resampled by arc length as the body model's outlines
+    are (that resampling was most of the likelihood's cost)."""
+    if ellipsoids is None:
+        ellipsoids = hand_ellipsoids(states)
+    centre, M, valid = image_ellipses(ellipsoids, view)
     m00 = np.sqrt(np.maximum(M[:, 0, 0], 1e-300))
     l10 = M[:, 1, 0] / m00
     l11 = np.sqrt(np.maximum(M[:, 1, 1] - l10 * l10, 1e-300))
@@ -148,11 +173,13 @@ def hand_log_likelihood(states: np.ndarray, views: list[HandView], ref: np.ndarr
     (None: no colour cue)."""
     out = np.zeros(len(states))
     centres = []
+    ellipsoids = hand_ellipsoids(states)
     for i, view in enumerate(views):
-        proj = project_hands(states, view, n_points)
-        centres.append(proj.patch_state[:, :2])
         if image_views is not None and i >= image_views:
+            centres.append(ellipse_centres(ellipsoids, view))
             continue
+        proj = project_hands(states, view, n_points, ellipsoids)
+        centres.append(proj.patch_state[:, :2])
         out += shape_log_likelihood(shape_distance(proj, view), sigma_s)  # Menezes eq. 2
         if view.skin is not None:
             out += shape_log_likelihood(skin_distance(proj, view), sigma_k)

@@ -20,9 +20,14 @@ Blobs cut by the image border are no candidates. Initialisation is automatic: th
 starts from the highest candidate (``init``), and re-starts after a loss from a candidate
 near where the hand was last tracked (``reacquire_m``; any after ``reacquire_frames``).
 The estimate is ``lost`` when its centre leaves the left image, its contour is off the
-edges by more than ``lost_px``, or ``lost_frames`` frames pass without a candidate within
+edges by more than ``lost_px`` while its rim does not separate skin from background either
+(``lost_skin``), or ``lost_frames`` frames pass without a candidate within
 ``lost_m``. The cue images are computed in a box around the candidates and the last estimate
-(:mod:`.roi`).
+(:mod:`.roi`). The published centre is, by default (``position: kalman``), not the particles'
+mean but the centre's Gaussian posterior given the stereo measurements under the random walk
+(a Kalman update per frame: every particle shares the measurement and the linear dynamics of
+the centre, so its conditional posterior is one Gaussian; the weights, collapsed by the
+orientation and size cues, would otherwise make the estimate one random draw).
 """
 
 from __future__ import annotations
@@ -32,6 +37,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from humimic.bodymodel.hand import hand_ellipsoids
 from humimic.estimation.particles import (
     Gaussian,
     Mixture,
@@ -42,14 +48,17 @@ from humimic.estimation.particles import (
 from humimic.perception.cues.color_models import ColorLUT
 from humimic.perception.cues.edges import DT_CAP_PX
 from humimic.perception.cues.histograms import update_reference
+from humimic.perception.cues.importance import Blobs
 from humimic.perception.trackers.gest.blobs import hand_blobs
 from humimic.perception.trackers.gest.config import GestConfig
 from humimic.perception.trackers.gest.likelihood import (
+    ellipse_centres,
     hand_log_likelihood,
     hand_view,
     project_hands,
     reference_histogram,
     shape_distance,
+    skin_distance,
 )
 from humimic.perception.trackers.gest.proposal import CandidateProposal, PoseReset
 from humimic.perception.trackers.gest.roi import crop_frame, roi_box
@@ -128,6 +137,8 @@ class GestTracker:
         self.lost_for = 0
         """Frames since the hand was last tracked."""
         self.offset = np.zeros(3)
+        self.centre: tuple[np.ndarray, np.ndarray] | None = None
+        """The centre's Gaussian posterior ``(mean, cov)`` (``position: kalman``)."""
         """The last estimate's silhouette offset (:meth:`_silhouette_offset`)."""
 
     def _ll(self, views, pairs, K):
@@ -157,7 +168,7 @@ class GestTracker:
         centre: 0.3-0.5 px here, centimetres of depth); ``proj_left`` its projection in the
         (cropped) left view."""
         c_l = proj_left.patch_state[0, :2] + origin_left
-        c_r = project_hands(mean[None], _Geometry(cams[1]), 4).patch_state[0, :2]
+        c_r = ellipse_centres(hand_ellipsoids(mean[None]), _Geometry(cams[1]))[0]
         if not (proj_left.valid[0] and np.isfinite(np.r_[c_l, c_r]).all()
                 and np.abs(c_r).max() < 1e5):
             return np.zeros(3)
@@ -180,9 +191,7 @@ class GestTracker:
              ) -> GestResult:
         cfg = self.cfg
         frames = (left, right)
-        blobs = [interior_blobs(hand_blobs(f.image, self.lut, cfg.blob_subsample),
-                                f.image.shape[1], f.image.shape[0], cfg.border_px)
-                 for f in frames]
+        blobs = [self._blobs(f) for f in frames]
         p, cov, cen1, pairs = stereo_candidates(blobs[0], blobs[1], left.camera, right.camera,
                                                 cfg.max_epipolar_px, cfg.blob_size,
                                                 cfg.blob_sigma_scale, 1.0)
@@ -226,7 +235,8 @@ class GestTracker:
         support = len(use) > 0 and float(np.min(np.linalg.norm(p[use] - mean[:3], axis=1))
                                          ) <= cfg.lost_m
         self.unsupported = 0 if support else self.unsupported + 1
-        status = ("tracking" if (s.ok and proj.valid[0] and d <= cfg.lost_px
+        fits = d <= cfg.lost_px or float(skin_distance(proj, views[0])[0]) <= cfg.lost_skin
+        status = ("tracking" if (s.ok and proj.valid[0] and fits
                                  and _centre_in_image(mean, left)
                                  and self.unsupported < cfg.lost_frames) else "lost")
         if status == "tracking":
@@ -235,13 +245,52 @@ class GestTracker:
             self.lost_for = 0
             self.offset = self._silhouette_offset(mean, proj, origin[0],
                                                   (left.camera, right.camera))
+            if cfg.position == "kalman" and len(use):
+                j = use[int(np.argmin(np.linalg.norm(p[use] - mean[:3], axis=1)))]
+                mean[:3] = self._centre_update(p[j] + self.offset,
+                                               cfg.centroid_px ** 2 * cen1[j])
+            elif cfg.position == "kalman" and self.centre is not None:
+                self.centre = (self.centre[0], self.centre[1]
+                               + cfg.sigma_position ** 2 * np.eye(3))
+                mean[:3] = self.centre[0]
             h = reference_histogram(proj, views[0])
             self.ref = h if self.ref is None else update_reference(self.ref, h, cfg.kappa)
         else:
-            self.last = None
+            self.last, self.centre = None, None
             self.lost_for += 1
             self.unsupported = 0
         return GestResult(mean, self.pf.cov, status, p, d)
+
+    def _centre_update(self, z: np.ndarray, R: np.ndarray) -> np.ndarray:
+        """The centre's posterior mean given this frame's stereo measurement ``z`` (the
+        candidate corrected by the estimate's silhouette offset, covariance ``R``) and the
+        last one under the centre's random walk (module docstring)."""
+        self.centre = ((z, R) if self.centre is None else
+                       centre_update(*self.centre, z, R, self.cfg.sigma_position))
+        return self.centre[0]
+
+    def _blobs(self, frame: CameraImage) -> Blobs:
+        """The frame's skin blobs that are not cut by the image border; while tracking, only
+        in the box the gate projects to around the last estimate (blobs cut by that box too
+        are dropped): the candidates outside it would be gated out anyway."""
+        cfg = self.cfg
+        box = None
+        if self.last is not None and cfg.roi:
+            K = frame.camera.intrinsics
+            uv = frame.camera.project_base(self.last[:3])
+            depth = float(np.linalg.norm(self.last[:3] - frame.camera.T_base_cam[:3, 3]))
+            r = K.fx * (cfg.gate_m + float(np.max(self.last[6:]))) / max(depth, 0.05)
+            if np.isfinite(uv).all():
+                box = roi_box(np.array([[uv[0] - r, uv[1] - r, 2 * r, 2 * r]]), K.width,
+                              K.height, 0.0)
+        crop = crop_frame(frame, box)
+        h, w = crop.image.shape[:2]
+        b = interior_blobs(hand_blobs(crop.image, self.lut, cfg.blob_subsample), w, h,
+                           cfg.border_px)
+        if box is None:
+            return b
+        shift = np.array(box[:2], float)
+        return Blobs(b.centers + shift, b.boxes + np.r_[shift, 0.0, 0.0], b.areas)
 
     def _roi(self, frame: CameraImage, blobs, centroids) -> tuple[int, int, int, int] | None:
         """The box the cues are computed in (:mod:`.roi`): the hand-sized blobs matched in
@@ -256,6 +305,15 @@ class GestTracker:
             boxes.append(np.array([[uv[0] - r, uv[1] - r, 2 * r, 2 * r]]))
         box = roi_box(np.concatenate(boxes), K.width, K.height, DT_CAP_PX)
         return box if box is not None else (0, 0, K.width, K.height)
+
+
+def centre_update(x: np.ndarray, P: np.ndarray, z: np.ndarray, R: np.ndarray, sigma: float
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """One Kalman cycle of the centre: the random walk ``x_k = x_{k-1} + N(0, sigma^2 I)``
+    (eq. 16's dynamics), then the direct measurement ``z = x_k + N(0, R)``."""
+    P = P + sigma ** 2 * np.eye(3)
+    K = P @ np.linalg.inv(P + R)
+    return x + K @ (z - x), (np.eye(3) - K) @ P
 
 
 def _matched(blobs, centroids) -> np.ndarray:
