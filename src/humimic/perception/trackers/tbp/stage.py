@@ -50,6 +50,9 @@ class TbpStage(PoseTrackerStage):
         self.torsos: list = []
         self.means: list = []
         self.cams: list = []
+        self.recorded: list | None = None
+        """Set to a list to keep every frame's ``(t, frame, torso)`` (offline replays:
+        ``benchmarks/diagnose_tbp.py``)."""
 
     def attach(self, bus, timer) -> None:
         super().attach(bus, timer)
@@ -74,6 +77,8 @@ class TbpStage(PoseTrackerStage):
             self.cams.append(None)
             return PoseEstimate(self.tracker_name, self.kind, np.full(8, np.nan), ARM_NAMES,
                                 status="searching")
+        if self.recorded is not None:
+            self.recorded.append((t, frame, torso))
         mean, cov, ok = self.tracker.step(frame, torso, self.rng)
         self.torsos.append(torso)
         self.means.append(mean)
