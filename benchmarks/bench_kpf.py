@@ -1,11 +1,12 @@
 """Speed of Schmidt et al.'s kernel-particle-filter tracker (``kpf``), rendering excluded: frames
 per second (cue maps + one filter step) at the issue's configurations (particles, mean-shift
 iterations) = (150, 2) and (1000, 3), on rendered frames of the side-pointing gesture
-(320 x 240, 7.5 Hz), for the paper's method (``kpf_paper``), ours (partitioned, ``kpf``) and
-plain CONDENSATION. Goals (issue 14): >= 75 Hz at (150, 2), >= 10 Hz at (1000, 3); the paper
-ran (150, 2) at 7.5 Hz on a 1.73 GHz Pentium M. Wall-clock rates depend on what else runs on the
-machine; the rate per second of this thread's CPU time (BLAS on one thread; OpenCV's own
-threads in the cue maps not counted) is what one free core would give.
+(320 x 240, 7.5 Hz), for the trackers of ``scenarios/schmidt_table1.yaml``: the paper's method
+(``kpf_paper``), ours (``kpf``) and plain CONDENSATION. Goals (issue 14): >= 75 Hz at (150, 2),
+>= 10 Hz at (1000, 3); the paper ran (150, 2) at 7.5 Hz on a 1.73 GHz Pentium M. Wall-clock
+rates depend on what else runs on the machine; the rate per second of this thread's CPU time
+(BLAS on one thread; OpenCV's own threads in the cue maps not counted) is what one free core
+would give.
 
     PYTHONPATH=src MUJOCO_GL=egl python benchmarks/bench_kpf.py [--frames N] [--repeats R]
 """
@@ -22,7 +23,6 @@ from _frames import render_sequence
 from humimic import bodymodel as bm
 from humimic.paths import SCENARIOS_DIR
 from humimic.perception.trackers.common import skin_model_lut
-from humimic.perception.trackers.kpf.config import KpfConfig
 from humimic.perception.trackers.kpf.cues import cue_maps
 from humimic.perception.trackers.kpf.tracker import KpfTracker, kpf_body
 from humimic.rngs import Rngs
@@ -32,13 +32,6 @@ from humimic.world.world import World
 
 HUMAN = {"distance": 2.0, "motion": {"kind": "point", "hand": "right", "gestures": ["side"],
                                      "move": 1.5, "hold": 2.0, "rest": 1.0}}
-VARIANTS = {
-    "kpf_paper": {"kde_stride": 4},
-    "kpf": {"partitioned": True, "torso_prior_m": 0.03, "kde_stride": 4,
-            "sigma_from_spread": False,
-            "sigma": {"edge": 0.25, "ridge": 0.4, "color": 0.15, "skin": 0.4}},
-    "condensation": {"filter": "condensation"},
-}
 
 
 def main() -> None:
@@ -49,17 +42,22 @@ def main() -> None:
     seq = render_sequence("kpf", HUMAN, args.frames / 7.5, cameras="left", rate=7.5)
     cam = seq.cameras[0]
     scenario = load_scenario(SCENARIOS_DIR / "schmidt_side.yaml", duration=0.2)
-    q0 = bm.truth_state(World(scenario, Rngs(0)), 0, "base")
-    lut = skin_model_lut(scenario, "bench")
+    world = World(scenario, Rngs(0))
+    try:
+        q0 = bm.truth_state(world, 0, "base")
+        lut = skin_model_lut(scenario, world, [cam], "bench")
+    finally:
+        world.close()
     body = kpf_body()
     frames = [(img, invert_transform(m.T_base_cam)) for img, m in
               zip(seq.images[cam], seq.models[cam], strict=True)]
     intr = seq.models[cam][0].intrinsics
     print(f"kpf tracker, {len(frames) - 1} frames of 320 x 240, median of {args.repeats} "
           "repeats (frames per second, cue maps + filter, rendering excluded)")
+    variants = load_scenario(SCENARIOS_DIR / "schmidt_table1.yaml").trackers
     for (n, it) in ((150, 2), (1000, 3)):
-        for name, extra in VARIANTS.items():
-            cfg = KpfConfig(particles=n, iterations=it, **extra)
+        for name, base in variants.items():
+            cfg = base.model_copy(update={"particles": n, "iterations": it})
             rates, cpu_rates = [], []
             for r in range(args.repeats):
                 tr = KpfTracker(body, intr, cfg, np.random.default_rng(r))

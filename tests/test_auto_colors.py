@@ -58,8 +58,10 @@ def test_dark_skin_learned_and_cached(cache_dir):
     assert not first.cached and second.cached and first.digest == second.digest
     assert len(list(cache_dir.glob("colors-skin-*.npz"))) == 1
     np.testing.assert_array_equal(first.lut.table, second.lut.table)
-    # the learned model finds this person's skin and little else (measured 0.998 / 0.001)
-    assert (second.lut.lookup(skin) > 1.0).mean() >= 0.97
+    # the learned model finds this person's skin and little else (measured 0.957 / 0.001; the
+    # skin's darkest pixels, eyes, brows and deep shade, share bins with the scene's dark
+    # surfaces and are cut: 0.998 before cut_background)
+    assert (second.lut.lookup(skin) > 1.0).mean() >= 0.92
     assert (second.lut.lookup(rest) > 1.0).mean() <= 0.01
     # the shipped model, learned for the default skin, misses most of it (measured 0.22)
     shipped = ColorLUT(load_color_model(DEFAULT_COLOR_MODEL))
@@ -107,3 +109,50 @@ def test_file_lut_cached_by_content(cache_dir, tmp_path):
 def test_sample_ticks_cover_the_run():
     np.testing.assert_array_equal(sample_ticks(841, 5), [0, 210, 420, 630, 840])
     np.testing.assert_array_equal(sample_ticks(1, 8), [0])
+
+
+def test_cut_background_clears_only_unseen_bins_the_scene_shows():
+    """Against a table indexed by hand (ColorLUT's own index): bins with >= 3 other pixels and
+    no class pixel are cleared; a bin shared with the class, or with too few others, is kept."""
+    from humimic.perception.cues.auto_colors import cut_background
+
+    bits = 6
+    table = np.full(64**3, 5.0, np.float32)
+    skin = np.array([[200, 150, 120]] * 10, np.uint8)
+    shoe = np.array([[25, 20, 17]] * 4, np.uint8)            # 4 others, no skin: cleared
+    shared = np.array([[201, 151, 121]] * 9, np.uint8)       # others in a skin bin: kept
+    speck = np.array([[90, 90, 200]] * 2, np.uint8)          # 2 others: kept
+    out = cut_background(table, bits, skin, np.concatenate([shoe, shared, speck]))
+
+    def bin_of(rgb):
+        r, g, b = (c // 4 for c in rgb)
+        return r * 64 * 64 + g * 64 + b
+
+    assert out[bin_of((25, 20, 17))] == 0.0
+    assert out[bin_of((200, 150, 120))] == 5.0 and out[bin_of((90, 90, 200))] == 5.0
+    assert np.count_nonzero(out == 0.0) == 1 and table.min() == 5.0  # a copy
+
+
+def test_very_dark_skin_model_does_not_claim_the_shoes(cache_dir):
+    """The very dark skin model's tails reach the dark shoes (rendered ~(25, 20, 17)): the
+    learned table is cleared where the scene's own shoes fall (uncut, a blob was tracked on a
+    foot at 2 m and named left_hand on every frame)."""
+    scenario = load_scenario(SCENARIOS_DIR / "ude_wave_tracking.yaml",
+                             ["human.skin=[0.30,0.20,0.15]", "human.distance=2.0"], duration=0.2)
+    world = World(scenario, Rngs(scenario.seed))
+    try:
+        lut = learned_lut(world, world.eye_cameras).lut
+        geoms = material_geoms(world.scene.model, "shoes")
+        shoes, _ = frame_pixels(world, world.eye_cameras, np.array([0]), geoms, 2.0,
+                                np.random.default_rng(5))
+        skin, _ = _skin_and_rest(world)
+        shoes = np.concatenate(shoes)
+        assert len(shoes) > 50
+        uncut = ColorLUT(lut.model, lut.bits)  # the mixture's own table
+        assert (uncut.lookup(shoes) > 1.0).mean() >= 0.5  # the tails claim them: measured 0.81
+        assert (lut.lookup(shoes) > 1.0).mean() <= 0.15  # measured 0.07
+        # the skin itself is kept (its darkest pixels, eyes and brows, are not learned as skin):
+        # measured 0.947 of all its pixels (uncut 0.988)
+        assert (lut.lookup(skin) > 1.0).mean() >= 0.9
+    finally:
+        world.close()

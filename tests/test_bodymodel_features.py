@@ -45,6 +45,9 @@ def test_cylinder_edges_ridges_and_bands():
     assert (np.sign(v[:10]) == -np.sign(v[10:])).all()            # one half per side
     np.testing.assert_allclose(e.normal[0, 0, :, 1], np.sign(v), atol=1e-12)   # outwards
     assert abs(np.cos(e.angle[0, 0])) == pytest.approx(1.0)
+    lean = limb_edges(view, 20, normals=False)          # the kpf's: the same without normals
+    assert lean.normal is None and np.array_equal(lean.uv, e.uv)
+    assert np.array_equal(lean.angle, e.angle) and np.array_equal(lean.ok, e.ok)
     r = limb_ridges(view, 30)
     np.testing.assert_allclose(r.width[0, 0], 2 * half, rtol=1e-9)
     np.testing.assert_allclose(r.uv[0, 0, :, 1], INTR.cy, atol=1e-9)

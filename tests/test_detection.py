@@ -202,3 +202,46 @@ def test_group_searches_once_per_frame_and_backs_off(skin_lut, monkeypatch):
     assert counts[(t > 0.25) & (t < 0.65)].all()  # phase two, not yet backing off
     late = counts[t > 0.8]
     assert 0.25 <= late.mean() <= 0.4  # every third frame
+
+
+def test_fitted_hypotheses_keep_to_their_own_blob():
+    """A small blob beside a large one (within the fit's neighbourhood) is fitted alone: each
+    centre takes the moments of its own blob's pixels (numpy's, computed directly)."""
+    from humimic.perception.blobs.detection import fitted_hypotheses
+
+    img = np.zeros((240, 320), np.uint8)
+    cv2.ellipse(img, (150, 100), (7, 9), 0, 0, 360, 255, -1)   # a head 14 px across
+    cv2.ellipse(img, (170, 102), (4, 5), 20, 0, 360, 255, -1)  # a hand 9 px across, 20 px off
+    grid = 1
+    post = (img > 0).astype(float)
+    mu, C = fitted_hypotheses(post, np.array([[150.0, 100.0], [170.0, 102.0]]), grid, 24,
+                              1.0, 40.0)
+    _, lab = cv2.connectedComponents(img)
+    for k, (u0, v0) in enumerate(((150, 100), (170, 102))):
+        v, u = np.nonzero(lab == lab[v0, u0])
+        np.testing.assert_allclose(mu[k], [u.mean(), v.mean()], atol=0.05)
+        np.testing.assert_allclose(C[k], np.cov(np.stack([u, v]), bias=True) + np.eye(2) / 12,
+                                   atol=0.05)
+
+
+def test_small_target_found_at_once_after_phase_one(skin_lut):
+    """A hand 8 px across (sigma 2 px, under the random hypotheses' sigma_min of 3 px) beside a
+    head: the colour-fitted hypotheses take its own size, so it is found within a few frames of
+    phase one's end (fits clamped to sigma_min: a window the hand cannot fill, never found in
+    the 1 s here)."""
+    bg = clutter_background(np.random.default_rng(10))
+    found = []
+    for seed in (1, 2, 3):
+        det = DetectingTracker(["head", "hand"], [skin_lut] * 2, np.random.default_rng(seed),
+                               DetectionParams(period=0.2))
+        for i in range(60):
+            img = bg.copy()
+            draw_ellipse(img, (160.0, 100.0), (7, 8), 0)
+            draw_ellipse(img, (180.0, 104.0), (4.0, 4.0), 0)
+            rs = det.process(i * DT, add_noise(img, np.random.default_rng(100 + i), 4.0))
+            if all(r.state == TargetState.TRACKING for r in rs):
+                found.append(i * DT)
+                break
+        else:
+            found.append(np.inf)
+    assert max(found) <= 0.2 + 8 * DT  # measured 4 frames after phase one (0.2 s), all seeds

@@ -111,9 +111,22 @@ def test_wave_detection_rate_and_filtered_rmse():
     # the head's stereo surface lies before its centre: flagged (raw RMSE 11.2 mm)
     assert head["detection_rate"] >= 0.93  # measured 0.971
     assert head["biased"] and head["raw_rmse_mm"] <= 20.0
-    # the hand hanging still is 8 px across and never detected: the verdict says why
+    # the hand hanging still against the shirt is 8 px across: found by the colour-fitted
+    # hypotheses at its own size (measured 0.946; never, while fits were at least 3 px sigma)
     left = m["tracking"]["left_hand"]
-    assert left["verdict"] == "poor" and left["cause"].startswith("too small"), left
+    assert left["detection_rate"] >= 0.85 and left["false_detection_rate"] <= 0.02, left
+
+
+def test_wave_at_two_metres():
+    """The default person 2.0 m away: the waving hand is ~9 px across (sigma ~2.2 px, under
+    the random hypotheses' 3 px floor); the colour-fitted hypotheses find it right after phase
+    one. The people sweep (6 s, seed 1): 0.970 of its visible frames, filtered 18.1 mm."""
+    hand = run("ude_wave_tracking", ["perception.detection.period=0.5", "human.distance=2.0"],
+               duration=3.0)[0]["tracking"]["right_hand"]
+    assert hand["visible_fraction"] == 1.0 and hand["median_size_px"] < 10.0
+    assert hand["detection_rate"] >= 0.85, hand  # measured 0.933 over 3 s (was 0.68)
+    assert hand["false_detection_rate"] <= 0.03  # measured 0.010
+    assert hand["filtered_rmse_mm"] <= 40.0  # the issue's goal at 2.0 m; measured 16.6 mm
 
 
 # ---- hidden for ~1 s --------------------------------------------------------------------------
@@ -192,3 +205,28 @@ def test_head_and_eye_motion_is_compensated():
     p_stale, _ = stale.triangulate(pa.uv_match[f, i, 0], pa.uv_match[f, i, 1])
     stale_rmse = 1e3 * np.sqrt(np.mean(np.sum((p_stale - truth) ** 2, axis=1)))
     assert stale_rmse > 300.0 * moving["raw_rmse_mm"]  # measured 13.4 m vs 14.7 mm: 915x
+
+
+# ---- a real person turning around (CMU clip) --------------------------------------------------
+def test_turning_person_hands_hidden_and_said_so():
+    """CMU subject 01 turns its back to the robot 1.6 m away (ude_cmu_turn): the visibility
+    ground truth shows the hands hidden by the body after the turn, detection is scored over
+    the frames a hand could be seen, and a poor hand says why."""
+    m, stages, world = run("ude_cmu_turn")
+    tr = m["tracking"]
+    vis = world.visibility.arrays()
+    before, behind = vis.t <= 1.6, (vis.t >= 2.6) & (vis.t <= 3.0)
+    for hand in ("right_hand", "left_hand"):
+        j = vis.target(hand)
+        assert vis.visible[before, :, j].all()  # facing the robot: both eyes see both hands
+        # back to the robot: in view, hidden by the body (unoccluded 0 in every sample)
+        assert vis.in_view[behind, :, j].all() and not vis.unoccluded[behind, :, j].any()
+        s = tr[hand]
+        assert 0.6 <= s["visible_fraction"] <= 0.9, s  # measured 0.714 (right), 0.829 (left)
+        assert s["detection_rate"] > s["detection_rate_all"]  # hidden frames not held against
+        assert s["verdict"] == "ok" or s["cause"], s  # a poor hand names its likely cause
+    # after the turn the hands swap sides in the image: the side rules name them wrongly,
+    # and the verdict says so (measured: poor, false detections 35 % / 20 % of reports)
+    assert any(tr[h]["verdict"] == "poor" for h in ("right_hand", "left_hand"))
+    head = tr["head"]
+    assert head["visible_fraction"] == 1.0 and head["detection_rate"] >= 0.7  # measured 0.828

@@ -297,8 +297,17 @@ def test_rerun_recording_and_plots_show_tracking(tmp_path):
               "/world/base/tracking/estimates", "/world/base/tracking/truth",
               "/series/tracking/right_hand/filtered_error_mm",
               "/series/tracking/right_hand/filter_2sigma_mm",
-              "/series/tracking/right_hand/raw_error_mm", "/events/perception/right_hand"):
+              "/series/tracking/right_hand/raw_error_mm", "/events/perception/right_hand",
+              "/series/visibility/right_hand/unoccluded", "/series/visibility/head/size_px"):
         assert e in entities, e
     for name in ("tracking_right_hand_error.png", "tracking_right_hand_pva.png",
                  "tracking.npz"):
         assert (tmp_path / name).stat().st_size > 1000, name
+    # the visibility ground truth is archived: 5 Hz over 1 s, both eyes, every target in view
+    from humimic.perception.blobs.archive import load_archive
+
+    vis = load_archive(tmp_path / "tracking.npz").visibility
+    assert vis.cameras == ["L_wide", "R_wide"] and len(vis.t) == 5
+    j = vis.target("right_hand")
+    assert vis.visible[:, :, j].all()  # the waving hand, 1.2 m away, in front of the body
+    assert np.all((vis.size_px[:, :, j] > 10) & (vis.size_px[:, :, j] < 20))  # measured 15 px

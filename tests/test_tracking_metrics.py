@@ -21,6 +21,7 @@ from humimic.metrics.ude_tables import filter_white_noise, table2, table3
 from humimic.perception.blobs.archive import load_archive, save_archive
 from humimic.perception.blobs.record import STATE_CODE, PerceptionRecord
 from humimic.perception.blobs.stereo import StereoRig
+from humimic.sensors.visibility import VisibilityArrays
 
 S, T, L = (STATE_CODE[k] for k in ("searching", "tracking", "lost"))
 
@@ -153,8 +154,15 @@ def test_archive_round_trip(tmp_path):
     fa = FilterArrays(["hand"], pa.t, np.ones((5, 1), bool), np.ones((5, 1), bool),
                       np.arange(45.0).reshape(5, 1, 9), np.zeros((5, 1, 9, 9)), np.ones((5, 1)))
     truth = {"hand": (np.ones((5, 3)), np.zeros((5, 3)), np.zeros((5, 3)))}
-    save_archive(tmp_path / "a.npz", pa, fa, truth, truth)
+    vis = VisibilityArrays(["L", "R"], ["hand"], np.array([0.0, 0.2]),
+                           np.array([[[30.0], [0.0]], [[12.0], [40.0]]]),
+                           np.array([[[40.0], [0.0]], [[48.0], [40.0]]]))
+    save_archive(tmp_path / "a.npz", pa, fa, truth, truth, vis)
     back = load_archive(tmp_path / "a.npz")
+    assert back.visibility.cameras == ["L", "R"] and back.visibility.targets == ["hand"]
+    np.testing.assert_array_equal(back.visibility.unoccluded[:, :, 0], [[0.75, 0.0], [0.25, 1]])
+    save_archive(tmp_path / "b.npz", pa, fa, truth, truth)  # a run without visibility
+    assert load_archive(tmp_path / "b.npz").visibility is None
     np.testing.assert_array_equal(back.perception.p_base, pa.p_base)
     np.testing.assert_array_equal(back.perception.uv_match, pa.uv_match)
     assert back.perception.reason.tolist() == pa.reason.tolist()

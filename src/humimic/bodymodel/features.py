@@ -121,16 +121,19 @@ def _ok(view: BodyView) -> np.ndarray:
 class LimbEdges:
     uv: np.ndarray
     """(N, Pc, M_E, 2) points, the first half on side 1, the rest on side 2 (pixels)."""
-    normal: np.ndarray
-    """(N, Pc, M_E, 2) outward unit normals of the boundary lines."""
+    normal: np.ndarray | None
+    """(N, Pc, M_E, 2) outward unit normals of the boundary lines (None with
+    ``normals=False``)."""
     angle: np.ndarray
     """(N, Pc) the limb's image angle (rad, atan2 of its axis from base to top, pixels)."""
     ok: np.ndarray
     """(N, Pc) bool."""
 
 
-def limb_edges(view: BodyView, m_e: int) -> LimbEdges:
-    """``m_e`` (even) points equally spaced on the limbs' two boundary lines (Schmidt eq. 1)."""
+def limb_edges(view: BodyView, m_e: int, normals: bool = True) -> LimbEdges:
+    """``m_e`` (even) points equally spaced on the limbs' two boundary lines (Schmidt eq. 1);
+    ``normals=False`` skips the normals (Schmidt's cue needs only the limb's angle; the
+    other fields are the same)."""
     if m_e < 2 or m_e % 2:
         raise ValueError(f"limb_edges: M_E must be even and >= 2, got {m_e}")
     base, top = _ends(view)                                           # (N, Pc, 2, 2)
@@ -138,6 +141,8 @@ def limb_edges(view: BodyView, m_e: int) -> LimbEdges:
     n, pc = base.shape[:2]
     uv = lerp(base, top, f).reshape(n, pc, m_e, 2)
     ax = view.axis_uv[:, :, 1] - view.axis_uv[:, :, 0]
+    if not normals:
+        return LimbEdges(uv, None, np.arctan2(ax[..., 1], ax[..., 0]), _ok(view))
     mid = 0.5 * (view.axis_uv[:, :, 0] + view.axis_uv[:, :, 1])
     d = top - base
     nrm = np.stack([d[..., 1], -d[..., 0]], -1)

@@ -7,6 +7,7 @@ Entity layout (see :mod:`humimic.viz.rerun_log` for how each is logged)::
     world/cameras/{cam}[/image]   eye-camera pose (OpenCV axes) and its pinhole image
     world/truth/..., world/estimates/...   points, ellipsoids, arrows in world coordinates
     series/...                    scalar time series         events/...   text logs
+    series/visibility/{target}/{unoccluded,size_px}   visibility ground truth, a line per eye
 """
 
 from __future__ import annotations
@@ -33,6 +34,12 @@ SERIES = "series"
 EVENTS = "events"
 
 Mode = Literal["off", "save", "spawn"]
+
+
+def visibility_entity(target: str, quantity: str) -> str:
+    """Series of a target's visibility ground truth (one line per eye camera), e.g.
+    ``series/visibility/right_hand/unoccluded`` (fraction; 0 out of view) or ``.../size_px``."""
+    return f"{SERIES}/visibility/{target}/{quantity}"
 
 
 def camera_entity(name: str) -> str:

@@ -21,6 +21,8 @@ from humimic.motion.primitives import min_jerk
 from humimic.scenario.base import RGB, Section
 
 PERSON_PREFIX = "person"
+SKIN_SITES = ("head", "r_hand", "l_hand")
+"""The sites of a person's skin (face and hands): what a skin-based tracker may mistake."""
 
 
 class PersonWaypoint(Section):
@@ -102,6 +104,7 @@ class PeopleMotion:
 
         self.people = list(people)
         self.adr, self.head0, self.start = [], [], []
+        self.sites0: list[dict[str, np.ndarray]] = []
         d = mujoco.MjData(model)
         mujoco.mj_kinematics(model, d)
         for i, p in enumerate(self.people, start=1):
@@ -109,6 +112,8 @@ class PeopleMotion:
             self.adr.append((model.jnt_qposadr[model.joint(pre + "root_x").id],
                              model.jnt_qposadr[model.joint(pre + "root_y").id]))
             self.head0.append(d.site_xpos[model.site(pre + "head").id].copy())
+            self.sites0.append({site: d.site_xpos[model.site(pre + site).id].copy()
+                                for site in SKIN_SITES})
             self.start.append(np.array(p.waypoints[0].at, float))
 
     def root_offsets(self, k: int, t: np.ndarray) -> np.ndarray:
@@ -120,6 +125,12 @@ class PeopleMotion:
     def apply(self, qpos: np.ndarray, t: float) -> None:
         for k, (ax, ay) in enumerate(self.adr):
             qpos[ax], qpos[ay] = self.root_offsets(k, np.array([t]))[0]
+
+    def site_world(self, k: int, site: str, t: np.ndarray) -> np.ndarray:
+        """Person ``k``'s site (one of :data:`SKIN_SITES`) in the world ``(F, 3)`` at times
+        ``t`` (the people only walk: their arms hang, so the site moves with the root)."""
+        dl = position(self.people[k].waypoints, t) - self.start[k]
+        return self.sites0[k][site] + np.column_stack([dl[:, 0], dl[:, 1], np.zeros(len(dl))])
 
     def head_world(self, k: int, t: np.ndarray) -> np.ndarray:
         """Person ``k``'s head centre in the world ``(F, 3)`` at times ``t``."""

@@ -20,10 +20,14 @@ from humimic.estimation.particles.weights import weights
 
 
 def sq_distances(x: np.ndarray, s: np.ndarray, h: np.ndarray) -> np.ndarray:
-    """``(M, N)`` squared scaled distances ``||(x_m - s_n) / h||^2`` (one matrix product)."""
+    """``(M, N)`` squared scaled distances ``||(x_m - s_n) / h||^2``: one matrix product of the
+    augmented rows ``[a, 1, |a|^2] . [-2 b, |b|^2, 1]`` (one ``(M, N)`` array allocated: fresh
+    large arrays cost more than the arithmetic)."""
     a, b = x / h, s / h
-    d2 = np.sum(a * a, 1)[:, None] + np.sum(b * b, 1)[None, :] - 2.0 * a @ b.T
-    return np.maximum(d2, 0.0)
+    A = np.column_stack([a, np.ones(len(a)), np.einsum("ij,ij->i", a, a)])
+    B = np.column_stack([-2.0 * b, np.einsum("ij,ij->i", b, b), np.ones(len(b))])
+    d2 = A @ B.T
+    return np.maximum(d2, 0.0, out=d2)
 
 
 def epanechnikov_norm(d: int) -> float:
@@ -35,6 +39,14 @@ def epanechnikov(r2: np.ndarray, d: int) -> np.ndarray:
     """Schmidt eq. 12: ``K_E(x) = (d + 2) / (2 c_d) (1 - ||x||^2)`` inside the unit ball, of
     the squared norm ``r2``; it integrates to one over R^d."""
     return (d + 2) / (2.0 * epanechnikov_norm(d)) * np.maximum(1.0 - r2, 0.0)
+
+
+def epanechnikov_inplace(r2: np.ndarray, d: int) -> np.ndarray:
+    """:func:`epanechnikov` overwriting the float array ``r2`` (no temporaries)."""
+    np.subtract(1.0, r2, out=r2)
+    np.maximum(r2, 0.0, out=r2)
+    r2 *= (d + 2) / (2.0 * epanechnikov_norm(d))
+    return r2
 
 
 def _bandwidth(h, d: int) -> np.ndarray:
@@ -57,7 +69,8 @@ def kde(x: np.ndarray, particles: np.ndarray, w: np.ndarray, h: np.ndarray) -> n
     d = particles.shape[1]
     h = _bandwidth(h, d)
     keep = heavy(np.asarray(w, float))
-    return epanechnikov(sq_distances(x, particles[keep], h), d) @ np.asarray(w)[keep] / np.prod(h)
+    r2 = sq_distances(x, particles[keep], h)
+    return epanechnikov_inplace(r2, d) @ np.asarray(w)[keep] / np.prod(h)
 
 
 def mean_shift(particles: np.ndarray, w: np.ndarray, h: np.ndarray) -> np.ndarray:
@@ -67,10 +80,10 @@ def mean_shift(particles: np.ndarray, w: np.ndarray, h: np.ndarray) -> np.ndarra
     (a particle with no weighted particle in its window stays put)."""
     keep = heavy(w)
     src, wk = particles[keep], w[keep]
-    inside = (sq_distances(particles, src, _bandwidth(h, particles.shape[1])) <= 1.0
-              ).astype(float)                                               # (N, K)
-    num = inside @ (wk[:, None] * src)
-    den = inside @ wk
+    inside = sq_distances(particles, src, _bandwidth(h, particles.shape[1]))    # (N, K)
+    np.less_equal(inside, 1.0, out=inside, casting="unsafe")            # 1.0 inside, in place
+    sums = inside @ np.column_stack([wk[:, None] * src, wk])           # numerators | denominator
+    num, den = sums[:, :-1], sums[:, -1]
     stay = den <= 0.0
     out = num / np.where(stay, 1.0, den)[:, None]
     out[stay] = particles[stay]

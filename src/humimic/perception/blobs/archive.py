@@ -2,7 +2,10 @@
 
 What perception measured and the filter estimated per frame, plus the ground truth at the
 frames' photon times, so scores and the paper's reproductions can be recomputed off-line
-(``python -m humimic.perception.reproduce``) without re-running the simulation.
+(``python -m humimic.perception.reproduce``) without re-running the simulation. With the eyes'
+visibility ground truth (:mod:`humimic.sensors.visibility`), its samples too (``vis_*``: sample
+times, target pixels seen and whole silhouettes per eye camera and target, from which in view,
+unoccluded fraction and size in pixels follow).
 """
 
 from __future__ import annotations
@@ -15,6 +18,7 @@ import numpy as np
 from humimic.estimation.stage import FilterArrays
 from humimic.perception.blobs.record import PerceptionArrays
 from humimic.sensors.camera_model import Intrinsics
+from humimic.sensors.visibility import VisibilityArrays
 
 _INTR = ("width", "height", "fx", "fy", "cx", "cy", "k1", "k2")
 
@@ -27,11 +31,14 @@ class TrackingArchive:
     """Published target -> true (p, v, a) at the perception frames, base frame, (F, 3) each."""
     filter_truth: dict[str, tuple[np.ndarray, np.ndarray, np.ndarray]]
     """The same at the filter's frames (a pipelined perception's last frame may be missing)."""
+    visibility: VisibilityArrays | None = None
+    """The eyes' visibility ground truth (None: the run sampled none)."""
 
 
 def save_archive(path: str | Path, pa: PerceptionArrays, fa: FilterArrays | None,
                  truth: dict[str, tuple[np.ndarray, np.ndarray, np.ndarray]],
-                 filter_truth: dict[str, tuple[np.ndarray, np.ndarray, np.ndarray]]) -> Path:
+                 filter_truth: dict[str, tuple[np.ndarray, np.ndarray, np.ndarray]],
+                 visibility: VisibilityArrays | None = None) -> Path:
     path = Path(path)
     data: dict[str, np.ndarray] = {
         "targets": np.array(pa.targets), "cameras": np.array(pa.cameras),
@@ -52,6 +59,10 @@ def save_archive(path: str | Path, pa: PerceptionArrays, fa: FilterArrays | None
         data[f"truth_{target}"] = np.stack([p, v, a])
     for target, (p, v, a) in filter_truth.items():
         data[f"ftruth_{target}"] = np.stack([p, v, a])
+    if visibility is not None:
+        data.update(vis_cameras=np.array(visibility.cameras), vis_targets=np.array(
+            visibility.targets), vis_t=visibility.t, vis_visible_px=visibility.visible_px,
+            vis_full_px=visibility.full_px)
     np.savez_compressed(path, **data)
     return path
 
@@ -73,4 +84,9 @@ def load_archive(path: str | Path) -> TrackingArchive:
         truth = {str(t): tuple(z[f"truth_{t}"]) for t in z["truth_targets"]}
         ftruth = {str(t): tuple(z[f"ftruth_{t}"]) for t in z["truth_targets"]
                   if f"ftruth_{t}" in z.files}
-    return TrackingArchive(pa, fa, truth, ftruth)
+        vis = None
+        if "vis_t" in z.files:
+            vis = VisibilityArrays([str(c) for c in z["vis_cameras"]],
+                                   [str(t) for t in z["vis_targets"]], z["vis_t"],
+                                   z["vis_visible_px"], z["vis_full_px"])
+    return TrackingArchive(pa, fa, truth, ftruth, vis)

@@ -80,6 +80,12 @@ class DetectionParams:
     target that appears is usually found in its first frame (the uniform half stays random)."""
     fit_radius_cells: int = 6
     """Half-size (coarse cells) of the neighbourhood the shape is fitted on."""
+    fit_sigma_min_px: float = 1.0
+    """Smallest axis of a fitted hypothesis (px). A fitted shape is measured, not guessed: it
+    may be smaller than ``sigma_min_px`` (the random hypotheses' prior), so a target smaller
+    than the prior (a hand ~9 px across at 2 m: sigma ~2.2 px) is hypothesised at its own size
+    instead of in a window it cannot fill. 1 px: the EM tracker's own floor (``min_var_px2``);
+    at 2 px the hand hanging 1.2 m away (8 px, thinner across) is never found."""
     proposal_grid_px: int = 4
     """Smallest spacing (px) of the coarse colour map the 'color' proposal draws from."""
     proposal_cells: int = 80
@@ -275,8 +281,8 @@ class DetectingTracker:
             if p.fit_shapes and lik is not None and (~uniform).any():
                 fit = ~uniform  # colour-drawn centres: hypotheses shaped like the blob there
                 centres[fit], covs[fit] = fitted_hypotheses(
-                    lik / (lik + 1.0), centres[fit], step, p.fit_radius_cells, p.sigma_min_px,
-                    p.sigma_max_px)
+                    lik / (lik + 1.0), centres[fit], step, p.fit_radius_cells,
+                    min(p.fit_sigma_min_px, p.sigma_min_px), p.sigma_max_px)
             f, inlier = color_sums(image, g.lut, centres, covs, p.window_side, p.window_k_sigma,
                                    p.score)
             if g.phase == 1:  # Ude phase one: sample E f (random hypotheses) and max f

@@ -11,6 +11,7 @@ from __future__ import annotations
 import functools
 import math
 
+import cv2
 import numpy as np
 
 from humimic.perception.cues.color_models import ColorLUT
@@ -126,16 +127,23 @@ def fitted_hypotheses(coarse_post: np.ndarray, centres: np.ndarray, grid: int, r
     px (cell ``(i, j)`` centred at ``(j grid + grid // 2, i grid + grid // 2)``); around each
     centre's cell, the probability-weighted mean and covariance of the cell centres within
     ``radius_cells`` (plus a cell's own spread, grid^2 / 12) give a hypothesis shaped like the
-    blob there, its axes clamped into ``[sigma_min, sigma_max]``.
+    blob there, its axes clamped into ``[sigma_min, sigma_max]``. Only the cells of the blob the
+    centre fell in count (the 8-connected component of cells with probability >= 1/2; a centre
+    outside every blob takes the whole neighbourhood): a small hand next to the head is fitted
+    alone, not as a smear over both.
     """
     h, w = coarse_post.shape
+    _, labels = cv2.connectedComponents((coarse_post >= 0.5).astype(np.uint8), connectivity=8)
     off = np.arange(-radius_cells, radius_cells + 1)
     ci = np.clip(np.floor(centres[:, 1] / grid).astype(int), 0, h - 1)
     cj = np.clip(np.floor(centres[:, 0] / grid).astype(int), 0, w - 1)
     ii, jj = np.broadcast_arrays(ci[:, None, None] + off[None, :, None],
                                  cj[:, None, None] + off[None, None, :])
     inside = (ii >= 0) & (ii < h) & (jj >= 0) & (jj < w)
-    wgt = np.where(inside, coarse_post[np.clip(ii, 0, h - 1), np.clip(jj, 0, w - 1)], 0.0)
+    ii_c, jj_c = np.clip(ii, 0, h - 1), np.clip(jj, 0, w - 1)
+    own = labels[ci, cj]
+    same = (labels[ii_c, jj_c] == own[:, None, None]) | (own == 0)[:, None, None]
+    wgt = np.where(inside & same, coarse_post[ii_c, jj_c], 0.0)
     wgt = wgt.reshape(len(centres), -1)
     u = (jj * grid + grid // 2).reshape(len(centres), -1).astype(float)
     v = (ii * grid + grid // 2).reshape(len(centres), -1).astype(float)

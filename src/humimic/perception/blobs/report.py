@@ -18,6 +18,7 @@ from humimic.metrics.tracking import FILTER_SETTLE_S, stereo_failures, target_sc
 from humimic.perception.blobs.archive import save_archive
 from humimic.perception.blobs.plots import plot_pva, plot_tracking_errors
 from humimic.pipeline.stage import Stage
+from humimic.viz.entities import visibility_entity
 from humimic.viz.plots import MAX_POINTS
 from humimic.viz.rerun_log import AXIS_RGB, SERIES
 
@@ -70,6 +71,8 @@ class TrackingReport(Stage):
         pa, fa = self.arrays()
         for target in self.targets:
             self._log_series(rlog, target, pa, fa, self.truth(pa.t, target)[0])
+        if self.visibility is not None:
+            log_visibility(rlog, self.visibility.arrays(), self.targets)
 
     def archive(self, out_dir) -> list:
         """``tracking.npz``: every measurement and estimate with the truth at their times."""
@@ -77,7 +80,8 @@ class TrackingReport(Stage):
         return [save_archive(
             Path(out_dir) / "tracking.npz", pa, fa,
             {t: self.truth(pa.t, t) for t in self.targets},
-            {t: self.truth(fa.t, t) for t in self.targets} if fa is not None else {})]
+            {t: self.truth(fa.t, t) for t in self.targets} if fa is not None else {},
+            self.visibility.arrays() if self.visibility is not None else None)]
 
     def _log_series(self, rlog, target, pa, fa, p) -> None:
         i = pa.index(target)
@@ -130,3 +134,19 @@ class TrackingReport(Stage):
                                       gt_t, self.gt.p_base(target)[k],
                                       self.gt.v_base(target)[k], self.gt.a_base(target)[k]))
         return paths
+
+
+def log_visibility(rlog, vis, targets: list[str]) -> None:
+    """The eyes' visibility ground truth of ``targets`` as rerun series: unoccluded fraction
+    (0 out of view) and visible size (px), one line per eye camera."""
+    if not len(vis.t):
+        return
+    unocc, size = vis.unoccluded, vis.size_px
+    for target in targets:
+        if target not in vis.targets:
+            continue
+        j = vis.target(target)
+        for name, values, unit in (("unoccluded", unocc, ""), ("size_px", size, " (px)")):
+            rlog.log_series(visibility_entity(target, name), vis.t, values[:, :, j],
+                            names=[f"{cam} {name.replace('_px', '')}{unit}"
+                                   for cam in vis.cameras])

@@ -9,7 +9,10 @@ pick the pixels, less the darkest (the face's eyes and brows are not skin:
 (:func:`~humimic.perception.cues.learn_colors.frame_pixels`, as ``learn_colors`` does). A
 Gaussian mixture (Ude eqs. 6-7) is fitted and tabulated
 (:class:`~humimic.perception.cues.color_models.ColorLUT`). Since the renders come from the run's
-own scene, the model sees the scenario's colours, face, lights, cameras and noise.
+own scene, the model sees the scenario's colours, face, lights, cameras and noise. The same
+renders of the whole scene give the other pixels (clothes, shoes, room): the table is cleared
+where they fall and no pixel of the class was seen (:func:`cut_background`), so the mixture's
+tails do not claim the scene's own look-alikes (dark shoes under a very dark skin model).
 
 Model and table are stored with :mod:`humimic.cache` under a hash of everything they depend on
 (:func:`inputs`: the class's materials and textures, the lights, the cameras, the geoms' shapes,
@@ -37,7 +40,7 @@ from humimic.perception.cues.color_models import (
 )
 from humimic.perception.cues.learn_colors import frame_pixels, material_geoms, trim_dark
 
-VERSION = 8
+VERSION = 9
 FRAMES = 8
 """Poses of the person rendered (spread evenly over the run)."""
 COMPONENTS = 3
@@ -48,6 +51,12 @@ TOL = 1e-5
 mixture to 0.3 % in mean log-likelihood)."""
 MIN_PIXELS = 200
 """Fewer labelled pixels than this: the colour class is not in view of the cameras."""
+NEGATIVES_PER_FRAME = 1 << 22
+"""Other pixels taken per rendered frame for :func:`cut_background` (this many: all of them;
+a sample of 6000 of 320x240 left 17 % of the shoes' pixels in bins it never hit)."""
+MIN_BACKGROUND = 3
+"""A bin is cleared when at least this many sampled other pixels fall in it (and no pixel of
+the class): a colour the scene shows, not one noise pixel."""
 
 
 class NotInView(ValueError):
@@ -91,7 +100,11 @@ def inputs(world, cameras: list[str], color_class: str, space: str, bits: int,
             head.specular.tobytes(), int(head.active),
             *(getattr(m, f"geom_{k}")[geoms].tobytes() for k in ("type", "size", "pos", "quat")),
             m.body_pos.tobytes(), m.body_quat.tobytes(), d.qpos.tobytes(),
-            world.gt.qpos[ticks].tobytes())
+            world.gt.qpos[ticks].tobytes(), NEGATIVES_PER_FRAME, MIN_BACKGROUND,
+            # the other pixels (cut_background): every surface's look and place
+            m.mat_rgba.tobytes(), m.mat_texid.tobytes(), m.geom_rgba.tobytes(),
+            m.geom_matid.tobytes(), m.geom_size.tobytes(), m.geom_type.tobytes(),
+            m.geom_pos.tobytes(), m.geom_quat.tobytes(), m.tex_data.tobytes())
 
 
 def digest_of(world, cameras: list[str], color_class: str = "skin", space: str = "rgb",
@@ -114,17 +127,49 @@ def learn_model(world, cameras: list[str], color_class: str, space: str,
     its diagonal): the LUT evaluates the density at bin centres, and a noiseless render gives
     components so narrow that they would fall between two centres and vanish from the table.
     """
+    model, _, _ = learn_model_and_background(world, cameras, color_class, space, rng, ticks,
+                                             bits)
+    return model
+
+
+def learn_model_and_background(world, cameras: list[str], color_class: str, space: str,
+                               rng: np.random.Generator, ticks: np.ndarray, bits: int = 6
+                               ) -> tuple[ColorModel, np.ndarray, np.ndarray]:
+    """:func:`learn_model`, and the class's pixels it was fitted to (without the darkest: with
+    them, the face's dark features would keep the shoes' bins) and the other pixels of the
+    same renders (for :func:`cut_background`)."""
     geoms = material_geoms(world.scene.model, color_class)
     noise = max((s.noise_std for s in world.eye_rig.specs if s.name in cameras), default=0.0)
-    pos, _ = frame_pixels(world, cameras, ticks, geoms, noise, rng)
+    pos, neg = frame_pixels(world, cameras, ticks, geoms, noise, rng,
+                            negatives_per_frame=NEGATIVES_PER_FRAME)
     pixels = trim_dark(np.concatenate(pos)) if pos else np.zeros((0, 3), np.uint8)
     if len(pixels) < MIN_PIXELS:
         raise NotInView(f"only {len(pixels)} pixels of {color_class!r} in view of "
                         f"{', '.join(cameras)} in {len(ticks)} poses of the person")
+    seen = pixels
     if len(pixels) > MAX_PIXELS:
         pixels = pixels[rng.choice(len(pixels), MAX_PIXELS, replace=False)]
-    return fit_color_model(pixels, space, COMPONENTS, rng, name=color_class, tol=TOL,
-                           max_iter=100, reg_covar=bin_variance(bits))
+    model = fit_color_model(pixels, space, COMPONENTS, rng, name=color_class, tol=TOL,
+                            max_iter=100, reg_covar=bin_variance(bits))
+    return model, seen, np.concatenate(neg) if neg else np.zeros((0, 3), np.uint8)
+
+
+def cut_background(table: np.ndarray, bits: int, class_px: np.ndarray, other_px: np.ndarray,
+                   min_other: int = MIN_BACKGROUND) -> np.ndarray:
+    """A copy of a LUT ``table`` (``(2^bits)^3`` densities, :class:`ColorLUT` layout) with 0 in
+    the bins where at least ``min_other`` of ``other_px (N, 3)`` uint8 fall and none of
+    ``class_px``: the model's tails where the scene's other surfaces are, and its own class
+    was never seen, are not the class."""
+    shift = 8 - bits
+
+    def counts(px: np.ndarray) -> np.ndarray:
+        q = np.asarray(px, np.uint8).reshape(-1, 3).astype(np.intp) >> shift
+        idx = (q[:, 0] << (2 * bits)) | (q[:, 1] << bits) | q[:, 2]
+        return np.bincount(idx, minlength=table.size)
+
+    out = np.array(table, np.float32, copy=True)
+    out[(counts(other_px) >= min_other) & (counts(class_px) == 0)] = 0.0
+    return out
 
 
 def _store(model: ColorModel, lut: ColorLUT) -> dict[str, np.ndarray]:
@@ -156,8 +201,10 @@ def learned_lut(world, cameras: list[str], color_class: str = "skin", space: str
     cached = lut is not None
     if lut is None:
         rng = np.random.default_rng(int(digest[:15], 16))
-        model = learn_model(world, cameras, color_class, space, rng, ticks, bits)
-        lut = ColorLUT(model, bits)
+        model, seen, other = learn_model_and_background(world, cameras, color_class, space,
+                                                        rng, ticks, bits)
+        lut = ColorLUT(model, bits, cut_background(ColorLUT(model, bits).table, bits, seen,
+                                                   other))
         cache.save(kind, digest, _store(model, lut))
     return CachedLUT(lut, cached, time.perf_counter() - t0, digest)
 

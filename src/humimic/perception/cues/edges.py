@@ -38,14 +38,17 @@ def grey(image: np.ndarray) -> np.ndarray:
     return image if image.ndim == 2 else cv2.cvtColor(image, cv2.COLOR_RGB2GRAY)
 
 
-def distance_transform(edges: np.ndarray, cap: float = DT_CAP_PX) -> np.ndarray:
+def distance_transform(edges: np.ndarray, cap: float = DT_CAP_PX,
+                       mask: int = cv2.DIST_MASK_PRECISE) -> np.ndarray:
     """Euclidean distance (px) of every pixel to the nearest edge pixel, capped at ``cap``
-    (``cv2.distanceTransform``, exact L2). An image without edges is ``cap`` everywhere."""
+    (``cv2.distanceTransform``, exact L2; ``mask=cv2.DIST_MASK_5``: the 5 x 5 chamfer
+    approximation, within 0.6 px below 30 px and half the time). An image without edges is
+    ``cap`` everywhere."""
     if not edges.any():
         return np.full(edges.shape, cap, np.float32)
-    dt = cv2.distanceTransform(np.where(edges > 0, 0, 255).astype(np.uint8), cv2.DIST_L2,
-                               cv2.DIST_MASK_PRECISE)
-    return np.minimum(dt, np.float32(cap))
+    free = cv2.compare(edges, 0, cv2.CMP_EQ)  # 255 off the edges
+    dt = cv2.distanceTransform(free, cv2.DIST_L2, mask)
+    return cv2.threshold(dt, float(cap), 0.0, cv2.THRESH_TRUNC)[1]
 
 
 def canny(image: np.ndarray, low: float = 50.0, high: float = 150.0,
@@ -79,11 +82,11 @@ def colour_canny(image: np.ndarray, low: float = 50.0, high: float = 150.0,
 
 def edge_maps(image: np.ndarray, low: float = 50.0, high: float = 150.0,
               blur_sigma: float = 1.0, cap: float = DT_CAP_PX,
-              colour: bool = False) -> EdgeMaps:
+              mask: int = cv2.DIST_MASK_PRECISE, colour: bool = False) -> EdgeMaps:
     """:func:`canny` edges (:func:`colour_canny` with ``colour``) and their distance transform
     for an RGB or grey uint8 image."""
     edges = (colour_canny if colour else canny)(image, low, high, blur_sigma)
-    return EdgeMaps(edges, distance_transform(edges, cap))
+    return EdgeMaps(edges, distance_transform(edges, cap, mask))
 
 
 def remap_uv(image: np.ndarray, u: np.ndarray, v: np.ndarray, outside, interpolation: int

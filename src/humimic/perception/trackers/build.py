@@ -1,6 +1,8 @@
 """Build the stages of the scenario's ``trackers:`` section, dispatching on each tracker's
 ``kind`` through :data:`BUILDERS` (one line per kind). A builder is ``(name, cfg, scenario,
-world, rngs, rlog) -> list[Stage]``; kinds are imported only when a scenario uses them."""
+world, rngs, rlog) -> list[Stage]``; kinds are imported only when a scenario uses them. A
+stage with ``wire(stages) -> stages`` may then wrap the others (ICU's module switch gates its
+near module)."""
 
 from __future__ import annotations
 
@@ -51,4 +53,7 @@ def tracker_stages(scenario, world, rngs, rlog) -> list[Stage]:
     stages: list[Stage] = []
     for name, cfg in (getattr(scenario, "trackers", None) or {}).items():
         stages.extend(BUILDERS[cfg.kind](name, cfg, scenario, world, rngs, rlog))
+    for st in list(stages):  # a tracker that gates others (ICU's Fig. 15 module switch)
+        if hasattr(st, "wire"):
+            stages = st.wire(stages)
     return stages

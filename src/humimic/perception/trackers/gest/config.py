@@ -20,9 +20,10 @@ class GestConfig(Section):
     proposes every hand-sized skin blob)."""
     cameras: tuple[str, str] | None = None
     """(left, right) eye cameras; default the rendered pair."""
-    views: Literal[1, 2] = 2
-    """Images the likelihood is evaluated in: 1 = the left image only (the paper), 2 = both
-    (depth from the shape cue's disparity as well as the projected size)."""
+    views: Literal[1, 2] = 1
+    """Images the shape, colour and skin cues are evaluated in: 1 = the left image only (the
+    paper), 2 = both (measured no better: 9.5-15 mm RMS either way on menezes_gest_reach at
+    three distances, the stereo cue carrying the depth; 1.5x the cost)."""
     n: int = Field(100, ge=1, le=20000)
     """Particles N."""
     alpha: float = Field(0.3, ge=0.0, le=1.0)
@@ -32,7 +33,8 @@ class GestConfig(Section):
     sigma_position: float = Field(0.02, gt=0.0, le=0.5)
     """Random-walk standard deviation of the centre per frame (m). Table 5: 1 cm (at 25 Hz);
     a reaching hand moves 5-10 mm per frame at 30 Hz, and with 1 cm the estimate trails it by
-    4-6 cm (menezes_gest_reach: 57 mm RMS against 29 mm with 2 cm)."""
+    4-6 cm (menezes_gest_reach: 57 mm RMS against 29 mm with 2 cm, with the earlier
+    likelihood; with the sharp stereo cue both are within 1-2 mm of each other)."""
     sigma_angle_deg: float = Field(1.0, gt=0.0, le=90.0)
     """Random-walk standard deviation of yaw, pitch, roll per frame (deg); Table 5: 1."""
     sigma_axes: float = Field(1e-4, gt=0.0, le=0.05)
@@ -70,26 +72,54 @@ class GestConfig(Section):
     """Physical size range (m, sqrt of the blob's area times depth / focal length) of a skin
     blob the importance function accepts: a head is larger."""
     blob_subsample: int = Field(2, ge=1, le=4)
-    """Subsampling of the skin mask before its connected components (sec. 4.2.2)."""
+    """Subsampling of the skin mask the blobs are found in (sec. 4.2.2); each is then measured
+    at full resolution in its box (:mod:`.blobs`). Measured at the subsampled resolution the
+    nearest triangulated blob is 23 mm RMS from the hand, at full resolution 10 mm
+    (menezes_gest_reach at 1.2 m; 73 against 16 mm at 1.5 m)."""
+    border_px: float = Field(1.0, ge=0.0)
+    """Skin blobs whose box comes closer than this (px) to an image border are cut by it (the
+    hand leaving the view) and are not candidates."""
     max_epipolar_px: float = Field(4.0, gt=0.0)
     """Largest reprojection residual (px) of a left-right blob match."""
     blob_sigma_scale: float = Field(0.5, gt=0.0)
     """Blob position covariance (eq. 17) = ``scale^2`` times the blob box's inertia."""
+    proposal: Literal["centroid", "blob"] = "centroid"
+    """Position covariance of the importance function: ``blob``, eq. 17 with the blobs'
+    inertia (the paper; ~10x wider in depth than the centroid's error), or ``centroid``,
+    eq. 17 with an isotropic centroid error of ``proposal_px`` in each image, centred on the
+    triangulated centroids corrected by the last estimate's silhouette offset."""
+    proposal_px: float = Field(0.08, gt=0.0)
+    """(Measured on menezes_gest_reach, 9 runs: 0.08 px gives 8.4-15.9 mm RMS, 0.15 px
+    9.5-15.1, eq. 17 with the inertia ``blob`` 55-60 mm: particles spread over decimetres
+    of depth, few where the stereo cue is.)"""
+    position_floor: float = Field(0.001, ge=0.0)
+    """Floor (m) added to the importance function's position standard deviation."""
+    roi: bool = True
+    """Compute the cue images in a box around the candidates and the last estimate only."""
     orientation_sigma_deg: float = Field(90.0, gt=0.0)
     """Spread (deg) of the start density's orientation about the last estimate (the
     orientation is unknown when the filter (re-)starts)."""
     fresh_orientation: float = Field(0.5, ge=0.0, le=1.0)
     """Share of the importance function's draws whose orientation is uniform (explores
     orientations away from the current hypotheses); the rest continue the particles'."""
-    centroid_px: float = Field(0.5, gt=0.0)
+    centroid_px: float = Field(0.08, gt=0.0)
     """Standard deviation (px) of a blob centroid against the projected ellipse's centre (the
-    stereo cue)."""
+    stereo cue). Measured at the true pose on menezes_gest_reach (full-resolution blobs,
+    0.7-1.3 m): 0.06-0.07 px per image (common part 0.05, left-right difference 0.08-0.10).
+    A blob centroid's disparity error is what limits depth: 0.1 px is 9 mm at 0.9 m, 15 mm
+    at 1.2 m."""
     init: Literal["raised", "any"] = "raised"
     """Which stereo candidate (re-)initialises the filter: ``raised``, the highest (the hand
     held up to the robot; the other hand hangs), or ``any`` (the whole importance function)."""
-    init_centroid: bool = True
-    """(Re-)start from the triangulated centroids' covariance (``centroid_px``) rather than
-    eq. 17's (the blobs' spread, ~10x wider in depth)."""
+    gate_m: float = Field(0.15, gt=0.0)
+    """While tracking, the importance function proposes only the candidates within this
+    distance (m) of the last estimate (the other hand is not taken for this one when this one
+    leaves the view)."""
+    reacquire_m: float = Field(0.35, gt=0.0)
+    """After a loss the filter re-starts only from a candidate within this distance (m) of
+    where the hand was last tracked ..."""
+    reacquire_frames: int = Field(90, ge=0)
+    """... for this many frames; then from any (``init``)."""
     lost_px: float = Field(5.0, gt=0.0)
     """The estimate is ``lost`` when its mean contour distance to edges exceeds this (px) or
     it left the image; then the filter re-initialises from the importance function."""

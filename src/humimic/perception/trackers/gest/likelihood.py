@@ -29,16 +29,15 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.special import logsumexp
 
 from humimic.bodymodel import conics
-from humimic.bodymodel.features import resample
 from humimic.bodymodel.hand import hand_ellipsoids, to_camera
-from humimic.bodymodel.projection import project_ellipsoids
+from humimic.bodymodel.projection import Z_MIN, project_ellipsoids
 from humimic.perception.cues.color_models import ColorLUT
 from humimic.perception.cues.edges import DT_CAP_PX, dt_distance, sample, shape_log_likelihood
 from humimic.perception.cues.histograms import color_log_likelihood, patch_histograms
 from humimic.perception.trackers.frame_cues import FrameCues, frame_cues
+from humimic.perception.trackers.gest.proposal import logsumexp
 from humimic.sensors.camera_model import CameraImage
 
 #: One square patch centred on the ellipse, ``s`` = its side (px) (histograms' patch units).
@@ -75,17 +74,39 @@ def hand_outlines(states: np.ndarray, intrinsics, T_cam_base: np.ndarray, n: int
 
 
 def project_hands(states: np.ndarray, view: HandView, n_points: int) -> HandProjection:
-    """Eq. 15 for every particle's ellipsoid, and its contour points and colour patch."""
-    outline, conic = hand_outlines(states, view.intrinsics, view.T_cam_base)
-    pts = resample(outline, n_points)
-    valid = outline.valid[:, 0]
-    uv = np.where(valid[:, None, None], pts.uv[:, 0], OFF_IMAGE)
-    centre, M, _ = conics.conic_to_ellipse(conic[:, 0])
+    """Eq. 15 for every particle's ellipsoid, and its contour points and colour patch.
+
+    The ``n_points`` contour points are ``centre + L (cos psi, sin psi)`` at equal steps of
+    ``psi`` (``L L^T`` the image ellipse's shape matrix), with their normals in closed form
+    (``L^-T (cos psi, sin psi)``); not resampled by arc length as the body model's outlines
+    are (that resampling was most of the likelihood's cost)."""
+    R, c, axes = hand_ellipsoids(states)
+    R, c = to_camera(view.T_cam_base, R, c)
+    A, b, c0 = conics.ellipsoid_quadric(R, c, axes)
+    conic = conics.quadric_to_conic(A, b, c0)                           # Menezes eq. 15
+    centre, M, ok = conics.conic_to_ellipse(conic)
+    M = np.where(ok[:, None, None], M, np.eye(2))
+    valid = ok & (c0 > 0.0) & (c[:, 2] - np.sqrt(np.sum(np.square(R[:, 2, :] * axes), -1))
+                                > Z_MIN)
+    m00 = np.sqrt(np.maximum(M[:, 0, 0], 1e-300))
+    l10 = M[:, 1, 0] / m00
+    l11 = np.sqrt(np.maximum(M[:, 1, 1] - l10 * l10, 1e-300))
+    psi = np.linspace(0.0, 2.0 * np.pi, n_points, endpoint=False)
+    cos, sin = np.cos(psi), np.sin(psi)
+    x = centre[:, 0, None] + m00[:, None] * cos
+    y = centre[:, 1, None] + l10[:, None] * cos + l11[:, None] * sin
+    nx = cos / m00[:, None] - (l10 / (m00 * l11))[:, None] * sin
+    ny = sin / l11[:, None]
+    norm = np.hypot(nx, ny)
+    K = view.intrinsics
+    u, v = K.distort(x, y)
+    uv = np.where(valid[:, None, None], np.stack([u, v], -1), OFF_IMAGE)
+    normal = np.stack([nx / norm, ny / norm], -1)
     _, minor, _ = conics.ellipse_axes(M)
-    cu, cv = view.intrinsics.distort(centre[:, 0], centre[:, 1])
-    side = np.sqrt(2.0) * minor * view.intrinsics.fx
+    cu, cv = K.distort(centre[:, 0], centre[:, 1])
+    side = np.sqrt(2.0) * minor * K.fx
     patch = np.where(valid[:, None], np.stack([cu, cv, side], -1), [OFF_IMAGE, OFF_IMAGE, 1.0])
-    return HandProjection(uv, pts.normal[:, 0], patch, valid)
+    return HandProjection(uv, normal, patch, valid)
 
 
 def shape_distance(proj: HandProjection, view: HandView) -> np.ndarray:
@@ -141,6 +162,12 @@ def hand_log_likelihood(states: np.ndarray, views: list[HandView], ref: np.ndarr
     if pairs is not None:
         out += blob_pair_log_likelihood(np.stack(centres, 1), pairs, sigma_px, outlier)
     return out
+
+
+def reference_histogram(proj: HandProjection, view: HandView) -> np.ndarray:
+    """``(3, bins)`` histogram of the first projected state's colour patch (eq. 13's
+    observation)."""
+    return patch_histograms(view.qimage, proj.patch_state[:1], INSCRIBED, grid=8)[0, 0]
 
 
 def patch_histogram(state: np.ndarray, view: HandView) -> np.ndarray:

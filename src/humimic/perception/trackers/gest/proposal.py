@@ -19,7 +19,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.special import logsumexp
 
 from humimic.estimation.particles.densities import Mixture, RandomWalk, UniformBox
 from humimic.estimation.particles.resampling import resample_indices
@@ -27,6 +26,16 @@ from humimic.estimation.particles.resampling import resample_indices
 #: Centre, orientation and semi-axes in the 9-D state.
 POS, ORI, AXES = slice(0, 3), slice(3, 6), slice(6, 9)
 POSE = slice(0, 6)
+
+
+def logsumexp(a: np.ndarray, axis: int = -1) -> np.ndarray:
+    """``log sum exp`` along ``axis`` (``-inf`` where every entry is): numpy only (scipy's
+    costs ~0.2 ms a call, a tenth of a frame's budget)."""
+    m = np.max(a, axis=axis, keepdims=True)
+    safe = np.where(np.isfinite(m), m, 0.0)
+    with np.errstate(divide="ignore"):
+        out = np.log(np.sum(np.exp(a - safe), axis=axis)) + np.squeeze(safe, axis)
+    return np.where(np.isfinite(np.squeeze(m, axis)), out, np.squeeze(m, axis))
 
 
 @dataclass(frozen=True)

@@ -73,6 +73,26 @@ def stereo_candidates(left: Blobs, right: Blobs, cam_l: CameraModel, cam_r: Came
                               np.maximum(res_l, res_r)[keep])
 
 
+def interior_blobs(blobs: Blobs, width: int, height: int, margin_px: float = 1.0) -> Blobs:
+    """The blobs whose box keeps ``margin_px`` from every image border: a blob cut by the
+    border (the hand leaving the view) has its centroid displaced towards the image, and a
+    triangulation of it is not the hand's."""
+    x, y, w, h = blobs.boxes.T
+    keep = ((x >= margin_px) & (y >= margin_px) & (x + w <= width - margin_px)
+            & (y + h <= height - margin_px))
+    return Blobs(blobs.centers[keep], blobs.boxes[keep], blobs.areas[keep])
+
+
+def triangulate_pixels(cam_l: CameraModel, cam_r: CameraModel, uv_l: np.ndarray,
+                       uv_r: np.ndarray) -> np.ndarray:
+    """Base-frame points ``(N, 3)`` of left/right pixel pairs ``(N, 2)`` (DLT)."""
+    P1 = invert_transform(cam_l.T_base_cam)[:3]
+    P2 = invert_transform(cam_r.T_base_cam)[:3]
+    X_h, _ = triangulate_dlt(P1, P2, cam_l.intrinsics.undistort_normalized(uv_l),
+                             cam_r.intrinsics.undistort_normalized(uv_r))
+    return X_h[:, :3] / X_h[:, 3:]
+
+
 _NONE = (np.zeros((0, 3)), np.zeros((0, 3, 3)), np.zeros((0, 3, 3)), np.zeros((0, 2, 2)))
 
 

@@ -7,10 +7,22 @@ particles the importance function proposes after the hand left the view keep the
 ICONDENSATION (:func:`humimic.estimation.particles.icondensation_step`) mixes ``alpha``
 particles from the stereo importance function (:mod:`.stereo`, :class:`.proposal.
 CandidateProposal`), ``beta`` from the dynamics and the rest from the prior; the likelihood
-is :mod:`.likelihood`'s. Initialisation is automatic: the filter starts from the importance
-function at the first frame with a hand-sized stereo skin blob, and re-starts from it
-whenever the estimate is lost (its contour off the edges by more than ``lost_px``, out of
-the image, or ``lost_frames`` frames in a row without a stereo skin blob within ``lost_m``).
+is :mod:`.likelihood`'s (shape, colour and skin cues in the left image, the stereo cue in
+both).
+
+The importance function places the centre at each full-resolution skin blob pair's
+triangulation, corrected by the last estimate's silhouette offset (the outline of an
+ellipsoid is not centred on the image of its centre), with eq. 17's covariance for the
+*centroid's* error (``proposal_px``; the paper's inertia, ``proposal: blob``, spreads the
+particles over decimetres of depth); while tracking it proposes only the candidates within
+``gate_m`` of the estimate, so the other hand is not taken for this one when it leaves.
+Blobs cut by the image border are no candidates. Initialisation is automatic: the filter
+starts from the highest candidate (``init``), and re-starts after a loss from a candidate
+near where the hand was last tracked (``reacquire_m``; any after ``reacquire_frames``).
+The estimate is ``lost`` when its centre leaves the left image, its contour is off the
+edges by more than ``lost_px``, or ``lost_frames`` frames pass without a candidate within
+``lost_m``. The cue images are computed in a box around the candidates and the last estimate
+(:mod:`.roi`).
 """
 
 from __future__ import annotations
@@ -28,22 +40,25 @@ from humimic.estimation.particles import (
     UniformBox,
 )
 from humimic.perception.cues.color_models import ColorLUT
+from humimic.perception.cues.edges import DT_CAP_PX
 from humimic.perception.cues.histograms import update_reference
-from humimic.perception.cues.importance import skin_blobs
+from humimic.perception.trackers.gest.blobs import hand_blobs
 from humimic.perception.trackers.gest.config import GestConfig
 from humimic.perception.trackers.gest.likelihood import (
     hand_log_likelihood,
     hand_view,
-    patch_histogram,
     project_hands,
+    reference_histogram,
     shape_distance,
 )
 from humimic.perception.trackers.gest.proposal import CandidateProposal, PoseReset
-from humimic.perception.trackers.gest.stereo import stereo_candidates
-from humimic.sensors.camera_model import CameraImage
-
-#: Floor (m) added to the triangulation's standard deviation in the importance function.
-POSITION_FLOOR_M = 0.005
+from humimic.perception.trackers.gest.roi import crop_frame, roi_box
+from humimic.perception.trackers.gest.stereo import (
+    interior_blobs,
+    stereo_candidates,
+    triangulate_pixels,
+)
+from humimic.sensors.camera_model import CameraImage, invert_transform
 
 
 @dataclass(frozen=True)
@@ -73,7 +88,7 @@ def hand_prior(cfg: GestConfig) -> UniformBox:
 
 def importance_function(p: np.ndarray, cov: np.ndarray, orientation: np.ndarray,
                         cfg: GestConfig, orientation_sigma_deg: float) -> Mixture | None:
-    """A 9-D start density: one Gaussian per stereo candidate (eq. 17's covariance, floored),
+    """A 9-D start density: one Gaussian per stereo candidate (position covariance ``cov``),
     about ``orientation`` for the angles and the nominal semi-axes."""
     if len(p) == 0:
         return None
@@ -82,7 +97,7 @@ def importance_function(p: np.ndarray, cov: np.ndarray, orientation: np.ndarray,
     parts = []
     for pj, cj in zip(p, cov, strict=True):
         C = np.zeros((9, 9))
-        C[:3, :3] = cj + POSITION_FLOOR_M ** 2 * np.eye(3)
+        C[:3, :3] = cj
         C[3:6, 3:6] = o * np.eye(3)
         C[6:, 6:] = np.diag(a)
         parts.append(Gaussian(np.r_[pj, orientation, cfg.axes], C))
@@ -104,12 +119,20 @@ class GestTracker:
         self.ref: np.ndarray | None = None
         self.orientation = np.zeros(3)
         self.locked = False
+        self.last: np.ndarray | None = None
+        """The last estimate while tracking (None when lost)."""
         self.unsupported = 0
         """Consecutive frames without a stereo candidate near the estimate."""
+        self.anchor: np.ndarray | None = None
+        """Where the hand was last tracked."""
+        self.lost_for = 0
+        """Frames since the hand was last tracked."""
+        self.offset = np.zeros(3)
+        """The last estimate's silhouette offset (:meth:`_silhouette_offset`)."""
 
-    def _ll(self, views, pairs):
+    def _ll(self, views, pairs, K):
         cfg = self.cfg
-        w, h = views[0].dt.shape[1], views[0].dt.shape[0]
+        w, h = K.width, K.height
         outlier = cfg.stereo_outlier / float(w * h) ** 2
 
         def log_likelihood(x: np.ndarray) -> np.ndarray:
@@ -122,48 +145,144 @@ class GestTracker:
         return log_likelihood
 
     def _init_source(self, p, cov):
-        """The 9-D density the filter (re-)starts from: the candidates' (or the highest
-        one's) centres, the last orientation, the nominal semi-axes."""
-        sig = self.cfg.orientation_sigma_deg
-        if self.cfg.init == "any":
-            return importance_function(p, cov, self.orientation, self.cfg, sig)
-        k = int(np.argmax(p[:, 2]))
-        return importance_function(p[k:k + 1], cov[k:k + 1], self.orientation, self.cfg, sig)
+        """The 9-D density the filter (re-)starts from: the candidates' centres, the last
+        orientation, the nominal semi-axes."""
+        return importance_function(p, cov, self.orientation, self.cfg,
+                                   self.cfg.orientation_sigma_deg)
+
+    def _silhouette_offset(self, mean: np.ndarray, proj_left, origin_left: np.ndarray,
+                           cams) -> np.ndarray:
+        """``x - g(c_L(x), c_R(x))``: the estimate's centre minus the triangulation of its
+        projected ellipses' centres (an ellipsoid's outline is not centred on the image of its
+        centre: 0.3-0.5 px here, centimetres of depth); ``proj_left`` its projection in the
+        (cropped) left view."""
+        c_l = proj_left.patch_state[0, :2] + origin_left
+        c_r = project_hands(mean[None], _Geometry(cams[1]), 4).patch_state[0, :2]
+        if not (proj_left.valid[0] and np.isfinite(np.r_[c_l, c_r]).all()
+                and np.abs(c_r).max() < 1e5):
+            return np.zeros(3)
+        off = mean[:3] - triangulate_pixels(cams[0], cams[1], c_l[None], c_r[None])[0]
+        return off if np.linalg.norm(off) < 0.05 else np.zeros(3)
+
+    def _reacquire(self, p: np.ndarray) -> np.ndarray:
+        """Indices of the candidates the filter may (re-)start from: the highest one (``init:
+        raised``) or all (``any``); after a loss only those within ``reacquire_m`` of where
+        the hand was last tracked (it re-enters where it left; the other hand, hanging, is
+        not taken for it) until ``reacquire_frames`` frames have passed."""
+        idx = np.arange(len(p))
+        if self.anchor is not None and self.lost_for < self.cfg.reacquire_frames:
+            idx = idx[np.linalg.norm(p - self.anchor, axis=1) <= self.cfg.reacquire_m]
+        if len(idx) and self.cfg.init == "raised":
+            idx = idx[[int(np.argmax(p[idx, 2]))]]
+        return idx
 
     def step(self, left: CameraImage, right: CameraImage, rng: np.random.Generator
              ) -> GestResult:
         cfg = self.cfg
-        views = [hand_view(f, cfg.bins, self.lut) for f in (left, right)]
-        blobs = [skin_blobs((v.skin > 0.5).astype(np.uint8), subsample=cfg.blob_subsample)
-                 for v in views]
-        p, cov, cen, pairs = stereo_candidates(blobs[0], blobs[1], left.camera, right.camera,
-                                        cfg.max_epipolar_px, cfg.blob_size,
-                                        cfg.blob_sigma_scale, cfg.centroid_px)
-        if not self.locked:
-            if len(p) == 0:
-                return GestResult(None, None, "searching", p, math.nan)
-            self.pf.initialize(rng, self._init_source(p, cen if cfg.init_centroid else cov))
+        frames = (left, right)
+        blobs = [interior_blobs(hand_blobs(f.image, self.lut, cfg.blob_subsample),
+                                f.image.shape[1], f.image.shape[0], cfg.border_px)
+                 for f in frames]
+        p, cov, cen1, pairs = stereo_candidates(blobs[0], blobs[1], left.camera, right.camera,
+                                                cfg.max_epipolar_px, cfg.blob_size,
+                                                cfg.blob_sigma_scale, 1.0)
+        pos_cov = cov if cfg.proposal == "blob" else cfg.proposal_px ** 2 * cen1
+        pos_cov = pos_cov + cfg.position_floor ** 2 * np.eye(3)
+        if self.last is None:                       # searching or lost: (re-)initialise
+            use = self._reacquire(p)
+            if len(use) == 0:
+                self.lost_for += 1
+                status = "lost" if self.locked else "searching"
+                mean = None if not self.locked else self.pf.last.mean
+                return GestResult(mean, self.pf.cov if self.locked else None, status, p,
+                                  math.nan)
+            self.pf.initialize(rng, self._init_source(p[use], pos_cov[use]))
             self.locked = True
+        else:                                       # tracking: candidates near the hand only
+            use = np.flatnonzero(np.linalg.norm(p - self.last[:3], axis=1) <= cfg.gate_m)
+        delta = (self.offset if self.last is not None and cfg.proposal == "centroid"
+                 else np.zeros(3))
+        # cue images where the likelihood looks (the left image only with ``views: 1``;
+        # the right camera then only places its ellipse centres for the stereo cue)
+        boxes = [self._roi(f, b, pairs[:, i] if len(pairs) else None)
+                 if cfg.roi and i < cfg.views else None
+                 for i, (f, b) in enumerate(zip(frames, blobs, strict=True))]
+        views = [hand_view(crop_frame(f, b), cfg.bins, self.lut) if i < cfg.views
+                 else _Geometry(f.camera) for i, (f, b) in enumerate(zip(frames, boxes,
+                                                                          strict=True))]
+        origin = np.array([(0, 0) if b is None else b[:2] for b in boxes], float)
         importance = None
-        if len(p):
-            floor = cov + POSITION_FLOOR_M ** 2 * np.eye(3)
+        if len(use):
             importance = CandidateProposal(
-                Mixture(tuple(Gaussian(pj, cj) for pj, cj in zip(p, floor, strict=True))),
+                Mixture(tuple(Gaussian(p[j] + delta, pos_cov[j]) for j in use)),
                 self.pf.particles, self.pf.log_weights, self.walk, self.orientations,
                 cfg.fresh_orientation)
-        s = self.pf.step(self._ll(views, pairs), rng, importance=importance)
+        s = self.pf.step(self._ll(views, pairs - origin[None], left.camera.intrinsics), rng,
+                         importance=importance)
         mean = s.mean.copy()
         mean[6:] = np.maximum(mean[6:], 1e-3)
         proj = project_hands(mean[None], views[0], cfg.n_points)
         d = float(shape_distance(proj, views[0])[0])
-        support = len(p) > 0 and float(np.min(np.linalg.norm(p - mean[:3], axis=1))) <= cfg.lost_m
+        support = len(use) > 0 and float(np.min(np.linalg.norm(p[use] - mean[:3], axis=1))
+                                         ) <= cfg.lost_m
         self.unsupported = 0 if support else self.unsupported + 1
         status = ("tracking" if (s.ok and proj.valid[0] and d <= cfg.lost_px
+                                 and _centre_in_image(mean, left)
                                  and self.unsupported < cfg.lost_frames) else "lost")
         if status == "tracking":
             self.orientation = mean[3:6]
-            h = patch_histogram(mean, views[0])
+            self.last, self.anchor = mean, mean[:3]
+            self.lost_for = 0
+            self.offset = self._silhouette_offset(mean, proj, origin[0],
+                                                  (left.camera, right.camera))
+            h = reference_histogram(proj, views[0])
             self.ref = h if self.ref is None else update_reference(self.ref, h, cfg.kappa)
-        elif len(p):                                 # automatic re-initialisation (Fig. 11)
-            self.pf.initialize(rng, self._init_source(p, cen if cfg.init_centroid else cov))
+        else:
+            self.last = None
+            self.lost_for += 1
+            self.unsupported = 0
         return GestResult(mean, self.pf.cov, status, p, d)
+
+    def _roi(self, frame: CameraImage, blobs, centroids) -> tuple[int, int, int, int] | None:
+        """The box the cues are computed in (:mod:`.roi`): the hand-sized blobs matched in
+        stereo, the blobs near the last estimate, padded by the distance transform's cap."""
+        K = frame.camera.intrinsics
+        boxes = [blobs.boxes[np.isin(np.arange(len(blobs.areas)),
+                                     _matched(blobs, centroids))]]
+        if self.last is not None:
+            uv = frame.camera.project_base(self.last[:3])
+            r = 1.5 * K.fx * float(np.max(self.last[6:])) / max(
+                float(np.linalg.norm(self.last[:3] - frame.camera.T_base_cam[:3, 3])), 0.05)
+            boxes.append(np.array([[uv[0] - r, uv[1] - r, 2 * r, 2 * r]]))
+        box = roi_box(np.concatenate(boxes), K.width, K.height, DT_CAP_PX)
+        return box if box is not None else (0, 0, K.width, K.height)
+
+
+def _matched(blobs, centroids) -> np.ndarray:
+    """Indices of ``blobs`` whose centre is one of ``centroids (M, 2)``."""
+    if centroids is None or len(blobs.areas) == 0:
+        return np.zeros(0, int)
+    d = np.linalg.norm(blobs.centers[:, None] - centroids[None], axis=2)
+    return np.flatnonzero(d.min(axis=1) < 1e-6)
+
+
+def _centre_in_image(state: np.ndarray, frame: CameraImage) -> bool:
+    """Whether the state's centre is in front of the camera and projects into the image."""
+    K = frame.camera.intrinsics
+    uv = frame.camera.project_base(state[:3])
+    return bool(np.isfinite(uv).all() and 0 <= uv[0] < K.width and 0 <= uv[1] < K.height)
+
+
+@dataclass(frozen=True)
+class _Geometry:
+    """A camera's geometry in the form :func:`.likelihood.project_hands` reads."""
+
+    cam: object
+
+    @property
+    def intrinsics(self):
+        return self.cam.intrinsics
+
+    @property
+    def T_cam_base(self):
+        return invert_transform(self.cam.T_base_cam)

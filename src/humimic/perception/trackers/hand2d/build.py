@@ -21,4 +21,5 @@ def hand2d_stage(name, cfg, scenario, world, rngs, rlog) -> Hand2DStage:
     tracker = Hand2DTracker(cfg, lut, width, height, rngs[f"trackers.{name}"],
                             FaceDetector())
     return Hand2DStage(name, cfg, camera, tracker, world.gt, rlog,
-                       getattr(world, "track_visibility", lambda: None)())
+                       getattr(world, "track_visibility", lambda: None)(),
+                       getattr(world, "people", None))

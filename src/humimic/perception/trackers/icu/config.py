@@ -15,6 +15,30 @@ from humimic.perception.trackers.fields import Bins
 from humimic.scenario.base import Section
 
 
+class NearModule(Section):
+    """Fig. 15's distance switch (:mod:`humimic.perception.trackers.icu.modules`): another
+    tracker of the scenario takes over while the recognised tutor is near."""
+
+    module: str
+    """Name (a key of ``trackers:``) of the near module, e.g. a ``tbp`` or ``gest`` tracker;
+    it gets frames only while the tutor is near."""
+    enter_m: float = Field(1.5, gt=0.0, le=20.0)
+    """Switch to the near module below this distance (m; the pinhole range of the estimate's
+    head width)."""
+    leave_m: float = Field(1.8, gt=0.0, le=20.0)
+    """Back to ICU above this distance (m)."""
+    hold_s: float = Field(0.25, ge=0.0, le=10.0)
+    """The tutor counts as recognised and tracked until the ICU tracker has not been on a
+    recognised face for this long (its losses of a few frames do not reset the module)."""
+
+    @field_validator("leave_m")
+    @classmethod
+    def _band(cls, v, info):
+        if v < info.data.get("enter_m", 0.0):
+            raise ValueError("leave_m must be at least enter_m")
+        return v
+
+
 class IcuConfig(Section):
     """Menezes sec. 5.2: one person (the tutor) tracked in one camera's images, state
     (u, v, s): head centre (px) and head width (px)."""
@@ -51,15 +75,25 @@ class IcuConfig(Section):
     beta: float = Field(0.6, ge=0.0, le=1.0)
     dynamics: tuple[float, float, float] = (6.0, 6.0, 1.0)
     """Random-walk standard deviations of (u, v, s) per frame (px)."""
-    detect_every: int = Field(3, ge=1, le=100)
+    detect_every: int = Field(1, ge=1, le=100)
     """While tracking, the face detector runs every this many frames, only around the
-    estimate (it costs ~20 ms on a whole 320 x 240 frame); while searching, every frame."""
+    estimate (~1 ms CPU); while searching, every frame."""
+    search: Literal["skin", "whole"] = "skin"
+    """Where faces are searched while nobody is tracked: ``skin`` -- around the skin blobs of
+    head size (the scenario's skin model; ~1 ms per blob instead of ~16 ms CPU for the whole
+    320 x 240 frame); ``whole`` -- the whole frame at every size."""
     min_face_px: int = Field(20, ge=8, le=200)
+    face_fit_px: int = Field(0, ge=0, le=200)
+    """While tracking, shrink the face window so the smallest expected face is about this
+    many pixels (:attr:`~humimic.perception.faces.detect.DetectorParams.fit_px`: ~25 % less
+    time per frame, noisier boxes and ~1-4 px more centre error); 0: never."""
     lost_colour: float = Field(0.5, gt=0.0, le=1.0)
     """Loss: Bhattacharyya distance (the worse of head and torso) above which a frame is
     bad."""
     lost_frames: int = Field(4, ge=1, le=1000)
     latency: float = Field(0.0, ge=0.0, le=1.0)
+    near: NearModule | None = None
+    """Fig. 15: the module that takes over near the robot (None: ICU at every distance)."""
 
     @field_validator("cues")
     @classmethod

@@ -24,12 +24,14 @@ GRID = 8
 
 def log_likelihood(dt: np.ndarray, qimage: QuantizedImage, states: np.ndarray,
                    template: Template, refs: np.ndarray, sigma_s: float, sigma_c: float,
-                   cues=("shape", "colour")) -> np.ndarray:
+                   cues=("shape", "colour"), dt_origin=(0, 0)) -> np.ndarray:
     """Menezes eq. 7 of eq. 3 (shape, mean DT distance) and eq. 6 (two patches) for states
-    ``(N, 3)`` (u, v, head width); ``cues`` chooses which."""
+    ``(N, 3)`` (u, v, head width); ``cues`` chooses which. ``dt`` may cover a region of the
+    image only, its pixel (0, 0) at image pixel ``dt_origin`` (x0, y0)."""
     terms = []
     if "shape" in cues:
         pts, _ = template.place(states)
+        pts = pts - np.asarray(dt_origin, float)
         terms.append(shape_log_likelihood(dt_distance(dt, pts), sigma_s))  # Menezes eq. 3
     if "colour" in cues:
         hists = patch_histograms(qimage, states, HEAD_TORSO_PATCHES, GRID)
@@ -37,12 +39,17 @@ def log_likelihood(dt: np.ndarray, qimage: QuantizedImage, states: np.ndarray,
     return fuse(*terms)  # Menezes eq. 7
 
 
-def colour_distance(qimage: QuantizedImage, state: np.ndarray, refs: np.ndarray) -> float:
-    """Bhattacharyya distance of one state's colours to the references: the larger of the
-    head's and the torso's (each the mean over the channels; 0 same, 1 disjoint or off the
-    image), so another person's shirt counts even under a matching face."""
-    h = patch_histograms(qimage, np.asarray(state)[None], HEAD_TORSO_PATCHES, GRID)[0]
-    return float(bhattacharyya(h, refs).mean(axis=1).max())
+def colour_distance(qimage: QuantizedImage, state: np.ndarray, refs: np.ndarray,
+                    hists: np.ndarray | None = None) -> float:
+    """Bhattacharyya distance of one state's colours (``hists``, :func:`references` of the
+    state, if computed already) to the references: the larger of the head's and the torso's
+    (each the mean over the channels; 0 same, 1 disjoint), so another person's shirt counts
+    even under a matching face; a patch wholly off the image (the torso of a tutor close to
+    the camera) is left out, 1 if both are."""
+    h = references(qimage, state) if hists is None else hists
+    d = bhattacharyya(h, refs).mean(axis=1)
+    seen = h.sum(axis=(1, 2)) > 0  # a patch wholly off the image (the torso, close up)
+    return float(d[seen].max()) if seen.any() else 1.0
 
 
 def references(qimage: QuantizedImage, state: np.ndarray) -> np.ndarray:

@@ -1,39 +1,49 @@
 """The ICU tracker and its state machine (Menezes sec. 5.2.2, Fig. 15).
 
-Machine states (:data:`MACHINE`): ``init`` -- nobody seen yet: the face detector (and, with
-``recognition``, the recogniser) runs on every whole frame; ``tracking`` -- a face recognised
-as the tutor (or any face without recognition) started ICONDENSATION on (u, v, s): particles
+Machine states (:data:`MACHINE`): ``init`` -- nobody seen yet: faces are searched (and, with
+``recognition``, recognised) every frame around the skin blobs of head size (or, with
+``search: whole`` or no skin model, in the whole frame); ``tracking`` -- a face recognised as
+the tutor (or any face without recognition) started ICONDENSATION on (u, v, s): particles
 come from the dynamics, from the prior and from the detected faces weighted by their
 probability of being the tutor (eq. 12), the face detector running every ``detect_every``
-frames in a window around the estimate; ``lost`` -- for ``lost_frames`` frames the colour at
-the estimate stayed unlike the references (head's or torso's Bhattacharyya distance above
-``lost_colour``) or the face there was recognised as someone else, or the estimate left the
-image: back to whole-frame detection, and to ``tracking`` when the
-tutor's face is found again. (The paper's machine also switches between image-based and 3-D
-tracking modules by distance; only the image-based module exists here.)
+frames in a window around the estimate, the shape cue's edges computed only around the
+particle cloud; ``lost`` -- for ``lost_frames`` frames the colour at the estimate stayed
+unlike the references (head's or torso's Bhattacharyya distance above ``lost_colour``) or the
+face there was recognised as someone else, or the estimate left the image: back to the search,
+and to ``tracking`` when the tutor's face is found again. (The paper's machine also switches
+between image-based and 3-D tracking modules by distance: :mod:`.modules`.)
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
+import cv2
 import numpy as np
 
 from humimic.estimation.particles import Gaussian, ParticleFilter, RandomWalk, UniformBox
 from humimic.perception.cues.edges import edge_maps, grey
 from humimic.perception.cues.histograms import quantize, update_reference
-from humimic.perception.cues.importance import recognition_proposal
+from humimic.perception.cues.importance import recognition_proposal, skin_blobs
 from humimic.perception.cues.templates import head_and_shoulders
 from humimic.perception.faces.detect import box_centers, crop_faces
 from humimic.perception.trackers.icu.likelihood import colour_distance, log_likelihood, references
+from humimic.perception.trackers.icu.search import shape_roi, skin_windows, unique_boxes
 
 MACHINE = ("init", "tracking", "lost")
 FACE_TO_HEAD = 1.0
 """Head width (the state's s) per Haar face-box width."""
-WINDOW_HALF = 1.2
+WINDOW_HALF = 1.0
 """While tracking, faces are searched within this many head widths of the estimate..."""
-WINDOW_SIZES = (0.7, 1.45)
-"""... and only at sizes between these multiples of the estimated face width."""
+WINDOW_SIZES = (0.8, 1.3)
+"""... and only at sizes between these multiples of the estimated face width (measured, 3
+seeds of Figs. 9 and 10 with detection every frame: 1.2 widths at 0.7-1.45 x cost 25 % more
+than 1.0 at 0.8-1.3 x for no better centre error)."""
+SKIN_POSTERIOR = 0.5
+"""A pixel is skin when its colour is more likely under the skin model than uniform."""
+EDGE_PAD_PX = 8.0
+"""Margin of the shape cue's edge region beyond the cloud's templates (and 3 sigma of the
+dynamics): an edge farther out than this is seen by no point within the region's border."""
 
 
 @dataclass(frozen=True)
@@ -56,14 +66,18 @@ class IcuStep:
 
 class IcuTracker:
     """``step(image)`` per frame. ``detector``: a FaceDetector; ``recogniser``: an
-    EigenfaceModel and the tutor's class index (or None: any face is the tutor)."""
+    EigenfaceModel and the tutor's class index (or None: any face is the tutor); ``skin``: a
+    skin :class:`~humimic.perception.cues.color_models.ColorLUT` to search faces around skin
+    blobs only (None: the whole frame)."""
 
     def __init__(self, cfg, width: int, height: int, rng: np.random.Generator, detector,
-                 recogniser=None, tutor: int = 0):
+                 recogniser=None, tutor: int = 0, skin=None):
         self.cfg, self.rng, self.detector = cfg, rng, detector
-        self.recogniser, self.tutor = recogniser, tutor
+        self.recogniser, self.tutor, self.skin = recogniser, tutor, skin
         self.width, self.height = width, height
         self.template = head_and_shoulders(cfg.n_points)
+        self.extent = np.stack([self.template.points.min(axis=0),
+                                self.template.points.max(axis=0)])
         self.sigma = np.asarray(cfg.dynamics, float)
         self.prior = UniformBox([0.0, 0.0, 0.8 * cfg.min_face_px],
                                 [width, height, max(height, cfg.min_face_px + 1.0)])
@@ -80,9 +94,28 @@ class IcuTracker:
         """Face boxes ``(K, 4)`` in the whole image (searching ``window`` (x0, y0, x1, y1)
         only, and face ``sizes`` (min, max) px only, if given) and each face's probability of
         being the tutor ``(K,)``."""
+        return self.recognise(g, self.detect(g, window, sizes))
+
+    def detect(self, g: np.ndarray, window=None, sizes=None) -> np.ndarray:
         x0, y0, x1, y1 = window or (0, 0, self.width, self.height)
         boxes = self.detector.detect(np.ascontiguousarray(g[y0:y1, x0:x1]), sizes)
-        boxes = boxes + np.array([x0, y0, 0.0, 0.0])
+        return boxes + np.array([x0, y0, 0.0, 0.0])
+
+    def search_faces(self, image: np.ndarray, g: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Faces anywhere in the frame: around the head-sized skin blobs (a half-resolution
+        skin mask) when there is a skin model and ``search`` is ``skin``, else the whole
+        frame."""
+        if self.skin is None or self.cfg.search != "skin":
+            return self.faces(g)
+        mask = self.skin.posterior(image[::2, ::2]) > SKIN_POSTERIOR
+        blobs = skin_blobs(mask, 1, min_area_px=(0.25 * self.cfg.min_face_px) ** 2)
+        boxes = [self.detect(g, w, sizes) for w, sizes in
+                 skin_windows(2.0 * blobs.boxes, self.width, self.height,
+                              self.cfg.min_face_px)]
+        return self.recognise(g, unique_boxes(np.vstack([np.zeros((0, 4)), *boxes])))
+
+    def recognise(self, g: np.ndarray, boxes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The boxes and each one's probability of being the tutor (1 without a recogniser)."""
         if self.recogniser is None or not len(boxes):
             return boxes, np.ones(len(boxes))
         p = self.recogniser.probabilities(crop_faces(g, boxes))[:, self.tutor]
@@ -109,7 +142,7 @@ class IcuTracker:
         return self._track(g, q)
 
     def _search(self, image, g, q) -> IcuStep:
-        boxes, p = self.faces(g)
+        boxes, p = self.search_faces(image, g)
         ok = p >= self.cfg.min_confidence
         conf = float(p.max()) if len(p) and self.recogniser is not None else np.nan
         nan = np.full(3, np.nan)
@@ -130,6 +163,17 @@ class IcuTracker:
         near = np.hypot(*(box_centers(boxes) - mean[:2]).T) < 0.5 * mean[2]
         return bool(near.any() and np.all(p[near] < self.cfg.min_confidence))
 
+    def shape_maps(self, g: np.ndarray, boxes: np.ndarray
+                   ) -> tuple[np.ndarray, tuple[int, int]]:
+        """The distance transform of the edges (eq. 3) around the particle cloud and the
+        detected faces (where this frame's particles come from, bar the prior's few draws) and
+        its origin (x0, y0) in the image."""
+        anchors = np.vstack([self.pf.particles, self.face_states(boxes)])
+        anchors[:, 2] += 3.0 * self.sigma[2]
+        x0, y0, x1, y1 = shape_roi(anchors, self.extent, self.width, self.height,
+                                   3.0 * self.sigma[:2].max() + EDGE_PAD_PX)
+        return edge_maps(g[y0:y1, x0:x1], mask=cv2.DIST_MASK_5).dt, (x0, y0)
+
     def _track(self, g, q) -> IcuStep:
         cfg = self.cfg
         boxes, p = np.zeros((0, 4)), np.zeros(0)
@@ -142,18 +186,22 @@ class IcuTracker:
                 importance = recognition_proposal(
                     box_centers(boxes), p, self.sigma[:2], boxes[:, 2] * FACE_TO_HEAD,
                     self.sigma[2])
-        dt = edge_maps(g).dt if "shape" in cfg.cues else None
+        dt, origin = None, (0, 0)
+        if "shape" in cfg.cues:
+            dt, origin = self.shape_maps(g, boxes)
         step = self.pf.step(
             lambda x: log_likelihood(dt, q, x, self.template, self.refs, cfg.sigma_s,
-                                     cfg.sigma_c, cfg.cues), self.rng, importance=importance)
+                                     cfg.sigma_c, cfg.cues, origin), self.rng,
+            importance=importance)
         mean = step.mean
-        colour = colour_distance(q, mean, self.refs)
+        seen = references(q, mean)
+        colour = colour_distance(q, mean, self.refs, seen)
         inside = 0 <= mean[0] < self.width and 0 <= mean[1] < self.height
         good = (step.ok and inside and colour <= cfg.lost_colour
                 and not self._someone_else(boxes, p, mean))
         self.bad = 0 if good else self.bad + 1
         if good:  # Menezes eq. 13, per patch
-            self.refs = update_reference(self.refs, references(q, mean), self.kappa)
+            self.refs = update_reference(self.refs, seen, self.kappa)
         if self.bad >= cfg.lost_frames or not inside:
             self.state = "lost"
         cov = self.pf.cov

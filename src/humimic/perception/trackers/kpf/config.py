@@ -83,6 +83,18 @@ class KpfConfig(Section):
     start (a person standing in front of the robot); None: off, as the paper."""
     torso_prior_deg: float = Field(5.0, gt=0.0, le=180.0)
     """The prior's standard deviation of the torso's rotations (deg), with ``torso_prior_m``."""
+    rescue_passes: int = Field(0, ge=0, le=5)
+    """Our extension: when the best particle's log-likelihood falls more than ``rescue_drop``
+    below the last frame's (the search lost a fast-moving arm), up to this many more
+    resample / random-walk / mean-shift passes in the same frame (kept if better); 0: off,
+    as the paper."""
+    rescue_drop: float = Field(2.0, gt=0.0, le=100.0)
+    depth_share: float = Field(0.0, ge=0.0, le=1.0)
+    """Our extension: the share of particles whose wrist is moved along its camera ray per arm
+    and frame (:func:`~humimic.perception.trackers.kpf.depth.wrist_depth_move`); 0: off, as
+    the paper."""
+    depth_extent_m: float = Field(0.25, gt=0.0, le=1.0)
+    """Half-width (m) of the uniform range change of those depth moves."""
     kde_stride: int = Field(1, ge=1, le=100)
     """The reweighting's KDEs from every k-th particle (1: all, exact; more: faster)."""
     cues: KpfCues = Field(default_factory=KpfCues)

@@ -63,6 +63,11 @@ class CueMaps:
         """(3, sum of the levels' pixels): the levels' planes raveled end to end."""
         return np.concatenate([hm.reshape(3, -1) for hm in self.hessian], axis=1)
 
+    @cached_property
+    def rgb_planes(self) -> np.ndarray:
+        """(3, H W) the colour channels raveled (gathers of one channel at a time)."""
+        return np.ascontiguousarray(self.rgb.reshape(-1, 3).T)
+
 
 def cue_maps(image: np.ndarray, skin_lut: ColorLUT, levels: int = 3, k_edge: float = 0.15,
              k_ridge: float = 0.05) -> CueMaps:
@@ -147,20 +152,24 @@ def ridge_response(maps: CueMaps, uv: np.ndarray, width_px: np.ndarray, angle: n
 _QUAD_GRID = np.array([(a, b) for a in (0.2, 0.5, 0.8) for b in (0.2, 0.5, 0.8)])
 
 
+#: (4, M_C) bilinear weights of the corners at the :data:`_QUAD_GRID` points.
+_QUAD_W = np.stack([(1 - _QUAD_GRID[:, 0]) * (1 - _QUAD_GRID[:, 1]),
+                    _QUAD_GRID[:, 0] * (1 - _QUAD_GRID[:, 1]),
+                    _QUAD_GRID[:, 0] * _QUAD_GRID[:, 1],
+                    (1 - _QUAD_GRID[:, 0]) * _QUAD_GRID[:, 1]])
+
+
 def band_points(quads: np.ndarray) -> np.ndarray:
     """Sample points ``(..., M_C, 2)`` inside quadrilaterals ``(..., 4, 2)`` (corners in order:
     side 1 base, side 1 top, side 2 top, side 2 base), bilinear in the corners."""
-    a, b = _QUAD_GRID[:, 0], _QUAD_GRID[:, 1]
-    W = np.stack([(1 - a) * (1 - b), a * (1 - b), a * b, (1 - a) * b])      # (4, M_C)
-    return np.einsum("...kc,km->...mc", quads, W)
+    return np.stack([quads[..., 0] @ _QUAD_W, quads[..., 1] @ _QUAD_W], -1)
 
 
 def band_colours(maps: CueMaps, quads: np.ndarray) -> np.ndarray:
-    """Mean RGB ``(..., 3)`` over each quadrilateral's sample points (off-image points black)."""
-    pts = band_points(quads)
-    idx, inside = _pixels(pts[..., 0], pts[..., 1], maps.shape)
-    rgb = maps.rgb.reshape(-1, 3)[idx] * inside[..., None]
-    return rgb.mean(axis=-2)
+    """Mean RGB ``(..., 3)`` over each quadrilateral's sample points (off-image points black;
+    coordinate and channel planes: numpy is slow on trailing axes of size 2 and 3)."""
+    idx, inside = _pixels(quads[..., 0] @ _QUAD_W, quads[..., 1] @ _QUAD_W, maps.shape)
+    return np.stack([np.mean(plane[idx] * inside, axis=-1) for plane in maps.rgb_planes], -1)
 
 
 def colour_response(colours: np.ndarray, reference: np.ndarray) -> np.ndarray:

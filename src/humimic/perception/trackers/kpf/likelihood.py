@@ -79,7 +79,7 @@ class Likelihood:
         col = [self.parts.index(p) for p in limbs]
         need = {c for p in limbs for c in self.use[p]}
         if "edge" in need:
-            e = bm.limb_edges(view, cfg.edge_points)
+            e = bm.limb_edges(view, cfg.edge_points, normals=False)
             f = np.where(e.ok, C.edge_response(maps, e.uv, e.angle), 0.0)
             cost["edge"][:, col] = 1.0 - f
         if "ridge" in need:
@@ -90,14 +90,16 @@ class Likelihood:
         if "color" in need:
             ok = view.valid[:, view.cone_idx] & view.generators
             for b in sorted({self.bands[p] for p in limbs if "color" in self.use[p]}):
-                quads = bm.limb_bands(view, b, 0.2)
-                for j, p in enumerate(limbs):
-                    if "color" in self.use[p] and self.bands[p] == b:
-                        colours[p] = C.band_colours(maps, quads[:, j])
-                        ref = self.references.get(p)
-                        f = (np.zeros(n) if ref is None
-                             else C.colour_response(colours[p][:, None], ref[None])[:, 0])
-                        cost["color"][:, col[j]] = np.where(ok[:, j], f, 1.0)
+                js = [j for j, p in enumerate(limbs) if "color" in self.use[p]
+                      and self.bands[p] == b]
+                got = C.band_colours(maps, bm.limb_bands(view, b, 0.2)[:, js])  # (N, J, B, 3)
+                for k, j in enumerate(js):
+                    p = limbs[j]
+                    colours[p] = got[:, k]
+                    ref = self.references.get(p)
+                    f = (np.zeros(n) if ref is None
+                         else C.colour_response(colours[p][:, None], ref[None])[:, 0])
+                    cost["color"][:, col[j]] = np.where(ok[:, j], f, 1.0)
         ell = [self.parts[i] for i in view.ellipsoid_idx]
         if any("skin" in self.use[p] for p in ell):
             centre, axes, angle = view.ellipses_px()

@@ -22,6 +22,7 @@ from humimic.estimation.particles.densities import Gaussian
 from humimic.estimation.particles.filters import condensation_step
 from humimic.estimation.particles.weights import uniform_log_weights
 from humimic.perception.trackers.kpf.cues import CueMaps
+from humimic.perception.trackers.kpf.depth import wrist_depth_move
 from humimic.perception.trackers.kpf.likelihood import Likelihood
 
 _BLAS = ThreadpoolController()
@@ -71,9 +72,25 @@ def distinct(fn):
     this saves that share of the likelihood evaluations. (``sigma_from_spread`` then takes
     the spread over the distinct particles.)"""
     def f(q: np.ndarray) -> np.ndarray:
-        _, first, inverse = np.unique(q, axis=0, return_index=True, return_inverse=True)
-        return np.asarray(fn(q[first]))[inverse.reshape(-1)]
+        first, inverse = unique_rows(q)
+        return np.asarray(fn(q[first]))[inverse]
     return f
+
+
+def unique_rows(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Indices of the distinct rows of ``q (N, d)`` and, per row, which of them it equals: rows
+    keyed by a fixed random projection (a 1-D sort, ~10x faster than ``np.unique(axis=0)``),
+    checked exactly (falls back to ``np.unique(axis=0)`` if two distinct rows share a key)."""
+    key = q @ _KEY[: q.shape[1]] if q.shape[1] <= len(_KEY) else q.sum(1)
+    _, first, inverse = np.unique(key, return_index=True, return_inverse=True)
+    inverse = inverse.reshape(-1)
+    if not np.array_equal(q[first][inverse], q):
+        _, first, inverse = np.unique(q, axis=0, return_index=True, return_inverse=True)
+        inverse = inverse.reshape(-1)
+    return first, inverse
+
+
+_KEY = np.random.default_rng(20071).normal(size=64)
 
 
 def kpf_body(model=None) -> bm.BodyModel:
@@ -104,6 +121,8 @@ class KpfTracker:
         self.mode = self.mode_prev = None
         self.share = 0.5
         self.torso_prior: Gaussian | None = None
+        self.best_prev: float | None = None
+        """The last frame's best log-likelihood (``rescue_passes``)."""
 
     def start(self, q0: np.ndarray, maps: CueMaps, T_cam_base: np.ndarray) -> None:
         """Initialise at a known pose (the paper fits the model by hand): every particle at
@@ -176,10 +195,28 @@ class KpfTracker:
         pred, moved = kpf.mixed_propagate(resampled, velocity, self.share, self.D,
                                           rng, self.limits.inside, cfg.motion_noise)
         pred = self.limits.clamp(pred)
+        if cfg.depth_share > 0.0:
+            pred = self._depth_moves(pred, T_cam_base)
         lik = (self._group_log_lik if cfg.partitioned else self._log_lik)(maps, T_cam_base)
-        parts, W, _, iters = kpf.kpf_modes(pred, lik, self.D, cfg.iterations, cfg.tol,
-                                           cfg.shrink, cfg.reweight == "kernel", groups,
-                                           cfg.kde_stride)
+        parts, W, ll, iters = kpf.kpf_modes(pred, lik, self.D, cfg.iterations, cfg.tol,
+                                            cfg.shrink, cfg.reweight == "kernel", groups,
+                                            cfg.kde_stride)
+        best = float(np.max(ll[:, 0]))
+        for _ in range(cfg.rescue_passes):
+            # the best particle fell well below the last frame's: the search lost the pose
+            # (fast motion); search again from this frame's posterior, a random walk of extent
+            # D, and mean shift
+            if self.best_prev is None or best >= self.best_prev - cfg.rescue_drop:
+                break
+            again = kpf.partitioned_resample(parts, W, groups, rng)
+            again = self.limits.clamp(again + rng.uniform(-1.0, 1.0, again.shape) * self.D)
+            p2, W2, ll2, it2 = kpf.kpf_modes(again, lik, self.D, cfg.iterations, cfg.tol,
+                                             cfg.shrink, cfg.reweight == "kernel", groups,
+                                             cfg.kde_stride)
+            iters += it2
+            if float(np.max(ll2[:, 0])) > best:
+                parts, W, ll, best = p2, W2, ll2, float(np.max(ll2[:, 0]))
+        self.best_prev = best
         h = cfg.shrink ** max(iters - 1, 0) * self.D
         win = cfg.window * self.D
         mode = np.empty(len(self.D))
@@ -191,6 +228,16 @@ class KpfTracker:
         _, first = np.unique(np.round(parts / (cfg.window * self.D)), axis=0,
                              return_index=True)
         return mode, iters, parts[first[np.argsort(-w[first])][:MAX_MODES]]
+
+    def _depth_moves(self, pred: np.ndarray, T_cam_base: np.ndarray) -> np.ndarray:
+        """A ``depth_share`` of the particles per arm get their wrist moved along its camera
+        ray by a uniform range change of half-width ``depth_extent_m``."""
+        cfg, rng = self.cfg, self.rng
+        for side in ("R", "L"):
+            pick = np.flatnonzero(rng.random(len(pred)) < cfg.depth_share)
+            delta = rng.uniform(-1.0, 1.0, len(pick)) * cfg.depth_extent_m
+            pred[pick] = wrist_depth_move(self.body, pred[pick], side, delta, T_cam_base)
+        return pred
 
     def _condensation(self, maps, T_cam_base):
         n = len(self.particles)

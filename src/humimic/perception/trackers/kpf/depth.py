@@ -1,0 +1,74 @@
+"""A depth-aware proposal for the arms (our extension of Schmidt et al.'s kernel particle filter).
+
+One camera sees a wrist only up to its distance along the viewing ray: most of the tracker's
+error is in depth. :func:`wrist_depth_move` moves an arm's wrist along the camera ray through
+it by a range change ``delta`` (m) and re-solves the arm for the new wrist: the elbow flexion
+from the shoulder-wrist distance (law of cosines), the upper arm turned by the smallest
+rotation that takes the wrist there (keeping the arm's swivel about the shoulder-wrist line as
+far as possible), and the shoulder angles from that rotation. The wrist's image stays put while
+the arm changes its depth, so the likelihood can choose between depths a random walk in joint
+space would rarely reach in one frame.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from humimic import bodymodel as bm
+from humimic.bodymodel.kinematics import elbow_rotation
+
+#: Arm side -> (segment prefix, offset of its four DOFs in the state).
+SIDES = {"R": ("r", 6), "L": ("l", 10)}
+
+
+def _rotation_between(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``(N, 3, 3)`` the smallest rotations taking directions ``a (N, 3)`` to ``b (N, 3)``
+    (Rodrigues; identity where they coincide, a half turn about a perpendicular where opposite)."""
+    a = a / np.linalg.norm(a, axis=1, keepdims=True)
+    b = b / np.linalg.norm(b, axis=1, keepdims=True)
+    v = np.cross(a, b)
+    c = np.sum(a * b, axis=1)
+    s2 = np.sum(v * v, axis=1)
+    K = np.zeros((len(a), 3, 3))
+    K[:, 0, 1], K[:, 0, 2], K[:, 1, 2] = -v[:, 2], v[:, 1], -v[:, 0]
+    K[:, 1, 0], K[:, 2, 0], K[:, 2, 1] = v[:, 2], -v[:, 1], v[:, 0]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        f = np.where(s2 > 1e-24, (1.0 - c) / s2, 0.5)
+    R = np.eye(3) + K + f[:, None, None] * (K @ K)
+    opposite = (s2 <= 1e-24) & (c < 0)
+    if opposite.any():                       # a half turn about any axis perpendicular to a
+        p = np.cross(a[opposite], np.eye(3)[np.argmin(np.abs(a[opposite]), axis=1)])
+        p /= np.linalg.norm(p, axis=1, keepdims=True)
+        R[opposite] = 2.0 * p[:, :, None] * p[:, None, :] - np.eye(3)
+    return R
+
+
+def wrist_depth_move(body: bm.BodyModel, q: np.ndarray, side: str, delta: np.ndarray,
+                     T_cam_ref: np.ndarray) -> np.ndarray:
+    """States ``(N, 14)`` with arm ``side`` (``R`` or ``L``) of ``q (N, 14)`` re-solved for its
+    wrist moved by ``delta (N,)`` m along the ray from the camera (``T_cam_ref``: reference-
+    frame points -> camera) through it. Where the new wrist is out of the arm's reach, or
+    the solution out of the joint limits, the particle is left unchanged."""
+    q = np.asarray(q, float)
+    prefix, j = SIDES[side]
+    sk = body.skeleton
+    lu, lf = sk.upper_arm, sk.forearm
+    pose = body.forward(q)
+    S, W = pose.joint(f"{prefix}_shoulder"), pose.joint(f"{prefix}_wrist")
+    T_ref_cam = np.linalg.inv(np.asarray(T_cam_ref, float))
+    ray = W - T_ref_cam[:3, 3]
+    ray /= np.linalg.norm(ray, axis=1, keepdims=True)
+    d_new = W + np.asarray(delta, float)[:, None] * ray - S            # shoulder -> new wrist
+    r = np.linalg.norm(d_new, axis=1)
+    ok = (r < lu + lf - 1e-6) & (r > abs(lu - lf) + 1e-6)
+    eb = np.arccos(np.clip((r * r - lu * lu - lf * lf) / (2 * lu * lf), -1.0, 1.0))
+    # the shoulder -> wrist vector in the upper arm's frame for the new elbow flexion
+    d_local = np.array([0.0, 0.0, -lu]) + (elbow_rotation(side, eb) @ np.array([0, 0, -lf]))
+    R_ref_upper = pose.segment(f"{prefix}_upper_arm")[0]
+    R_new = _rotation_between((R_ref_upper @ d_local[..., None])[..., 0], d_new) @ R_ref_upper
+    R_ref_torso = pose.segment("torso")[0]
+    angles = bm.shoulder_angles(np.swapaxes(R_ref_torso, -1, -2) @ R_new, side)
+    out = q.copy()
+    out[:, j:j + 3], out[:, j + 3] = angles, eb
+    ok &= np.all(np.isfinite(out), axis=1) & body.free_limits.inside(out)
+    return np.where(ok[:, None], out, q)

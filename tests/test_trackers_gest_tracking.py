@@ -1,0 +1,151 @@
+"""GEST (Menezes sec. 6.1) as a tracker: the projected contour against the dual-quadric
+projection, the region-of-interest crop, border-cut blobs, triangulation against OpenCV, and
+tracking, losing and re-acquiring a synthetic hand in a stereo pair; the reach scenario's
+accuracy."""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+import pytest
+from _synth_vision import SKIN_RGB, clutter_background, stereo_head
+
+from humimic.bodymodel.kinematics import ypr_matrix
+from humimic.perception.blobs.config import DEFAULT_COLOR_MODEL
+from humimic.perception.cues.color_models import ColorLUT, load_color_model
+from humimic.perception.cues.importance import Blobs
+from humimic.perception.trackers.gest.config import GestConfig
+from humimic.perception.trackers.gest.likelihood import hand_view, project_hands
+from humimic.perception.trackers.gest.roi import crop_frame, roi_box
+from humimic.perception.trackers.gest.stereo import interior_blobs, triangulate_pixels
+from humimic.perception.trackers.gest.tracker import GestTracker
+from humimic.sensors.camera_model import CameraImage, invert_transform
+
+HAND = np.array([1.0, 0.05, 1.15, 0.3, 0.2, 1.2, 0.045, 0.022, 0.08])
+
+
+def _pixel_conic(state: np.ndarray, cam) -> np.ndarray:
+    """The image conic of the hand ellipsoid by projecting its *dual* quadric,
+    ``C* = P Q* P^T`` (Hartley & Zisserman result 8.9), ``C = (C*)^-1`` -- not eq. 15."""
+    R = ypr_matrix(*state[3:6])
+    T = np.eye(4)
+    T[:3, :3], T[:3, 3] = R * state[6:], state[:3]          # unit sphere -> ellipsoid
+    Q_dual = T @ np.diag([1.0, 1.0, 1.0, -1.0]) @ T.T
+    P = cam.intrinsics.K @ invert_transform(cam.T_base_cam)[:3]
+    return np.linalg.inv(P @ Q_dual @ P.T)
+
+
+def test_contour_points_and_normals_lie_on_the_dual_quadric_projection():
+    cam, _ = stereo_head(k1=0.0, k2=0.0)
+    rng = np.random.default_rng(1)
+    states = HAND + np.c_[rng.normal(0, 0.1, (6, 3)), rng.normal(0, 1.0, (6, 3)),
+                          np.zeros((6, 3))]
+    view = hand_view(CameraImage(0.0, cam, np.zeros((240, 320, 3), np.uint8)), 32)
+    proj = project_hands(states, view, 20)
+    assert proj.valid.all()
+    for s, uv, nrm, patch in zip(states, proj.contour, proj.normal, proj.patch_state,
+                                 strict=True):
+        C = _pixel_conic(s, cam)
+        x = np.c_[uv, np.ones(len(uv))]
+        grad = x @ C                                         # conic gradient at each point
+        scale = np.linalg.norm(grad[:, :2], axis=1) * np.linalg.norm(uv - uv.mean(0), axis=1)
+        np.testing.assert_allclose(np.einsum("ij,ij->i", x, grad) / scale, 0.0, atol=1e-9)
+        g = grad[:, :2] / np.linalg.norm(grad[:, :2], axis=1, keepdims=True)
+        np.testing.assert_allclose(np.abs(np.einsum("ij,ij->i", g, nrm)), 1.0, atol=1e-9)
+        centre = np.linalg.solve(C[:2, :2], -C[:2, 2])      # the conic's centre
+        np.testing.assert_allclose(patch[:2], centre, atol=1e-6)
+
+
+def test_a_crop_is_a_shift_of_the_principal_point():
+    cam, _ = stereo_head()
+    frame = CameraImage(0.0, cam, clutter_background(np.random.default_rng(0)))
+    box = roi_box(np.array([[100.0, 50.0, 30.0, 40.0]]), 320, 240, 30.0)
+    assert box == (70, 20, 160, 120)
+    crop = crop_frame(frame, box)
+    p = np.array([[1.0, 0.1, 1.2], [1.2, 0.0, 1.1]])
+    np.testing.assert_allclose(crop.camera.project_base(p), cam.project_base(p) - box[:2],
+                               atol=1e-9)
+    np.testing.assert_array_equal(crop.image, frame.image[20:120, 70:160])
+    assert roi_box(np.zeros((0, 4)), 320, 240, 30.0) is None
+
+
+def test_blobs_cut_by_the_border_are_dropped():
+    b = Blobs(np.array([[5.0, 50], [100, 100], [300, 200]]),
+              np.array([[0.0, 40, 12, 20], [90, 90, 20, 20], [290, 190, 30, 40]]),
+              np.array([200.0, 300, 900]))
+    kept = interior_blobs(b, 320, 240, 1.0)
+    np.testing.assert_array_equal(kept.centers, [[100, 100]])
+
+
+def test_triangulate_pixels_matches_opencv():
+    cam_l, cam_r = stereo_head(k1=0.0, k2=0.0)
+    p = np.array([[0.9, 0.1, 1.1], [1.4, -0.3, 1.3]])
+    uv_l, uv_r = cam_l.project_base(p), cam_r.project_base(p)
+    P1, P2 = (c.intrinsics.K @ invert_transform(c.T_base_cam)[:3] for c in (cam_l, cam_r))
+    X = cv2.triangulatePoints(P1, P2, uv_l.T, uv_r.T)
+    np.testing.assert_allclose(triangulate_pixels(cam_l, cam_r, uv_l, uv_r),
+                               (X[:3] / X[3]).T, atol=1e-9)
+
+
+def _draw(backgrounds, cams, hands) -> list[CameraImage]:
+    """The skin ellipsoids ``hands`` drawn over the backgrounds of both eyes."""
+    out = []
+    for img0, cam in zip(backgrounds, cams, strict=True):
+        img = img0.copy()
+        view = hand_view(CameraImage(0.0, cam, img), 32)
+        for h in hands:
+            outline = project_hands(h[None], view, 64).contour[0]
+            cv2.fillPoly(img, [np.round(outline * 16).astype(np.int32)], SKIN_RGB,
+                         cv2.LINE_AA, shift=4)
+        out.append(CameraImage(0.0, cam, img))
+    return out
+
+
+def test_tracks_loses_at_the_border_and_reacquires_near_the_exit():
+    """A hand moving 5 mm per frame over a plain wall, then above the image while the other
+    hand hangs 0.5 m away, then back. Measured (seeds 0-2): 1-21 mm error while tracked (the
+    blob triangulation itself 3-11 mm off: anti-aliased rims under the default skin model);
+    lost at once; back to tracking within one frame, 14-25 mm off; the other hand never
+    taken."""
+    lut = ColorLUT(load_color_model(DEFAULT_COLOR_MODEL), 6)
+    cams = stereo_head(k1=0.0, k2=0.0)
+    bgs = [np.full((240, 320, 3), 70, np.uint8)] * 2
+    other = HAND + np.r_[0.0, -0.25, -0.45, np.zeros(6)]
+    trk = GestTracker(GestConfig(), lut)
+    rng = np.random.default_rng(0)
+    path = ([HAND + np.r_[0.0, 0.005 * k, 0.0, np.zeros(6)] for k in range(12)]
+            + [HAND + np.r_[0.0, 0.06, 0.6, np.zeros(6)]] * 4
+            + [HAND + np.r_[0.0, 0.06, 0.0, np.zeros(6)]] * 4)
+    status, err = [], []
+    for hand in path:
+        res = trk.step(*_draw(bgs, cams, [hand, other]), rng)
+        status.append(res.status)
+        err.append(np.linalg.norm(res.mean[:3] - hand[:3]) if res.mean is not None else None)
+    assert status[:12] == ["tracking"] * 12
+    assert max(err[:12]) < 0.045                                   # measured <= 21 mm
+    assert status[12:16] == ["lost"] * 4                           # above the image
+    assert "tracking" in status[16:18] and status[-1] == "tracking"
+    assert max(e for e, s in zip(err[16:], status[16:], strict=True)
+               if s == "tracking") < 0.05                          # the hand, not the other
+
+
+def test_reach_scenario_position_error(tmp_path):
+    """menezes_gest_reach's first 1.5 s (the hand 0.75-1.0 m away): measured 8.0-8.7 mm RMS
+    (seeds 3, 4). Over the whole 4 s, seeds 3-5: 8.4-9.1 mm (hand 0.5-0.9 m: 8.7-9.9;
+    1.0-1.3 m: 13.2-15.9)."""
+    from humimic.paths import SCENARIOS_DIR
+    from humimic.run import run_one
+    from humimic.scenario import load_scenario
+
+    sc = load_scenario(SCENARIOS_DIR / "menezes_gest_reach.yaml", ["output.plots=false"],
+                       duration=1.5)
+    m = run_one(sc, tmp_path, rerun="off", progress=False)["trackers"]["gest"]
+    assert m["tracked_in_view_fraction"] >= 0.95
+    assert m["position_rmse_mm"] < 25.0
+
+
+@pytest.mark.parametrize("bad", [{"gate_m": 0.0}, {"proposal": "inertia"},
+                                 {"reacquire_frames": -1}])
+def test_bad_settings_are_rejected(bad):
+    with pytest.raises(ValueError):
+        GestConfig(**bad)
