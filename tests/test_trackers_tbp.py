@@ -92,7 +92,8 @@ def rendered_pointing():
         mujoco.mj_forward(world.scene.model, world.scene.data)
         frames.append(world.eye_rig.capture(t)[stage.camera])
     world.eye_rig.close()
-    view = arm_view(frames[1], trk.flow(frames[0].image, frames[1].image), trk.lut, 32)
+    view = arm_view(frames[1], trk.flow(frames[0].image, frames[1].image), trk.lut, 32,
+                    trk.cfg.edges == "colour")
     truth = truth_state(world, tick, "base")
     trk._first_frame(view, truth[:6])
     refs = patch_histograms_all(project_arms(trk.body, truth[None, 6:], truth[:6], view, 4),
@@ -101,10 +102,11 @@ def rendered_pointing():
 
 
 #: DOF index, margin (nats) of the true pose over +-20 deg on it; measured (the smaller of
-#: the two signs) with the tracker's defaults: R_SFE 0.38 (+20 deg moves the raised arm
-#: towards the camera: monocular depth), R_SAA 25, R_HR 0.99, R_EB 8.9, L_SFE 13, L_SAA 12,
-#: L_HR 0.27 (the hanging arm's twist is unobservable: the stabiliser alone), L_EB 2.8.
-MARGINS = [(0, 0.1), (1, 8.0), (2, 0.3), (3, 3.0), (4, 4.5), (5, 4.0), (6, 0.08), (7, 1.0)]
+#: the two signs) with the tracker's defaults (colour-gradient edges): R_SFE 0.44 (+20 deg
+#: moves the raised arm towards the camera: monocular depth), R_SAA 27, R_HR 3.3, R_EB 12,
+#: L_SFE 4.4, L_SAA 9.2, L_HR 0.34 (the hanging arm's twist is unobservable: the stabiliser
+#: alone), L_EB 2.4. (Grey edges: R_HR 0.99, R_EB 8.9, L_SFE 13, L_SAA 12.)
+MARGINS = [(0, 0.15), (1, 9.0), (2, 1.1), (3, 4.0), (4, 1.5), (5, 3.0), (6, 0.1), (7, 0.8)]
 
 
 @pytest.mark.parametrize(("dof", "margin"), MARGINS)
@@ -137,3 +139,39 @@ def test_kalman_filter_overshoots_an_end_stop_the_particle_filter_cannot():
     np.testing.assert_array_equal(beyond_limits(np.clip(est, lo, hi), lo, hi), 0.0)
     np.testing.assert_allclose(beyond_limits(np.array([[-0.1, 0.2, 3.0]]), lo, hi),
                                [[0.1, 0.0, 3.0 - hi[2]]])
+
+
+def test_tbp_follows_fig13s_arms_in_clutter():
+    """The first 1.5 s of fig13 (both arms abducting in front of the cluttered cupboard; torso
+    from the truth so that only the tracker is scored), seed 0. Measured over seeds 0-5: joint
+    RMSE 16-21 deg, wrist RMSE 97-178 mm (40-154 in the image plane: the right arm lags its
+    abduction by up to 48 deg at 1.5 s before catching up later in the run), the left arm's
+    abduction 2 deg."""
+    from humimic.perception.trackers.tbp.build import tbp_stage
+    from humimic.world.world import World
+
+    sc = load_scenario(SCENARIOS_DIR / "fig13_tbp_clutter.yaml", ["trackers.tbp.torso=truth"],
+                       duration=1.6)
+    rngs = Rngs(sc.seed)
+    world = World(sc, rngs)
+    stage = tbp_stage("tbp", sc.trackers["tbp"], sc, world, rngs, None)
+    trk, rng = stage.tracker, np.random.default_rng(0)
+    body, err, wrist = trk.body, [], []
+    for k in range(45):
+        tick = world.gt.index_of(k / 30)
+        world.apply_human(tick)
+        mujoco.mj_forward(world.scene.model, world.scene.data)
+        frame = world.eye_rig.capture(k / 30)[stage.camera]
+        truth = truth_state(world, tick, "base")
+        mean, _, _ = trk.step(frame, truth[:6], rng)
+        err.append(mean - truth[6:])
+        p_est = body.forward(mean[None], fixed=truth[:6])
+        p_true = body.forward(truth[None, 6:], fixed=truth[:6])
+        wrist += [(p_est.joint(w) - p_true.joint(w))[0] for w in ("r_wrist", "l_wrist")]
+    world.eye_rig.close()
+    per_dof = np.degrees(np.sqrt(np.mean(np.square(err), axis=0)))
+    joints = np.degrees(np.sqrt(np.mean(np.square(err))))
+    wrist_mm = 1e3 * np.sqrt(np.mean(np.sum(np.square(wrist), axis=1)))
+    assert joints < 40.0, joints
+    assert wrist_mm < 400.0, wrist_mm
+    assert per_dof[ARM_NAMES.index("L_SAA")] < 6.0, per_dof

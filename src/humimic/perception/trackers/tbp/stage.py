@@ -1,7 +1,9 @@
 """The TBP pipeline stage: one eye image (+ the torso pose) -> eight arm angles on ``poses``;
 scores against the avatar (``trackers.<name>.*``): ``joint_rmse_deg`` (all eight angles and
 per DOF), ``elbow_rmse_mm``, ``wrist_rmse_mm`` (both arms pooled, 3-D, base frame),
-``wrist_within_10cm_fraction`` and ``torso_source`` (``truth`` is an oracle).
+``wrist_within_10cm_fraction``, the wrist error split into the camera's depth and its image
+plane (``wrist_depth_rmse_mm``, ``wrist_image_plane_rmse_mm``), ``shoulder_rmse_mm`` (where
+the torso placement put the shoulders) and ``torso_source`` (``truth`` is an oracle).
 
 With ``torso: head`` the torso is placed from the latest ``head`` measurement on the bus
 (upright, facing the robot: the paper's coarsely fronto-parallel torso with shoulders deduced
@@ -48,6 +50,9 @@ class TbpStage(PoseTrackerStage):
         self.torsos: list = []
         self.means: list = []
         self.cams: list = []
+        self.recorded: list | None = None
+        """Set to a list to keep every frame's ``(t, frame, torso)`` (offline replays:
+        ``benchmarks/diagnose_tbp.py``)."""
 
     def attach(self, bus, timer) -> None:
         super().attach(bus, timer)
@@ -72,6 +77,8 @@ class TbpStage(PoseTrackerStage):
             self.cams.append(None)
             return PoseEstimate(self.tracker_name, self.kind, np.full(8, np.nan), ARM_NAMES,
                                 status="searching")
+        if self.recorded is not None:
+            self.recorded.append((t, frame, torso))
         mean, cov, ok = self.tracker.step(frame, torso, self.rng)
         self.torsos.append(torso)
         self.means.append(mean)
@@ -143,12 +150,18 @@ class TbpStage(PoseTrackerStage):
             return p_est.joint(name) - p_true.joint(name)
         elbow = np.vstack([joint_err("r_elbow"), joint_err("l_elbow")])
         wrist = np.vstack([joint_err("r_wrist"), joint_err("l_wrist")])
+        shoulder = np.vstack([joint_err("r_shoulder"), joint_err("l_shoulder")])
+        R_cam = np.array([self.cams[i].T_base_cam[:3, :3] for i in use] * 2)
+        wrist_cam = np.einsum("nji,nj->ni", R_cam, wrist)            # camera frame, z = depth
         out.update({
             "joint_rmse_deg": float(np.sqrt(np.mean(err ** 2))),
             "joint_rmse_deg_per_dof": {n: float(np.sqrt(np.mean(err[:, k] ** 2)))
                                        for k, n in enumerate(ARM_NAMES)},
             "elbow_rmse_mm": 1e3 * rmse(elbow), "wrist_rmse_mm": 1e3 * rmse(wrist),
             "right_wrist_rmse_mm": 1e3 * rmse(joint_err("r_wrist")),
+            "wrist_depth_rmse_mm": 1e3 * rmse(wrist_cam[:, 2:]),
+            "wrist_image_plane_rmse_mm": 1e3 * rmse(wrist_cam[:, :2]),
+            "shoulder_rmse_mm": 1e3 * rmse(shoulder),
             "wrist_within_10cm_fraction": float(np.mean(np.linalg.norm(wrist, axis=1) <= 0.1)),
         })
         return out
