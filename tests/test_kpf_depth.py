@@ -1,0 +1,65 @@
+"""The kpf's depth-aware proposal (``wrist_depth_move``) against closed-form geometry: the moved
+wrist stays on the camera ray through the old one, its distance to the camera changes by the
+requested amount, the shoulder and the other arm stay put, the segments keep their lengths and
+the smallest-rotation helper matches scipy's ``Rotation.align_vectors``."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+from humimic.perception.trackers.kpf.depth import _rotation_between, wrist_depth_move
+from humimic.perception.trackers.kpf.tracker import kpf_body
+
+
+def _camera() -> np.ndarray:
+    """T_cam_base of a camera 2 m in front of the body looking back at it (OpenCV axes)."""
+    R_base_cam = np.column_stack([[0, 1, 0], [0, 0, -1], [-1, 0, 0]]).astype(float)
+    T = np.eye(4)
+    T[:3, :3], T[:3, 3] = R_base_cam.T, -R_base_cam.T @ np.array([2.0, 0.0, 1.3])
+    return T
+
+
+def test_wrist_moves_along_its_camera_ray_by_delta():
+    body = kpf_body()
+    rng = np.random.default_rng(4)
+    n = 200
+    q = np.zeros((n, 14))
+    q[:, 2], q[:, 3] = 0.0, np.pi                      # torso at the base origin, facing +x
+    q[:, 6:10] = rng.uniform([-0.3, 0.1, -0.5, 0.3], [1.2, 1.2, 0.5, 1.5], (n, 4))
+    q[:, 10:14] = rng.uniform([-0.3, 0.1, -0.5, 0.3], [1.2, 1.2, 0.5, 1.5], (n, 4))
+    q = body.free_limits.clamp(q)
+    delta = rng.uniform(-0.15, 0.15, n)
+    T = _camera()
+    out = wrist_depth_move(body, q, "R", delta, T)
+    moved = np.any(out != q, axis=1)
+    assert moved.mean() > 0.5                           # most stay in reach and limits
+    assert np.array_equal(out[:, :6], q[:, :6]) and np.array_equal(out[:, 10:], q[:, 10:])
+    a, b = body.forward(q).to(T), body.forward(out).to(T)
+    w0, w1 = a.joint("r_wrist")[moved], b.joint("r_wrist")[moved]
+    # same ray (camera centre at the origin): parallel vectors; range changed by delta
+    cos = np.sum(w0 * w1, 1) / np.linalg.norm(w0, axis=1) / np.linalg.norm(w1, axis=1)
+    assert np.all(cos > 1 - 1e-10)
+    np.testing.assert_allclose(np.linalg.norm(w1, axis=1) - np.linalg.norm(w0, axis=1),
+                               delta[moved], atol=1e-9)
+    np.testing.assert_allclose(a.joint("r_shoulder"), b.joint("r_shoulder"), atol=1e-12)
+    for j0, j1 in (("r_shoulder", "r_elbow"), ("r_elbow", "r_wrist")):
+        np.testing.assert_allclose(np.linalg.norm(b.joint(j1) - b.joint(j0), axis=1),
+                                   np.linalg.norm(a.joint(j1) - a.joint(j0), axis=1), atol=1e-9)
+    # untouched: out of reach or out of the joint limits
+    assert np.all(body.free_limits.inside(out))
+
+
+def test_rotation_between_matches_scipy():
+    rng = np.random.default_rng(0)
+    a, b = rng.normal(size=(50, 3)), rng.normal(size=(50, 3))
+    R = _rotation_between(a, b)
+    for k in range(50):
+        ref, _ = Rotation.align_vectors(b[k][None], a[k][None])
+        np.testing.assert_allclose(R[k], ref.as_matrix(), atol=1e-9)
+    R = _rotation_between(np.array([[1.0, 0, 0], [0, 1.0, 0]]), np.array([[-2.0, 0, 0],
+                                                                          [0, 3.0, 0]]))
+    np.testing.assert_allclose(R[0] @ [1, 0, 0], [-1, 0, 0], atol=1e-12)
+    assert np.linalg.det(R[0]) == pytest.approx(1.0)
+    np.testing.assert_allclose(R[1], np.eye(3), atol=1e-12)
