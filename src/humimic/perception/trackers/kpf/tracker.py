@@ -195,12 +195,13 @@ class KpfTracker:
         pred, moved = kpf.mixed_propagate(resampled, velocity, self.share, self.D,
                                           rng, self.limits.inside, cfg.motion_noise)
         pred = self.limits.clamp(pred)
-        if cfg.depth_share > 0.0:
-            pred = self._depth_moves(pred, T_cam_base, cfg.depth_share)
+        prior = pred
+        if cfg.depth_share > 0.0:   # a proposal: the reweighting keeps the dynamics' KDE
+            pred = self._depth_moves(pred.copy(), T_cam_base, cfg.depth_share)
         lik = (self._group_log_lik if cfg.partitioned else self._log_lik)(maps, T_cam_base)
         parts, W, ll, iters = kpf.kpf_modes(pred, lik, self.D, cfg.iterations, cfg.tol,
                                             cfg.shrink, cfg.reweight == "kernel", groups,
-                                            cfg.kde_stride)
+                                            cfg.kde_stride, prior)
         best = float(np.max(ll[:, 0]))
         for _ in range(cfg.rescue_passes):
             # the best particle fell well below the last frame's: the search lost the pose
