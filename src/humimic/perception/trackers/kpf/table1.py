@@ -2,13 +2,14 @@
 mean-shift iterations, side and angular pointing) and print it beside the paper's.
 
 ``python -m humimic.perception.reproduce schmidt-table1 [--out DIR] [--jobs N] [--seeds N]
-[--duration S] [--particles N ...] [--no-run]`` runs ``sweeps/schmidt_table1.yaml`` through the sweep tool (complete
-runs are skipped), then reads every run's ``metrics.json``. Each run holds three trackers on the
-same frames (``scenarios/schmidt_table1.yaml``): ``kpf`` (ours: partitioned mean shift, torso
-prior), ``kpf_paper`` (the published method) and ``condensation``. Per run the error is the mean
-over frames of the distance between the true wrist and the model's forearm end; the table gives
-its mean and standard deviation over the seeds (the paper's "Var." column is read as the
-spread over its 5 runs, in mm), and the error split into image-plane and depth components.
+[--duration S] [--particles N ...] [--no-run]`` runs ``sweeps/schmidt_table1.yaml`` (the rows
+of those particle counts; default all) through the sweep tool (complete runs are skipped),
+then reads every run's ``metrics.json``. Each run holds three trackers on the same frames
+(``scenarios/schmidt_table1.yaml``): ``kpf`` (ours: partitioned mean shift, torso prior),
+``kpf_paper`` (the published method) and ``condensation``. Per run the error is the mean over
+frames of the distance between the true wrist and the model's forearm end; the table gives its
+mean and standard deviation over the seeds (the paper's "Var." column is read as the spread
+over its 5 runs, in mm), and the error split into image-plane and depth components.
 """
 
 from __future__ import annotations
