@@ -69,8 +69,9 @@ def test_poses_published_per_frame_and_scored(run):
     assert isinstance(p, PoseEstimate) and p.tracker == "kpf" and len(p.state) == 14
     assert set(p.joints) >= {"r_wrist", "r_elbow", "l_wrist"} and p.cov.shape == (14, 14)
     assert set(p.angles) == {"R_SFE", "R_SAA", "R_HR", "R_EB", "L_SFE", "L_SAA", "L_HR", "L_EB"}
-    # measured 119 mm (the covered frames keep the last pose while the arm rises)
-    assert m["wrist_error_mm"] < 250.0
+    # measured 119-139 mm (the covered frames keep the last pose while the arm rises; the
+    # value moves with rounding-level changes of the maths: one seed, 15 frames)
+    assert m["wrist_error_mm"] < 300.0
     assert m["wrist_lateral_mm"] < m["wrist_error_mm"] + 1e-9
     assert m["frames_per_s"] > 0.0 and 0.0 <= m["lost_fraction"] <= 1.0
     assert m["joint_rmse_deg"] < 40.0                   # measured 16 deg

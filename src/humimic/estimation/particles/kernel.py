@@ -159,7 +159,8 @@ def mixed_propagate(particles: np.ndarray, velocity: np.ndarray, share: float, D
 def kpf_modes(particles: np.ndarray, log_lik_fn: Callable[[np.ndarray], np.ndarray],
               h0: np.ndarray, iterations: int, tol: float = 1e-3, shrink: float = 0.8,
               reweight: bool = True, groups: list[np.ndarray] | None = None,
-              stride: int = 1) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+              stride: int = 1, prior: np.ndarray | None = None
+              ) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
     """Mean-shift mode seeking of a predicted particle set (Schmidt sec. 5.2): weight by the
     likelihood, then up to ``iterations`` times shift every particle (eq. 13, bandwidth
     ``h = shrink^i h0``) and reweight (:func:`kernel_log_weights` with ``stride``, or the
@@ -171,7 +172,9 @@ def kpf_modes(particles: np.ndarray, log_lik_fn: Callable[[np.ndarray], np.ndarr
     dimensions affect (e.g. a torso group with the whole pose's, an arm group with that arm's
     limbs), and each group is shifted and reweighted with its own weights over its own
     dimensions (a product kernel). Returns particles, normalised weights ``(N, G)``,
-    log-likelihoods ``(N, G)`` and the iterations done."""
+    log-likelihoods ``(N, G)`` and the iterations done. ``prior`` (default: ``particles``) are
+    samples of the prior whose KDE the reweighting uses, when ``particles`` were drawn from
+    another proposal (e.g. some of them moved along a direction the dynamics rarely take)."""
     d = particles.shape[1]
     groups = [np.arange(d)] if groups is None else [np.asarray(g) for g in groups]
     h0 = _bandwidth(h0, d)
@@ -181,7 +184,7 @@ def kpf_modes(particles: np.ndarray, log_lik_fn: Callable[[np.ndarray], np.ndarr
 
     lik = lik_of(particles)
     W = np.stack([weights(lik[:, g]) for g in range(len(groups))], axis=1)
-    prior = particles
+    prior = particles if prior is None else prior
     done = 0
     for i in range(iterations):
         h = shrink ** i * h0

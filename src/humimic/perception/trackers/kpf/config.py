@@ -89,6 +89,8 @@ class KpfConfig(Section):
     resample / random-walk / mean-shift passes in the same frame (kept if better); 0: off,
     as the paper."""
     rescue_drop: float = Field(2.0, gt=0.0, le=100.0)
+    rescue_depth_share: float = Field(0.0, ge=0.0, le=1.0)
+    """The share of depth moves (``depth_share``) in the rescue passes."""
     depth_share: float = Field(0.0, ge=0.0, le=1.0)
     """Our extension: the share of particles whose wrist is moved along its camera ray per arm
     and frame (:func:`~humimic.perception.trackers.kpf.depth.wrist_depth_move`); 0: off, as

@@ -2,13 +2,14 @@
 mean-shift iterations, side and angular pointing) and print it beside the paper's.
 
 ``python -m humimic.perception.reproduce schmidt-table1 [--out DIR] [--jobs N] [--seeds N]
-[--duration S] [--no-run]`` runs ``sweeps/schmidt_table1.yaml`` through the sweep tool (complete
-runs are skipped), then reads every run's ``metrics.json``. Each run holds three trackers on the
-same frames (``scenarios/schmidt_table1.yaml``): ``kpf`` (ours: partitioned mean shift, torso
-prior), ``kpf_paper`` (the published method) and ``condensation``. Per run the error is the mean
-over frames of the distance between the true wrist and the model's forearm end; the table gives
-its mean and standard deviation over the seeds (the paper's "Var." column is read as the
-spread over its 5 runs, in mm), and the error split into image-plane and depth components.
+[--duration S] [--particles N ...] [--no-run]`` runs ``sweeps/schmidt_table1.yaml`` (the rows
+of those particle counts; default all) through the sweep tool (complete runs are skipped),
+then reads every run's ``metrics.json``. Each run holds three trackers on the same frames
+(``scenarios/schmidt_table1.yaml``): ``kpf`` (ours: partitioned mean shift, torso prior),
+``kpf_paper`` (the published method) and ``condensation``. Per run the error is the mean over
+frames of the distance between the true wrist and the model's forearm end; the table gives its
+mean and standard deviation over the seeds (the paper's "Var." column is read as the spread
+over its 5 runs, in mm), and the error split into image-plane and depth components.
 """
 
 from __future__ import annotations
@@ -91,8 +92,13 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--seeds", type=int, default=None, help="seeds per point (default: 5)")
     p.add_argument("--duration", type=float, default=None, help="simulated s per run")
     p.add_argument("--no-run", action="store_true", help="only read finished runs")
+    p.add_argument("--particles", type=int, nargs="+", default=None,
+                   help="only these rows of Table 1 (by particles, e.g. 1000 150)")
     args = p.parse_args(argv)
     sweep = load_sweep(SWEEP)
+    if args.particles is not None:
+        sweep.config.cases = [c for c in sweep.config.cases
+                              if c["trackers.kpf.particles"] in args.particles]
     if args.seeds is not None:
         sweep.config.seeds = args.seeds
     if args.duration is not None:

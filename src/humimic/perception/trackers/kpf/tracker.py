@@ -195,12 +195,13 @@ class KpfTracker:
         pred, moved = kpf.mixed_propagate(resampled, velocity, self.share, self.D,
                                           rng, self.limits.inside, cfg.motion_noise)
         pred = self.limits.clamp(pred)
-        if cfg.depth_share > 0.0:
-            pred = self._depth_moves(pred, T_cam_base)
+        prior = pred
+        if cfg.depth_share > 0.0:   # a proposal: the reweighting keeps the dynamics' KDE
+            pred = self._depth_moves(pred.copy(), T_cam_base, cfg.depth_share)
         lik = (self._group_log_lik if cfg.partitioned else self._log_lik)(maps, T_cam_base)
         parts, W, ll, iters = kpf.kpf_modes(pred, lik, self.D, cfg.iterations, cfg.tol,
                                             cfg.shrink, cfg.reweight == "kernel", groups,
-                                            cfg.kde_stride)
+                                            cfg.kde_stride, prior)
         best = float(np.max(ll[:, 0]))
         for _ in range(cfg.rescue_passes):
             # the best particle fell well below the last frame's: the search lost the pose
@@ -210,6 +211,8 @@ class KpfTracker:
                 break
             again = kpf.partitioned_resample(parts, W, groups, rng)
             again = self.limits.clamp(again + rng.uniform(-1.0, 1.0, again.shape) * self.D)
+            if cfg.rescue_depth_share > 0.0:
+                again = self._depth_moves(again, T_cam_base, cfg.rescue_depth_share)
             p2, W2, ll2, it2 = kpf.kpf_modes(again, lik, self.D, cfg.iterations, cfg.tol,
                                              cfg.shrink, cfg.reweight == "kernel", groups,
                                              cfg.kde_stride)
@@ -229,12 +232,13 @@ class KpfTracker:
                              return_index=True)
         return mode, iters, parts[first[np.argsort(-w[first])][:MAX_MODES]]
 
-    def _depth_moves(self, pred: np.ndarray, T_cam_base: np.ndarray) -> np.ndarray:
-        """A ``depth_share`` of the particles per arm get their wrist moved along its camera
-        ray by a uniform range change of half-width ``depth_extent_m``."""
+    def _depth_moves(self, pred: np.ndarray, T_cam_base: np.ndarray, share: float
+                     ) -> np.ndarray:
+        """A ``share`` of the particles per arm get their wrist moved along its camera ray by
+        a uniform range change of half-width ``depth_extent_m``."""
         cfg, rng = self.cfg, self.rng
         for side in ("R", "L"):
-            pick = np.flatnonzero(rng.random(len(pred)) < cfg.depth_share)
+            pick = np.flatnonzero(rng.random(len(pred)) < share)
             delta = rng.uniform(-1.0, 1.0, len(pick)) * cfg.depth_extent_m
             pred[pick] = wrist_depth_move(self.body, pred[pick], side, delta, T_cam_base)
         return pred

@@ -1,0 +1,107 @@
+"""The kpf's depth-aware proposal (``wrist_depth_move``) against closed-form geometry: the moved
+wrist stays on the camera ray through the old one, its distance to the camera changes by the
+requested amount, the shoulder and the other arm stay put, the segments keep their lengths and
+the smallest-rotation helper matches scipy's ``Rotation.align_vectors``."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+from humimic.perception.trackers.kpf.depth import _rotation_between, wrist_depth_move
+from humimic.perception.trackers.kpf.tracker import kpf_body
+
+
+def _camera() -> np.ndarray:
+    """T_cam_base of a camera 2 m in front of the body looking back at it (OpenCV axes)."""
+    R_base_cam = np.column_stack([[0, 1, 0], [0, 0, -1], [-1, 0, 0]]).astype(float)
+    T = np.eye(4)
+    T[:3, :3], T[:3, 3] = R_base_cam.T, -R_base_cam.T @ np.array([2.0, 0.0, 0.2])
+    return T
+
+
+def test_wrist_moves_along_its_camera_ray_by_delta():
+    body = kpf_body()
+    rng = np.random.default_rng(4)
+    n = 200
+    q = np.zeros((n, 14))
+    q[:, 2], q[:, 3] = 0.0, np.pi                      # torso at the base origin, facing +x
+    q[:, 6:10] = rng.uniform([-0.3, 0.1, -0.5, 0.3], [1.2, 1.2, 0.5, 1.5], (n, 4))
+    q[:, 10:14] = rng.uniform([-0.3, 0.1, -0.5, 0.3], [1.2, 1.2, 0.5, 1.5], (n, 4))
+    q = body.free_limits.clamp(q)
+    delta = rng.uniform(-0.15, 0.15, n)
+    T = _camera()
+    out = wrist_depth_move(body, q, "R", delta, T)
+    moved = np.any(out != q, axis=1)
+    assert moved.mean() > 0.5                           # most stay in reach and limits
+    assert np.array_equal(out[:, :6], q[:, :6]) and np.array_equal(out[:, 10:], q[:, 10:])
+    a, b = body.forward(q).to(T), body.forward(out).to(T)
+    w0, w1 = a.joint("r_wrist")[moved], b.joint("r_wrist")[moved]
+    # same ray (camera centre at the origin): parallel vectors; range changed by delta
+    cos = np.sum(w0 * w1, 1) / np.linalg.norm(w0, axis=1) / np.linalg.norm(w1, axis=1)
+    assert np.all(cos > 1 - 1e-10)
+    np.testing.assert_allclose(np.linalg.norm(w1, axis=1) - np.linalg.norm(w0, axis=1),
+                               delta[moved], atol=1e-9)
+    np.testing.assert_allclose(a.joint("r_shoulder"), b.joint("r_shoulder"), atol=1e-12)
+    for j0, j1 in (("r_shoulder", "r_elbow"), ("r_elbow", "r_wrist")):
+        np.testing.assert_allclose(np.linalg.norm(b.joint(j1) - b.joint(j0), axis=1),
+                                   np.linalg.norm(a.joint(j1) - a.joint(j0), axis=1), atol=1e-9)
+    # untouched: out of reach or out of the joint limits
+    assert np.all(body.free_limits.inside(out))
+
+
+def test_rotation_between_matches_scipy():
+    rng = np.random.default_rng(0)
+    a, b = rng.normal(size=(50, 3)), rng.normal(size=(50, 3))
+    R = _rotation_between(a, b)
+    for k in range(50):
+        ref, _ = Rotation.align_vectors(b[k][None], a[k][None])
+        np.testing.assert_allclose(R[k], ref.as_matrix(), atol=1e-9)
+    R = _rotation_between(np.array([[1.0, 0, 0], [0, 1.0, 0]]), np.array([[-2.0, 0, 0],
+                                                                          [0, 3.0, 0]]))
+    np.testing.assert_allclose(R[0] @ [1, 0, 0], [-1, 0, 0], atol=1e-12)
+    assert np.linalg.det(R[0]) == pytest.approx(1.0)
+    np.testing.assert_allclose(R[1], np.eye(3), atol=1e-12)
+
+
+def test_tracker_with_depth_moves_and_rescue_holds_a_static_synthetic_person():
+    """The tracker's extensions end to end on a rasterised body model (skin-coloured head and
+    hands, distinct limb colours, a static pose): with depth moves and rescue passes (forced
+    every frame) on, the estimate stays on the person: right wrist within 12 cm over 4 frames
+    (measured 24-46 mm, seed 0; even this perfect image pins the depth only to a few cm)."""
+    from humimic import bodymodel as bm
+    from humimic.perception.blobs.config import DEFAULT_COLOR_MODEL
+    from humimic.perception.cues.color_models import ColorLUT, load_color_model
+    from humimic.perception.trackers.kpf.config import KpfConfig
+    from humimic.perception.trackers.kpf.cues import cue_maps
+    from humimic.perception.trackers.kpf.tracker import KpfTracker
+    from humimic.sensors.camera_model import Intrinsics
+
+    body = kpf_body()
+    intr = Intrinsics(320, 240, 260.0, 260.0, 159.5, 119.5)
+    T = _camera()
+    q0 = np.zeros(14)
+    q0[3] = np.pi
+    q0[6:10] = [0.3, 0.9, 0.0, 0.6]                     # right arm raised to the side
+    q0[10:14] = [0.1, 0.2, 0.0, 0.3]
+    labels = bm.label_mask(bm.project(body, body.forward(q0[None]), intr, T))
+    palette = {"torso": (40, 60, 160), "head": (224, 172, 140), "r_hand": (224, 172, 140),
+               "l_hand": (224, 172, 140), "r_upper_arm": (200, 40, 40),
+               "l_upper_arm": (200, 40, 40), "r_forearm": (230, 200, 60),
+               "l_forearm": (230, 200, 60)}
+    img = np.full((240, 320, 3), 90, np.uint8)
+    for p, name in enumerate(body.part_names):
+        img[labels == p + 1] = palette.get(name, (128, 128, 128))
+    lut = ColorLUT(load_color_model(DEFAULT_COLOR_MODEL), 6)
+    cfg = KpfConfig(particles=150, iterations=2, partitioned=True, torso_prior_m=0.03,
+                    kde_stride=4, depth_share=0.3, rescue_passes=1, rescue_drop=0.01)
+    tr = KpfTracker(body, intr, cfg, np.random.default_rng(0))
+    maps = cue_maps(img, lut)
+    tr.start(q0, maps, T)
+    wrist = body.forward(q0[None]).joint("r_wrist")[0]
+    for _ in range(4):
+        res = tr.step(maps, T)
+        assert np.all(np.isfinite(res.particles))
+        err = np.linalg.norm(body.forward(res.mode[None]).joint("r_wrist")[0] - wrist)
+        assert err < 0.12, err
