@@ -7,7 +7,9 @@
 * ``detection_rate``: frames with a valid 3-D measurement / visible frames, counted from the
   end of detection's phase one (``warmup_s``: the tracker is blind by design before it);
   ``None`` when the target is never visible then;
-* ``false_detection_rate``: blob reports (per eye) that are false / all blob reports: the
+* ``false_detection_rate``: blob reports (per eye; a report is a blob carrying the target's
+  name while perception vouches for it, i.e. its identity margin is met: an unsure name is not
+  published) that are false / all blob reports: the
   target is hidden in that eye (out of view or less than :data:`HIDDEN_FRACTION` unoccluded),
   or the blob is on something else (the target's true position lies outside the blob's
   :data:`OFF_TARGET_SIGMA`-sigma ellipse); ``false_detections``: frames with one;
@@ -81,7 +83,7 @@ def visibility_scores(pa, i: int, target: str, vis, p_true: np.ndarray, warmup_s
     ok = pa.ok[:, i]
     after = (pa.t - pa.t[0] >= warmup_s - 1e-9) if len(pa.t) else np.zeros(0, bool)
     scored = visible & after
-    seen = pa.seen[:, i] & after[:, None]
+    seen = pa.seen[:, i] & (pa.confirmed[:, i] & after)[:, None]
     false = seen & hidden_eye
     for eye in (0, 1):
         frames = np.flatnonzero(seen[:, eye] & ~hidden_eye[:, eye])
