@@ -103,7 +103,7 @@ class PeopleMotion:
         import mujoco
 
         self.people = list(people)
-        self.adr, self.head0, self.start = [], [], []
+        self.adr, self.start = [], []
         self.sites0: list[dict[str, np.ndarray]] = []
         d = mujoco.MjData(model)
         mujoco.mj_kinematics(model, d)
@@ -111,7 +111,6 @@ class PeopleMotion:
             pre = f"{PERSON_PREFIX}{i}/"
             self.adr.append((model.jnt_qposadr[model.joint(pre + "root_x").id],
                              model.jnt_qposadr[model.joint(pre + "root_y").id]))
-            self.head0.append(d.site_xpos[model.site(pre + "head").id].copy())
             self.sites0.append({site: d.site_xpos[model.site(pre + site).id].copy()
                                 for site in SKIN_SITES})
             self.start.append(np.array(p.waypoints[0].at, float))
@@ -131,8 +130,3 @@ class PeopleMotion:
         ``t`` (the people only walk: their arms hang, so the site moves with the root)."""
         dl = position(self.people[k].waypoints, t) - self.start[k]
         return self.sites0[k][site] + np.column_stack([dl[:, 0], dl[:, 1], np.zeros(len(dl))])
-
-    def head_world(self, k: int, t: np.ndarray) -> np.ndarray:
-        """Person ``k``'s head centre in the world ``(F, 3)`` at times ``t``."""
-        dl = position(self.people[k].waypoints, t) - self.start[k]
-        return self.head0[k] + np.column_stack([dl[:, 0], dl[:, 1], np.zeros(len(dl))])

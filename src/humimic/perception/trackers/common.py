@@ -256,8 +256,11 @@ class ImageTrackerStage(Stage):
             truth = ImageTruth(truth.uv, truth.size_px, seen & (truth.depth > 0), truth.depth)
         return uv, scale, tracking, truth
 
+    #: The other people's parts scored against (site of :data:`SKIN_SITES`, width m).
+    other_sites: tuple[tuple[str, float], ...] = (("head", HEAD_WIDTH_M),)
+
     def others(self) -> list:
-        """Projected head truths of the other people in the room (``human.people``), for
+        """Projected truths of the other people's :attr:`other_sites` (``human.people``), for
         occlusion and identity switches."""
         if self.people is None:
             return []
@@ -265,8 +268,10 @@ class ImageTrackerStage(Stage):
         T_base_world = invert_transform(self.gt.T_world_base)
         out = []
         for k in range(len(self.people.people)):
-            p = self.people.head_world(k, t) @ T_base_world[:3, :3].T + T_base_world[:3, 3]
-            out.append(project_truth(self.cameras, p, HEAD_WIDTH_M))
+            for site, size in self.other_sites:
+                p = (self.people.site_world(k, site, t) @ T_base_world[:3, :3].T
+                     + T_base_world[:3, 3])
+                out.append(project_truth(self.cameras, p, size))
         return out
 
     def metrics(self) -> dict:

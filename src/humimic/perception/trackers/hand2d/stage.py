@@ -6,10 +6,8 @@ from __future__ import annotations
 import numpy as np
 
 from humimic.messages import Track2D, Tracks2D
-from humimic.metrics.tracks2d import project_truth
 from humimic.perception.trackers.common import HEAD_WIDTH_M, ImageTrackerStage, Overlay
 from humimic.perception.trackers.hand2d.tracker import Hand2DTracker
-from humimic.sensors.camera_model import invert_transform
 
 HAND_WIDTH_M = 0.09
 """The avatar's hand seen palm-on is 9 cm wide (``models/avatar.xml``): the true scale."""
@@ -36,21 +34,9 @@ class Hand2DStage(ImageTrackerStage):
             out["trackers"][self.tracker_name]["others_near_frames"] = int(near.sum())
         return out
 
-    def others(self) -> list:
-        """The other people's face and hands projected (``human.people``): the skin the
-        tracker must not take for the tutor's hand (identity switches, wrong-person frames)."""
-        if self.people is None:
-            return []
-        t = np.array(self.times)
-        T_base_world = invert_transform(self.gt.T_world_base)
-        out = []
-        for k in range(len(self.people.people)):
-            for site, size in (("head", HEAD_WIDTH_M), ("r_hand", HAND_WIDTH_M),
-                               ("l_hand", HAND_WIDTH_M)):
-                p = (self.people.site_world(k, site, t) @ T_base_world[:3, :3].T
-                     + T_base_world[:3, 3])
-                out.append(project_truth(self.cameras, p, size))
-        return out
+    #: The other people's face and hands: the skin the tracker must not take for the tutor's
+    #: hand (identity switches, wrong-person frames).
+    other_sites = (("head", HEAD_WIDTH_M), ("r_hand", HAND_WIDTH_M), ("l_hand", HAND_WIDTH_M))
 
     def track(self, t: float, image: np.ndarray):
         s = self.tracker.step(image)
