@@ -108,6 +108,17 @@ class SpillArray:
         return self
 
 
+def row_blocks(a, start: int, stop: int):
+    """Rows ``[start, stop)`` of ``a`` (a :class:`SpillArray` or an array) as consecutive
+    arrays of at most :data:`BLOCK` rows, aligned to :class:`SpillArray`'s blocks: reductions
+    over a long record without the whole column in memory."""
+    k = start
+    while k < stop:
+        end = min(stop, (k // BLOCK + 1) * BLOCK)
+        yield a[k:end]
+        k = end
+
+
 class SpillRows:
     """An append-only list of per-frame row tuples whose full batches of :data:`BATCH` rows are
     pickled to an unnamed temporary file; :meth:`columns` stacks each column batch by batch.
