@@ -34,14 +34,16 @@ def test_spill_array_matches_numpy(monkeypatch):
 def test_spill_rows_stack_like_a_list(monkeypatch):
     monkeypatch.setattr(spill, "BATCH", 4)
     rng = np.random.default_rng(2)
-    rows = [(float(k), rng.standard_normal((2, 3)), ["", "lost"][k % 2], k % 3 == 0)
-            for k in range(11)]
+    rows = [(float(k), rng.standard_normal((2, 3)),
+             ["", "lost"][k % 2] if k < 8 else "no stereo match", k % 3 == 0)
+            for k in range(11)]  # a later batch with longer strings: the column widens
     log = spill.SpillRows()
     for r in rows:
         log.append(r)
     assert len(log) == 11 and [r[0] for r in log] == [r[0] for r in rows]
     for got, want in zip(log.columns(), zip(*rows, strict=True), strict=True):
         np.testing.assert_array_equal(got, np.array(want))
+        assert got.dtype == np.array(want).dtype
 
 
 def test_row_blocks_cover_the_rows_block_by_block(monkeypatch):

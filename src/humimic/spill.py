@@ -158,6 +158,19 @@ class SpillRows:
             yield from batch
 
     def columns(self) -> list[np.ndarray]:
-        """Column ``j`` is ``np.array([row[j] for row in rows])``, built one batch at a time."""
-        parts = [[np.array(c) for c in zip(*batch, strict=True)] for batch in self._batches()]
-        return [np.concatenate(c) for c in zip(*parts, strict=True)]
+        """Column ``j`` is ``np.array([row[j] for row in rows])``, built one batch at a time
+        into its preallocated result (peak memory: the columns and one batch, not twice the
+        columns)."""
+        out: list[np.ndarray] = []
+        k = 0
+        for batch in self._batches():
+            cols = [np.array(c) for c in zip(*batch, strict=True)]
+            if not out:
+                out = [np.empty((self._n, *c.shape[1:]), c.dtype) for c in cols]
+            for j, c in enumerate(cols):
+                dtype = np.result_type(out[j].dtype, c.dtype)  # e.g. longer strings later
+                if dtype != out[j].dtype:
+                    out[j] = out[j].astype(dtype)
+                out[j][k:k + len(c)] = c
+            k += len(batch)
+        return out
