@@ -24,10 +24,7 @@ part of their moving ancestor, jointless bodies welded to the world as static en
 Usage -- always as a context manager, so Ctrl-C still leaves a complete ``.rrd``::
 
     with RerunLog(scene, "save", out / "run.rrd", recording_id=run_id) as rlog:
-        rlog.log_static_scene()
-        for ...:                       # the simulation loop
-            rlog.log_poses(t)
-    # close() ran: pose buffer flushed, file footer written (also after KeyboardInterrupt)
+        rlog.log_static_scene()        # then rlog.log_poses(t) in the loop; close() on exit
 
 With ``mode="off"`` no stream is created and every method returns at once.
 Pixel coordinates passed in are OpenCV's (pixel centres at integers); rerun's images put pixel
@@ -72,13 +69,10 @@ from humimic.viz.geometry import (
 )
 
 _PIXEL_CENTRE_SHIFT = 0.5  # OpenCV pixel centre (0, 0) -> rerun (0.5, 0.5)
-#: Payload (bytes, estimated) handed to the SDK between blocking flushes. The SDK encodes and
-#: writes on its own threads; without a bound, the end-of-run series of a long run (a column per
-#: joint, 250 000 rows at 420 Hz for ten minutes) queue up faster than they are written: +270 MiB
-#: of peak memory for ten minutes' joint series, +80 MiB with a flush after each.
-BACKLOG_BYTES = 8 << 20
-#: Rows of a series sent as one chunk (a longer series is sent as several).
-SERIES_CHUNK = 1 << 15
+#: Payload (bytes, estimated) handed to the SDK between blocking flushes, and rows of a series
+#: sent as one chunk. The SDK encodes and writes on its own threads: unbounded, ten minutes' joint
+#: series (30 x 250 000 rows) queue up faster than written, +279 MiB of peak memory; +32 MiB so.
+BACKLOG_BYTES, SERIES_CHUNK = 8 << 20, 1 << 15
 #: Estimated cost of one small ``log`` call (a few points or a text), on top of its arrays.
 _LOG_CALL_BYTES = 512
 
