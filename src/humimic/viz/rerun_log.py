@@ -1,22 +1,14 @@
 """One run's rerun recording: the scene, body poses, eye images and every stage's output.
 
 :class:`RerunLog` owns one ``rerun.RecordingStream`` (never the global recording). Everything
-is logged against the ``sim_time`` timeline (simulated seconds). Entity layout::
-
-    world                         z-up world frame (ViewCoordinates RIGHT_HAND_Z_UP, static)
-    world/room/{kind}             the room's static geoms (walls see-through), static
-    world/room/{body}/{kind}      other static bodies of the room (e.g. the screen)
-    world/db/{body}               robot body pose in world (Transform3D, per log_poses call)
-    world/db/{body}/{kind}        its geoms in body coordinates, static; kind is boxes,
-                                  capsules, ellipsoids, cylinders, planes, walls or mesh_{geom}
-    world/human/{body}[/{kind}]   the avatar, the same way
-    world/base                    the robot base frame (static T_world_base + axes); 3-D data
-                                  in base coordinates can be logged under it
-    world/cameras/{cam}           eye-camera pose T_world_cam (OpenCV axes = rerun RDF)
-    world/cameras/{cam}/image     Pinhole (static) + JPEG image; 2-D overlays (blob ellipses)
-                                  go below it, in OpenCV pixel coordinates
-    world/truth/..., world/estimates/...   points, ellipsoids, arrows in world coordinates
-    series/...                    scalar time series         events/...   text logs
+is logged against the ``sim_time`` timeline (simulated seconds). Entity layout: see
+:mod:`humimic.viz.entities`. Here: ``world`` is z-up (static ViewCoordinates); each body's geoms
+are static entities ``{body}/{kind}`` in body coordinates (kind: boxes, capsules, ellipsoids,
+cylinders, planes, walls or mesh_{geom}; room walls see-through) under ``world/room``,
+``world/db`` (robot) and ``world/human``, placed by a Transform3D per :meth:`log_poses`;
+``world/base`` is static T_world_base with axes; ``world/cameras/{cam}`` is T_world_cam
+(OpenCV axes = rerun RDF) and ``.../image`` a static Pinhole + JPEG, with 2-D overlays below it
+in OpenCV pixel coordinates.
 
 Moving bodies are the MuJoCo bodies with a joint (or mocap); jointless children are drawn as
 part of their moving ancestor, jointless bodies welded to the world as static entities.
