@@ -56,3 +56,16 @@ def test_slam_frontend_keys_are_passed_through():
     cfg = SlamConfig(patch_px=15, search_sigma=2.5, max_search_px=30, min_zncc=0.9)
     fe = settings_from_config(cfg).frontend
     assert (fe.patch_px, fe.search_sigma, fe.max_search_px, fe.min_zncc) == (15, 2.5, 30, 0.9)
+
+
+def test_slam_measurement_noise_keys_are_the_filters_parameter_names():
+    from humimic.estimation.ekf.slam import SlamParams
+    from humimic.estimation.ekf.slam_config import SlamConfig, SlamNoise
+    from humimic.estimation.ekf.slam_stage import settings_from_config
+
+    keys = {"sigma_accel", "sigma_gyro", "sigma_px"}
+    assert _fields(SlamParams) & set(SlamNoise.model_fields) == keys
+    cfg = SlamConfig(noise=SlamNoise(sigma_accel=0.7, sigma_gyro=0.02, sigma_px=1.5))
+    slam = settings_from_config(cfg).slam
+    assert (slam.sigma_accel, slam.sigma_gyro, slam.sigma_px) == (0.7, 0.02, 1.5)
+    assert slam != SlamParams()

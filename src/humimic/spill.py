@@ -108,6 +108,17 @@ class SpillArray:
         return self
 
 
+def row_blocks(a, start: int, stop: int):
+    """Rows ``[start, stop)`` of ``a`` (a :class:`SpillArray` or an array) as consecutive
+    arrays of at most :data:`BLOCK` rows, aligned to :class:`SpillArray`'s blocks: reductions
+    over a long record without the whole column in memory."""
+    k = start
+    while k < stop:
+        end = min(stop, (k // BLOCK + 1) * BLOCK)
+        yield a[k:end]
+        k = end
+
+
 class SpillRows:
     """An append-only list of per-frame row tuples whose full batches of :data:`BATCH` rows are
     pickled to an unnamed temporary file; :meth:`columns` stacks each column batch by batch.
@@ -147,6 +158,19 @@ class SpillRows:
             yield from batch
 
     def columns(self) -> list[np.ndarray]:
-        """Column ``j`` is ``np.array([row[j] for row in rows])``, built one batch at a time."""
-        parts = [[np.array(c) for c in zip(*batch, strict=True)] for batch in self._batches()]
-        return [np.concatenate(c) for c in zip(*parts, strict=True)]
+        """Column ``j`` is ``np.array([row[j] for row in rows])``, built one batch at a time
+        into its preallocated result (peak memory: the columns and one batch, not twice the
+        columns)."""
+        out: list[np.ndarray] = []
+        k = 0
+        for batch in self._batches():
+            cols = [np.array(c) for c in zip(*batch, strict=True)]
+            if not out:
+                out = [np.empty((self._n, *c.shape[1:]), c.dtype) for c in cols]
+            for j, c in enumerate(cols):
+                dtype = np.result_type(out[j].dtype, c.dtype)  # e.g. longer strings later
+                if dtype != out[j].dtype:
+                    out[j] = out[j].astype(dtype)
+                out[j][k:k + len(c)] = c
+            k += len(batch)
+        return out

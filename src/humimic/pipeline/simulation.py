@@ -64,8 +64,9 @@ def simulate(world, stages: list[Stage], rlog, bus: Bus | None = None,
     for topic, samples in (("imu", world.imu), ("wiimote", world.wiimote)):
         if samples is not None:
             data, ticks = samples
-            keep = world.faults.keep(topic, len(ticks))
-            inertial.append((topic, data, {int(k): i for i, k in enumerate(ticks) if keep[i]}))
+            keep = world.faults.keep(topic, len(ticks))  # samples kept, walked in tick order
+            rows = np.flatnonzero(keep)
+            inertial.append([topic, data, np.asarray(ticks)[rows], rows, 0])
     with timer.time("render_setup"):  # GL contexts before the clock starts
         for rig in (world.eye_rig, world.head_rig):
             if rig is not None:
@@ -114,9 +115,13 @@ def simulate(world, stages: list[Stage], rlog, bus: Bus | None = None,
                     true = replace(image, camera=world.head_rig.camera_model("headcam"))
                     rlog.log_camera_image(t, "world/cameras/headcam", true, quality)
                 head_frames += 1
-            for topic, data, index in inertial:
-                i = index.get(tick)
-                if i is not None:
+            for sensor in inertial:  # [topic, samples, their ticks, their rows, next one]
+                topic, data, ticks_kept, rows, j = sensor
+                if j < len(rows) and ticks_kept[j] <= tick:
+                    j = sensor[4] = int(np.searchsorted(ticks_kept, tick, side="right"))
+                    if ticks_kept[j - 1] != tick:
+                        continue
+                    i = rows[j - 1]  # of samples sharing a tick (rate > physics), the last
                     R = data.orientation.R[i] if data.orientation is not None else None
                     bus.publish(topic, Stamped(t, InertialReading(data.accel[i], data.gyro[i],
                                                                   R)))

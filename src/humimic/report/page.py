@@ -25,6 +25,7 @@ from humimic.errors import InputError
 from humimic.maths.stats import chi2_band, nees
 from humimic.metrics.flatten import flatten_metrics
 from humimic.metrics.tracking import FILTER_SETTLE_S
+from humimic.viz.plots import MAX_POINTS
 
 #: Frames averaged for the NEES window (0.5 s at 60 Hz).
 NEES_WINDOW = 30
@@ -253,6 +254,9 @@ def tracking_series(archive, target: str) -> dict[str, np.ndarray]:
 
 def _plot_tracking(sub, archive, target: str) -> None:
     s = tracking_series(archive, target)
+    mean = window_mean(s["nees"], NEES_WINDOW)
+    d = slice(None, None, max(1, -(-len(s["t"]) // MAX_POINTS)))  # what is drawn: <= MAX_POINTS
+    s, mean = {k: v[d] for k, v in s.items()}, mean[d]
     ax_e, ax_n = sub.subplots(1, 2)
     for k, (axis, colour) in enumerate(zip("xyz", ("#1f77b4", "#ff7f0e", "#2ca02c"),
                                            strict=True)):
@@ -269,7 +273,7 @@ def _plot_tracking(sub, archive, target: str) -> None:
     lo, hi = chi2_band(NEES_DOF)
     lo_w, hi_w = chi2_band(NEES_DOF, NEES_WINDOW)
     ax_n.semilogy(s["t"], s["nees"], ".", markersize=2, color="#90a4ae", label="per frame")
-    ax_n.semilogy(s["t"], window_mean(s["nees"], NEES_WINDOW), color="#37474f", linewidth=1.2,
+    ax_n.semilogy(s["t"], mean, color="#37474f", linewidth=1.2,
                   label=f"mean of {NEES_WINDOW} frames")
     ax_n.axhspan(lo, hi, color="#2e7d32", alpha=0.08, label="95 % band, one frame")
     ax_n.axhspan(lo_w, hi_w, color="#2e7d32", alpha=0.2, label=f"95 % band, {NEES_WINDOW} frames")

@@ -82,13 +82,15 @@ def log_mimicry(stage, rlog) -> None:
                                      axis=1),
                             names=[f"{axis} {ch.target} true, mapped (m)",
                                    f"{axis} commanded (m)", f"{axis} {ch.site} robot (m)"])
-    step = max(1, int(round(1.0 / (30.0 * rec.dt))))
-    for k in range(0, n, step):
-        cmd = stage.to_world(rec.p_cmd[k])
-        rlog.log_points(t[k], "world/mimic/commanded", cmd, colors=[255, 160, 0], radii=0.015)
-        rlog.log_points(t[k], "world/mimic/reached", stage.to_world(rec.p_robot[k]),
+    ks = np.arange(0, n, max(1, int(round(1.0 / (30.0 * rec.dt)))))  # 30 Hz
+    p_cmd, p_robot = rec.p_cmd[ks], rec.p_robot[ks]  # gathered a block at a time, not per row
+    gaze = (rec.cam_mat[ks], rec.cam_pos[ks]) if stage.gaze is not None else None
+    for i, k in enumerate(ks.tolist()):
+        rlog.log_points(t[k], "world/mimic/commanded", stage.to_world(p_cmd[i]),
+                        colors=[255, 160, 0], radii=0.015)
+        rlog.log_points(t[k], "world/mimic/reached", stage.to_world(p_robot[i]),
                         colors=[0, 200, 255], radii=0.012)
-        if stage.gaze is not None:
-            axes = rec.cam_mat[k].reshape(2, 3, 3)[:, :, 2] * -1.5  # camera -z, 1.5 m
-            rlog.log_arrow(t[k], "world/mimic/gaze", rec.cam_pos[k], axes,
+        if gaze is not None:
+            axes = gaze[0][i].reshape(2, 3, 3)[:, :, 2] * -1.5  # camera -z, 1.5 m
+            rlog.log_arrow(t[k], "world/mimic/gaze", gaze[1][i], axes,
                            colors=[[255, 0, 255], [255, 0, 255]])

@@ -1,22 +1,14 @@
 """One run's rerun recording: the scene, body poses, eye images and every stage's output.
 
 :class:`RerunLog` owns one ``rerun.RecordingStream`` (never the global recording). Everything
-is logged against the ``sim_time`` timeline (simulated seconds). Entity layout::
-
-    world                         z-up world frame (ViewCoordinates RIGHT_HAND_Z_UP, static)
-    world/room/{kind}             the room's static geoms (walls see-through), static
-    world/room/{body}/{kind}      other static bodies of the room (e.g. the screen)
-    world/db/{body}               robot body pose in world (Transform3D, per log_poses call)
-    world/db/{body}/{kind}        its geoms in body coordinates, static; kind is boxes,
-                                  capsules, ellipsoids, cylinders, planes, walls or mesh_{geom}
-    world/human/{body}[/{kind}]   the avatar, the same way
-    world/base                    the robot base frame (static T_world_base + axes); 3-D data
-                                  in base coordinates can be logged under it
-    world/cameras/{cam}           eye-camera pose T_world_cam (OpenCV axes = rerun RDF)
-    world/cameras/{cam}/image     Pinhole (static) + JPEG image; 2-D overlays (blob ellipses)
-                                  go below it, in OpenCV pixel coordinates
-    world/truth/..., world/estimates/...   points, ellipsoids, arrows in world coordinates
-    series/...                    scalar time series         events/...   text logs
+is logged against the ``sim_time`` timeline (simulated seconds). Entity layout: see
+:mod:`humimic.viz.entities`. Here: ``world`` is z-up (static ViewCoordinates); each body's geoms
+are static entities ``{body}/{kind}`` in body coordinates (kind: boxes, capsules, ellipsoids,
+cylinders, planes, walls or mesh_{geom}; room walls see-through) under ``world/room``,
+``world/db`` (robot) and ``world/human``, placed by a Transform3D per :meth:`log_poses`;
+``world/base`` is static T_world_base with axes; ``world/cameras/{cam}`` is T_world_cam
+(OpenCV axes = rerun RDF) and ``.../image`` a static Pinhole + JPEG, with 2-D overlays below it
+in OpenCV pixel coordinates.
 
 Moving bodies are the MuJoCo bodies with a joint (or mocap); jointless children are drawn as
 part of their moving ancestor, jointless bodies welded to the world as static entities.
@@ -24,10 +16,7 @@ part of their moving ancestor, jointless bodies welded to the world as static en
 Usage -- always as a context manager, so Ctrl-C still leaves a complete ``.rrd``::
 
     with RerunLog(scene, "save", out / "run.rrd", recording_id=run_id) as rlog:
-        rlog.log_static_scene()
-        for ...:                       # the simulation loop
-            rlog.log_poses(t)
-    # close() ran: pose buffer flushed, file footer written (also after KeyboardInterrupt)
+        rlog.log_static_scene()        # then rlog.log_poses(t) in the loop; close() on exit
 
 With ``mode="off"`` no stream is created and every method returns at once.
 Pixel coordinates passed in are OpenCV's (pixel centres at integers); rerun's images put pixel
@@ -72,6 +61,17 @@ from humimic.viz.geometry import (
 )
 
 _PIXEL_CENTRE_SHIFT = 0.5  # OpenCV pixel centre (0, 0) -> rerun (0.5, 0.5)
+#: Payload (bytes, estimated) handed to the SDK between blocking flushes, and rows of a series
+#: sent as one chunk. The SDK encodes and writes on its own threads: unbounded, ten minutes' joint
+#: series (30 x 250 000 rows) queue up faster than written, +279 MiB of peak memory; +32 MiB so.
+BACKLOG_BYTES, SERIES_CHUNK = 8 << 20, 1 << 15
+#: Wall seconds between the SDK's own flushes when saving. Its default, 0.2 s, cuts a chunk per
+#: entity five times a second, and the file sink keeps an index entry per chunk until it closes,
+#: then builds its footer from them: 120 000 small chunks held +43 MiB and peaked +59 MiB more at
+#: close (measured); a ten-minute run peaked as its recording closed. 5 s: 25x fewer chunks.
+FLUSH_TICK_S = 5.0
+#: Estimated cost of one small ``log`` call (a few points or a text), on top of its arrays.
+_LOG_CALL_BYTES = 512
 
 
 class RerunLog:
@@ -80,7 +80,8 @@ class RerunLog:
     ``mode``: ``off`` (no-op), ``save`` (stream to ``path``, no viewer) or ``spawn`` (open a
     viewer; also write ``path`` if given). ``blueprint`` (see :mod:`humimic.viz.blueprint`) is
     stored as the recording's default layout. Poses are buffered and sent in columns every
-    ``pose_batch`` calls (default 30 when saving, 6 when a viewer is live) and on close.
+    ``pose_batch`` calls (default 300 when saving: the file sink keeps an index entry per chunk
+    until it closes; 6 when a viewer is live) and on close.
     """
 
     def __init__(self, scene, mode: Mode, path: Path | None, recording_id: str,
@@ -99,15 +100,18 @@ class RerunLog:
         self._moving = np.array([b for b in range(1, m.nbody) if rigid_root(m, b) == b],
                                 dtype=np.intp)
         self._moving_paths = [body_entity(m, int(b)) for b in self._moving]
-        cap = pose_batch or (30 if mode == "save" else 6)
+        cap = pose_batch or (300 if mode == "save" else 6)
         self._pose_t = np.empty(cap)
         self._pose_p = np.empty((cap, len(self._moving), 3))
         self._pose_q = np.empty((cap, len(self._moving), 4))
         self._pose_k = 0
+        self._backlog = 0
         self._pinholes: dict[str, tuple] = {}
         self._static_done: set[str] = set()
 
-        rec = rr.RecordingStream(app_id, recording_id=recording_id)
+        batcher = (rr.ChunkBatcherConfig(flush_tick=FLUSH_TICK_S, flush_num_bytes=BACKLOG_BYTES)
+                   if mode == "save" else None)  # a live viewer keeps the SDK's low latency
+        rec = rr.RecordingStream(app_id, recording_id=recording_id, batcher_config=batcher)
         rec.set_log_time_enabled(False)  # sim_time is the only timeline
         if path is not None:
             Path(path).parent.mkdir(parents=True, exist_ok=True)
@@ -155,6 +159,14 @@ class RerunLog:
         """Make ``blueprint`` the active and default layout (when it is known only later)."""
         if self._rec is not None:
             self._rec.send_blueprint(blueprint, make_active=True, make_default=True)
+
+    def _sent(self, nbytes: int) -> None:
+        """Count ``nbytes`` handed to the SDK; past :data:`BACKLOG_BYTES`, wait until the SDK
+        has written what it holds (memory stays bounded however much a run logs)."""
+        self._backlog += int(nbytes) + _LOG_CALL_BYTES
+        if self._backlog >= BACKLOG_BYTES and self._rec is not None:
+            self._rec.flush(timeout_sec=60.0)
+            self._backlog = 0
 
     # ---- scene -------------------------------------------------------------------------------
     def log_static_scene(self, groups: tuple[int, ...] = (0, 1, 2)) -> None:
@@ -215,6 +227,7 @@ class RerunLog:
             self._rec.send_columns(path, indexes=times, columns=rr.Transform3D.columns(
                 translation=self._pose_p[:k, i], quaternion=self._pose_q[:k, i]))
         self._pose_k = 0
+        self._sent(self._pose_t[:k].nbytes * (1 + 7 * len(self._moving_paths)))
 
     def log_transform(self, t: float, entity: str, T_parent_child: np.ndarray,
                       static: bool = False, axis_length_m: float | None = None) -> None:
@@ -228,6 +241,7 @@ class RerunLog:
         if not static:
             self._rec.set_time(TIMELINE, duration=t)
         self._rec.log(entity, *parts, static=static)
+        self._sent(0)
 
     # ---- cameras -----------------------------------------------------------------------------
     def log_camera_image(self, t: float, entity: str, cam_image: CameraImage,
@@ -269,6 +283,7 @@ class RerunLog:
             if not ok:
                 raise RuntimeError(f"JPEG encoding of {img} failed")
             rec.log(img, rr.EncodedImage(contents=buf.tobytes(), media_type="image/jpeg"))
+        self._sent(cam_image.image.nbytes if jpeg_quality is None else len(buf))
 
     def log_ellipses_2d(self, t: float, entity: str, centers_px: np.ndarray,
                         covariances_px2: np.ndarray, n_sigma: float = 2.0, colors=None,
@@ -293,6 +308,7 @@ class RerunLog:
             self._rec.log(f"{entity}/labels", rr.Points2D(
                 label_anchors(c, cov, n_sigma, list(labels)), colors=colors, radii=0.01,
                 labels=list(labels), show_labels=True))
+        self._sent(strips.nbytes)
 
     # ---- 3-D ---------------------------------------------------------------------------------
     def log_points(self, t: float, entity: str, points: np.ndarray, colors=None,
@@ -301,10 +317,11 @@ class RerunLog:
         Labels show on hover unless ``show_labels``."""
         if self._rec is None:
             return
+        points = np.asarray(points, dtype=float).reshape(-1, 3)
         self._rec.set_time(TIMELINE, duration=t)
-        self._rec.log(entity, rr.Points3D(np.asarray(points, dtype=float).reshape(-1, 3),
-                                          colors=colors, radii=radii, labels=labels,
+        self._rec.log(entity, rr.Points3D(points, colors=colors, radii=radii, labels=labels,
                                           show_labels=show_labels))
+        self._sent(points.nbytes + 16 * len(labels or ()))
 
     def log_ellipsoids_3d(self, t: float, entity: str, centers: np.ndarray,
                           covariances: np.ndarray, n_sigma: float = 2.0, colors=None,
@@ -324,6 +341,7 @@ class RerunLog:
             fill_mode=rr.components.FillMode.MajorWireframe),
             rr.Points3D(centers, colors=colors, radii=point_radius, labels=labels,
                         show_labels=False))
+        self._sent(centers.nbytes * 4)
 
     def log_arrow(self, t: float, entity: str, origin: np.ndarray, vector: np.ndarray,
                   colors=None, labels=None) -> None:
@@ -334,6 +352,7 @@ class RerunLog:
         self._rec.log(entity, rr.Arrows3D(
             origins=np.asarray(origin, dtype=float).reshape(-1, 3),
             vectors=np.asarray(vector, dtype=float).reshape(-1, 3), colors=colors, labels=labels))
+        self._sent(0)
 
     def log_lines_3d(self, t: float, entity: str, strips, colors=None, radii=0.003,
                      labels=None) -> None:
@@ -342,6 +361,7 @@ class RerunLog:
             return
         self._rec.set_time(TIMELINE, duration=t)
         self._rec.log(entity, rr.LineStrips3D(strips, colors=colors, radii=radii, labels=labels))
+        self._sent(sum(np.asarray(s).nbytes for s in strips))
 
     # ---- series and events --------------------------------------------------------------------
     def log_scalar(self, t: float, entity: str, value) -> None:
@@ -351,6 +371,7 @@ class RerunLog:
         self.logged.add(entity)
         self._rec.set_time(TIMELINE, duration=t)
         self._rec.log(entity, rr.Scalars(np.atleast_1d(np.asarray(value, dtype=float))))
+        self._sent(0)
 
     def log_series(self, entity: str, times: np.ndarray, values: np.ndarray,
                    names: list[str] | None = None, colors=None, widths=None) -> None:
@@ -360,9 +381,12 @@ class RerunLog:
             return
         self.logged.add(entity)
         v = np.asarray(values, dtype=float)
-        self._rec.send_columns(
-            entity, indexes=[rr.TimeColumn(TIMELINE, duration=np.asarray(times, dtype=float))],
-            columns=rr.Scalars.columns(scalars=v if v.ndim == 2 else v.reshape(-1, 1)))
+        v, times = (v if v.ndim == 2 else v.reshape(-1, 1)), np.asarray(times, dtype=float)
+        for k in range(0, len(times), SERIES_CHUNK):  # bounded chunks: bounded SDK buffers
+            self._rec.send_columns(
+                entity, indexes=[rr.TimeColumn(TIMELINE, duration=times[k:k + SERIES_CHUNK])],
+                columns=rr.Scalars.columns(scalars=v[k:k + SERIES_CHUNK]))
+            self._sent(v[k:k + SERIES_CHUNK].nbytes + 8 * len(times[k:k + SERIES_CHUNK]))
         if names is not None:
             self.set_series_names(entity, names, colors, widths)
 
@@ -380,9 +404,11 @@ class RerunLog:
         self.logged.add(entity)
         self._rec.set_time(TIMELINE, duration=t)
         self._rec.log(entity, rr.TextLog(text, level=level))
+        self._sent(len(text))
 
     def log(self, t: float, entity: str, *archetypes) -> None:
         """Any rerun archetypes at ``t`` (overlays the methods above do not cover)."""
         if self._rec is not None:
             self._rec.set_time(TIMELINE, duration=t)
             self._rec.log(entity, *archetypes)
+            self._sent(0)

@@ -31,7 +31,7 @@ class SlamNoise(Section):
     """sigma of the angular acceleration (rad/s^2): 15."""
     accel_bias_drift: float = Field(mm.SIGMA_BIAS, ge=0.0, le=10.0)
     """sigma of the accelerometer-bias variation (m/s^3): 1e-3."""
-    accel: float = Field(mm.SIGMA_ACCEL, gt=0.0, le=100.0)
+    sigma_accel: float = Field(mm.SIGMA_ACCEL, gt=0.0, le=100.0)
     """sigma of the acceleration measurement (m/s^2), eq. 7: 0.5."""
     orientation_std_deg: tuple[float, float] | None = (1.0, 10.0)
     """sigma of the measured orientation's tilt (pitch, roll) and yaw (deg), as small rotations
@@ -42,9 +42,9 @@ class SlamNoise(Section):
     screen's 4.5 m (first 8 s of the Table II walk: ATE 5.3 cm with it, 2.2 cm with (0.25,
     20) deg). The yaw here mostly holds the heading while no feature is seen. ``null``: the
     paper's 1e-3 per component."""
-    gyro: float = Field(0.01, gt=0.0, le=10.0)
+    sigma_gyro: float = Field(0.01, gt=0.0, le=10.0)
     """sigma of the angular rate (rad/s) when ``use_gyro``: the arm EKF's eq. 15 value."""
-    pixel: float = Field(1.0, gt=0.0, le=20.0)
+    sigma_px: float = Field(1.0, gt=0.0, le=20.0)
     """sigma of a feature's image position (px), eq. 8: 1."""
 
 

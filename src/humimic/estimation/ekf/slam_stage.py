@@ -30,6 +30,7 @@ head camera (frame I) in the paper's W:
 from __future__ import annotations
 
 import time
+from dataclasses import replace
 
 import numpy as np
 
@@ -56,10 +57,10 @@ def settings_from_config(cfg) -> EstimatorSettings:
     nz = cfg.noise
     orient = (None if nz.orientation_std_deg is None
               else tuple(np.radians(nz.orientation_std_deg)))
-    slam = SlamParams(noise=mm.MotionNoise(nz.jerk, nz.angular_acc, nz.accel_bias_drift),
-                      sigma_accel=nz.accel, sigma_gyro=nz.gyro, sigma_px=nz.pixel,
-                      orientation_tilt_yaw=orient,
-                      rho0=1.0 / cfg.init_depth, sigma_rho=cfg.init_inverse_depth_std)
+    slam = replace(pass_through(SlamParams, nz),  # sigma_accel, sigma_gyro, sigma_px
+                   noise=mm.MotionNoise(nz.jerk, nz.angular_acc, nz.accel_bias_drift),
+                   orientation_tilt_yaw=orient,
+                   rho0=1.0 / cfg.init_depth, sigma_rho=cfg.init_inverse_depth_std)
     fe = pass_through(FrontendParams, cfg)  # patch_px, search_sigma, max_search_px, min_zncc
     return EstimatorSettings(use_camera=cfg.mode != "inertial", use_accel=cfg.mode != "camera",
                              use_gyro=cfg.use_gyro and cfg.mode != "camera",

@@ -9,10 +9,10 @@ import numpy as np
 
 from humimic.perception.faces.detect import DetectorParams, FaceDetector, matches_truth
 from humimic.perception.faces.studio import FaceStudio, FaceView, size_to_distance
+from humimic.world.names import EYE_HFOV_DEG
 
 FRONTAL_LIMITS_DEG = (12.0, 10.0, 8.0)
 """Largest |yaw|, |pitch|, |roll| of a "frontal" view."""
-HFOV_DEG = {"wide": 100.0, "foveal": 24.0}
 
 
 def random_view(rng: np.random.Generator, distance: float, limits_deg=FRONTAL_LIMITS_DEG,
@@ -63,7 +63,7 @@ def detection_rates(identities: list[str], cameras=("foveal", "wide"),
                 for b in range(len(bins) - 1):
                     for _ in range(per_bin):
                         size = rng.uniform(bins[b], bins[b + 1])
-                        dist = size_to_distance(size, HFOV_DEG[cam])
+                        dist = size_to_distance(size, EYE_HFOV_DEG[cam])
                         if not distances[0] <= dist <= distances[1]:
                             continue
                         shot = studio.render(random_view(rng, dist), f"L_{cam}")

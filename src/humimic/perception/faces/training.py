@@ -31,9 +31,9 @@ from humimic import cache
 from humimic.paths import MODELS_DIR
 from humimic.perception.faces.detect import DetectorParams, FaceDetector, crop_faces, matches_truth
 from humimic.perception.faces.eigenfaces import EigenfaceModel, train
-from humimic.perception.faces.rates import HFOV_DEG
 from humimic.perception.faces.studio import FaceStudio, FaceView, size_to_distance
 from humimic.world.faces import FACES_DIR
+from humimic.world.names import EYE_HFOV_DEG
 
 VERSION = 1
 SKIN_TONES = ((0.95, 0.80, 0.70), (0.87, 0.67, 0.55), (0.76, 0.57, 0.45), (0.62, 0.45, 0.34),
@@ -60,7 +60,7 @@ def random_view(spec: RenderSpec, camera: str, rng: np.random.Generator) -> Face
     """A view of the spec's distribution for ``camera``; None if the drawn size is out of the
     camera's reach at the allowed distances."""
     size = float(np.exp(rng.uniform(*np.log(spec.size_px))))
-    dist = size_to_distance(size, HFOV_DEG[camera])
+    dist = size_to_distance(size, EYE_HFOV_DEG[camera])
     if not spec.distances[0] <= dist <= spec.distances[1]:
         return None
     off = 0.1 * dist
