@@ -10,6 +10,9 @@ import numpy as np
 import rerun as rr
 from scipy.spatial.transform import Rotation
 
+from humimic.sensors.camera_model import make_transform
+from humimic.viz.entities import body_entity
+
 _DEFAULT_RGBA = np.array([0.5, 0.5, 0.5, 1.0], dtype=np.float32)
 _INFINITE_PLANE_HALF_M = 5.0
 _WALL_HALF_SIZE_M = 2.0  # static boxes larger than this are drawn see-through
@@ -124,3 +127,30 @@ def geom_archetypes(m: mujoco.MjModel, geoms: list[tuple[int, np.ndarray]], stat
                     else rr.components.FillMode.Solid)
             cls = rr.Ellipsoids3D if kind == "ellipsoids" else rr.Boxes3D
             yield kind, cls(centers=b["p"], half_sizes=half, fill_mode=fill, **common)
+
+
+def scene_geoms(m: mujoco.MjModel, groups: tuple[int, ...]):
+    """Every geom in MuJoCo ``groups``, per body entity, posed in its entity's frame.
+
+    Returns ``(per_entity, static_bodies)``: ``per_entity[entity]`` lists ``(geom, T_frame_geom)``
+    (the frame is the geom's moving ancestor, :func:`rigid_root`, or a static body's own frame);
+    ``static_bodies[entity]`` is T_world_body of each body welded to the world. Relative geom
+    poses do not depend on the configuration, so the model's default one is used.
+    """
+    d0 = mujoco.MjData(m)
+    mujoco.mj_kinematics(m, d0)
+    per_entity: dict[str, list[tuple[int, np.ndarray]]] = defaultdict(list)
+    static_bodies: dict[str, np.ndarray] = {}
+    for g in range(m.ngeom):
+        if int(m.geom_group[g]) not in groups:
+            continue
+        b = int(m.geom_bodyid[g])
+        root = rigid_root(m, b)
+        frame = b if root == 0 else root  # static bodies keep their own entity
+        entity = body_entity(m, frame)
+        T_world_frame = make_transform(d0.xmat[frame].reshape(3, 3), d0.xpos[frame])
+        T_world_geom = make_transform(d0.geom_xmat[g].reshape(3, 3), d0.geom_xpos[g])
+        per_entity[entity].append((g, np.linalg.inv(T_world_frame) @ T_world_geom))
+        if root == 0 and frame != 0:
+            static_bodies[entity] = T_world_frame
+    return per_entity, static_bodies

@@ -25,15 +25,13 @@ centres at +0.5, so 2-D overlays and the pinhole's principal point are shifted b
 
 from __future__ import annotations
 
-from collections import defaultdict
 from pathlib import Path
 
 import cv2
-import mujoco
 import numpy as np
 import rerun as rr
 
-from humimic.sensors.camera_model import CameraImage, make_transform
+from humimic.sensors.camera_model import CameraImage
 from humimic.viz.entities import (  # noqa: F401 -- the names every logger uses, re-exported
     AXIS_RGB,
     BASE,
@@ -58,6 +56,7 @@ from humimic.viz.geometry import (
     geom_archetypes,
     label_anchors,
     rigid_root,
+    scene_geoms,
 )
 
 _PIXEL_CENTRE_SHIFT = 0.5  # OpenCV pixel centre (0, 0) -> rerun (0.5, 0.5)
@@ -179,23 +178,12 @@ class RerunLog:
         if self._rec is None:
             return
         rec, m = self._rec, self.scene.model
-        d0 = mujoco.MjData(m)
-        mujoco.mj_kinematics(m, d0)  # relative geom poses do not depend on the configuration
-        per_entity: dict[str, list[tuple[int, np.ndarray]]] = defaultdict(list)
-        for g in range(m.ngeom):
-            if int(m.geom_group[g]) not in groups:
-                continue
-            b = int(m.geom_bodyid[g])
-            root = rigid_root(m, b)
-            frame = b if root == 0 else root  # static bodies keep their own entity
-            entity = body_entity(m, frame)
-            T_world_frame = make_transform(d0.xmat[frame].reshape(3, 3), d0.xpos[frame])
-            T_world_geom = make_transform(d0.geom_xmat[g].reshape(3, 3), d0.geom_xpos[g])
-            per_entity[entity].append((g, np.linalg.inv(T_world_frame) @ T_world_geom))
-            if root == 0 and frame != 0 and entity not in self._static_done:
+        per_entity, static_bodies = scene_geoms(m, groups)
+        for entity, T_world_body in static_bodies.items():
+            if entity not in self._static_done:
                 self._static_done.add(entity)
-                rec.log(entity, rr.Transform3D(translation=T_world_frame[:3, 3],
-                                               mat3x3=T_world_frame[:3, :3]), static=True)
+                rec.log(entity, rr.Transform3D(translation=T_world_body[:3, 3],
+                                               mat3x3=T_world_body[:3, :3]), static=True)
         for entity, geoms in per_entity.items():
             for kind, archetype in geom_archetypes(m, geoms, static=entity.startswith(ROOM)):
                 rec.log(f"{entity}/{kind}", archetype, static=True)
