@@ -19,15 +19,44 @@ from humimic.estimation.particles.resampling import resample_indices
 from humimic.estimation.particles.weights import weights
 
 
-def sq_distances(x: np.ndarray, s: np.ndarray, h: np.ndarray) -> np.ndarray:
+def sq_distances(x: np.ndarray, s: np.ndarray, h: np.ndarray, dtype=np.float64) -> np.ndarray:
     """``(M, N)`` squared scaled distances ``||(x_m - s_n) / h||^2``: one matrix product of the
     augmented rows ``[a, 1, |a|^2] . [-2 b, |b|^2, 1]`` (one ``(M, N)`` array allocated: fresh
-    large arrays cost more than the arithmetic)."""
-    a, b = x / h, s / h
-    A = np.column_stack([a, np.ones(len(a)), np.einsum("ij,ij->i", a, a)])
-    B = np.column_stack([-2.0 * b, np.einsum("ij,ij->i", b, b), np.ones(len(b))])
+    large arrays cost more than the arithmetic), in ``dtype`` (``float32``: half the memory
+    traffic; both point sets are first centred on ``s``'s mean, so ``|a|^2`` and ``|b|^2`` stay
+    of the order of the spread and the cancellation error near a distance of 1 is ~1e-6)."""
+    c = s.mean(axis=0) if len(s) else 0.0
+    a, b = (x - c) / h, (s - c) / h
+    A = np.column_stack([a, np.ones(len(a)), np.einsum("ij,ij->i", a, a)]).astype(dtype)
+    B = np.column_stack([-2.0 * b, np.einsum("ij,ij->i", b, b), np.ones(len(b))]).astype(dtype)
     d2 = A @ B.T
     return np.maximum(d2, 0.0, out=d2)
+
+
+def unique_rows(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Indices of the distinct rows of ``q (N, d)`` and, per row, which of them it equals: rows
+    keyed by a fixed random projection (a 1-D sort, ~10x faster than ``np.unique(axis=0)``),
+    checked exactly (falls back to ``np.unique(axis=0)`` if two distinct rows share a key)."""
+    key = q @ _KEY[: q.shape[1]] if q.shape[1] <= len(_KEY) else q.sum(1)
+    _, first, inverse = np.unique(key, return_index=True, return_inverse=True)
+    inverse = inverse.reshape(-1)
+    if not np.array_equal(q[first][inverse], q):
+        _, first, inverse = np.unique(q, axis=0, return_index=True, return_inverse=True)
+        inverse = inverse.reshape(-1)
+    return first, inverse
+
+
+_KEY = np.random.default_rng(20071).normal(size=64)
+
+
+def merge_rows(s: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Weighted points ``s (N, d)``, ``w (N,)`` with coinciding rows merged (their weights
+    summed): every kernel sum ``sum_n K(x - s_n) w_n`` is the same over the merged set (mean
+    shift moves whole windows of particles onto one point)."""
+    first, inverse = unique_rows(s)
+    if len(first) == len(s):
+        return s, w
+    return s[first], np.bincount(inverse, weights=w, minlength=len(first))
 
 
 def epanechnikov_norm(d: int) -> float:
@@ -63,61 +92,79 @@ def heavy(w: np.ndarray, rel: float = NEGLIGIBLE) -> np.ndarray:
     return np.flatnonzero(w > rel * np.max(w, initial=0.0))
 
 
-def kde(x: np.ndarray, particles: np.ndarray, w: np.ndarray, h: np.ndarray) -> np.ndarray:
+def kde(x: np.ndarray, particles: np.ndarray, w: np.ndarray, h: np.ndarray,
+        dtype=np.float64) -> np.ndarray:
     """Schmidt eq. 11: ``p(x) = sum_n K_h(x - s_n) w_n`` with ``K_h(u) = K(u / h) / prod(h)``
-    (normalised weights ``w``), at points ``x (M, d)`` (negligible weights left out)."""
+    (normalised weights ``w``), at points ``x (M, d)`` (negligible weights left out, coinciding
+    particles and points computed once; kernel sums in ``dtype``)."""
     d = particles.shape[1]
     h = _bandwidth(h, d)
-    keep = heavy(np.asarray(w, float))
-    r2 = sq_distances(x, particles[keep], h)
-    return epanechnikov_inplace(r2, d) @ np.asarray(w)[keep] / np.prod(h)
+    w = np.asarray(w, float)
+    keep = heavy(w)
+    src, wk = merge_rows(particles[keep], w[keep])
+    first, inverse = unique_rows(x)
+    r2 = sq_distances(x[first], src, h, dtype)
+    p = epanechnikov_inplace(r2, d) @ wk.astype(dtype)
+    return p.astype(float)[inverse] / np.prod(h)
 
 
-def mean_shift(particles: np.ndarray, w: np.ndarray, h: np.ndarray) -> np.ndarray:
+def mean_shift(particles: np.ndarray, w: np.ndarray, h: np.ndarray, dtype=np.float64
+               ) -> np.ndarray:
     """Schmidt eq. 13: every particle moved to ``m(s) = sum H(s_i - s) w_i s_i / sum H w_i``.
     ``H``'s profile is ``-k'``: for the Epanechnikov kernel a constant inside the bandwidth
     (the flat kernel), so ``m(s)`` is the weighted mean of the particles within ``h`` of ``s``
-    (a particle with no weighted particle in its window stays put)."""
+    (a particle with no weighted particle in its window stays put). Coinciding particles are
+    shifted once and merged as sources (their weights summed); sums in ``dtype``, of the
+    sources' offsets from their weighted mean (in units of ``h``)."""
+    h = _bandwidth(h, particles.shape[1])
     keep = heavy(w)
-    src, wk = particles[keep], w[keep]
-    inside = sq_distances(particles, src, _bandwidth(h, particles.shape[1]))    # (N, K)
+    if len(keep) == 0:
+        return particles.copy()
+    src, wk = merge_rows(particles[keep], w[keep])
+    first, inverse = unique_rows(particles)
+    at = particles[first]
+    inside = sq_distances(at, src, h, dtype)                             # (M, K)
     np.less_equal(inside, 1.0, out=inside, casting="unsafe")            # 1.0 inside, in place
-    sums = inside @ np.column_stack([wk[:, None] * src, wk])           # numerators | denominator
-    num, den = sums[:, :-1], sums[:, -1]
+    c = wk @ src / wk.sum()
+    sums = inside @ np.column_stack([wk[:, None] * ((src - c) / h), wk]).astype(dtype)
+    num, den = sums[:, :-1].astype(float), sums[:, -1].astype(float)
     stay = den <= 0.0
-    out = num / np.where(stay, 1.0, den)[:, None]
-    out[stay] = particles[stay]
-    return out
+    out = c + h * (num / np.where(stay, 1.0, den)[:, None])
+    out[stay] = at[stay]
+    return out[inverse]
 
 
 def kernel_log_weights(log_lik: np.ndarray, shifted: np.ndarray, prior: np.ndarray,
-                       h: np.ndarray, stride: int = 1) -> np.ndarray:
+                       h: np.ndarray, stride: int = 1, dtype=np.float64) -> np.ndarray:
     """Reweighting after a mean shift (Chang & Ansari eq. 9, which Schmidt follows): shifted
     samples are no longer drawn from the prior, so ``w ∝ p(y|s) p(s) / q(s)`` with the prior
     ``p`` the KDE (eq. 11) of the predicted particles ``prior`` (equally weighted, before any
     shift) and the proposal ``q`` the KDE of the shifted ones. Unnormalised log-weights
     (``-inf`` where the prior's KDE is 0). ``stride > 1`` estimates both KDEs from every
     ``stride``-th particle (a Monte Carlo estimate, ``N / stride`` kernels per point instead of
-    N), keeping each sample's own kernel in ``q`` so it stays positive."""
+    N), keeping each sample's own kernel in ``q`` so it stays positive. Kernel sums in
+    ``dtype``; coinciding samples computed once."""
     n, d = shifted.shape
     h = _bandwidth(h, d)
     ref_p, ref_q = prior[::stride], shifted[::stride]
-    p = kde(shifted, ref_p, np.full(len(ref_p), 1.0 / len(ref_p)), h)
-    q = kde(shifted, ref_q, np.full(len(ref_q), 1.0 / len(ref_q)), h)   # > 0 when stride 1
+    first, inverse = unique_rows(shifted)
+    at = shifted[first]
+    p = kde(at, ref_p, np.full(len(ref_p), 1.0 / len(ref_p)), h, dtype)[inverse]
+    q = kde(at, ref_q, np.full(len(ref_q), 1.0 / len(ref_q)), h, dtype)[inverse]  # > 0 at stride 1
     if stride > 1:
         q = q * (1.0 - 1.0 / n) + epanechnikov(0.0, d) / np.prod(h) / n
     with np.errstate(divide="ignore"):
         return log_lik + np.log(p) - np.log(q)
 
 
-def dominant_mode(particles: np.ndarray, w: np.ndarray, h: np.ndarray, window: np.ndarray
-                  ) -> tuple[np.ndarray, int]:
+def dominant_mode(particles: np.ndarray, w: np.ndarray, h: np.ndarray, window: np.ndarray,
+                  dtype=np.float64) -> tuple[np.ndarray, int]:
     """The dominant mode (Schmidt sec. 5.2): the particle where the posterior's KDE (eq. 11)
     peaks, then the weighted mean of the particles within ``window`` (scaled distance <= 1) of
     it. Returns the mode ``(d,)`` and the peak particle's index. Only particles of
     non-negligible weight are candidates for the peak (the others' KDE value is no larger)."""
     keep = heavy(w)
-    peak = int(keep[np.argmax(kde(particles[keep], particles, w, h))])
+    peak = int(keep[np.argmax(kde(particles[keep], particles, w, h, dtype))])
     near = sq_distances(particles[peak:peak + 1], particles, window)[0] <= 1.0
     wn = w * near
     if wn.sum() <= 0.0:
@@ -159,7 +206,7 @@ def mixed_propagate(particles: np.ndarray, velocity: np.ndarray, share: float, D
 def kpf_modes(particles: np.ndarray, log_lik_fn: Callable[[np.ndarray], np.ndarray],
               h0: np.ndarray, iterations: int, tol: float = 1e-3, shrink: float = 0.8,
               reweight: bool = True, groups: list[np.ndarray] | None = None,
-              stride: int = 1, prior: np.ndarray | None = None
+              stride: int = 1, prior: np.ndarray | None = None, dtype=np.float64
               ) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
     """Mean-shift mode seeking of a predicted particle set (Schmidt sec. 5.2): weight by the
     likelihood, then up to ``iterations`` times shift every particle (eq. 13, bandwidth
@@ -174,7 +221,8 @@ def kpf_modes(particles: np.ndarray, log_lik_fn: Callable[[np.ndarray], np.ndarr
     dimensions (a product kernel). Returns particles, normalised weights ``(N, G)``,
     log-likelihoods ``(N, G)`` and the iterations done. ``prior`` (default: ``particles``) are
     samples of the prior whose KDE the reweighting uses, when ``particles`` were drawn from
-    another proposal (e.g. some of them moved along a direction the dynamics rarely take)."""
+    another proposal (e.g. some of them moved along a direction the dynamics rarely take).
+    ``dtype``: of the kernel sums (:func:`mean_shift`, :func:`kernel_log_weights`)."""
     d = particles.shape[1]
     groups = [np.arange(d)] if groups is None else [np.asarray(g) for g in groups]
     h0 = _bandwidth(h0, d)
@@ -191,11 +239,11 @@ def kpf_modes(particles: np.ndarray, log_lik_fn: Callable[[np.ndarray], np.ndarr
         best = particles[np.argmax(W, axis=0), :]
         shifted = particles.copy()
         for k, g in enumerate(groups):
-            shifted[:, g] = mean_shift(particles[:, g], W[:, k], h[g])
+            shifted[:, g] = mean_shift(particles[:, g], W[:, k], h[g], dtype)
         lik = lik_of(shifted)
         for k, g in enumerate(groups):
-            lw = (kernel_log_weights(lik[:, k], shifted[:, g], prior[:, g], h[g], stride)
-                  if reweight else lik[:, k])
+            lw = (kernel_log_weights(lik[:, k], shifted[:, g], prior[:, g], h[g], stride,
+                                     dtype) if reweight else lik[:, k])
             W[:, k] = weights(lw)
         particles, done = shifted, i + 1
         moved = [np.linalg.norm((particles[int(np.argmax(W[:, k])), g] - best[k, g]) / h0[g])
