@@ -137,10 +137,14 @@ def test_mixed_propagation_shares_bounds_and_validity():
         300 / (300 + 3 * 700))
 
 
-def test_duplicate_particles_and_single_precision_give_the_same_shift_and_weights():
-    """Coinciding particles are shifted once and merged as sources, and the kernel sums may run
-    in float32: mean shift, the KDE and the reweighting agree with a per-point loop over the
-    unmerged float64 set (mean shift leaves many duplicates after its first iteration)."""
+@pytest.mark.parametrize("dedup_min", [0, kpf.DEDUP_MIN])
+def test_duplicate_particles_and_single_precision_give_the_same_shift_and_weights(
+        dedup_min, monkeypatch):
+    """Coinciding particles are shifted once and merged as sources (always, with
+    ``DEDUP_MIN = 0``), and the kernel sums may run in float32: mean shift, the KDE and the
+    reweighting agree with a per-point loop over the unmerged float64 set (mean shift leaves
+    many duplicates after its first iteration)."""
+    monkeypatch.setattr(kpf, "DEDUP_MIN", dedup_min)
     rng = np.random.default_rng(5)
     base = rng.normal([0.3, -1.2, 2.0, 40.0], [0.4, 0.3, 0.5, 0.2], (120, 4))
     s = base[rng.integers(0, 120, 400)]                       # ~28 % distinct rows

@@ -49,11 +49,26 @@ def unique_rows(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 _KEY = np.random.default_rng(20071).normal(size=64)
 
 
-def merge_rows(s: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+#: Kernel matrices smaller than this many entries are computed without looking for coinciding
+#: rows (finding them costs ~0.1 ms, as much as a 150 x 150 matrix).
+DEDUP_MIN = 100_000
+
+
+def _distinct(x: np.ndarray, other: int) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`unique_rows` of ``x`` when a kernel matrix of ``len(x) x other`` is large enough
+    to be worth it, else every row."""
+    if len(x) * other < DEDUP_MIN:
+        return np.arange(len(x)), np.arange(len(x))
+    return unique_rows(x)
+
+
+def merge_rows(s: np.ndarray, w: np.ndarray, other: int = DEDUP_MIN) -> tuple[np.ndarray,
+                                                                            np.ndarray]:
     """Weighted points ``s (N, d)``, ``w (N,)`` with coinciding rows merged (their weights
     summed): every kernel sum ``sum_n K(x - s_n) w_n`` is the same over the merged set (mean
-    shift moves whole windows of particles onto one point)."""
-    first, inverse = unique_rows(s)
+    shift moves whole windows of particles onto one point). Left as they are when the kernel
+    matrix against ``other`` points is small (:data:`DEDUP_MIN`)."""
+    first, inverse = _distinct(s, other)
     if len(first) == len(s):
         return s, w
     return s[first], np.bincount(inverse, weights=w, minlength=len(first))
@@ -101,8 +116,8 @@ def kde(x: np.ndarray, particles: np.ndarray, w: np.ndarray, h: np.ndarray,
     h = _bandwidth(h, d)
     w = np.asarray(w, float)
     keep = heavy(w)
-    src, wk = merge_rows(particles[keep], w[keep])
-    first, inverse = unique_rows(x)
+    src, wk = merge_rows(particles[keep], w[keep], len(x))
+    first, inverse = _distinct(x, len(src))
     r2 = sq_distances(x[first], src, h, dtype)
     p = epanechnikov_inplace(r2, d) @ wk.astype(dtype)
     return p.astype(float)[inverse] / np.prod(h)
@@ -120,8 +135,8 @@ def mean_shift(particles: np.ndarray, w: np.ndarray, h: np.ndarray, dtype=np.flo
     keep = heavy(w)
     if len(keep) == 0:
         return particles.copy()
-    src, wk = merge_rows(particles[keep], w[keep])
-    first, inverse = unique_rows(particles)
+    src, wk = merge_rows(particles[keep], w[keep], len(particles))
+    first, inverse = _distinct(particles, len(src))
     at = particles[first]
     inside = sq_distances(at, src, h, dtype)                             # (M, K)
     np.less_equal(inside, 1.0, out=inside, casting="unsafe")            # 1.0 inside, in place
@@ -147,7 +162,7 @@ def kernel_log_weights(log_lik: np.ndarray, shifted: np.ndarray, prior: np.ndarr
     n, d = shifted.shape
     h = _bandwidth(h, d)
     ref_p, ref_q = prior[::stride], shifted[::stride]
-    first, inverse = unique_rows(shifted)
+    first, inverse = _distinct(shifted, len(ref_p))
     at = shifted[first]
     p = kde(at, ref_p, np.full(len(ref_p), 1.0 / len(ref_p)), h, dtype)[inverse]
     q = kde(at, ref_q, np.full(len(ref_q), 1.0 / len(ref_q)), h, dtype)[inverse]  # > 0 at stride 1

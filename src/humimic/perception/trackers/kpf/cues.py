@@ -23,7 +23,6 @@ the cost.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import cached_property
 
 import cv2
 import numpy as np
@@ -34,21 +33,27 @@ from humimic.perception.cues.color_models import ColorLUT
 RIDGE_WIDTH_PX = 4.0
 
 
-def _normalise(g: np.ndarray, k: float) -> np.ndarray:
-    """``(C, H, W)`` derivative planes scaled by ``tanh(|g| / k) / |g|`` (Sidenbladh's
-    non-linear normalisation, one magnitude over all planes)."""
-    mag = np.sqrt(np.sum(g * g, axis=0))
-    return g * (np.tanh(mag / k) / np.maximum(mag, 1e-6))
+def _norm_factor(mag: np.ndarray, k: float) -> np.ndarray:
+    """Sidenbladh's non-linear normalisation of derivatives of magnitude ``mag``: the factor
+    ``tanh(|g| / k) / |g|`` (weak texture smoothed away, strong edges saturated at 1)."""
+    return np.tanh(mag / k) / np.maximum(mag, 1e-6)
 
 
 @dataclass(frozen=True)
 class CueMaps:
-    """One frame's cue maps (float32)."""
+    """One frame's cue maps (float32 images, sampled by :func:`sample`)."""
 
-    grad: np.ndarray
-    """(2, H, W) normalised ``d/du``, ``d/dv``."""
-    hessian: tuple[np.ndarray, ...]
-    """Per pyramid level, (3, H_mu, W_mu) normalised ``uu``, ``uv``, ``vv``."""
+    gradient: np.ndarray
+    """(H, W, 2) normalised ``d/du``, ``d/dv``."""
+    ridge: np.ndarray
+    """(H, W_total, 4) the pyramid levels side by side (one zero column after each, so a
+    point clipped to a level's ``[-1, W_mu]`` never reads its neighbour), channels
+    ``(uu - vv) / 2``, ``uv``, ``(uu + vv) / 2``, 0 of the normalised second derivatives (see
+    :func:`ridge_response`)."""
+    level_shapes: np.ndarray
+    """(levels, 2) (H_mu, W_mu) of the pyramid levels."""
+    level_columns: np.ndarray
+    """(levels,) the first column of each level in ``ridge``."""
     rgb: np.ndarray
     """(H, W, 3) in [0, 1]."""
     skin: np.ndarray
@@ -58,15 +63,39 @@ class CueMaps:
     def shape(self) -> tuple[int, int]:
         return self.rgb.shape[:2]
 
-    @cached_property
-    def hessian_flat(self) -> np.ndarray:
-        """(3, sum of the levels' pixels): the levels' planes raveled end to end."""
-        return np.concatenate([hm.reshape(3, -1) for hm in self.hessian], axis=1)
+    @property
+    def grad(self) -> np.ndarray:
+        """(2, H, W) normalised ``d/du``, ``d/dv``."""
+        return np.moveaxis(self.gradient, -1, 0)
 
-    @cached_property
-    def rgb_planes(self) -> np.ndarray:
-        """(3, H W) the colour channels raveled (gathers of one channel at a time)."""
-        return np.ascontiguousarray(self.rgb.reshape(-1, 3).T)
+
+#: cv2.remap's limit on an image or map side.
+_REMAP_MAX = 32766
+
+
+def sample(image: np.ndarray, uv: np.ndarray) -> np.ndarray:
+    """``image (H, W[, C])`` (float32, C <= 4) at the nearest pixels of points ``uv (N, ..., 2)``
+    (pixels, rounded half to even by ``np.rint`` before ``cv2.remap`` sees them as float32),
+    0 off the image and at NaN points: ``(N, ..., [C])``. One ``cv2.remap`` pass, no index
+    arrays."""
+    lead, chans = uv.shape[:-1], image.shape[2:]
+    n = lead[0] if lead else 1
+    m = np.rint(uv).astype(np.float32).reshape(n, -1, 2)
+    if m.size == 0:
+        return np.zeros(lead + chans, np.float32)
+    if m.shape[1] > _REMAP_MAX:
+        m = m.reshape(-1, 1, 2)
+    parts = [cv2.remap(image, m[i:i + _REMAP_MAX], None, cv2.INTER_NEAREST,
+                       borderMode=cv2.BORDER_CONSTANT, borderValue=0)
+             for i in range(0, len(m), _REMAP_MAX)]
+    out = parts[0] if len(parts) == 1 else np.concatenate(parts)
+    return out.reshape(lead + chans)
+
+
+def _norm_factor(mag: np.ndarray, k: float) -> np.ndarray:
+    """Sidenbladh's non-linear normalisation of derivatives of magnitude ``mag``: the factor
+    ``tanh(|g| / k) / |g|`` (weak texture smoothed away, strong edges saturated at 1)."""
+    return np.tanh(mag / k) / np.maximum(mag, 1e-6)
 
 
 def cue_maps(image: np.ndarray, skin_lut: ColorLUT, levels: int = 3, k_edge: float = 0.15,
@@ -75,46 +104,33 @@ def cue_maps(image: np.ndarray, skin_lut: ColorLUT, levels: int = 3, k_edge: flo
     scales (grey levels in [0, 1] per pixel, per pixel^2)."""
     grey = cv2.cvtColor(image, cv2.COLOR_RGB2GRAY).astype(np.float32) / 255.0
     g = cv2.GaussianBlur(grey, (5, 5), 1.0)
-    grad = np.stack([cv2.Sobel(g, cv2.CV_32F, 1, 0, ksize=3) / 8.0,
-                     cv2.Sobel(g, cv2.CV_32F, 0, 1, ksize=3) / 8.0])
-    hess = []
-    level = g
-    for mu in range(levels):
-        if mu:
-            level = cv2.pyrDown(level)
-        hess.append(_normalise(np.stack([
-            cv2.Sobel(level, cv2.CV_32F, 2, 0, ksize=3) / 4.0,
-            cv2.Sobel(level, cv2.CV_32F, 1, 1, ksize=3) / 4.0,
-            cv2.Sobel(level, cv2.CV_32F, 0, 2, ksize=3) / 4.0]), k_ridge))
+    gu = cv2.Sobel(g, cv2.CV_32F, 1, 0, ksize=3, scale=1.0 / 8.0)
+    gv = cv2.Sobel(g, cv2.CV_32F, 0, 1, ksize=3, scale=1.0 / 8.0)
+    f = _norm_factor(cv2.magnitude(gu, gv), k_edge)
+    gradient = cv2.merge([gu * f, gv * f])
+    pyramid = [g]
+    for _ in range(1, levels):
+        pyramid.append(cv2.pyrDown(pyramid[-1]))
+    shapes = np.array([lv.shape for lv in pyramid])
+    columns = np.concatenate([[0], np.cumsum(shapes[:-1, 1] + 1)])
+    ridge = np.zeros((shapes[0, 0], int(np.sum(shapes[:, 1] + 1)), 4), np.float32)
+    for lv, (h, w), c in zip(pyramid, shapes, columns, strict=True):
+        uu = cv2.Sobel(lv, cv2.CV_32F, 2, 0, ksize=3, scale=0.25)
+        uv = cv2.Sobel(lv, cv2.CV_32F, 1, 1, ksize=3, scale=0.25)
+        vv = cv2.Sobel(lv, cv2.CV_32F, 0, 2, ksize=3, scale=0.25)
+        f = _norm_factor(np.sqrt(uu * uu + uv * uv + vv * vv), k_ridge)
+        ridge[:h, c:c + w, :3] = cv2.merge([0.5 * (uu - vv) * f, uv * f, 0.5 * (uu + vv) * f])
     skin = (skin_lut.posterior(image) > 0.5).astype(np.float32)
-    return CueMaps(_normalise(grad, k_edge), tuple(hess), image.astype(np.float32) / 255.0, skin)
-
-
-def _pixels(u: np.ndarray, v: np.ndarray, shape: tuple[int, int]
-            ) -> tuple[np.ndarray, np.ndarray]:
-    """Flat pixel indices (nearest) of points ``(u, v)`` and whether they fall inside (NaN
-    points do not)."""
-    h, w = shape
-    with np.errstate(invalid="ignore"):
-        ui, vi = np.rint(u).astype(np.intp), np.rint(v).astype(np.intp)
-    inside = (ui >= 0) & (ui < w) & (vi >= 0) & (vi < h) & np.isfinite(u) & np.isfinite(v)
-    return np.where(inside, vi * w + ui, 0), inside
-
-
-def _mean_inside(values: np.ndarray, inside: np.ndarray, outside: float) -> np.ndarray:
-    """Mean over the last axis of ``values`` where ``inside``; ``outside`` counts for points off
-    the image."""
-    return np.mean(np.where(inside, values, outside), axis=-1)
+    return CueMaps(gradient, ridge, shapes, columns, image.astype(np.float32) / 255.0, skin)
 
 
 def edge_response(maps: CueMaps, uv: np.ndarray, angle: np.ndarray) -> np.ndarray:
     """Schmidt eqs. 1-2: ``(N, L)`` mean ``|g_v cos a - g_u sin a|`` over the points
-    ``uv (N, L, M, 2)`` of limbs at image angles ``angle (N, L)``."""
-    idx, inside = _pixels(uv[..., 0], uv[..., 1], maps.shape)
-    gu, gv = maps.grad[0].ravel()[idx], maps.grad[1].ravel()[idx]
-    c = np.cos(angle)[..., None].astype(np.float32)
-    s = np.sin(angle)[..., None].astype(np.float32)
-    return _mean_inside(np.abs(gv * c - gu * s), inside, 0.0)
+    ``uv (N, L, M, 2)`` of limbs at image angles ``angle (N, L)`` (off-image points count 0):
+    the imaginary part of ``(g_u + i g_v) e^{-i a}``."""
+    g = sample(maps.gradient, uv).view(np.complex64)[..., 0]
+    rot = np.exp(-1j * angle.astype(np.float32))[..., None]
+    return np.mean(np.abs((g * rot).imag), axis=-1)
 
 
 def ridge_level(width_px: np.ndarray, levels: int) -> np.ndarray:
@@ -129,23 +145,21 @@ def ridge_response(maps: CueMaps, uv: np.ndarray, width_px: np.ndarray, angle: n
                    ) -> np.ndarray:
     """Schmidt eqs. 3-4: ``(N, L)`` mean ridge response over the axis points ``uv (N, L, M, 2)``
     at the pyramid level of each limb's mean width ``width_px (N, L)`` (one gather from the
-    levels laid end to end)."""
-    mu = ridge_level(width_px, len(maps.hessian))[..., None]                   # (N, L, 1)
-    shapes = np.array([hm.shape[1:] for hm in maps.hessian])                   # (levels, 2)
-    offsets = np.concatenate([[0], np.cumsum(shapes[:, 0] * shapes[:, 1])[:-1]])
+    levels laid end to end; off-image points count 0). With ``s, c = sin a, cos a`` the
+    curvature across the limb is ``s^2 uu + c^2 vv - 2 sc uv = T - P`` and along it
+    ``c^2 uu + s^2 vv + 2 sc uv = T + P``, where ``T = (uu + vv) / 2`` and
+    ``P = cos 2a (uu - vv) / 2 + sin 2a uv = Re(((uu - vv) / 2 + i uv) e^{-2ia})``."""
+    shapes = maps.level_shapes
+    mu = ridge_level(width_px, len(shapes))[..., None]                          # (N, L, 1)
+    m = np.empty(uv.shape)
     scale = 0.5 ** mu
-    u = np.rint(uv[..., 0] * scale).astype(np.intp)
-    v = np.rint(uv[..., 1] * scale).astype(np.intp)
-    h, w = shapes[mu, 0], shapes[mu, 1]
-    inside = (u >= 0) & (u < w) & (v >= 0) & (v < h)
-    idx = np.where(inside, offsets[mu] + v * w + u, 0)
-    flat = maps.hessian_flat
-    uu, uv_, vv = flat[0][idx], flat[1][idx], flat[2][idx]
-    c = np.cos(angle)[..., None].astype(np.float32)
-    s = np.sin(angle)[..., None].astype(np.float32)
-    across = np.abs(s * s * uu + c * c * vv - 2 * s * c * uv_)
-    along = np.abs(c * c * uu + s * s * vv + 2 * s * c * uv_)
-    return _mean_inside(across - along, inside, 0.0)
+    np.clip(np.rint(uv[..., 0] * scale), -1.0, shapes[mu, 1], out=m[..., 0])
+    m[..., 0] += maps.level_columns[mu]
+    np.clip(uv[..., 1] * scale, -1.0, shapes[mu, 0], out=m[..., 1])
+    got = sample(maps.ridge, m).view(np.complex64)                       # (N, L, M, 2)
+    t = got[..., 1].real
+    p = (got[..., 0] * np.exp(-2j * angle.astype(np.float32))[..., None]).real
+    return np.mean(np.abs(t - p) - np.abs(t + p), axis=-1)
 
 
 #: Fractions (along, across) of a band quadrilateral where the colour is sampled (M_C = 9).
@@ -166,10 +180,15 @@ def band_points(quads: np.ndarray) -> np.ndarray:
 
 
 def band_colours(maps: CueMaps, quads: np.ndarray) -> np.ndarray:
-    """Mean RGB ``(..., 3)`` over each quadrilateral's sample points (off-image points black;
-    coordinate and channel planes: numpy is slow on trailing axes of size 2 and 3)."""
-    idx, inside = _pixels(quads[..., 0] @ _QUAD_W, quads[..., 1] @ _QUAD_W, maps.shape)
-    return np.stack([np.mean(plane[idx] * inside, axis=-1) for plane in maps.rgb_planes], -1)
+    """Mean RGB ``(..., 3)`` over each quadrilateral's sample points (off-image points black)."""
+    pts = np.stack([quads[..., 0] @ _QUAD_W, quads[..., 1] @ _QUAD_W], -1)      # (..., M_C, 2)
+    got = sample(maps.rgb, pts)                                           # (..., M_C, 3)
+    flat = got.reshape(-1, got.shape[-2] * 3) @ _CHANNEL_MEAN             # a matrix product:
+    return flat.reshape(got.shape[:-2] + (3,))                            # fast on rows of 27
+
+
+#: (M_C * 3, 3) the mean over the sample points of each channel, of rows ``[r g b r g b ...]``.
+_CHANNEL_MEAN = np.tile(np.eye(3, dtype=np.float32), (len(_QUAD_GRID), 1)) / len(_QUAD_GRID)
 
 
 def colour_response(colours: np.ndarray, reference: np.ndarray) -> np.ndarray:
@@ -192,6 +211,5 @@ def skin_response(maps: CueMaps, centre: np.ndarray, axes: np.ndarray, angle: np
     c, s = np.cos(angle)[..., None], np.sin(angle)[..., None]
     x = _DISC[:, 0] * axes[..., :1]
     y = _DISC[:, 1] * axes[..., 1:]
-    idx, inside = _pixels(centre[..., :1] + c * x - s * y, centre[..., 1:] + s * x + c * y,
-                          maps.shape)
-    return _mean_inside(maps.skin.ravel()[idx], inside, 0.0)
+    pts = np.stack([centre[..., :1] + c * x - s * y, centre[..., 1:] + s * x + c * y], -1)
+    return np.mean(sample(maps.skin, pts), axis=-1)
