@@ -74,6 +74,50 @@ def test_ridge_cue_on_the_axis_at_the_width_level(lut, width):
                                                                   0, 2))
 
 
+def test_sampling_and_ridge_match_direct_indexing_and_the_paper_formula(lut):
+    """``sample`` (cv2.remap) against numpy indexing with np.rint, off-image points and NaN
+    giving 0; the ridge response (its complex form, levels side by side) against eq. 3-4's
+    ``|s^2 uu + c^2 vv - 2 sc uv| - |c^2 uu + s^2 vv + 2 sc uv|`` on OpenCV's own pyramid."""
+    rng = np.random.default_rng(2)
+    img = rng.integers(0, 255, (H, W, 3)).astype(np.uint8)
+    img = cv2.GaussianBlur(img, (0, 0), 2.0)
+    maps = C.cue_maps(img, lut)
+    uv = np.stack([rng.uniform(-20, W + 20, (50, 4, 30)), rng.uniform(-20, H + 20, (50, 4, 30))],
+                  -1)
+    uv[0, 0, :3] = np.nan
+    uv[1, 1, :5, 0] = np.rint(uv[1, 1, :5, 0]) + 0.5                      # ties: half to even
+    ui, vi = np.rint(uv[..., 0]), np.rint(uv[..., 1])
+    with np.errstate(invalid="ignore"):
+        inside = (ui >= 0) & (ui < W) & (vi >= 0) & (vi < H)
+    ui, vi = np.where(inside, ui, 0).astype(int), np.where(inside, vi, 0).astype(int)
+    want = np.where(inside[..., None], maps.rgb[vi, ui], 0.0)
+    assert np.array_equal(C.sample(maps.rgb, uv), want)
+    # ridge: every level, angles all round
+    width = np.array([2.0, 8.0, 16.0, 40.0])[None].repeat(50, 0)              # levels 0,1,2,2
+    angle = rng.uniform(-np.pi, np.pi, (50, 4))
+    g = cv2.GaussianBlur(cv2.cvtColor(img, cv2.COLOR_RGB2GRAY).astype(np.float32) / 255,
+                         (5, 5), 1.0)
+    levels = [g, cv2.pyrDown(g), cv2.pyrDown(cv2.pyrDown(g))]
+    want = np.zeros((50, 4))
+    for n in range(50):
+        for j, mu in enumerate(C.ridge_level(width[n], 3)):
+            lv = levels[mu]
+            uu, uv_, vv = (cv2.Sobel(lv, cv2.CV_32F, dx, dy, ksize=3) / 4.0
+                           for dx, dy in ((2, 0), (1, 1), (0, 2)))
+            norm = np.tanh(np.sqrt(uu ** 2 + uv_ ** 2 + vv ** 2) / 0.05) / np.maximum(
+                np.sqrt(uu ** 2 + uv_ ** 2 + vv ** 2), 1e-6)
+            s, c = np.sin(angle[n, j]), np.cos(angle[n, j])
+            x, y = np.rint(uv[n, j, :, 0] * 0.5 ** mu), np.rint(uv[n, j, :, 1] * 0.5 ** mu)
+            with np.errstate(invalid="ignore"):
+                ok = (x >= 0) & (x < lv.shape[1]) & (y >= 0) & (y < lv.shape[0])
+            x, y = np.where(ok, x, 0).astype(int), np.where(ok, y, 0).astype(int)
+            a, b, d = (m[y, x] * norm[y, x] for m in (uu, uv_, vv))
+            r = np.abs(s * s * a + c * c * d - 2 * s * c * b) - np.abs(c * c * a + s * s * d
+                                                                       + 2 * s * c * b)
+            want[n, j] = np.mean(np.where(ok, r, 0.0))
+    assert np.allclose(C.ridge_response(maps, uv, width, angle), want, atol=1e-5)
+
+
 def test_colour_and_skin_cues(lut):
     img = np.full((H, W, 3), 30, np.uint8)
     img[20:60, 20:60] = (200, 40, 40)
