@@ -68,46 +68,60 @@ class Likelihood:
         """Eq. 10's 1 / N_l where the cue is used, else 0."""
         self.references: dict[str, np.ndarray] = {}
         """Part name -> (B, 3) adapted mean colours (eq. 7); empty until :meth:`adapt`."""
+        lay = body.layout
+        self.limbs = [self.parts[i] for i in lay.cone_idx]
+        """The cone parts, in the order of the limb features."""
+        self.limb_cols = np.asarray(lay.cone_idx, int)
+        self.need = {c for p in self.limbs for c in self.use[p]}
+        self.colour_sets = {}
+        """Band count -> (limb positions, part names) of the limbs with the colour cue."""
+        for j, p in enumerate(self.limbs):
+            if "color" in self.use[p]:
+                js, names = self.colour_sets.setdefault(self.bands[p], ([], []))
+                js.append(j)
+                names.append(p)
+        ell = [self.parts[i] for i in lay.ellipsoid_idx]
+        self.skin_js = np.array([j for j, p in enumerate(ell) if "skin" in self.use[p]], int)
+        """Positions (among the ellipsoids) of the parts with the skin cue."""
+        self.skin_cols = np.asarray(lay.ellipsoid_idx, int)[self.skin_js]
 
     def evaluate(self, q: np.ndarray, maps: C.CueMaps, T_cam_base: np.ndarray) -> Evaluation:
         """Costs and log-likelihoods of full states ``q (N, 14)``."""
         cfg = self.cfg
         n = len(q)
         view = bm.project(self.body, self.body.forward(q), self.intr, T_cam_base)
-        cost = {c: np.full((n, len(self.parts)), np.nan) for c in CUE_NAMES}
-        limbs = list(view.limb_names)
-        col = [self.parts.index(p) for p in limbs]
-        need = {c for p in limbs for c in self.use[p]}
-        if "edge" in need:
+        planes = np.full((len(CUE_NAMES), n, len(self.parts)), np.nan)
+        cost = dict(zip(CUE_NAMES, planes, strict=True))
+        col = self.limb_cols
+        if "edge" in self.need:
             e = bm.limb_edges(view, cfg.edge_points, normals=False)
-            f = np.where(e.ok, C.edge_response(maps, e.uv, e.angle), 0.0)
-            cost["edge"][:, col] = 1.0 - f
-        if "ridge" in need:
+            cost["edge"][:, col] = 1.0 - np.where(e.ok, C.edge_response(maps, e.uv, e.angle), 0.0)
+        if "ridge" in self.need:
             r = bm.limb_ridges(view, cfg.ridge_points)
             f = C.ridge_response(maps, r.uv, r.width.mean(-1), r.angle)
             cost["ridge"][:, col] = 1.0 - np.where(r.ok, f, 0.0)
         colours = {}
-        if "color" in need:
+        if self.colour_sets:
             ok = view.valid[:, view.cone_idx] & view.generators
-            for b in sorted({self.bands[p] for p in limbs if "color" in self.use[p]}):
-                js = [j for j, p in enumerate(limbs) if "color" in self.use[p]
-                      and self.bands[p] == b]
+            for b, (js, names) in self.colour_sets.items():
                 got = C.band_colours(maps, bm.limb_bands(view, b, 0.2)[:, js])  # (N, J, B, 3)
-                for k, j in enumerate(js):
-                    p = limbs[j]
+                for k, p in enumerate(names):
                     colours[p] = got[:, k]
-                    ref = self.references.get(p)
-                    f = (np.zeros(n) if ref is None
-                         else C.colour_response(colours[p][:, None], ref[None])[:, 0])
-                    cost["color"][:, col[j]] = np.where(ok[:, j], f, 1.0)
-        ell = [self.parts[i] for i in view.ellipsoid_idx]
-        if any("skin" in self.use[p] for p in ell):
+                if all(p in self.references for p in names):
+                    ref = np.stack([self.references[p] for p in names])
+                    f = C.colour_response(got, ref)                          # (N, J)
+                else:   # a limb before its first adaptation: no colour term
+                    f = np.column_stack([
+                        C.colour_response(got[:, k:k + 1], self.references[p][None])[:, 0]
+                        if p in self.references else np.zeros(n)
+                        for k, p in enumerate(names)])
+                cost["color"][:, col[js]] = np.where(ok[:, js], f, 1.0)
+        if len(self.skin_js):
             centre, axes, angle = view.ellipses_px()
-            f = C.skin_response(maps, centre, axes, angle)
-            ok = view.valid[:, view.ellipsoid_idx]
-            for j, p in enumerate(ell):
-                if "skin" in self.use[p]:
-                    cost["skin"][:, self.parts.index(p)] = 1.0 - np.where(ok[:, j], f[:, j], 0.0)
+            j = self.skin_js
+            f = C.skin_response(maps, centre[:, j], axes[:, j], angle[:, j])
+            ok = view.valid[:, view.ellipsoid_idx[j]]
+            cost["skin"][:, self.skin_cols] = 1.0 - np.where(ok, f, 0.0)
         for c in CUE_NAMES:   # cues not configured on a part do not count
             cost[c][:, ~self.used[c]] = np.nan
         return Evaluation(cost, self.combine(cost), colours)
