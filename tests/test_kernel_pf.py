@@ -30,6 +30,16 @@ def _kde_loop(x, s, w, h):
     return out / np.prod(h)
 
 
+def _kde_broadcast(x, s, w, h):
+    """:func:`_kde_loop` at every point of ``x`` by broadcasting (M, N, d) differences."""
+    d = s.shape[1]
+    vol = {0: 1.0, 1: 2.0}
+    for k in range(2, d + 1):
+        vol[k] = 2 * math.pi / k * vol[k - 2]
+    r2 = np.sum(((x[:, None] - s[None]) / h) ** 2, axis=-1)
+    return np.maximum(1 - r2, 0) @ w * (d + 2) / (2 * vol[d]) / np.prod(h)
+
+
 @pytest.fixture
 def cloud():
     rng = np.random.default_rng(3)
@@ -156,9 +166,21 @@ def test_duplicate_particles_and_single_precision_give_the_same_shift_and_weight
     for dtype, tol in ((np.float64, 1e-12), (np.float32, 1e-5)):
         assert np.allclose(kpf.mean_shift(s, w, h, dtype), loop, rtol=0, atol=tol)
         x = s[:40] + 0.05
-        ref = [_kde_loop(p, s, w, h) for p in x]
+        ref = _kde_broadcast(x, s, w, h)
         assert np.allclose(kpf.kde(x, s, w, h, dtype), ref, rtol=10 * tol, atol=0)
     lik = rng.normal(size=len(s))
     shifted = kpf.mean_shift(s, w, h)
-    assert np.allclose(kpf.kernel_log_weights(lik, shifted, s, h, dtype=np.float32),
-                       kpf.kernel_log_weights(lik, shifted, s, h), rtol=0, atol=1e-4)
+    prior = base[rng.integers(0, 120, 400)] + rng.normal(0, 0.05, (400, 4))
+    for stride in (1, 3):
+        rp, rq = prior[::stride], shifted[::stride]
+        p = _kde_broadcast(shifted, rp, np.full(len(rp), 1 / len(rp)), h)
+        q = _kde_broadcast(shifted, rq, np.full(len(rq), 1 / len(rq)), h)
+        if stride > 1:
+            q = q * (1 - 1 / 400) + kpf.epanechnikov(0.0, 4) / np.prod(h) / 400
+        with np.errstate(divide="ignore"):
+            want = lik + np.log(p) - np.log(q)
+        for dtype, tol in ((np.float64, 1e-9), (np.float32, 1e-4)):
+            got = kpf.kernel_log_weights(lik, shifted, prior, h, stride, dtype)
+            assert np.array_equal(np.isfinite(got), np.isfinite(want))
+            ok = np.isfinite(want)
+            assert np.allclose(got[ok], want[ok], rtol=0, atol=tol)

@@ -56,9 +56,9 @@ DEDUP_MIN = 100_000
 
 def _distinct(x: np.ndarray, other: int) -> tuple[np.ndarray, np.ndarray]:
     """:func:`unique_rows` of ``x`` when a kernel matrix of ``len(x) x other`` is large enough
-    to be worth it, else every row."""
+    to be worth it, else ``None, None`` (every row)."""
     if len(x) * other < DEDUP_MIN:
-        return np.arange(len(x)), np.arange(len(x))
+        return None, None
     return unique_rows(x)
 
 
@@ -69,7 +69,7 @@ def merge_rows(s: np.ndarray, w: np.ndarray, other: int = DEDUP_MIN) -> tuple[np
     shift moves whole windows of particles onto one point). Left as they are when the kernel
     matrix against ``other`` points is small (:data:`DEDUP_MIN`)."""
     first, inverse = _distinct(s, other)
-    if len(first) == len(s):
+    if first is None or len(first) == len(s):
         return s, w
     return s[first], np.bincount(inverse, weights=w, minlength=len(first))
 
@@ -112,15 +112,20 @@ def kde(x: np.ndarray, particles: np.ndarray, w: np.ndarray, h: np.ndarray,
     """Schmidt eq. 11: ``p(x) = sum_n K_h(x - s_n) w_n`` with ``K_h(u) = K(u / h) / prod(h)``
     (normalised weights ``w``), at points ``x (M, d)`` (negligible weights left out, coinciding
     particles and points computed once; kernel sums in ``dtype``)."""
-    d = particles.shape[1]
-    h = _bandwidth(h, d)
     w = np.asarray(w, float)
     keep = heavy(w)
     src, wk = merge_rows(particles[keep], w[keep], len(x))
     first, inverse = _distinct(x, len(src))
-    r2 = sq_distances(x[first], src, h, dtype)
-    p = epanechnikov_inplace(r2, d) @ wk.astype(dtype)
-    return p.astype(float)[inverse] / np.prod(h)
+    p = _kernel_sums(x if first is None else x[first], src, wk[:, None], h, dtype)[:, 0]
+    return p if first is None else p[inverse]
+
+
+def _kernel_sums(x: np.ndarray, src: np.ndarray, W: np.ndarray, h, dtype) -> np.ndarray:
+    """``(M, S)`` ``sum_n K_h(x_m - src_n) W[n, s]`` (eq. 11 per weight column)."""
+    d = x.shape[1]
+    h = _bandwidth(h, d)
+    r2 = sq_distances(x, src, h, dtype)
+    return (epanechnikov_inplace(r2, d) @ W.astype(dtype)).astype(float) / np.prod(h)
 
 
 def mean_shift(particles: np.ndarray, w: np.ndarray, h: np.ndarray, dtype=np.float64
@@ -135,9 +140,14 @@ def mean_shift(particles: np.ndarray, w: np.ndarray, h: np.ndarray, dtype=np.flo
     keep = heavy(w)
     if len(keep) == 0:
         return particles.copy()
-    src, wk = merge_rows(particles[keep], w[keep], len(particles))
-    first, inverse = _distinct(particles, len(src))
-    at = particles[first]
+    first, inverse = _distinct(particles, len(keep))
+    if first is None:
+        at, src, wk = particles, particles[keep], w[keep]
+    else:   # the distinct particles; as sources, those holding heavy ones, weights summed
+        at = particles[first]
+        wsum = np.bincount(inverse[keep], weights=w[keep], minlength=len(first))
+        nz = np.flatnonzero(wsum > 0.0)
+        src, wk = at[nz], wsum[nz]
     inside = sq_distances(at, src, h, dtype)                             # (M, K)
     np.less_equal(inside, 1.0, out=inside, casting="unsafe")            # 1.0 inside, in place
     c = wk @ src / wk.sum()
@@ -146,7 +156,7 @@ def mean_shift(particles: np.ndarray, w: np.ndarray, h: np.ndarray, dtype=np.flo
     stay = den <= 0.0
     out = c + h * (num / np.where(stay, 1.0, den)[:, None])
     out[stay] = at[stay]
-    return out[inverse]
+    return out if first is None else out[inverse]
 
 
 def kernel_log_weights(log_lik: np.ndarray, shifted: np.ndarray, prior: np.ndarray,
@@ -162,10 +172,19 @@ def kernel_log_weights(log_lik: np.ndarray, shifted: np.ndarray, prior: np.ndarr
     n, d = shifted.shape
     h = _bandwidth(h, d)
     ref_p, ref_q = prior[::stride], shifted[::stride]
-    first, inverse = _distinct(shifted, len(ref_p))
-    at = shifted[first]
-    p = kde(at, ref_p, np.full(len(ref_p), 1.0 / len(ref_p)), h, dtype)[inverse]
-    q = kde(at, ref_q, np.full(len(ref_q), 1.0 / len(ref_q)), h, dtype)[inverse]  # > 0 at stride 1
+    # one kernel matrix: the prior's particles | the shifted ones (coinciding ones merged)
+    first, inverse = _distinct(shifted, len(ref_p) + len(ref_q))
+    if first is None:
+        at, src_q, w_q = shifted, ref_q, np.full(len(ref_q), 1.0 / len(ref_q))
+    else:
+        at = shifted[first]
+        counts = np.bincount(inverse[::stride], minlength=len(first))
+        nz = np.flatnonzero(counts)
+        src_q, w_q = at[nz], counts[nz] / len(ref_q)
+    W = np.zeros((len(ref_p) + len(src_q), 2))
+    W[:len(ref_p), 0], W[len(ref_p):, 1] = 1.0 / len(ref_p), w_q
+    pq = _kernel_sums(at, np.concatenate([ref_p, src_q]), W, h, dtype)
+    p, q = (pq if first is None else pq[inverse]).T       # q > 0 at stride 1 (own kernel)
     if stride > 1:
         q = q * (1.0 - 1.0 / n) + epanechnikov(0.0, d) / np.prod(h) / n
     with np.errstate(divide="ignore"):
