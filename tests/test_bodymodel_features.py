@@ -97,3 +97,27 @@ def test_hidden_behind_the_bar_and_invalid_parts():
     assert not view2.outline.valid.any()
     pts2 = contour_points(view2, 10)
     assert not pts2.visible.any() and np.isnan(pts2.uv).all()
+
+
+def test_image_ellipses_match_the_pixel_conic():
+    """``ellipses_px`` (the normalised ellipse mapped by K) against the ellipse of the pixel
+    conic ``K^-T C K^-1`` (Menezes eq. 15 in pixels), for off-centre, rotated ellipsoids."""
+    from humimic import bodymodel as bm
+    from humimic.bodymodel import conics
+
+    body = bm.avatar_body()
+    rng = np.random.default_rng(4)
+    q = np.zeros((20, 14))
+    q[:, :3] = rng.uniform([-0.3, -0.3, -0.3], [0.3, 0.3, 0.3], (20, 3)) + [0.0, 0.0, 2.0]
+    q[:, 3:] = rng.uniform(-0.6, 0.6, (20, 11))
+    T = np.array([[0.0, -1, 0, 0], [0, 0, -1, 0], [1, 0, 0, 0], [0, 0, 0, 1]])  # looks along +x
+    q[:, 0] += 2.0
+    view = project(body, body.forward(q), INTR, T)
+    centre, axes, angle = view.ellipses_px()
+    c_ref, M_ref, ok = conics.conic_to_ellipse(conics.conic_to_pixels(view.conic, INTR.K))
+    major, minor, ang_ref = conics.ellipse_axes(M_ref)
+    assert ok.sum() > 20
+    np.testing.assert_allclose(centre[ok], c_ref[ok], atol=1e-6)
+    np.testing.assert_allclose(axes[ok], np.stack([major, minor], -1)[ok], rtol=1e-6)
+    d = np.angle(np.exp(2j * (angle[ok] - ang_ref[ok])))                     # axis: mod pi
+    assert np.all(np.abs(d) < 1e-5)

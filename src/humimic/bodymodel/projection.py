@@ -152,10 +152,14 @@ class BodyView:
     def ellipses_px(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The ellipsoids' image ellipses in pixels, without the lens distortion (the outline
         has it): centres ``(N, Pe, 2)``, semi-axes ``(N, Pe, 2)`` (major, minor) and the major
-        axis' angle ``(N, Pe)`` (rad, from +u towards +v)."""
-        centre, M, _ = conics.conic_to_ellipse(conics.conic_to_pixels(self.conic,
-                                                                      self.intrinsics.K))
-        major, minor, angle = conics.ellipse_axes(M)
+        axis' angle ``(N, Pe)`` (rad, from +u towards +v). The normalised ellipse mapped by
+        ``K``'s affine part ``A``: centre ``A c + (c_u, c_v)``, shape ``A M A^T`` (the same ellipse
+        as the conic ``K^-T C K^-1``'s)."""
+        centre, M = self.ellipse
+        K = np.asarray(self.intrinsics.K, float)
+        A = K[:2, :2]
+        centre = centre @ A.T + K[:2, 2]
+        major, minor, angle = conics.ellipse_axes(A @ M @ A.T)
         return centre, np.stack([major, minor], -1), angle
 
     @cached_property

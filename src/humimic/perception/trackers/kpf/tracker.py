@@ -216,8 +216,7 @@ class KpfTracker:
         w = W[:, 0]
         self.share = kpf.motion_share(w, moved, cfg.min_random)
         self.particles, self.w, self.W = parts, w, W
-        _, first = np.unique(np.round(parts / (cfg.window * self.D)), axis=0,
-                             return_index=True)
+        first, _ = kpf.unique_rows(np.round(parts / (cfg.window * self.D)))
         return mode, iters, parts[first[np.argsort(-w[first])][:MAX_MODES]]
 
     def _depth_moves(self, pred: np.ndarray, T_cam_base: np.ndarray, share: float
