@@ -46,14 +46,14 @@ class CueMaps:
     gradient: np.ndarray
     """(H, W, 2) normalised ``d/du``, ``d/dv``."""
     ridge: np.ndarray
-    """(H, W_total, 4) the pyramid levels side by side (one zero column after each, so a
-    point clipped to a level's ``[-1, W_mu]`` never reads its neighbour), channels
-    ``(uu - vv) / 2``, ``uv``, ``(uu + vv) / 2``, 0 of the normalised second derivatives (see
-    :func:`ridge_response`)."""
+    """(H_total, W, 4) the pyramid levels one below the other (a zero row after each, zeros
+    right of the smaller ones, so a point clipped to a level's ``[-1, H_mu] x [-1, W_mu]``
+    never reads its neighbour), channels ``(uu - vv) / 2``, ``uv``, ``(uu + vv) / 2``, 0 of
+    the normalised second derivatives (see :func:`ridge_response`)."""
     level_shapes: np.ndarray
     """(levels, 2) (H_mu, W_mu) of the pyramid levels."""
-    level_columns: np.ndarray
-    """(levels,) the first column of each level in ``ridge``."""
+    level_rows: np.ndarray
+    """(levels,) the first row of each level in ``ridge``."""
     rgb: np.ndarray
     """(H, W, 3) in [0, 1]."""
     skin: np.ndarray
@@ -112,16 +112,20 @@ def cue_maps(image: np.ndarray, skin_lut: ColorLUT, levels: int = 3, k_edge: flo
     for _ in range(1, levels):
         pyramid.append(cv2.pyrDown(pyramid[-1]))
     shapes = np.array([lv.shape for lv in pyramid])
-    columns = np.concatenate([[0], np.cumsum(shapes[:-1, 1] + 1)])
-    ridge = np.zeros((shapes[0, 0], int(np.sum(shapes[:, 1] + 1)), 4), np.float32)
-    for lv, (h, w), c in zip(pyramid, shapes, columns, strict=True):
+    rows = np.concatenate([[0], np.cumsum(shapes[:-1, 0] + 1)])
+    ridge = np.zeros((int(np.sum(shapes[:, 0] + 1)), shapes[0, 1], 4), np.float32)
+    for lv, (h, w), r in zip(pyramid, shapes, rows, strict=True):
         uu = cv2.Sobel(lv, cv2.CV_32F, 2, 0, ksize=3, scale=0.25)
         uv = cv2.Sobel(lv, cv2.CV_32F, 1, 1, ksize=3, scale=0.25)
         vv = cv2.Sobel(lv, cv2.CV_32F, 0, 2, ksize=3, scale=0.25)
         f = _norm_factor(np.sqrt(uu * uu + uv * uv + vv * vv), k_ridge)
-        ridge[:h, c:c + w, :3] = cv2.merge([0.5 * (uu - vv) * f, uv * f, 0.5 * (uu + vv) * f])
+        planes = [0.5 * (uu - vv) * f, uv * f, 0.5 * (uu + vv) * f, np.zeros_like(f)]
+        if w == ridge.shape[1]:
+            cv2.merge(planes, ridge[r:r + h])           # the full-width level written in place
+        else:
+            ridge[r:r + h, :w] = cv2.merge(planes)
     skin = (skin_lut.posterior(image) > 0.5).astype(np.float32)
-    return CueMaps(gradient, ridge, shapes, columns, image.astype(np.float32) / 255.0, skin)
+    return CueMaps(gradient, ridge, shapes, rows, image.astype(np.float32) / 255.0, skin)
 
 
 def edge_response(maps: CueMaps, uv: np.ndarray, angle: np.ndarray) -> np.ndarray:
@@ -154,8 +158,8 @@ def ridge_response(maps: CueMaps, uv: np.ndarray, width_px: np.ndarray, angle: n
     m = np.empty(uv.shape)
     scale = 0.5 ** mu
     np.clip(np.rint(uv[..., 0] * scale), -1.0, shapes[mu, 1], out=m[..., 0])
-    m[..., 0] += maps.level_columns[mu]
-    np.clip(uv[..., 1] * scale, -1.0, shapes[mu, 0], out=m[..., 1])
+    np.clip(np.rint(uv[..., 1] * scale), -1.0, shapes[mu, 0], out=m[..., 1])
+    m[..., 1] += maps.level_rows[mu]
     got = sample(maps.ridge, m).view(np.complex64)                       # (N, L, M, 2)
     t = got[..., 1].real
     p = (got[..., 0] * np.exp(-2j * angle.astype(np.float32))[..., None]).real
