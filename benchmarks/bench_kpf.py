@@ -23,7 +23,7 @@ from _frames import render_sequence
 from humimic import bodymodel as bm
 from humimic.paths import SCENARIOS_DIR
 from humimic.perception.trackers.common import skin_model_lut
-from humimic.perception.trackers.kpf.cues import cue_maps
+from humimic.perception.trackers.kpf.frame_cues import FrameCues
 from humimic.perception.trackers.kpf.tracker import KpfTracker, kpf_body
 from humimic.rngs import Rngs
 from humimic.scenario import load_scenario
@@ -61,10 +61,10 @@ def main() -> None:
             rates, cpu_rates = [], []
             for r in range(args.repeats):
                 tr = KpfTracker(body, intr, cfg, np.random.default_rng(r))
-                tr.start(q0, cue_maps(frames[0][0], lut), frames[0][1])
+                tr.start(q0, FrameCues(frames[0][0], lut), frames[0][1])
                 t0, c0 = time.perf_counter(), time.thread_time()
                 for img, T in frames[1:]:
-                    tr.step(cue_maps(img, lut), T)
+                    tr.step(FrameCues(img, lut), T)
                 rates.append((len(frames) - 1) / (time.perf_counter() - t0))
                 cpu_rates.append((len(frames) - 1) / (time.thread_time() - c0))
             print(f"  ({n:4d}, {it}) {name:13s} {statistics.median(rates):7.1f} Hz wall "

@@ -58,10 +58,17 @@ class CueMaps:
     """(H, W, 3) in [0, 1]."""
     skin: np.ndarray
     """(H, W) 1 where skin."""
+    origin: tuple[int, int] = (0, 0)
+    """Image pixel ``(u, v)`` of the maps' pixel ``(0, 0)`` (maps of an image region)."""
 
     @property
     def shape(self) -> tuple[int, int]:
+        """(H, W) of the maps."""
         return self.rgb.shape[:2]
+
+    def local(self, uv: np.ndarray) -> np.ndarray:
+        """Image pixels ``(..., 2)`` as the maps' pixels."""
+        return uv if self.origin == (0, 0) else uv - np.asarray(self.origin, float)
 
     @property
     def grad(self) -> np.ndarray:
@@ -99,9 +106,18 @@ def _norm_factor(mag: np.ndarray, k: float) -> np.ndarray:
 
 
 def cue_maps(image: np.ndarray, skin_lut: ColorLUT, levels: int = 3, k_edge: float = 0.15,
-             k_ridge: float = 0.05) -> CueMaps:
+             k_ridge: float = 0.05, region: tuple[int, int, int, int] | None = None
+             ) -> CueMaps:
     """Cue maps of an RGB uint8 image; ``k_edge`` / ``k_ridge`` the normalisation's contrast
-    scales (grey levels in [0, 1] per pixel, per pixel^2)."""
+    scales (grey levels in [0, 1] per pixel, per pixel^2). ``region`` ``(u0, v0, u1, v1)``:
+    only that part of the image (``u0``, ``v0`` multiples of ``2^(levels - 1)`` keep the
+    pyramid aligned with the whole image's; the maps equal the whole image's farther than
+    :data:`~humimic.perception.trackers.kpf.frame_cues.MARGIN_PX` inside the region's edges
+    that are not the image's)."""
+    origin = (0, 0)
+    if region is not None:
+        u0, v0, u1, v1 = region
+        image, origin = image[v0:v1, u0:u1], (u0, v0)
     grey = cv2.cvtColor(image, cv2.COLOR_RGB2GRAY).astype(np.float32) / 255.0
     g = cv2.GaussianBlur(grey, (5, 5), 1.0)
     gu = cv2.Sobel(g, cv2.CV_32F, 1, 0, ksize=3, scale=1.0 / 8.0)
@@ -125,14 +141,15 @@ def cue_maps(image: np.ndarray, skin_lut: ColorLUT, levels: int = 3, k_edge: flo
         else:
             ridge[r:r + h, :w] = cv2.merge(planes)
     skin = (skin_lut.posterior(image) > 0.5).astype(np.float32)
-    return CueMaps(gradient, ridge, shapes, rows, image.astype(np.float32) / 255.0, skin)
+    return CueMaps(gradient, ridge, shapes, rows, image.astype(np.float32) / 255.0, skin,
+                   origin)
 
 
 def edge_response(maps: CueMaps, uv: np.ndarray, angle: np.ndarray) -> np.ndarray:
     """Schmidt eqs. 1-2: ``(N, L)`` mean ``|g_v cos a - g_u sin a|`` over the points
     ``uv (N, L, M, 2)`` of limbs at image angles ``angle (N, L)`` (off-image points count 0):
     the imaginary part of ``(g_u + i g_v) e^{-i a}``."""
-    g = sample(maps.gradient, uv).view(np.complex64)[..., 0]
+    g = sample(maps.gradient, maps.local(uv)).view(np.complex64)[..., 0]
     rot = np.exp(-1j * angle.astype(np.float32))[..., None]
     return np.mean(np.abs((g * rot).imag), axis=-1)
 
@@ -157,8 +174,9 @@ def ridge_response(maps: CueMaps, uv: np.ndarray, width_px: np.ndarray, angle: n
     mu = ridge_level(width_px, len(shapes))[..., None]                          # (N, L, 1)
     m = np.empty(uv.shape)
     scale = 0.5 ** mu
-    np.clip(np.rint(uv[..., 0] * scale), -1.0, shapes[mu, 1], out=m[..., 0])
-    np.clip(np.rint(uv[..., 1] * scale), -1.0, shapes[mu, 0], out=m[..., 1])
+    u0, v0 = maps.origin                                  # multiples of 2^mu (cue_maps)
+    np.clip(np.rint(uv[..., 0] * scale) - u0 * scale, -1.0, shapes[mu, 1], out=m[..., 0])
+    np.clip(np.rint(uv[..., 1] * scale) - v0 * scale, -1.0, shapes[mu, 0], out=m[..., 1])
     m[..., 1] += maps.level_rows[mu]
     got = sample(maps.ridge, m).view(np.complex64)                       # (N, L, M, 2)
     t = got[..., 1].real
@@ -186,7 +204,7 @@ def band_points(quads: np.ndarray) -> np.ndarray:
 def band_colours(maps: CueMaps, quads: np.ndarray) -> np.ndarray:
     """Mean RGB ``(..., 3)`` over each quadrilateral's sample points (off-image points black)."""
     pts = np.stack([quads[..., 0] @ _QUAD_W, quads[..., 1] @ _QUAD_W], -1)      # (..., M_C, 2)
-    got = sample(maps.rgb, pts)                                           # (..., M_C, 3)
+    got = sample(maps.rgb, maps.local(pts))                               # (..., M_C, 3)
     flat = got.reshape(-1, got.shape[-2] * 3) @ _CHANNEL_MEAN             # a matrix product:
     return flat.reshape(got.shape[:-2] + (3,))                            # fast on rows of 27
 
@@ -216,4 +234,4 @@ def skin_response(maps: CueMaps, centre: np.ndarray, axes: np.ndarray, angle: np
     x = _DISC[:, 0] * axes[..., :1]
     y = _DISC[:, 1] * axes[..., 1:]
     pts = np.stack([centre[..., :1] + c * x - s * y, centre[..., 1:] + s * x + c * y], -1)
-    return np.mean(sample(maps.skin, pts), axis=-1)
+    return np.mean(sample(maps.skin, maps.local(pts)), axis=-1)

@@ -19,6 +19,7 @@ import numpy as np
 
 from humimic import bodymodel as bm
 from humimic.perception.trackers.kpf import cues as C
+from humimic.perception.trackers.kpf.frame_cues import FrameCues, sample_box
 
 CUE_NAMES = ("edge", "ridge", "color", "skin")
 
@@ -85,11 +86,16 @@ class Likelihood:
         """Positions (among the ellipsoids) of the parts with the skin cue."""
         self.skin_cols = np.asarray(lay.ellipsoid_idx, int)[self.skin_js]
 
-    def evaluate(self, q: np.ndarray, maps: C.CueMaps, T_cam_base: np.ndarray) -> Evaluation:
-        """Costs and log-likelihoods of full states ``q (N, 14)``."""
+    def evaluate(self, q: np.ndarray, maps: C.CueMaps | FrameCues, T_cam_base: np.ndarray
+                 ) -> Evaluation:
+        """Costs and log-likelihoods of full states ``q (N, 14)``; ``maps`` the frame's maps,
+        or a :class:`FrameCues` that computes them where these particles' points fall."""
         cfg = self.cfg
         n = len(q)
         view = bm.project(self.body, self.body.forward(q), self.intr, T_cam_base)
+        ellipses = view.ellipses_px() if len(self.skin_js) else None
+        if isinstance(maps, FrameCues):
+            maps = maps.covering(*sample_box(view, ellipses))
         planes = np.full((len(CUE_NAMES), n, len(self.parts)), np.nan)
         cost = dict(zip(CUE_NAMES, planes, strict=True))
         col = self.limb_cols
@@ -117,7 +123,7 @@ class Likelihood:
                         for k, p in enumerate(names)])
                 cost["color"][:, col[js]] = np.where(ok[:, js], f, 1.0)
         if len(self.skin_js):
-            centre, axes, angle = view.ellipses_px()
+            centre, axes, angle = ellipses
             j = self.skin_js
             f = C.skin_response(maps, centre[:, j], axes[:, j], angle[:, j])
             ok = view.valid[:, view.ellipsoid_idx[j]]

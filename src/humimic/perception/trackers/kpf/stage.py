@@ -18,7 +18,7 @@ import numpy as np
 
 from humimic import bodymodel as bm
 from humimic.messages import PoseEstimate
-from humimic.perception.trackers.kpf.cues import cue_maps
+from humimic.perception.trackers.kpf.frame_cues import FrameCues
 from humimic.perception.trackers.kpf.scores import ENDPOINTS, KpfRecord, kpf_metrics
 from humimic.perception.trackers.kpf.tracker import KpfTracker, kpf_body
 from humimic.perception.trackers.kpf.viz import log_frame, log_run
@@ -51,7 +51,7 @@ class KpfStage(Stage):
         t = msg.t
         T_cam_base = invert_transform(frame.camera.T_base_cam)
         t0, c0 = time.perf_counter(), time.thread_time()
-        maps = cue_maps(frame.image, self.skin_lut)
+        maps = FrameCues(frame.image, self.skin_lut)     # computed where the particles look
         if self.tracker is None:
             self.tracker = KpfTracker(self.body, frame.camera.intrinsics, self.cfg, self.rng,
                                       self.frame_rate)

@@ -23,6 +23,7 @@ from humimic.estimation.particles.filters import condensation_step
 from humimic.estimation.particles.weights import uniform_log_weights
 from humimic.perception.trackers.kpf.cues import CueMaps
 from humimic.perception.trackers.kpf.depth import wrist_depth_move
+from humimic.perception.trackers.kpf.frame_cues import FrameCues
 from humimic.perception.trackers.kpf.likelihood import Likelihood
 
 _BLAS = ThreadpoolController()
@@ -112,7 +113,7 @@ class KpfTracker:
         self.best_prev: float | None = None
         """The last frame's best log-likelihood (``rescue_passes``)."""
 
-    def start(self, q0: np.ndarray, maps: CueMaps, T_cam_base: np.ndarray) -> None:
+    def start(self, q0: np.ndarray, maps: CueMaps | FrameCues, T_cam_base: np.ndarray) -> None:
         """Initialise at a known pose (the paper fits the model by hand): every particle at
         ``q0`` and the colour references from its back-projection."""
         n = self.cfg.particles
@@ -148,7 +149,7 @@ class KpfTracker:
                                     t[:, side[1]].sum(1)])
         return distinct(f)
 
-    def step(self, maps: CueMaps, T_cam_base: np.ndarray) -> FrameResult:
+    def step(self, maps: CueMaps | FrameCues, T_cam_base: np.ndarray) -> FrameResult:
         """Track one frame (BLAS on one thread: the N x N products are small, and threads
         spinning on a shared 2-core machine made them 5x slower)."""
         if self.particles is None:
@@ -156,7 +157,7 @@ class KpfTracker:
         with _BLAS.limit(limits=1, user_api="blas"):
             return self._step(maps, T_cam_base)
 
-    def _step(self, maps: CueMaps, T_cam_base: np.ndarray) -> FrameResult:
+    def _step(self, maps: CueMaps | FrameCues, T_cam_base: np.ndarray) -> FrameResult:
         if self.cfg.filter == "condensation":
             mode, iters, modes = self._condensation(maps, T_cam_base), 0, None
         else:
