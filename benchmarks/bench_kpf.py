@@ -1,6 +1,7 @@
 """Speed of Schmidt et al.'s kernel-particle-filter tracker (``kpf``), rendering excluded: frames
-per second (cue maps + one filter step) at the issue's configurations (particles, mean-shift
-iterations) = (150, 2) and (1000, 3), on rendered frames of the side-pointing gesture
+per second (cue maps + one filter step; the maps over the image region the particles need,
+``FrameCues``, as the tracker stage computes them) at the issue's configurations (particles,
+mean-shift iterations) = (150, 2) and (1000, 3), on rendered frames of the side-pointing gesture
 (320 x 240, 7.5 Hz), for the trackers of ``scenarios/schmidt_table1.yaml``: the paper's method
 (``kpf_paper``), ours (``kpf``) and plain CONDENSATION. Goals (issue 14): >= 75 Hz at (150, 2),
 >= 10 Hz at (1000, 3); the paper ran (150, 2) at 7.5 Hz on a 1.73 GHz Pentium M. Wall-clock
