@@ -66,9 +66,6 @@ class CueMaps:
         """(H, W) of the maps."""
         return self.rgb.shape[:2]
 
-    def local(self, uv: np.ndarray) -> np.ndarray:
-        """Image pixels ``(..., 2)`` as the maps' pixels."""
-        return uv if self.origin == (0, 0) else uv - np.asarray(self.origin, float)
 
     @property
     def grad(self) -> np.ndarray:
@@ -80,14 +77,17 @@ class CueMaps:
 _REMAP_MAX = 32766
 
 
-def sample(image: np.ndarray, uv: np.ndarray) -> np.ndarray:
+def sample(image: np.ndarray, uv: np.ndarray, origin: tuple[int, int] = (0, 0)) -> np.ndarray:
     """``image (H, W[, C])`` (float32, C <= 4) at the nearest pixels of points ``uv (N, ..., 2)``
     (pixels, rounded half to even by ``np.rint`` before ``cv2.remap`` sees them as float32),
     0 off the image and at NaN points: ``(N, ..., [C])``. One ``cv2.remap`` pass, no index
-    arrays."""
+    arrays. ``origin``: the image pixel of ``image[0, 0]`` (maps of an image region)."""
     lead, chans = uv.shape[:-1], image.shape[2:]
     n = lead[0] if lead else 1
-    m = np.rint(uv).astype(np.float32).reshape(n, -1, 2)
+    m = np.rint(uv).astype(np.float32).reshape(n, -1)
+    if origin != (0, 0):   # rows of (u, v) pairs: a long last axis, fast to broadcast along
+        m -= np.tile(np.asarray(origin, np.float32), m.shape[1] // 2)
+    m = m.reshape(n, -1, 2)
     if m.size == 0:
         return np.zeros(lead + chans, np.float32)
     if m.shape[1] > _REMAP_MAX:
@@ -149,7 +149,7 @@ def edge_response(maps: CueMaps, uv: np.ndarray, angle: np.ndarray) -> np.ndarra
     """Schmidt eqs. 1-2: ``(N, L)`` mean ``|g_v cos a - g_u sin a|`` over the points
     ``uv (N, L, M, 2)`` of limbs at image angles ``angle (N, L)`` (off-image points count 0):
     the imaginary part of ``(g_u + i g_v) e^{-i a}``."""
-    g = sample(maps.gradient, maps.local(uv)).view(np.complex64)[..., 0]
+    g = sample(maps.gradient, uv, maps.origin).view(np.complex64)[..., 0]
     rot = np.exp(-1j * angle.astype(np.float32))[..., None]
     return np.mean(np.abs((g * rot).imag), axis=-1)
 
@@ -204,7 +204,7 @@ def band_points(quads: np.ndarray) -> np.ndarray:
 def band_colours(maps: CueMaps, quads: np.ndarray) -> np.ndarray:
     """Mean RGB ``(..., 3)`` over each quadrilateral's sample points (off-image points black)."""
     pts = np.stack([quads[..., 0] @ _QUAD_W, quads[..., 1] @ _QUAD_W], -1)      # (..., M_C, 2)
-    got = sample(maps.rgb, maps.local(pts))                               # (..., M_C, 3)
+    got = sample(maps.rgb, pts, maps.origin)                              # (..., M_C, 3)
     flat = got.reshape(-1, got.shape[-2] * 3) @ _CHANNEL_MEAN             # a matrix product:
     return flat.reshape(got.shape[:-2] + (3,))                            # fast on rows of 27
 
@@ -234,4 +234,4 @@ def skin_response(maps: CueMaps, centre: np.ndarray, axes: np.ndarray, angle: np
     x = _DISC[:, 0] * axes[..., :1]
     y = _DISC[:, 1] * axes[..., 1:]
     pts = np.stack([centre[..., :1] + c * x - s * y, centre[..., 1:] + s * x + c * y], -1)
-    return np.mean(sample(maps.skin, maps.local(pts)), axis=-1)
+    return np.mean(sample(maps.skin, pts, maps.origin), axis=-1)

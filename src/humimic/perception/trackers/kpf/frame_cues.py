@@ -30,15 +30,16 @@ def sample_box(view: BodyView, ellipses=None) -> tuple[np.ndarray, np.ndarray]:
     axis points interpolate them), the skin points within the image ellipses' major radius
     of their centres (``ellipses`` as :meth:`BodyView.ellipses_px`, computed if None)."""
     centre, axes, _ = view.ellipses_px() if ellipses is None else ellipses
-    r = axes.max(axis=-1, keepdims=True)
-    pts = [view.sides_uv.reshape(-1, 2), view.axis_uv.reshape(-1, 2),
-           (centre - r).reshape(-1, 2), (centre + r).reshape(-1, 2)]
-    pts = np.concatenate(pts)
-    with np.errstate(invalid="ignore"):
-        pts = pts[np.isfinite(pts).all(axis=1)]
-    if len(pts) == 0:
+    r = axes.max(axis=-1)
+    lo, hi = np.empty(2), np.empty(2)
+    for k in range(2):   # 1-D NaN-skipping reductions (numpy is slow over a short last axis)
+        c = centre[..., k]
+        pts = np.concatenate([view.sides_uv[..., k].ravel(), view.axis_uv[..., k].ravel(),
+                              (c - r).ravel(), (c + r).ravel()])
+        lo[k], hi[k] = np.fmin.reduce(pts, initial=np.inf), np.fmax.reduce(pts, initial=-np.inf)
+    if not (np.isfinite(lo).all() and np.isfinite(hi).all()):
         return np.zeros(2), np.zeros(2)
-    return pts.min(axis=0), pts.max(axis=0)
+    return lo, hi
 
 
 class FrameCues:
