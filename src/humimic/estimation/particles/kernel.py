@@ -27,8 +27,10 @@ def sq_distances(x: np.ndarray, s: np.ndarray, h: np.ndarray, dtype=np.float64) 
     of the order of the spread and the cancellation error near a distance of 1 is ~1e-6)."""
     c = s.mean(axis=0) if len(s) else 0.0
     a, b = (x - c) / h, (s - c) / h
-    A = np.column_stack([a, np.ones(len(a)), np.einsum("ij,ij->i", a, a)]).astype(dtype)
-    B = np.column_stack([-2.0 * b, np.einsum("ij,ij->i", b, b), np.ones(len(b))]).astype(dtype)
+    d = x.shape[1]
+    A, B = np.empty((len(a), d + 2), dtype), np.empty((len(b), d + 2), dtype)
+    A[:, :d], A[:, d], A[:, d + 1] = a, 1.0, np.einsum("ij,ij->i", a, a)
+    B[:, :d], B[:, d], B[:, d + 1] = -2.0 * b, np.einsum("ij,ij->i", b, b), 1.0
     d2 = A @ B.T
     return np.maximum(d2, 0.0, out=d2)
 
