@@ -6,10 +6,12 @@ mean-shift iterations) = (150, 2) and (1000, 3), on rendered frames of the side-
 (``kpf_paper``), ours (``kpf``) and plain CONDENSATION. Goals (issue 14): >= 75 Hz at (150, 2),
 >= 10 Hz at (1000, 3); the paper ran (150, 2) at 7.5 Hz on a 1.73 GHz Pentium M. Wall-clock
 rates depend on what else runs on the machine; the rate per second of this thread's CPU time
-(BLAS on one thread; OpenCV's own threads in the cue maps not counted) is what one free core
-would give.
+(BLAS on one thread; OpenCV's own worker threads, in the cue maps and the cue sampling's
+``cv2.remap``, not counted) is what one free core would give; ``--opencv-threads 1`` keeps
+OpenCV on this thread too, so every operation of the tracker is counted.
 
     PYTHONPATH=src MUJOCO_GL=egl python benchmarks/bench_kpf.py [--frames N] [--repeats R]
+        [--opencv-threads N]
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ import argparse
 import statistics
 import time
 
+import cv2
 import numpy as np
 from _frames import render_sequence
 
@@ -39,7 +42,11 @@ def main() -> None:
     p = argparse.ArgumentParser()
     p.add_argument("--frames", type=int, default=20)
     p.add_argument("--repeats", type=int, default=3)
+    p.add_argument("--opencv-threads", type=int, default=None,
+                   help="cv2.setNumThreads (default: OpenCV's own choice)")
     args = p.parse_args()
+    if args.opencv_threads is not None:
+        cv2.setNumThreads(args.opencv_threads)
     seq = render_sequence("kpf", HUMAN, args.frames / 7.5, cameras="left", rate=7.5)
     cam = seq.cameras[0]
     scenario = load_scenario(SCENARIOS_DIR / "schmidt_side.yaml", duration=0.2)
