@@ -30,6 +30,7 @@ from humimic.perception.cues.color_models import ColorLUT
 from humimic.pipeline.stage import Stage
 from humimic.scenario.errors import ScenarioError
 from humimic.sensors.camera_model import invert_transform
+from humimic.viz.plots import plot_track2d
 from humimic.viz.rerun_log import EVENTS, SERIES, image_entity
 
 GOOD, BAD, DETECTION = (40, 200, 60), (230, 40, 40), (255, 220, 0)
@@ -226,13 +227,27 @@ class ImageTrackerStage(Stage):
         self.rlog.log(t, f"{base}/detections", rr.Boxes2D(
             mins=boxes[:, :2] + shift, sizes=boxes[:, 2:], colors=DETECTION))
 
+    def _state_codes(self) -> np.ndarray:
+        return np.array([TRACK_STATES.index(tr.tracks[0].state) if tr.tracks else 0
+                         for tr in self.tracks], float)
+
+    def plots(self, out_dir) -> list:
+        """``tracker_<name>.png``: the centre error over time, hidden frames shaded, and the
+        state."""
+        if not self.times:
+            return []
+        uv, _, _, truth = self.arrays()
+        return [plot_track2d(Path(out_dir) / f"tracker_{self.tracker_name}.png",
+                             np.array(self.times), np.linalg.norm(uv - truth.uv, axis=1),
+                             truth.visible, self._state_codes(), TRACK_STATES,
+                             f"{self.tracker_name}: {self.target} on {self.camera}")]
+
     def log(self, rlog) -> None:
         if not self.times:
             return
-        code = [TRACK_STATES.index(tr.tracks[0].state) if tr.tracks else 0
-                for tr in self.tracks]
+        code = self._state_codes()
         rlog.log_series(f"{SERIES}/trackers/{self.tracker_name}/state", np.array(self.times),
-                        np.array(code, float), names=["state (0 init, 1 tracking, 2 lost)"])
+                        code, names=["state (0 init, 1 tracking, 2 lost)"])
         uv, _, _, truth = self.arrays()
         err = np.linalg.norm(uv - truth.uv, axis=1)
         rlog.log_series(f"{SERIES}/trackers/{self.tracker_name}/error_px", np.array(self.times),
