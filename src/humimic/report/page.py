@@ -45,8 +45,7 @@ EMBED = (("slam_table2.png", "Sugiyama & Miura's Table II: the paper's estimated
                                     "comes from"),
          ("mimic_*.png", "Mimicry of {name}: the robot site's displacement vs the person's "
                          "(mapped), the estimate and the command"),
-         ("tracker_*.png", "Tracker {name}: its centre error in the image (hidden frames "
-                           "shaded) and its state"),
+         ("tracker_*.png", "Tracker {name}: its error against the ground truth over time"),
          ("ground_truth.png", "Ground truth: the person's head and hands in the robot's base "
                               "frame"))
 

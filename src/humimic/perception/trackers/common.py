@@ -30,7 +30,7 @@ from humimic.perception.cues.color_models import ColorLUT
 from humimic.pipeline.stage import Stage
 from humimic.scenario.errors import ScenarioError
 from humimic.sensors.camera_model import invert_transform
-from humimic.viz.plots import plot_track2d
+from humimic.viz.plots import plot_errors, plot_track2d
 from humimic.viz.rerun_log import EVENTS, SERIES, image_entity
 
 GOOD, BAD, DETECTION = (40, 200, 60), (230, 40, 40), (255, 220, 0)
@@ -128,6 +128,14 @@ class PoseTrackerStage(Stage):
     def scores(self) -> dict:
         return {}
 
+    def error_series(self) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+        """Per-frame errors (m) by label, ``(times, errors)``, NaN where not judged: what
+        :meth:`plots` draws (none by default)."""
+        return {}
+
+    def plots(self, out_dir) -> list:
+        return pose_error_plot(out_dir, self.tracker_name, self.error_series())
+
     def metrics(self) -> dict:
         n = len(self.times)
         lost = [e is None or e.status != "tracking" for e in self.estimates]
@@ -136,6 +144,16 @@ class PoseTrackerStage(Stage):
                "lost_fraction": float(np.mean(lost)) if n else None}
         out.update(self.scores())
         return {"trackers": {self.tracker_name: out}}
+
+
+def pose_error_plot(out_dir, name: str, series: dict) -> list:
+    """``tracker_<name>.png``: a 3-D tracker's per-frame errors (m, drawn in mm) over time."""
+    if not series:
+        return []
+    t0 = next(iter(series.values()))[0]
+    mm = {label: (np.asarray(t), 1e3 * np.asarray(e)) for label, (t, e) in series.items()}
+    return [plot_errors(Path(out_dir) / f"tracker_{name}.png", t0, mm,
+                        title=f"{name}: error against the avatar's truth", ylabel="mm")]
 
 
 @dataclass(frozen=True)
