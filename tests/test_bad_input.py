@@ -5,6 +5,7 @@ one line on stderr naming what is wrong (issue 10). The property-based version i
 from __future__ import annotations
 
 import math
+import time
 
 import mujoco
 import numpy as np
@@ -212,3 +213,15 @@ def test_a_sweep_setting_past_a_list_names_the_sweep_file(tmp_path, capsys):
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1
     assert "sweep.yaml:4: grid.cameras.resolution.5: cannot be set in the scenario" in err, err
+
+
+def test_an_error_found_after_the_perception_worker_started_is_one_line(tmp_path, capfd):
+    """The blob worker (a child process) starts before the trackers are checked against the
+    cameras; when the run stops there, the child must end quietly (it printed a BrokenPipe
+    traceback on the same stderr)."""
+    code = main([str(SCENARIOS_DIR / "fig12_tbp_pointing.yaml"), "--quiet", "--rerun", "off",
+                 "--set", "trackers.tbp.camera=X_wide", "--out", str(tmp_path / "run")])
+    time.sleep(0.5)  # the child's last words, if any, come after the parent has given up
+    err = capfd.readouterr().err.strip()
+    assert code == 2 and len(err.splitlines()) == 1, err
+    assert "trackers.tbp.camera: camera 'X_wide' is not rendered" in err

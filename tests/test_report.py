@@ -10,7 +10,8 @@ import pytest
 
 from humimic.paths import SCENARIOS_DIR
 from humimic.report.__main__ import main as report_main
-from humimic.report.page import verdicts, window_mean
+from humimic.report.page import window_mean
+from humimic.report.verdicts import verdicts
 from humimic.run import run_one
 from humimic.scenario import load_scenario
 
@@ -79,3 +80,38 @@ def test_report_refuses_a_directory_that_is_not_a_run(tmp_path, capsys):
     (tmp_path / "metrics.json").write_text("{not json")
     assert report_main([str(tmp_path)]) == 2
     assert "unreadable metrics.json" in capsys.readouterr().err
+
+
+def test_trackers_get_a_verdict_line_with_their_own_errors():
+    m = {"sim_time_s": 5.0, "trackers": {
+        "icu": {"frames": 300, "visible_frames": 188, "center_rmse_px": 4.04,
+                "lost_fraction": 0.07, "identity_switches": 0},
+        "hand": {"frames": 300, "center_rmse_px": 9.0, "lost_fraction": 0.2,
+                 "identity_switches": 2},
+        "kpf": {"frames": 40, "wrist_error_mm": 63.2, "lost_fraction": 0.1}}}
+    rows = {v.label: v for v in verdicts(m)}
+    assert rows["tracker icu"].value == "4.0 px centre RMSE; lost on 7% of 188 visible frames"
+    assert rows["tracker icu"].status == "info"
+    assert rows["tracker hand"].status == "warn" and "2 identity switches" in rows[
+        "tracker hand"].value
+    assert rows["tracker kpf"].value == "63.2 mm mean wrist error; lost fraction 10%"
+
+
+def test_the_nees_line_shows_only_beside_a_nees_verdict():
+    from humimic.report.page import _nees_shown
+    from humimic.report.verdicts import Verdict
+
+    assert not _nees_shown([Verdict("tracker icu", "4.0 px centre RMSE", "info")])
+    assert _nees_shown([Verdict("head: filter consistency", "80 % of frames inside the 95 % "
+                                "χ² band of position NEES (3 dof)", "ok")])
+
+
+def test_track2d_plot_is_written(tmp_path):
+    from humimic.viz.plots import plot_track2d
+
+    t = np.arange(50) / 30
+    err = np.where(np.arange(50) < 30, 3.0, np.nan)
+    path = plot_track2d(tmp_path / "tracker_x.png", t, err, np.arange(50) < 30,
+                        (np.arange(50) >= 30).astype(float) * 2, ("init", "tracking", "lost"),
+                        "x")
+    assert path.is_file() and path.stat().st_size > 10_000

@@ -160,3 +160,19 @@ def test_ctrl_c_still_writes_metrics_and_a_readable_recording(tmp_path, monkeypa
     assert json.loads((tmp_path / "metrics.json").read_text())["interrupted"] is True
     entities = {chunk.entity_path for chunk in RrdReader(tmp_path / "run.rrd").stream()}
     assert "/world/cameras/L_wide/image" in entities and "/world/human/head" in entities
+
+
+@pytest.mark.parametrize("name, tracker", [("menezes_fig9_leave_return.yaml", "icu"),
+                                           ("menezes_gest_reach.yaml", "gest"),
+                                           ("fig12_tbp_pointing.yaml", "tbp"),
+                                           ("schmidt_side.yaml", "kpf")])
+def test_every_tracker_kind_plots_its_error(tmp_path, name, tracker):
+    """A person would rather look than read: each tracker writes ``tracker_<name>.png``, and
+    the report page embeds it."""
+    scenario = load_scenario(SCENARIOS_DIR / name, ["output.plots=true"], duration=0.6)
+    run_one(scenario, tmp_path, rerun="off", progress=False)
+    assert (tmp_path / f"tracker_{tracker}.png").stat().st_size > 10_000
+    from humimic.report.page import load_run
+
+    assert [h for p, h in load_run(tmp_path).images if p.name == f"tracker_{tracker}.png"] == [
+        f"Tracker {tracker}: its error against the ground truth over time"]

@@ -9,6 +9,11 @@ from rich.table import Table
 
 from humimic.metrics.flatten import flatten_metrics
 
+#: Score sections of ``metrics.json`` (shared/design.md's namespaces) and how many keys deep
+#: the table goes: ``trackers.<name>.recognition.<count>`` is four.
+SECTIONS = {"tracking": 3, "trackers": 4, "slam": 3, "arm": 3, "commands": 3, "mimicry": 3,
+            "latency_ms": 3, "lag_ms": 3}
+
 
 def _fmt(value) -> str:
     if isinstance(value, float):
@@ -24,8 +29,8 @@ def summary_rows(metrics: dict) -> list[tuple[str, str]]:
                                             "realtime_factor", "interrupted") if k in metrics]
     for name, st in metrics.get("stages", {}).items():
         rows.append((f"stages.{name}", f"{st['mean_ms']:.3f} ms x {st['calls']}"))
-    for section in ("tracking", "mimicry", "latency_ms", "lag_ms"):
-        flat = flatten_metrics({section: metrics.get(section, {})}, max_depth=3, lists=False)
+    for section, depth in SECTIONS.items():
+        flat = flatten_metrics({section: metrics.get(section, {})}, max_depth=depth, lists=False)
         rows.extend((key, _fmt(value)) for key, value in flat.items())
     if metrics.get("mujoco_warnings"):
         rows.append(("mujoco_warnings", _fmt(metrics["mujoco_warnings"])))

@@ -1,11 +1,10 @@
 """Compose a run's one-page report, ``report.png`` and ``report.html`` in the run directory:
 verdicts, each beside its stated threshold; per tracked target its filtered error with the
 filter's ±2σ band and its NEES against the chi-square band; then the run's own plots (mimicry,
-error budget, ground truth), each under a heading saying what it shows.
+error budget, trackers, ground truth), each under a heading saying what it shows.
 
-Verdict thresholds (:data:`THRESHOLDS`) are the accuracy goals of the issues (e.g. detection
-rate ≥ 0.98, filtered RMSE ≤ 25 mm, mimicry RMSE ≤ 25 mm and lag ≤ 50 ms): guides for a
-glance, not tests. Figures are drawn on explicit Agg canvases (no pyplot, no global backend).
+Verdicts and their thresholds: :mod:`humimic.report.verdicts`. Figures are drawn on explicit
+Agg canvases (no pyplot, no global backend).
 """
 
 from __future__ import annotations
@@ -25,6 +24,7 @@ from humimic.errors import InputError
 from humimic.maths.stats import chi2_band, nees
 from humimic.metrics.flatten import flatten_metrics
 from humimic.metrics.tracking import FILTER_SETTLE_S
+from humimic.report.verdicts import STATUS_COLOUR, Verdict, verdicts
 from humimic.viz.plots import MAX_POINTS
 
 #: Frames averaged for the NEES window (0.5 s at 60 Hz).
@@ -36,18 +36,6 @@ NEES_LINE = ("NEES = eᵀP⁻¹e, the squared error measured in the filter's own
              f"a consistent filter averages {NEES_DOF} for a position ({NEES_DOF} dof) and "
              "stays inside the 95 % χ² band; above it the filter is over-confident, below it "
              "too cautious.")
-#: (ok, warn, higher_is_better) per verdict: ok at or past the first value, warn up to the
-#: second, bad beyond.
-THRESHOLDS = {
-    "detection_rate": (0.98, 0.90, True),
-    "rmse_mm": (25.0, 50.0, False),
-    "nees_in_band": (0.80, 0.50, True),
-    "mimic_rmse_mm": (25.0, 50.0, False),
-    "lag_ms": (50.0, 100.0, False),
-    "latency_ms": (50.0, 100.0, False),
-    "slam_ate_m": (0.03, 0.10, False),
-    "slam_heading_deg": (2.0, 5.0, False),
-}
 #: Run plots embedded in the page, in order: file pattern and its section heading.
 EMBED = (("slam_table2.png", "Sugiyama & Miura's Table II: the paper's estimated positions beside "
                               "ours"),
@@ -57,22 +45,13 @@ EMBED = (("slam_table2.png", "Sugiyama & Miura's Table II: the paper's estimated
                                     "comes from"),
          ("mimic_*.png", "Mimicry of {name}: the robot site's displacement vs the person's "
                          "(mapped), the estimate and the command"),
+         ("tracker_*.png", "Tracker {name}: its error against the ground truth over time"),
          ("ground_truth.png", "Ground truth: the person's head and hands in the robot's base "
                               "frame"))
-STATUS_COLOUR = {"ok": "#2e7d32", "warn": "#f9a825", "bad": "#c62828", "info": "#546e7a"}
 
 
 class NotARunError(InputError):
     """The directory is not a finished humimic run."""
-
-
-@dataclass
-class Verdict:
-    label: str
-    value: str
-    status: str  # ok | warn | bad | info
-    threshold: str = ""
-    """The rule the status comes from, shown beside the value."""
 
 
 @dataclass
@@ -109,111 +88,6 @@ def load_run(run_dir: str | Path) -> Run:
                 seen.add(p)
                 images.append((p, heading.format(name=p.stem.split("_", 1)[-1])))
     return Run(path, metrics, archive, images)
-
-
-# ---- verdicts ------------------------------------------------------------------------------
-def grade(kind: str, value: float | None) -> tuple[str, str]:
-    """``(status, rule)`` of ``value`` under :data:`THRESHOLDS` ``[kind]``."""
-    ok, warn, higher = THRESHOLDS[kind]
-    cmp = "≥" if higher else "≤"
-    rule = f"ok {cmp} {ok:g}, warn {cmp} {warn:g}"
-    if value is None:
-        return "bad", rule
-    if higher:
-        return ("ok" if value >= ok else "warn" if value >= warn else "bad"), rule
-    return ("ok" if value <= ok else "warn" if value <= warn else "bad"), rule
-
-
-def _worst(*statuses: str) -> str:
-    return max(statuses, key=["info", "ok", "warn", "bad"].index)
-
-
-def _tracking_verdicts(target: str, s: dict) -> list[Verdict]:
-    rate = s.get("detection_rate")
-    never = rate is None or s.get("time_to_first_detection_s") is None
-    value = "never detected" if never else f"{rate:.3f}"
-    if s.get("verdict") == "poor":  # against the visibility ground truth
-        value += (f" of its visible frames (visible {s.get('visible_fraction', 0.0):.0%}; "
-                  f"likely cause: {s.get('cause')})")
-    out = [Verdict(f"{target}: detection rate", value,
-                   *grade("detection_rate", None if never else rate))]
-    f, raw = s.get("filtered_rmse_mm"), s.get("raw_rmse_mm")
-    if f is None and raw is None:
-        return out
-    status, rule = grade("rmse_mm", f if f is not None else raw)
-    value = (f"filtered {f:.1f} mm" if f is not None else "no filter") + (
-        f", raw {raw:.1f} mm" if raw is not None else "")
-    if f is not None and raw is not None and f >= raw:
-        status, value = _worst(status, "warn"), value + ": the filter does not improve on raw"
-    out.append(Verdict(f"{target}: 3-D RMSE", value, status, rule))
-    if s.get("biased"):
-        bias = np.linalg.norm([b or 0.0 for b in s.get("raw_bias_mm") or [0.0]])
-        share = s.get("raw_bias_share") or 0.0
-        out.append(Verdict(
-            f"{target}: biased", f"mean error {bias:.1f} mm, {100 * share:.0f} % of the mean "
-            "square (stereo sees the surface, the truth is the part's centre)", "warn",
-            "bias share ≤ 50 %"))
-    band = s.get("filtered_nees_pos3_in_band")
-    if band is not None:
-        raw_d = s.get("raw_nees_pos3_debiased_in_band")
-        extra = f"; raw, bias removed: {100 * raw_d:.0f} %" if raw_d is not None else ""
-        out.append(Verdict(f"{target}: filter consistency",
-                           f"{100 * band:.0f} % of frames inside the 95 % χ² band of position "
-                           f"NEES (3 dof){extra}", *grade("nees_in_band", band)))
-    return out
-
-
-def verdicts(metrics: dict) -> list[Verdict]:
-    """What went well and what did not, from ``metrics.json``, each with its rule."""
-    out = [Verdict("run", f"{metrics.get('sim_time_s', 0):.2f} s simulated, "
-                          f"{metrics.get('realtime_factor', 0):.2f}x real time",
-                   "bad" if metrics.get("interrupted") else "info",
-                   "interrupted" if metrics.get("interrupted") else "")]
-    warnings = metrics.get("mujoco_warnings") or {}
-    out.append(Verdict("MuJoCo warnings", ", ".join(f"{k}: {v}" for k, v in warnings.items())
-                       or "none", "bad" if warnings else "ok", "none"))
-    for target, s in (metrics.get("tracking") or {}).items():
-        out.extend(_tracking_verdicts(target, s))
-    for site, s in (metrics.get("mimicry") or {}).items():
-        if not isinstance(s, dict) or "rmse_mm" not in s:
-            continue
-        if s.get("status", "ok") != "ok":
-            out.append(Verdict(f"mimicry {site}", s.get("reason", s["status"]), "bad"))
-            continue
-        (st_r, rule_r), (st_l, rule_l) = (grade("mimic_rmse_mm", s["rmse_mm"]),
-                                          grade("lag_ms", abs(s.get("lag_ms") or 0.0)))
-        out.append(Verdict(f"mimicry {site}: RMSE / lag",
-                           f"{s['rmse_mm']:.1f} mm / {s.get('lag_ms', float('nan')):.0f} ms",
-                           _worst(st_r, st_l), f"RMSE {rule_r}; |lag| {rule_l}"))
-    joints = (metrics.get("mimicry") or {}).get("joints")
-    if joints:
-        bad = joints.get("limit_violations", 0) or not joints.get("finite", True)
-        out.append(Verdict("robot joints", "NaN!" if not joints.get("finite", True) else
-                           f"{joints.get('limit_violations', 0)} limit violations",
-                           "bad" if bad else "ok", "none"))
-    e2e = (metrics.get("latency_ms") or {}).get("end_to_end")
-    if e2e is not None:
-        out.append(Verdict("latency, photon to joint command", f"{e2e:.1f} ms",
-                           *grade("latency_ms", e2e)))
-    out.extend(_slam_verdicts(metrics.get("slam")))
-    return out
-
-
-def _slam_verdicts(s: dict | None) -> list[Verdict]:
-    if not s or not s.get("frames"):
-        return []
-    ate, head = s.get("ate_rmse_m"), s.get("heading_rmse_deg")
-    (st_a, rule_a), (st_h, rule_h) = grade("slam_ate_m", ate), grade("slam_heading_deg", head)
-    out = [Verdict(f"SLAM ({s.get('mode')}): head position / heading RMSE",
-                   f"{100 * ate:.1f} cm / {head:.2f} deg" if ate is not None and head is not None
-                   else "no estimate", _worst(st_a, st_h),
-                   f"position {rule_a} m; heading {rule_h} deg")]
-    if s.get("mode") != "inertial":
-        lost = s.get("frames_without_features", 0)
-        out.append(Verdict("SLAM: features measured per frame",
-                           f"{s.get('features_per_frame', 0):.1f}; {lost} frames without one",
-                           "ok" if lost == 0 else "warn", "every frame measures one"))
-    return out
 
 
 # ---- tracking panels -----------------------------------------------------------------------
@@ -304,8 +178,14 @@ def _draw_verdicts(sub, run: Run, items: list[Verdict]) -> None:
         ax.text(0.27, y, v.value, fontsize=9, va="center", transform=ax.transAxes)
         ax.text(1.0, y, v.threshold, fontsize=8, va="center", ha="right", color="#546e7a",
                 transform=ax.transAxes)
-    ax.text(0.0, 0.5 / n, NEES_LINE, fontsize=8, va="center", style="italic",
-            color="#37474f", transform=ax.transAxes, wrap=True)
+    if _nees_shown(items):
+        ax.text(0.0, 0.5 / n, NEES_LINE, fontsize=8, va="center", style="italic",
+                color="#37474f", transform=ax.transAxes, wrap=True)
+
+
+def _nees_shown(items: list[Verdict]) -> bool:
+    """Whether a verdict speaks of NEES (the line explaining it is then shown)."""
+    return any("NEES" in v.value for v in items)
 
 
 def write_report(run_dir: str | Path) -> tuple[Path, Path]:
@@ -359,7 +239,7 @@ table{{border-collapse:collapse}}td{{padding:2px 10px;border-bottom:1px solid #e
 </head><body>
 <h1>{html.escape(str(m.get('scenario')))} <small>seed {m.get('seed')}</small></h1>
 <h2>Verdicts</h2><table>{verdict_rows}</table>
-<p><i>{html.escape(NEES_LINE)}</i></p>
+{f"<p><i>{html.escape(NEES_LINE)}</i></p>" if _nees_shown(items) else ""}
 <p><img src="report.png" style="width:100%"></p>
 <h2>Stage costs</h2><table>{stage_rows}</table>
 <h2>All metrics</h2><table>{metric_rows}</table>

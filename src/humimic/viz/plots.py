@@ -157,3 +157,29 @@ def plot_error_budget(path: Path | str, sites: Sequence[str],
                        fontsize="medium")
     fig.suptitle("Mimicry error budget: robot site vs the mapped truth, split by stage")
     return _save(fig, path)
+
+
+def plot_track2d(path: Path | str, times: np.ndarray, error_px: np.ndarray, visible: np.ndarray,
+                 state: np.ndarray, states: Sequence[str], title: str) -> Path:
+    """A 2-D tracker over time: its centre error (px, NaN where it reports nothing) with the
+    frames where the target is hidden shaded, and its state (index into ``states``) below."""
+    fig = _figure(8.0, 4.5)
+    ax_err, ax_state = fig.subplots(2, 1, sharex=True, height_ratios=(3, 1))
+    t, e = _split(times, error_px)
+    ax_err.plot(t, e, linewidth=1.2, label="centre error")
+    _, hid = _split(times, ~np.asarray(visible, bool))
+    if hid.any():
+        ax_err.fill_between(t, 0, 1, where=hid > 0.5, transform=ax_err.get_xaxis_transform(),
+                            color="0.6", alpha=0.3, linewidth=0, label="target hidden")
+    ax_err.set_ylabel(_label("centre error", "px"))
+    ax_err.set_ylim(bottom=0)
+    ax_err.grid(True, alpha=0.3)
+    ax_err.set_title(title)
+    ax_err.legend(loc="upper right", fontsize="small")
+    _, s = _split(times, state)
+    ax_state.step(t, s, where="post", linewidth=1.2, color="0.2")
+    ax_state.set_yticks(range(len(states)), list(states))
+    ax_state.set_ylim(-0.5, len(states) - 0.5)
+    ax_state.set_xlabel("time [s]")
+    ax_state.grid(True, alpha=0.3)
+    return _save(fig, path)

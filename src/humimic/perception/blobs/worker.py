@@ -158,7 +158,10 @@ def _serve(recv: Connection, send: Connection, shm_fd: int) -> None:
     import humimic.perception.blobs.core  # noqa: F401  (imports everything a core unpickles)
     from humimic.sensors.camera_model import CameraImage
 
-    send.send_bytes(pickle.dumps(("ready",)))
+    try:
+        send.send_bytes(pickle.dumps(("ready",)))
+    except OSError:  # the caller stopped during its set-up (e.g. a scenario error): nothing to do
+        return
     core, buf = None, None
     while True:
         try:

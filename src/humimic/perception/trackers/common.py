@@ -30,6 +30,7 @@ from humimic.perception.cues.color_models import ColorLUT
 from humimic.pipeline.stage import Stage
 from humimic.scenario.errors import ScenarioError
 from humimic.sensors.camera_model import invert_transform
+from humimic.viz.plots import plot_errors, plot_track2d
 from humimic.viz.rerun_log import EVENTS, SERIES, image_entity
 
 GOOD, BAD, DETECTION = (40, 200, 60), (230, 40, 40), (255, 220, 0)
@@ -127,6 +128,14 @@ class PoseTrackerStage(Stage):
     def scores(self) -> dict:
         return {}
 
+    def error_series(self) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+        """Per-frame errors (m) by label, ``(times, errors)``, NaN where not judged: what
+        :meth:`plots` draws (none by default)."""
+        return {}
+
+    def plots(self, out_dir) -> list:
+        return pose_error_plot(out_dir, self.tracker_name, self.error_series())
+
     def metrics(self) -> dict:
         n = len(self.times)
         lost = [e is None or e.status != "tracking" for e in self.estimates]
@@ -135,6 +144,16 @@ class PoseTrackerStage(Stage):
                "lost_fraction": float(np.mean(lost)) if n else None}
         out.update(self.scores())
         return {"trackers": {self.tracker_name: out}}
+
+
+def pose_error_plot(out_dir, name: str, series: dict) -> list:
+    """``tracker_<name>.png``: a 3-D tracker's per-frame errors (m, drawn in mm) over time."""
+    if not series:
+        return []
+    t0 = next(iter(series.values()))[0]
+    mm = {label: (np.asarray(t), 1e3 * np.asarray(e)) for label, (t, e) in series.items()}
+    return [plot_errors(Path(out_dir) / f"tracker_{name}.png", t0, mm,
+                        title=f"{name}: error against the avatar's truth", ylabel="mm")]
 
 
 @dataclass(frozen=True)
@@ -226,13 +245,27 @@ class ImageTrackerStage(Stage):
         self.rlog.log(t, f"{base}/detections", rr.Boxes2D(
             mins=boxes[:, :2] + shift, sizes=boxes[:, 2:], colors=DETECTION))
 
+    def _state_codes(self) -> np.ndarray:
+        return np.array([TRACK_STATES.index(tr.tracks[0].state) if tr.tracks else 0
+                         for tr in self.tracks], float)
+
+    def plots(self, out_dir) -> list:
+        """``tracker_<name>.png``: the centre error over time, hidden frames shaded, and the
+        state."""
+        if not self.times:
+            return []
+        uv, _, _, truth = self.arrays()
+        return [plot_track2d(Path(out_dir) / f"tracker_{self.tracker_name}.png",
+                             np.array(self.times), np.linalg.norm(uv - truth.uv, axis=1),
+                             truth.visible, self._state_codes(), TRACK_STATES,
+                             f"{self.tracker_name}: {self.target} on {self.camera}")]
+
     def log(self, rlog) -> None:
         if not self.times:
             return
-        code = [TRACK_STATES.index(tr.tracks[0].state) if tr.tracks else 0
-                for tr in self.tracks]
+        code = self._state_codes()
         rlog.log_series(f"{SERIES}/trackers/{self.tracker_name}/state", np.array(self.times),
-                        np.array(code, float), names=["state (0 init, 1 tracking, 2 lost)"])
+                        code, names=["state (0 init, 1 tracking, 2 lost)"])
         uv, _, _, truth = self.arrays()
         err = np.linalg.norm(uv - truth.uv, axis=1)
         rlog.log_series(f"{SERIES}/trackers/{self.tracker_name}/error_px", np.array(self.times),

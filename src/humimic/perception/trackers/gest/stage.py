@@ -98,6 +98,20 @@ class GestStage(PoseTrackerStage):
             rlog.log_points(t, f"{ESTIMATES}/{self.tracker_name}",
                             (T[:3, :3] @ res.mean[:3] + T[:3, 3])[None], colors=GOOD)
 
+    def error_series(self) -> dict:
+        """The hand centre's 3-D error on frames it is in view and tracked (NaN elsewhere)."""
+        if not self.times:
+            return {}
+        t = np.asarray(self.times)
+        truth = truth_hand_state(self.world, self.world.gt.index_of(t), self.side, "base")
+        est = np.array([r.mean[:3] if r is not None and r.mean is not None
+                        and r.status == "tracking" else np.full(3, np.nan)
+                        for r in self.results])
+        seen = np.array([_in_view(c, p) for c, p in zip(self.left_cams, truth[:, :3],
+                                                          strict=True)])
+        err = np.linalg.norm(est - truth[:, :3], axis=1)
+        return {f"{self.side.lower()}_hand centre": (t, np.where(seen, err, np.nan))}
+
     def scores(self) -> dict:
         if not self.times:
             return {}

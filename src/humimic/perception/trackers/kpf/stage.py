@@ -18,8 +18,9 @@ import numpy as np
 
 from humimic import bodymodel as bm
 from humimic.messages import PoseEstimate
+from humimic.perception.trackers.common import pose_error_plot
 from humimic.perception.trackers.kpf.frame_cues import FrameCues
-from humimic.perception.trackers.kpf.scores import ENDPOINTS, KpfRecord, kpf_metrics
+from humimic.perception.trackers.kpf.scores import ENDPOINTS, KpfRecord, errors, kpf_metrics
 from humimic.perception.trackers.kpf.tracker import KpfTracker, kpf_body
 from humimic.perception.trackers.kpf.viz import log_frame, log_run
 from humimic.pipeline.stage import Stage
@@ -79,3 +80,12 @@ class KpfStage(Stage):
 
     def log(self, rlog) -> None:
         log_run(rlog, self.name, self.rec, self.world, self.body)
+
+    def plots(self, out_dir) -> list:
+        """``tracker_<name>.png``: the wrist error (whole, image plane, depth) and the elbow's."""
+        if not self.rec.t:
+            return []
+        e, t = errors(self.rec, self.world, self.body), np.asarray(self.rec.t)
+        return pose_error_plot(out_dir, self.name, {
+            "wrist": (t, e["wrist"]), "wrist, image plane": (t, e["lateral"]),
+            "wrist, depth": (t, e["depth"]), "elbow": (t, e["elbow"])})

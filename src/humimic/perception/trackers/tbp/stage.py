@@ -124,6 +124,24 @@ class TbpStage(PoseTrackerStage):
                                  np.random.default_rng(self.world.scenario.seed))
         return kalman_scores(kf, est[:, idx], truth, lim.lower[idx], lim.upper[idx])
 
+    def error_series(self) -> dict:
+        """Each wrist's and elbow's 3-D error per frame (NaN where nothing was estimated)."""
+        use = [i for i, m in enumerate(self.means) if m is not None]
+        if not use:
+            return {}
+        t = np.asarray(self.times)
+        truth = truth_state(self.world, self.world.gt.index_of(t[use]), "base")
+        body = self.tracker.body.with_free(DOF_NAMES)
+        p_true = body.forward(truth)
+        p_est = body.forward(np.hstack([np.array([self.torsos[i] for i in use]),
+                                        np.array([self.means[i] for i in use])]))
+        out = {}
+        for joint in ("r_wrist", "l_wrist", "r_elbow", "l_elbow"):
+            err = np.full(len(t), np.nan)
+            err[use] = np.linalg.norm(p_est.joint(joint) - p_true.joint(joint), axis=1)
+            out[joint] = (t, err)
+        return out
+
     def scores(self) -> dict:
         use = [i for i, m in enumerate(self.means) if m is not None]
         out = {"torso_source": "truth (oracle)" if self.cfg.torso == "truth" else "head",

@@ -1,0 +1,25 @@
+"""The end-of-run summary table shows every score section of shared/design.md's namespaces."""
+
+from humimic.metrics.summary import summary_rows
+
+
+def test_every_family_shows_its_scores():
+    metrics = {
+        "scenario": "s", "seed": 1,
+        "stages": {"render": {"mean_ms": 1.0, "calls": 3}},
+        "trackers": {"icu": {"lost_fraction": 0.05, "reacquire_s": [0.0, 0.1],
+                             "recognition": {"tutor_accepted": 174}}},
+        "slam": {"ate_rmse_m": 0.04}, "arm": {"wrist_rmse_m": 0.02},
+        "commands": {"sent": 3}, "lag_ms": {"end_to_end": 21.5},
+        "faults": {"dropped": 2},  # what was injected, not a score
+    }
+    rows = dict(summary_rows(metrics))
+    assert rows["stages.render"] == "1.000 ms x 3"
+    assert rows["trackers.icu.lost_fraction"] == "0.05"
+    assert rows["trackers.icu.recognition.tutor_accepted"] == "174"
+    assert rows["slam.ate_rmse_m"] == "0.04"
+    assert rows["arm.wrist_rmse_m"] == "0.02"
+    assert rows["commands.sent"] == "3"
+    assert rows["lag_ms.end_to_end"] == "21.5"
+    assert not any(k.startswith("trackers.icu.reacquire_s") for k in rows)  # lists stay out
+    assert not any(k.startswith("faults") for k in rows)
