@@ -82,3 +82,23 @@ def test_region_maps_equal_the_whole_image_maps_inside_the_margin():
         np.testing.assert_allclose(a[i:-i, i:-i], b[i:-i, i:-i], atol=1e-5)
         near.append(np.abs(a[1:-1, 1:-1] - b[1:-1, 1:-1]).max())
     assert near[2] > 1e-3                            # inside 1 level-2 pixel: edge effects
+
+
+def test_sample_box_ignores_invalid_parts():
+    """NaN (invalid parts) and infinite (degenerate conics) coordinates do not widen or void
+    the box: it still bounds every finite sample point."""
+    from humimic.perception.trackers.kpf.frame_cues import sample_box
+
+    body = kpf_body()
+    q = np.zeros((3, 14))
+    q[:, 0], q[:, 3] = 2.0, np.pi
+    view = bm.project(body, body.forward(q), INTR, T_CAM_BASE)
+    centre, axes, angle = view.ellipses_px()
+    lo, hi = sample_box(view, (centre, axes, angle))
+    bad = centre.copy()
+    bad[0, 0] = np.inf
+    bad[1, 1] = np.nan
+    lo2, hi2 = sample_box(view, (bad, axes, angle))
+    assert np.all(np.isfinite(lo2)) and np.all(lo2 >= lo - 1e-9) and np.all(hi2 <= hi + 1e-9)
+    assert np.all(hi2 - lo2 > 20.0)                        # the other parts still bound it
+    assert np.all(view.sides_uv[np.isfinite(view.sides_uv)].reshape(-1) >= min(lo2) - 1e-9)

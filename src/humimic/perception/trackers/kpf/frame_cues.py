@@ -31,14 +31,14 @@ def sample_box(view: BodyView, ellipses=None) -> tuple[np.ndarray, np.ndarray]:
     of their centres (``ellipses`` as :meth:`BodyView.ellipses_px`, computed if None)."""
     centre, axes, _ = view.ellipses_px() if ellipses is None else ellipses
     r = axes.max(axis=-1)
-    lo, hi = np.empty(2), np.empty(2)
-    for k in range(2):   # 1-D NaN-skipping reductions (numpy is slow over a short last axis)
+    lo, hi = np.zeros(2), np.zeros(2)
+    for k in range(2):   # 1-D reductions (numpy is slow over a short last axis)
         c = centre[..., k]
         pts = np.concatenate([view.sides_uv[..., k].ravel(), view.axis_uv[..., k].ravel(),
                               (c - r).ravel(), (c + r).ravel()])
-        lo[k], hi[k] = np.fmin.reduce(pts, initial=np.inf), np.fmax.reduce(pts, initial=-np.inf)
-    if not (np.isfinite(lo).all() and np.isfinite(hi).all()):
-        return np.zeros(2), np.zeros(2)
+        pts = pts[np.isfinite(pts)]          # invalid parts (NaN, degenerate conics) sample 0
+        if len(pts):
+            lo[k], hi[k] = pts.min(), pts.max()
     return lo, hi
 
 
