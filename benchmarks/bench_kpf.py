@@ -69,7 +69,7 @@ def main() -> None:
     variants = load_scenario(SCENARIOS_DIR / "schmidt_table1.yaml").trackers
     for (n, it) in ((150, 2), (1000, 3)):
         for name, base in variants.items():
-            cfg = base.model_copy(update={"particles": n, "iterations": it})
+            cfg = base.model_copy(update={"n_particles": n, "iterations": it})
             rates, cpu_rates, per_frame = [], [], []
             for r in range(args.repeats):
                 tr = KpfTracker(body, intr, cfg, np.random.default_rng(0 if args.same_seed else r))

@@ -120,7 +120,7 @@ def main() -> None:
             trk.step(f, torso, np.random.default_rng(0))
         return len(frames)
 
-    report(f"tbp N={cfg.n}", time_runs(
+    report(f"tbp N={cfg.n_particles}", time_runs(
         lambda r: TbpTracker(cfg, stage.tracker.body, stage.tracker.lut), tbp_run,
         args.repeats), GOALS_FPS["tbp"])
     report("  tbp image prep (flow, edges)", time_runs(

@@ -94,7 +94,7 @@ def test_tracker_with_depth_moves_and_rescue_holds_a_static_synthetic_person():
     for p, name in enumerate(body.part_names):
         img[labels == p + 1] = palette.get(name, (128, 128, 128))
     lut = ColorLUT(load_color_model(DEFAULT_COLOR_MODEL), 6)
-    cfg = KpfConfig(particles=150, iterations=2, partitioned=True, torso_prior_m=0.03,
+    cfg = KpfConfig(n_particles=150, iterations=2, partitioned=True, torso_prior_m=0.03,
                     kde_stride=4, depth_share=0.3, rescue_passes=1, rescue_drop=0.01)
     tr = KpfTracker(body, intr, cfg, np.random.default_rng(0))
     maps = cue_maps(img, lut)

@@ -38,7 +38,7 @@ class Poses(Stage):
 def run():
     sc = load_scenario(SCENARIOS_DIR / "schmidt_side.yaml",
                        ['output.rerun="off"', "output.plots=false",
-                        "trackers.kpf.particles=150", "trackers.kpf.iterations=2",
+                        "trackers.kpf.n_particles=150", "trackers.kpf.iterations=2",
                         'cameras.covered=[{camera: left, start: 1.25, end: 1.6}]'],
                        duration=2.0)
     rngs = Rngs(sc.seed)
@@ -86,7 +86,7 @@ def test_covered_camera_frames_are_lost_and_particles_stay_finite(run):
 
 
 @pytest.mark.parametrize("tracker, key", [
-    ("{kind: kpf, particles: 0}", "trackers.kpf.particles"),
+    ("{kind: kpf, n_particles: 0}", "trackers.kpf.n_particles"),
     ("{kind: kpf, iterations: 0}", "trackers.kpf.iterations"),
     ("{kind: kpf, D_arm_deg: [22, 20, 35]}", "trackers.kpf.D_arm_deg"),
     ("{kind: kpf, cues: {torso: [edge, shape]}}", "trackers.kpf.cues.torso.1"),

@@ -157,6 +157,10 @@ def command_line_source(key: str, overridden: dict[str, str] | set[str]) -> str 
     return None
 
 
+#: Keys renamed since, to what a scenario should say now (the did-you-mean of an unknown key):
+#: every particle filter's size is ``n_particles``.
+RENAMED = {"n": "n_particles", "particles": "n_particles"}
+
 _BOUNDS = {"greater_than": "> {gt}", "greater_than_equal": ">= {ge}", "less_than": "< {lt}",
            "less_than_equal": "<= {le}"}
 
@@ -184,8 +188,9 @@ def from_validation_error(err: ValidationError, root: type[BaseModel], file: str
     if kind == "extra_forbidden":
         model = model_at(root, loc)
         options = sorted(model.model_fields) if model else []
+        hint = RENAMED.get(str(loc[-1]))
         return ScenarioError(source, key, "unknown key", value, ", ".join(options) or None,
-                             suggest(loc[-1], options), line)
+                             hint if hint in options else suggest(loc[-1], options), line)
     if kind == "literal_error":
         expected = ctx.get("expected", "")
         options = [o.strip().strip("'") for o in str(expected).replace(" or ", ",").split(",")]

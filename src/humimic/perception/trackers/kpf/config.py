@@ -51,7 +51,7 @@ class KpfConfig(Section):
     filter: Literal["kpf", "condensation"] = "kpf"
     """``kpf``: mean shift and mixed propagation; ``condensation``: plain CONDENSATION (random
     walk of the same extent, weighted mean), the paper's baseline."""
-    particles: int = Field(1000, gt=0, le=20000)
+    n_particles: int = Field(1000, gt=0, le=20000)
     iterations: int = Field(3, gt=0, le=20)
     """Maximum mean-shift iterations per frame."""
     D_arm_deg: list[ArmExtent] = Field(default_factory=lambda: [22.0, 20.0, 35.0, 25.0],

@@ -46,8 +46,8 @@ def collect(planned) -> dict:
             t = m.get("trackers", {}).get(name)
             if cfg is None or t is None:
                 continue
-            iters = dict(CONFIGS).get(cfg.particles, cfg.iterations)  # CONDENSATION: none
-            row = out.setdefault((gesture, cfg.particles, iters, name), {k: [] for k in KEYS})
+            iters = dict(CONFIGS).get(cfg.n_particles, cfg.iterations)  # CONDENSATION: none
+            row = out.setdefault((gesture, cfg.n_particles, iters, name), {k: [] for k in KEYS})
             for k in KEYS:
                 row[k].append(t[k])
     return out
@@ -98,7 +98,7 @@ def main(argv: list[str] | None = None) -> int:
     sweep = load_sweep(SWEEP)
     if args.particles is not None:
         sweep.config.cases = [c for c in sweep.config.cases
-                              if c["trackers.kpf.particles"] in args.particles]
+                              if c["trackers.kpf.n_particles"] in args.particles]
     if args.seeds is not None:
         sweep.config.seeds = args.seeds
     if args.duration is not None:

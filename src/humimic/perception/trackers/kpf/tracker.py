@@ -116,7 +116,7 @@ class KpfTracker:
     def start(self, q0: np.ndarray, maps: CueMaps | FrameCues, T_cam_base: np.ndarray) -> None:
         """Initialise at a known pose (the paper fits the model by hand): every particle at
         ``q0`` and the colour references from its back-projection."""
-        n = self.cfg.particles
+        n = self.cfg.n_particles
         self.mode = self.mode_prev = self.limits.clamp(np.asarray(q0, float))
         c = self.cfg
         self.torso_prior = None if c.torso_prior_m is None else Gaussian(

@@ -22,7 +22,7 @@ class TbpConfig(Section):
     (``measurements``, target ``head``; the torso upright and facing the robot, as the paper
     assumes a coarsely fronto-parallel torso placed from the face tracker); ``truth``, the
     avatar's true torso pose -- an ORACLE, reported as such in the metrics."""
-    n: int = Field(400, ge=1, le=20000)
+    n_particles: int = Field(400, ge=1, le=20000)
     """Particles N."""
     sigma_deg: float = Field(1.0, gt=0.0, le=45.0)
     """Process noise of the constant-velocity model per frame (deg, each angle; not in Table

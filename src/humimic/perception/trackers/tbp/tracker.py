@@ -85,9 +85,9 @@ class TbpTracker:
 
     def _start(self, rng: np.random.Generator) -> None:
         q = self.body.clamp(self.q_def + rng.normal(0, math.radians(self.cfg.init_sigma_deg),
-                                                    (self.cfg.n, 8)))
+                                                    (self.cfg.n_particles, 8)))
         self.particles = np.hstack([q, q])
-        self.log_weights = uniform_log_weights(self.cfg.n)
+        self.log_weights = uniform_log_weights(self.cfg.n_particles)
 
     def _first_frame(self, view: ArmView, torso: np.ndarray) -> None:
         """Cue weights from the first frame (sec. 6.3.1) and the patches' references."""
