@@ -94,6 +94,10 @@ def test_pose_reset_and_candidate_proposal_against_closed_forms():
                                                np.diag(walk.sigma[6:] ** 2)))
             assert table[i, j] == pytest.approx(np.log(cont + reset), rel=1e-9, abs=1e-9)
     np.testing.assert_allclose(np.diag(table), dyn.log_density(x_new, x_old), rtol=1e-12)
+    w = np.array([0.1, 0.2, 0.3, 0.4])                  # the predictive density, sum_j w_j p
+    expect = [np.log(sum(w[j] * np.exp(table[i, j]) for j in range(4))) for i in range(4)]
+    np.testing.assert_allclose(dyn.predictive_log_density(x_new, x_old, np.log(w)), expect,
+                               rtol=1e-12)
     # the proposal: one particle, one candidate, fresh = 0.3
     pos = Mixture((Gaussian(HAND[:3], np.eye(3) * 1e-4),))
     prop = CandidateProposal(pos, HAND[None], np.zeros(1), walk,

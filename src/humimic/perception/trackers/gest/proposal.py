@@ -70,6 +70,20 @@ class PoseReset:
              + self._axes().pairwise_log_density(x_new[:, AXES], x_old[:, AXES]))
         return np.logaddexp(a, b)
 
+    def predictive_log_density(self, x: np.ndarray, particles: np.ndarray,
+                               log_weights: np.ndarray) -> np.ndarray:
+        """``log sum_j w_j p(x | x_j) = log((1 - eps) f(x) + eps U(p, o) f_a(a))`` with ``f``
+        and ``f_a`` the random walks' predictive densities over the whole state and over the
+        semi-axes (normalised weights): two ``(n, N)`` tables reduced by rows, no table-wide
+        ``logaddexp``."""
+        x, particles = np.asarray(x, float), np.asarray(particles, float)
+        lw = np.asarray(log_weights, float)[None]
+        f = logsumexp(self.walk.pairwise_log_density(x, particles) + lw, axis=1)
+        f_a = logsumexp(self._axes().pairwise_log_density(x[:, AXES], particles[:, AXES]) + lw,
+                        axis=1)
+        return np.logaddexp(math.log1p(-self.eps) + f,
+                            math.log(self.eps) + self.box.log_density(x[:, POSE]) + f_a)
+
     def mean(self, x: np.ndarray) -> np.ndarray:
         return np.asarray(x, float)
 

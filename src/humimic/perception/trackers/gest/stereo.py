@@ -16,7 +16,7 @@ import numpy as np
 
 from humimic.perception.blobs.triangulation import dlt_jacobian, triangulate_dlt
 from humimic.perception.cues.importance import Blobs
-from humimic.sensors.camera_model import CameraModel, invert_transform
+from humimic.sensors.camera_model import CameraModel
 
 
 def blob_inertia(blobs: Blobs, scale: float = 1.0) -> np.ndarray:
@@ -42,8 +42,8 @@ def stereo_candidates(left: Blobs, right: Blobs, cam_l: CameraModel, cam_r: Came
     if kl == 0 or kr == 0:
         return _NONE
     il, ir = np.repeat(np.arange(kl), kr), np.tile(np.arange(kr), kl)
-    P1 = invert_transform(cam_l.T_base_cam)[:3]
-    P2 = invert_transform(cam_r.T_base_cam)[:3]
+    P1 = cam_l.T_cam_base[:3]
+    P2 = cam_r.T_cam_base[:3]
     x1 = cam_l.intrinsics.undistort_normalized(left.centers[il])
     x2 = cam_r.intrinsics.undistort_normalized(right.centers[ir])
     X_h, svd = triangulate_dlt(P1, P2, x1, x2)
@@ -86,8 +86,8 @@ def interior_blobs(blobs: Blobs, width: int, height: int, margin_px: float = 1.0
 def triangulate_pixels(cam_l: CameraModel, cam_r: CameraModel, uv_l: np.ndarray,
                        uv_r: np.ndarray) -> np.ndarray:
     """Base-frame points ``(N, 3)`` of left/right pixel pairs ``(N, 2)`` (DLT)."""
-    P1 = invert_transform(cam_l.T_base_cam)[:3]
-    P2 = invert_transform(cam_r.T_base_cam)[:3]
+    P1 = cam_l.T_cam_base[:3]
+    P2 = cam_r.T_cam_base[:3]
     X_h, _ = triangulate_dlt(P1, P2, cam_l.intrinsics.undistort_normalized(uv_l),
                              cam_r.intrinsics.undistort_normalized(uv_r))
     return X_h[:, :3] / X_h[:, 3:]

@@ -67,7 +67,7 @@ from humimic.perception.trackers.gest.stereo import (
     stereo_candidates,
     triangulate_pixels,
 )
-from humimic.sensors.camera_model import CameraImage, invert_transform
+from humimic.sensors.camera_model import CameraImage
 
 
 @dataclass(frozen=True)
@@ -296,8 +296,7 @@ class GestTracker:
         """The box the cues are computed in (:mod:`.roi`): the hand-sized blobs matched in
         stereo, the blobs near the last estimate, padded by the distance transform's cap."""
         K = frame.camera.intrinsics
-        boxes = [blobs.boxes[np.isin(np.arange(len(blobs.areas)),
-                                     _matched(blobs, centroids))]]
+        boxes = [blobs.boxes[_matched(blobs, centroids)]]
         if self.last is not None:
             uv = frame.camera.project_base(self.last[:3])
             r = 1.5 * K.fx * float(np.max(self.last[6:])) / max(
@@ -343,4 +342,4 @@ class _Geometry:
 
     @property
     def T_cam_base(self):
-        return invert_transform(self.cam.T_base_cam)
+        return self.cam.T_cam_base
