@@ -98,7 +98,7 @@ def patch_histograms(qimage: QuantizedImage, states: np.ndarray, patches: np.nda
     flat = np.where(inside, row * w + col, h * w)  # off the image: the sentinel
     stride = 3 * (bins + 1)
     base = (np.arange(n * p).reshape(n, p, 1) * stride).astype(np.int32)
-    ids = qimage.planes[:, flat] + base            # (3, N, P, S): every channel in one gather
+    ids = np.take(qimage.planes, flat, axis=1) + base   # (3, N, P, S): one gather
     counts = np.bincount(ids.ravel(), minlength=n * p * stride)
     counts = counts.reshape(n, p, 3, bins + 1)[..., :bins]
     total = inside.sum(axis=-1)[..., None, None].astype(np.float64)
