@@ -198,8 +198,8 @@ def skin_distance(proj: HandProjection, view: HandView, offset_px: float = 2.0
     """``D_k = 1 - (mean skin inside - mean skin outside)`` in [0, 2] (module docstring),
     sampled ``offset_px`` either side of the contour along its normals."""
     step = offset_px * proj.normal
-    inside = sample(view.skin, proj.contour - step, 0.0).mean(axis=1)
-    outside = sample(view.skin, proj.contour + step, 0.0).mean(axis=1)
+    inside, outside = sample(view.skin, np.stack([proj.contour - step, proj.contour + step]),
+                             0.0).mean(axis=2)                          # one gather
     return 1.0 - (inside - outside)
 
 
