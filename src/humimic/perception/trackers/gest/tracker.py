@@ -289,9 +289,9 @@ class GestTracker:
             if np.isfinite(uv).all():
                 box = roi_box(np.array([[uv[0] - r, uv[1] - r, 2 * r, 2 * r]]), K.width,
                               K.height, 0.0)
-        crop = crop_frame(frame, box)
-        h, w = crop.image.shape[:2]
-        b = interior_blobs(hand_blobs(crop.image, self.lut, cfg.blob_subsample), w, h,
+        image = frame.image if box is None else frame.image[box[1]:box[3], box[0]:box[2]]
+        h, w = image.shape[:2]
+        b = interior_blobs(hand_blobs(image, self.lut, cfg.blob_subsample), w, h,
                            cfg.border_px)
         if box is None:
             return b
