@@ -252,8 +252,9 @@ class ColorLUT:
 
     def index(self, rgb_u8: np.ndarray) -> np.ndarray:
         """Table index of uint8 pixels ``(..., 3)``."""
-        q = (np.asarray(rgb_u8, dtype=np.uint8) >> self.shift).astype(np.intp)  # one cast
-        return (q[..., 0] << (2 * self.bits)) | (q[..., 1] << self.bits) | q[..., 2]
+        q = np.asarray(rgb_u8, dtype=np.uint8) >> self.shift
+        return ((q[..., 0].astype(np.intp) << (2 * self.bits))
+                | (q[..., 1].astype(np.intp) << self.bits) | q[..., 2])
 
     def lookup(self, rgb_u8: np.ndarray) -> np.ndarray:
         """Colour density for uint8 pixels ``(..., 3)``: float32 ``(...)``.  # Ude eq. 6"""
