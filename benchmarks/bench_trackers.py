@@ -79,9 +79,16 @@ def main() -> None:
                     help="cpu: this process's CPU time, every thread (OpenCV's idle workers "
                          "spin, so a quiet machine shows more than the wall); wall: "
                          "perf_counter, meaningful only on a quiet machine")
+    ap.add_argument("--cv-threads", type=int, default=None,
+                    help="cv2.setNumThreads before timing (default: OpenCV's own, one worker "
+                         "per core; on these small images 1 is faster and spins no workers)")
     args = ap.parse_args()
     global clock
     clock = CLOCK[args.clock]
+    if args.cv_threads is not None:
+        import cv2
+
+        cv2.setNumThreads(args.cv_threads)
 
     from humimic.perception.cues.importance import skin_blobs
     from humimic.perception.trackers.gest.build import gest_stage
@@ -128,8 +135,10 @@ def main() -> None:
         lambda trk: [arm_view(f, None, trk.lut, 32) for _, _, (f,) in frames] and len(frames),
         args.repeats))
     world.eye_rig.close()
+    import cv2
+
     print(f"({args.clock} time; quartiles over {args.repeats} runs of {args.frames} frames each; "
-          f"load average {os.getloadavg()[0]:.1f})")
+          f"OpenCV threads {cv2.getNumThreads()}; load average {os.getloadavg()[0]:.1f})")
 
 
 if __name__ == "__main__":

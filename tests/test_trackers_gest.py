@@ -8,6 +8,7 @@ import cv2
 import numpy as np
 import pytest
 from _synth_vision import SKIN_RGB, clutter_background, stereo_head
+from scipy.special import logsumexp as scipy_logsumexp
 from scipy.stats import multivariate_normal
 
 from humimic.estimation.particles import Gaussian, Mixture, RandomWalk, UniformBox
@@ -20,7 +21,7 @@ from humimic.perception.trackers.gest.likelihood import (
     patch_histogram,
     project_hands,
 )
-from humimic.perception.trackers.gest.proposal import CandidateProposal, PoseReset
+from humimic.perception.trackers.gest.proposal import CandidateProposal, PoseReset, logsumexp
 from humimic.perception.trackers.gest.stereo import stereo_candidates
 from humimic.perception.trackers.gest.tracker import skin_mask
 from humimic.sensors.camera_model import CameraImage, invert_transform
@@ -94,6 +95,10 @@ def test_pose_reset_and_candidate_proposal_against_closed_forms():
                                                np.diag(walk.sigma[6:] ** 2)))
             assert table[i, j] == pytest.approx(np.log(cont + reset), rel=1e-9, abs=1e-9)
     np.testing.assert_allclose(np.diag(table), dyn.log_density(x_new, x_old), rtol=1e-12)
+    w = np.array([0.1, 0.2, 0.3, 0.4])                  # the predictive density, sum_j w_j p
+    expect = [np.log(sum(w[j] * np.exp(table[i, j]) for j in range(4))) for i in range(4)]
+    np.testing.assert_allclose(dyn.predictive_log_density(x_new, x_old, np.log(w)), expect,
+                               rtol=1e-12)
     # the proposal: one particle, one candidate, fresh = 0.3
     pos = Mixture((Gaussian(HAND[:3], np.eye(3) * 1e-4),))
     prop = CandidateProposal(pos, HAND[None], np.zeros(1), walk,
@@ -106,6 +111,17 @@ def test_pose_reset_and_candidate_proposal_against_closed_forms():
                        * multivariate_normal.pdf(x[:, 6:], HAND[6:],
                                                  np.diag(walk.sigma[6:] ** 2))))
     np.testing.assert_allclose(prop.log_density(x), expect, rtol=1e-9)
+
+
+def test_logsumexp_matches_scipy_over_underflowing_tables():
+    rng = np.random.default_rng(3)
+    a = -rng.exponential(5000.0, (40, 30))              # most entries underflow exp
+    a[:, 0] = rng.normal(0.0, 3.0, 40)
+    a[5, 7:] = -np.inf
+    a[7] = -np.inf                                      # a row with no mass
+    for axis in (0, 1):
+        np.testing.assert_allclose(logsumexp(a, axis=axis),
+                                   scipy_logsumexp(a, axis=axis), rtol=1e-15, atol=0)
 
 
 @pytest.fixture(scope="module")

@@ -16,7 +16,7 @@ from humimic.perception.cues.color_models import ColorLUT, load_color_model
 from humimic.perception.cues.importance import Blobs
 from humimic.perception.trackers.gest.blobs import hand_blobs
 from humimic.perception.trackers.gest.config import GestConfig
-from humimic.perception.trackers.gest.likelihood import hand_view, project_hands
+from humimic.perception.trackers.gest.likelihood import hand_view, project_hands, project_views
 from humimic.perception.trackers.gest.roi import crop_frame, roi_box
 from humimic.perception.trackers.gest.stereo import interior_blobs, triangulate_pixels
 from humimic.perception.trackers.gest.tracker import GestTracker, centre_update
@@ -55,6 +55,23 @@ def test_contour_points_and_normals_lie_on_the_dual_quadric_projection():
         np.testing.assert_allclose(np.abs(np.einsum("ij,ij->i", g, nrm)), 1.0, atol=1e-9)
         centre = np.linalg.solve(C[:2, :2], -C[:2, 2])      # the conic's centre
         np.testing.assert_allclose(patch[:2], centre, atol=1e-6)
+
+
+def test_both_views_in_one_batch_match_the_dual_quadric_projection():
+    cams = stereo_head(k1=0.0, k2=0.0)
+    rng = np.random.default_rng(2)
+    states = HAND + np.c_[rng.normal(0, 0.1, (5, 3)), rng.normal(0, 1.0, (5, 3)),
+                          np.zeros((5, 3))]
+    views = [hand_view(CameraImage(0.0, c, np.zeros((240, 320, 3), np.uint8)), 32)
+             for c in cams]
+    projs, centres = project_views(states, views, 20, image_views=1)
+    assert projs[1] is None and centres.shape == (5, 2, 2)
+    for k, cam in enumerate(cams):
+        for s, c in zip(states, centres[:, k], strict=True):
+            C = _pixel_conic(s, cam)
+            np.testing.assert_allclose(c, np.linalg.solve(C[:2, :2], -C[:2, 2]), atol=1e-6)
+    np.testing.assert_allclose(projs[0].contour, project_hands(states, views[0], 20).contour,
+                               atol=1e-9)
 
 
 def test_a_crop_is_a_shift_of_the_principal_point():

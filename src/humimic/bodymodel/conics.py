@@ -44,14 +44,18 @@ def conic_to_ellipse(C: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]
     """Centre ``(..., 2)`` and shape matrix ``M (..., 2, 2)`` of the ellipse
     ``(x - c)^T M^-1 (x - c) = 1`` of conics ``C (..., 3, 3)`` (any scale or sign), and a
     ``(...)`` bool that is False where the conic is not a real ellipse."""
-    C2, c2, c33 = C[..., :2, :2], C[..., :2, 2], C[..., 2, 2]
-    det = C2[..., 0, 0] * C2[..., 1, 1] - C2[..., 0, 1] * C2[..., 1, 0]
+    # component form of centre = -C2^-1 c2, kappa = centre^T C2 centre - c33,
+    # M = kappa C2^-1 (numpy's batched 2x2 products cost more than the arithmetic)
+    a, b, e, d = C[..., 0, 0], C[..., 0, 1], C[..., 1, 0], C[..., 1, 1]
+    ux, uy, c33 = C[..., 0, 2], C[..., 1, 2], C[..., 2, 2]
+    det = a * d - b * e
+    M = np.empty(np.shape(C)[:-2] + (2, 2))
     with np.errstate(divide="ignore", invalid="ignore"):
-        inv = np.stack([np.stack([C2[..., 1, 1], -C2[..., 0, 1]], -1),
-                        np.stack([-C2[..., 1, 0], C2[..., 0, 0]], -1)], -2) / det[..., None, None]
-        centre = -(inv @ c2[..., None])[..., 0]
-        kappa = np.sum(centre * (C2 @ centre[..., None])[..., 0], axis=-1) - c33
-        M = kappa[..., None, None] * inv
+        cx = (b * uy - d * ux) / det
+        cy = (e * ux - a * uy) / det
+        k = (cx * (a * cx + b * cy) + cy * (e * cx + d * cy) - c33) / det
+        M[..., 0, 0], M[..., 0, 1], M[..., 1, 0], M[..., 1, 1] = k * d, -k * b, -k * e, k * a
+    centre = np.stack([cx, cy], -1)
     ok = (det > 0) & (M[..., 0, 0] > 0) & np.isfinite(M).all(axis=(-1, -2))
     return centre, M, ok
 

@@ -14,6 +14,7 @@ Conventions (used everywhere in humimic):
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 
@@ -188,12 +189,19 @@ class CameraModel:
     @property
     def P_base(self) -> np.ndarray:
         """3x4 projection matrix from homogeneous base-frame points to pixels (no distortion)."""
-        T_cam_base = invert_transform(self.T_base_cam)
-        return self.intrinsics.K @ T_cam_base[:3, :]
+        return self.intrinsics.K @ self.T_cam_base[:3, :]
+
+    @functools.cached_property
+    def T_cam_base(self) -> np.ndarray:
+        """``T_base_cam``'s inverse (read-only; computed once per camera model: the pose of
+        a camera at one instant does not change)."""
+        T = invert_transform(self.T_base_cam)
+        T.setflags(write=False)
+        return T
 
     def project_base(self, p_base: np.ndarray) -> np.ndarray:
         """Project base-frame points ``(..., 3)`` to pixels ``(..., 2)`` (with distortion)."""
-        T_cam_base = invert_transform(self.T_base_cam)
+        T_cam_base = self.T_cam_base
         p = np.asarray(p_base, dtype=float)
         p_cam = p @ T_cam_base[:3, :3].T + T_cam_base[:3, 3]
         return self.intrinsics.project(p_cam)

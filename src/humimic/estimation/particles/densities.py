@@ -181,6 +181,8 @@ class Mixture:
         x = np.asarray(x, float)
         if self.empty:
             return np.full(x.shape[:-1], -np.inf)
+        if len(self.parts) == 1:            # the sum below with one term, exactly
+            return np.log(self.coefficients[0]) + self.parts[0].log_density(x)
         terms = np.stack([np.log(c) + p.log_density(x)
                           for p, c in zip(self.parts, self.coefficients, strict=True)])
         m = terms.max(axis=0)

@@ -18,6 +18,7 @@ at the largest distance (1) from any reference.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -53,19 +54,32 @@ def quantize(image: np.ndarray, bins: int = 32) -> QuantizedImage:
     return QuantizedImage(planes, h, w, bins)
 
 
-def patch_grid(states: np.ndarray, patches: np.ndarray, grid: int) -> np.ndarray:
-    """Sample positions ``(N, P, grid*grid, 2)`` (u, v) of every patch of every state."""
+@functools.lru_cache(maxsize=16)
+def _lattice(grid: int) -> tuple[np.ndarray, np.ndarray]:
+    """The ``grid x grid`` lattice in [-0.5, 0.5) (u, v offsets, row-major), read-only."""
+    f = (np.arange(grid) + 0.5) / grid - 0.5
+    fu, fv = (a.ravel() for a in np.meshgrid(f, f))
+    fu.setflags(write=False)
+    fv.setflags(write=False)
+    return fu, fv
+
+
+def _grid_uv(states: np.ndarray, patches: np.ndarray, grid: int
+             ) -> tuple[np.ndarray, np.ndarray]:
+    """``u``, ``v`` ``(N, P, grid*grid)`` of :func:`patch_grid`."""
     x = np.asarray(states, dtype=np.float64)
     x = x[None] if x.ndim == 1 else x
     P = np.asarray(patches, dtype=np.float64)
-    f = (np.arange(grid) + 0.5) / grid - 0.5  # lattice in [-0.5, 0.5)
-    fu, fv = np.meshgrid(f, f)
-    s = x[:, 2, None, None]
-    cu = x[:, 0, None, None] + s * P[None, :, 0, None]
-    cv = x[:, 1, None, None] + s * P[None, :, 1, None]
-    u = cu + s * P[None, :, 2, None] * fu.ravel()[None, None, :]
-    v = cv + s * P[None, :, 3, None] * fv.ravel()[None, None, :]
-    return np.stack([u, v], axis=-1)
+    fu, fv = _lattice(grid)
+    s = x[:, 2, None]                                      # (N, 1)
+    u = (x[:, 0, None] + s * P[:, 0])[..., None] + (s * P[:, 2])[..., None] * fu
+    v = (x[:, 1, None] + s * P[:, 1])[..., None] + (s * P[:, 3])[..., None] * fv
+    return u, v
+
+
+def patch_grid(states: np.ndarray, patches: np.ndarray, grid: int) -> np.ndarray:
+    """Sample positions ``(N, P, grid*grid, 2)`` (u, v) of every patch of every state."""
+    return np.stack(_grid_uv(states, patches, grid), axis=-1)
 
 
 def patch_histograms(qimage: QuantizedImage, states: np.ndarray, patches: np.ndarray,
@@ -75,16 +89,16 @@ def patch_histograms(qimage: QuantizedImage, states: np.ndarray, patches: np.nda
     A pixel at integer ``(i, j)`` covers ``[i - 0.5, i + 0.5)``; samples off the image are
     dropped.
     """
-    pts = patch_grid(states, patches, grid)  # (N, P, S, 2)
-    n, p = pts.shape[:2]
+    u, v = _grid_uv(states, patches, grid)  # (N, P, S)
+    n, p = u.shape[:2]
     h, w, bins = qimage.height, qimage.width, qimage.bins
-    col = np.floor(pts[..., 0] + 0.5).astype(np.int64)
-    row = np.floor(pts[..., 1] + 0.5).astype(np.int64)
+    col = np.floor(u + 0.5).astype(np.int64)
+    row = np.floor(v + 0.5).astype(np.int64)
     inside = (col >= 0) & (col < w) & (row >= 0) & (row < h)
     flat = np.where(inside, row * w + col, h * w)  # off the image: the sentinel
     stride = 3 * (bins + 1)
     base = (np.arange(n * p).reshape(n, p, 1) * stride).astype(np.int32)
-    ids = np.stack([qimage.planes[c].take(flat) + base for c in range(3)])
+    ids = np.take(qimage.planes, flat, axis=1) + base   # (3, N, P, S): one gather
     counts = np.bincount(ids.ravel(), minlength=n * p * stride)
     counts = counts.reshape(n, p, 3, bins + 1)[..., :bins]
     total = inside.sum(axis=-1)[..., None, None].astype(np.float64)

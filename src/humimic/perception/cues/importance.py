@@ -80,5 +80,5 @@ def skin_blobs(mask: np.ndarray, subsample: int = 2, min_area_px: float = 40.0,
     keep = (area >= min_area_px) & (ratio >= aspect[0]) & (ratio <= aspect[1])
     # a subsampled pixel i stands for full-resolution pixels [s i, s i + s): centre s i + (s-1)/2
     centers = cent[keep] * s + (s - 1.0) / 2.0
-    boxes = np.column_stack([stats[keep, 0] * s, stats[keep, 1] * s, w[keep] * s, h[keep] * s])
+    boxes = stats[keep, :4] * s                       # x, y, w, h (CC_STAT_LEFT..HEIGHT)
     return Blobs(centers.reshape(-1, 2), boxes.reshape(-1, 4), area[keep])

@@ -5,13 +5,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import cv2
 import numpy as np
 
 from humimic.perception.cues.color_models import ColorLUT
 from humimic.perception.cues.edges import edge_maps
 from humimic.perception.cues.histograms import QuantizedImage, quantize
 from humimic.perception.cues.motion import MotionEdgeMaps, motion_edge_maps
-from humimic.sensors.camera_model import CameraImage, Intrinsics, invert_transform
+from humimic.sensors.camera_model import CameraImage, Intrinsics
 
 
 @dataclass(frozen=True)
@@ -38,7 +39,7 @@ def frame_cues(frame: CameraImage, bins: int, lut: ColorLUT | None = None,
     """The cue images of ``frame``: edges (on the colour gradient with ``colour_edges``; and
     moving edges with ``flow``), skin posterior, quantised colours."""
     maps = edge_maps(frame.image, colour=colour_edges)
-    return FrameCues(frame.camera.intrinsics, invert_transform(frame.camera.T_base_cam),
+    return FrameCues(frame.camera.intrinsics, frame.camera.T_cam_base,
                      motion_edge_maps(maps, flow), None if lut is None else
                      lut.posterior(frame.image), quantize(frame.image, bins),
-                     float(np.mean(maps.edges > 0)))
+                     cv2.countNonZero(maps.edges) / maps.edges.size)

@@ -30,6 +30,7 @@ the camera or off the image cost the distance transform's cap at every point.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -77,28 +78,79 @@ def hand_outlines(states: np.ndarray, intrinsics, T_cam_base: np.ndarray, n: int
     return outline, conic
 
 
-def image_ellipses(ellipsoids: tuple, view) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def views_ellipses(ellipsoids: tuple, T_cam_base: np.ndarray
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Eq. 15 for ellipsoids ``(R, centre, semi-axes)`` (base frame, as
-    :func:`~humimic.bodymodel.hand.hand_ellipsoids` gives them) in ``view``'s camera: the image
-    ellipses' centres ``(N, 2)`` and shape matrices ``(N, 2, 2)`` (normalised coordinates) and
-    whether each ellipsoid lies wholly in front of the camera."""
-    R, c = to_camera(view.T_cam_base, ellipsoids[0], ellipsoids[1])
+    :func:`~humimic.bodymodel.hand.hand_ellipsoids` gives them, ``N`` of them) in ``V`` cameras
+    at once (``T_cam_base (V, 4, 4)``): the image ellipses' centres ``(V, N, 2)`` and shape
+    matrices ``(V, N, 2, 2)`` (normalised coordinates) and whether each ellipsoid lies wholly
+    in front of each camera ``(V, N)``."""
+    T = np.asarray(T_cam_base, float)
+    R = T[:, None, :3, :3] @ ellipsoids[0][None]                       # into each camera
+    c = ellipsoids[1][None] @ np.swapaxes(T[:, :3, :3], 1, 2) + T[:, None, :3, 3]
     axes = ellipsoids[2]
     A, b, c0 = conics.ellipsoid_quadric(R, c, axes)
     conic = conics.quadric_to_conic(A, b, c0)                           # Menezes eq. 15
     centre, M, ok = conics.conic_to_ellipse(conic)
-    M = np.where(ok[:, None, None], M, np.eye(2))
-    valid = ok & (c0 > 0.0) & (c[:, 2] - np.sqrt(np.sum(np.square(R[:, 2, :] * axes), -1))
+    M = np.where(ok[..., None, None], M, np.eye(2))
+    valid = ok & (c0 > 0.0) & (c[..., 2] - np.sqrt(np.sum(np.square(R[..., 2, :] * axes), -1))
                                 > Z_MIN)
     return centre, M, valid
+
+
+def image_ellipses(ellipsoids: tuple, view) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`views_ellipses` in ``view``'s camera alone: centres ``(N, 2)``, shape matrices
+    ``(N, 2, 2)``, in front ``(N,)``."""
+    centre, M, valid = views_ellipses(ellipsoids, np.asarray(view.T_cam_base)[None])
+    return centre[0], M[0], valid[0]
+
+
+def pixel_centres(centre: np.ndarray, valid: np.ndarray, intrinsics) -> np.ndarray:
+    """Pixel centres ``(N, 2)`` of image ellipses (normalised ``centre (N, 2)``), off-image
+    sentinel where not ``valid``."""
+    cu, cv = intrinsics.distort(centre[:, 0], centre[:, 1])
+    return np.where(valid[:, None], np.stack([cu, cv], -1), OFF_IMAGE)
 
 
 def ellipse_centres(ellipsoids: tuple, view) -> np.ndarray:
     """Pixel centres ``(N, 2)`` of the ellipsoids' image ellipses (off-image sentinel where
     invalid): all the stereo cue needs of the right camera."""
     centre, _, valid = image_ellipses(ellipsoids, view)
-    cu, cv = view.intrinsics.distort(centre[:, 0], centre[:, 1])
-    return np.where(valid[:, None], np.stack([cu, cv], -1), OFF_IMAGE)
+    return pixel_centres(centre, valid, view.intrinsics)
+
+
+@functools.lru_cache(maxsize=16)
+def _circle(n_points: int) -> tuple[np.ndarray, np.ndarray]:
+    """``cos psi, sin psi`` at ``n_points`` equal steps (read-only)."""
+    psi = np.linspace(0.0, 2.0 * np.pi, n_points, endpoint=False)
+    cos, sin = np.cos(psi), np.sin(psi)
+    cos.setflags(write=False)
+    sin.setflags(write=False)
+    return cos, sin
+
+
+def ellipse_projection(centre: np.ndarray, M: np.ndarray, valid: np.ndarray, intrinsics,
+                       n_points: int) -> HandProjection:
+    """Contour points, normals and colour patch of image ellipses ``(centre (N, 2), M
+    (N, 2, 2), valid (N,))`` (:func:`project_hands`)."""
+    m00 = np.sqrt(np.maximum(M[:, 0, 0], 1e-300))
+    l10 = M[:, 1, 0] / m00
+    l11 = np.sqrt(np.maximum(M[:, 1, 1] - l10 * l10, 1e-300))
+    cos, sin = _circle(n_points)
+    x = centre[:, 0, None] + m00[:, None] * cos
+    y = centre[:, 1, None] + l10[:, None] * cos + l11[:, None] * sin
+    nx = cos / m00[:, None] - (l10 / (m00 * l11))[:, None] * sin
+    ny = sin / l11[:, None]
+    norm = np.hypot(nx, ny)
+    K = intrinsics
+    u, v = K.distort(x, y)
+    uv = np.where(valid[:, None, None], np.stack([u, v], -1), OFF_IMAGE)
+    normal = np.stack([nx / norm, ny / norm], -1)
+    _, minor, _ = conics.ellipse_axes(M)
+    cu, cv = K.distort(centre[:, 0], centre[:, 1])
+    side = np.sqrt(2.0) * minor * K.fx
+    patch = np.where(valid[:, None], np.stack([cu, cv, side], -1), [OFF_IMAGE, OFF_IMAGE, 1.0])
+    return HandProjection(uv, normal, patch, valid)
 
 
 def project_hands(states: np.ndarray, view: HandView, n_points: int,
@@ -112,26 +164,28 @@ def project_hands(states: np.ndarray, view: HandView, n_points: int,
     are (that resampling was most of the likelihood's cost)."""
     if ellipsoids is None:
         ellipsoids = hand_ellipsoids(states)
-    centre, M, valid = image_ellipses(ellipsoids, view)
-    m00 = np.sqrt(np.maximum(M[:, 0, 0], 1e-300))
-    l10 = M[:, 1, 0] / m00
-    l11 = np.sqrt(np.maximum(M[:, 1, 1] - l10 * l10, 1e-300))
-    psi = np.linspace(0.0, 2.0 * np.pi, n_points, endpoint=False)
-    cos, sin = np.cos(psi), np.sin(psi)
-    x = centre[:, 0, None] + m00[:, None] * cos
-    y = centre[:, 1, None] + l10[:, None] * cos + l11[:, None] * sin
-    nx = cos / m00[:, None] - (l10 / (m00 * l11))[:, None] * sin
-    ny = sin / l11[:, None]
-    norm = np.hypot(nx, ny)
-    K = view.intrinsics
-    u, v = K.distort(x, y)
-    uv = np.where(valid[:, None, None], np.stack([u, v], -1), OFF_IMAGE)
-    normal = np.stack([nx / norm, ny / norm], -1)
-    _, minor, _ = conics.ellipse_axes(M)
-    cu, cv = K.distort(centre[:, 0], centre[:, 1])
-    side = np.sqrt(2.0) * minor * K.fx
-    patch = np.where(valid[:, None], np.stack([cu, cv, side], -1), [OFF_IMAGE, OFF_IMAGE, 1.0])
-    return HandProjection(uv, normal, patch, valid)
+    return ellipse_projection(*image_ellipses(ellipsoids, view), view.intrinsics, n_points)
+
+
+def project_views(states: np.ndarray, views: list, n_points: int,
+                  image_views: int | None = None, ellipsoids: tuple | None = None
+                  ) -> tuple[list[HandProjection | None], np.ndarray]:
+    """:func:`project_hands` in the first ``image_views`` of ``views`` (all if None; None for
+    the others), and the pixel centres ``(N, V, 2)`` of the image ellipses in every view, with
+    eq. 15 evaluated for all views in one batch."""
+    if ellipsoids is None:
+        ellipsoids = hand_ellipsoids(states)
+    centre, M, valid = views_ellipses(ellipsoids, np.stack([v.T_cam_base for v in views]))
+    projs, centres = [], []
+    for i, view in enumerate(views):
+        if image_views is not None and i >= image_views:
+            projs.append(None)
+            centres.append(pixel_centres(centre[i], valid[i], view.intrinsics))
+            continue
+        proj = ellipse_projection(centre[i], M[i], valid[i], view.intrinsics, n_points)
+        projs.append(proj)
+        centres.append(proj.patch_state[:, :2])
+    return projs, np.stack(centres, 1)
 
 
 def shape_distance(proj: HandProjection, view: HandView) -> np.ndarray:
@@ -144,8 +198,8 @@ def skin_distance(proj: HandProjection, view: HandView, offset_px: float = 2.0
     """``D_k = 1 - (mean skin inside - mean skin outside)`` in [0, 2] (module docstring),
     sampled ``offset_px`` either side of the contour along its normals."""
     step = offset_px * proj.normal
-    inside = sample(view.skin, proj.contour - step, 0.0).mean(axis=1)
-    outside = sample(view.skin, proj.contour + step, 0.0).mean(axis=1)
+    inside, outside = sample(view.skin, np.stack([proj.contour - step, proj.contour + step]),
+                             0.0).mean(axis=2)                          # one gather
     return 1.0 - (inside - outside)
 
 
@@ -172,14 +226,10 @@ def hand_log_likelihood(states: np.ndarray, views: list[HandView], ref: np.ndarr
     ``pairs (M, len(views), 2)`` is given (eq. 7); ``ref (3, bins)`` the reference histogram
     (None: no colour cue)."""
     out = np.zeros(len(states))
-    centres = []
-    ellipsoids = hand_ellipsoids(states)
-    for i, view in enumerate(views):
-        if image_views is not None and i >= image_views:
-            centres.append(ellipse_centres(ellipsoids, view))
+    projs, centres = project_views(states, views, n_points, image_views)
+    for proj, view in zip(projs, views, strict=True):
+        if proj is None:
             continue
-        proj = project_hands(states, view, n_points, ellipsoids)
-        centres.append(proj.patch_state[:, :2])
         out += shape_log_likelihood(shape_distance(proj, view), sigma_s)  # Menezes eq. 2
         if view.skin is not None:
             out += shape_log_likelihood(skin_distance(proj, view), sigma_k)
@@ -187,7 +237,7 @@ def hand_log_likelihood(states: np.ndarray, views: list[HandView], ref: np.ndarr
             h = patch_histograms(view.qimage, proj.patch_state, INSCRIBED, grid=8)
             out += color_log_likelihood(h, ref[None], sigma_c)          # Menezes eq. 6
     if pairs is not None:
-        out += blob_pair_log_likelihood(np.stack(centres, 1), pairs, sigma_px, outlier)
+        out += blob_pair_log_likelihood(centres, pairs, sigma_px, outlier)
     return out
 
 

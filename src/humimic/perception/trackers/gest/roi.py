@@ -26,10 +26,9 @@ def roi_box(boxes: np.ndarray, width: int, height: int, pad_px: float
     b = b[np.isfinite(b).all(axis=1)]
     if len(b) == 0:
         return None
-    x0 = int(np.clip(np.floor(b[:, 0].min() - pad_px), 0, width))
-    y0 = int(np.clip(np.floor(b[:, 1].min() - pad_px), 0, height))
-    x1 = int(np.clip(np.ceil((b[:, 0] + b[:, 2]).max() + pad_px), 0, width))
-    y1 = int(np.clip(np.ceil((b[:, 1] + b[:, 3]).max() + pad_px), 0, height))
+    lo = np.clip(np.floor(b[:, :2].min(axis=0) - pad_px), 0, (width, height))
+    hi = np.clip(np.ceil((b[:, :2] + b[:, 2:]).max(axis=0) + pad_px), 0, (width, height))
+    x0, y0, x1, y1 = (int(a) for a in (*lo, *hi))
     if x1 - x0 < 2 or y1 - y0 < 2:
         return None
     return x0, y0, x1, y1

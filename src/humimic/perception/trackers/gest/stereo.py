@@ -16,7 +16,7 @@ import numpy as np
 
 from humimic.perception.blobs.triangulation import dlt_jacobian, triangulate_dlt
 from humimic.perception.cues.importance import Blobs
-from humimic.sensors.camera_model import CameraModel, invert_transform
+from humimic.sensors.camera_model import CameraModel
 
 
 def blob_inertia(blobs: Blobs, scale: float = 1.0) -> np.ndarray:
@@ -42,8 +42,8 @@ def stereo_candidates(left: Blobs, right: Blobs, cam_l: CameraModel, cam_r: Came
     if kl == 0 or kr == 0:
         return _NONE
     il, ir = np.repeat(np.arange(kl), kr), np.tile(np.arange(kr), kl)
-    P1 = invert_transform(cam_l.T_base_cam)[:3]
-    P2 = invert_transform(cam_r.T_base_cam)[:3]
+    P1 = cam_l.T_cam_base[:3]
+    P2 = cam_r.T_cam_base[:3]
     x1 = cam_l.intrinsics.undistort_normalized(left.centers[il])
     x2 = cam_r.intrinsics.undistort_normalized(right.centers[ir])
     X_h, svd = triangulate_dlt(P1, P2, x1, x2)
@@ -59,15 +59,16 @@ def stereo_candidates(left: Blobs, right: Blobs, cam_l: CameraModel, cam_r: Came
     if not keep.any():
         return _NONE
     G = dlt_jacobian(P1, P2, X_h[keep], tuple(a[keep] for a in svd))   # (M, 3, 4) normalised
-    Nl = np.diag([1.0 / cam_l.intrinsics.fx, 1.0 / cam_l.intrinsics.fy])
-    Nr = np.diag([1.0 / cam_r.intrinsics.fx, 1.0 / cam_r.intrinsics.fy])
-    s_l = Nl @ blob_inertia(left, sigma_scale)[il[keep]] @ Nl
-    s_r = Nr @ blob_inertia(right, sigma_scale)[ir[keep]] @ Nr
+    # pixel -> normalised scaling N = diag(1/fx, 1/fy): N S N = S * n n^T
+    n_l = np.array([1.0 / cam_l.intrinsics.fx, 1.0 / cam_l.intrinsics.fy])
+    n_r = np.array([1.0 / cam_r.intrinsics.fx, 1.0 / cam_r.intrinsics.fy])
+    s_l = blob_inertia(left, sigma_scale)[il[keep]] * np.outer(n_l, n_l)
+    s_r = blob_inertia(right, sigma_scale)[ir[keep]] * np.outer(n_r, n_r)
     G_l, G_r = G[:, :, :2], G[:, :, 2:]
-    cov = (G_l @ s_l @ np.swapaxes(G_l, 1, 2)
-           + G_r @ s_r @ np.swapaxes(G_r, 1, 2))                       # Menezes eq. 17
-    c_l, c_r = centroid_px ** 2 * Nl @ Nl, centroid_px ** 2 * Nr @ Nr
-    cen = G_l @ c_l @ np.swapaxes(G_l, 1, 2) + G_r @ c_r @ np.swapaxes(G_r, 1, 2)
+    G_lT, G_rT = np.swapaxes(G_l, 1, 2), np.swapaxes(G_r, 1, 2)
+    cov = G_l @ s_l @ G_lT + G_r @ s_r @ G_rT                          # Menezes eq. 17
+    cen = ((G_l * (centroid_px * n_l) ** 2) @ G_lT
+           + (G_r * (centroid_px * n_r) ** 2) @ G_rT)
     uv = np.stack([left.centers[il[keep]], right.centers[ir[keep]]], 1)
     return _one_per_left_blob(p[keep], cov, cen, uv, il[keep],
                               np.maximum(res_l, res_r)[keep])
@@ -86,8 +87,8 @@ def interior_blobs(blobs: Blobs, width: int, height: int, margin_px: float = 1.0
 def triangulate_pixels(cam_l: CameraModel, cam_r: CameraModel, uv_l: np.ndarray,
                        uv_r: np.ndarray) -> np.ndarray:
     """Base-frame points ``(N, 3)`` of left/right pixel pairs ``(N, 2)`` (DLT)."""
-    P1 = invert_transform(cam_l.T_base_cam)[:3]
-    P2 = invert_transform(cam_r.T_base_cam)[:3]
+    P1 = cam_l.T_cam_base[:3]
+    P2 = cam_r.T_cam_base[:3]
     X_h, _ = triangulate_dlt(P1, P2, cam_l.intrinsics.undistort_normalized(uv_l),
                              cam_r.intrinsics.undistort_normalized(uv_r))
     return X_h[:, :3] / X_h[:, 3:]

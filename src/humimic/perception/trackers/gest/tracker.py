@@ -37,7 +37,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from humimic.bodymodel.hand import hand_ellipsoids
 from humimic.estimation.particles import (
     Gaussian,
     Mixture,
@@ -52,10 +51,9 @@ from humimic.perception.cues.importance import Blobs
 from humimic.perception.trackers.gest.blobs import hand_blobs
 from humimic.perception.trackers.gest.config import GestConfig
 from humimic.perception.trackers.gest.likelihood import (
-    ellipse_centres,
     hand_log_likelihood,
     hand_view,
-    project_hands,
+    project_views,
     reference_histogram,
     shape_distance,
     skin_distance,
@@ -67,7 +65,7 @@ from humimic.perception.trackers.gest.stereo import (
     stereo_candidates,
     triangulate_pixels,
 )
-from humimic.sensors.camera_model import CameraImage, invert_transform
+from humimic.sensors.camera_model import CameraImage
 
 
 @dataclass(frozen=True)
@@ -161,14 +159,14 @@ class GestTracker:
         return importance_function(p, cov, self.orientation, self.cfg,
                                    self.cfg.orientation_sigma_deg)
 
-    def _silhouette_offset(self, mean: np.ndarray, proj_left, origin_left: np.ndarray,
-                           cams) -> np.ndarray:
+    def _silhouette_offset(self, mean: np.ndarray, proj_left, centre_right: np.ndarray,
+                           origin_left: np.ndarray, cams) -> np.ndarray:
         """``x - g(c_L(x), c_R(x))``: the estimate's centre minus the triangulation of its
         projected ellipses' centres (an ellipsoid's outline is not centred on the image of its
         centre: 0.3-0.5 px here, centimetres of depth); ``proj_left`` its projection in the
-        (cropped) left view."""
+        (cropped) left view, ``centre_right`` its ellipse's centre in the right image (px)."""
         c_l = proj_left.patch_state[0, :2] + origin_left
-        c_r = ellipse_centres(hand_ellipsoids(mean[None]), _Geometry(cams[1]))[0]
+        c_r = centre_right
         if not (proj_left.valid[0] and np.isfinite(np.r_[c_l, c_r]).all()
                 and np.abs(c_r).max() < 1e5):
             return np.zeros(3)
@@ -191,7 +189,8 @@ class GestTracker:
              ) -> GestResult:
         cfg = self.cfg
         frames = (left, right)
-        blobs = [self._blobs(f) for f in frames]
+        near = [self._near(f) for f in frames]
+        blobs = [self._blobs(f, n) for f, n in zip(frames, near, strict=True)]
         p, cov, cen1, pairs = stereo_candidates(blobs[0], blobs[1], left.camera, right.camera,
                                                 cfg.max_epipolar_px, cfg.blob_size,
                                                 cfg.blob_sigma_scale, 1.0)
@@ -213,9 +212,9 @@ class GestTracker:
                  else np.zeros(3))
         # cue images where the likelihood looks (the left image only with ``views: 1``;
         # the right camera then only places its ellipse centres for the stereo cue)
-        boxes = [self._roi(f, b, pairs[:, i] if len(pairs) else None)
+        boxes = [self._roi(f, b, pairs[:, i] if len(pairs) else None, n)
                  if cfg.roi and i < cfg.views else None
-                 for i, (f, b) in enumerate(zip(frames, blobs, strict=True))]
+                 for i, (f, b, n) in enumerate(zip(frames, blobs, near, strict=True))]
         views = [hand_view(crop_frame(f, b), cfg.bins, self.lut) if i < cfg.views
                  else _Geometry(f.camera) for i, (f, b) in enumerate(zip(frames, boxes,
                                                                           strict=True))]
@@ -230,7 +229,7 @@ class GestTracker:
                          importance=importance)
         mean = s.mean.copy()
         mean[6:] = np.maximum(mean[6:], 1e-3)
-        proj = project_hands(mean[None], views[0], cfg.n_points)
+        (proj, _), centres = project_views(mean[None], views, cfg.n_points, 1)
         d = float(shape_distance(proj, views[0])[0])
         support = len(use) > 0 and float(np.min(np.linalg.norm(p[use] - mean[:3], axis=1))
                                          ) <= cfg.lost_m
@@ -243,7 +242,7 @@ class GestTracker:
             self.orientation = mean[3:6]
             self.last, self.anchor = mean, mean[:3]
             self.lost_for = 0
-            self.offset = self._silhouette_offset(mean, proj, origin[0],
+            self.offset = self._silhouette_offset(mean, proj, centres[0, 1] + origin[1], origin[0],
                                                   (left.camera, right.camera))
             if cfg.position == "kalman" and len(use):
                 j = use[int(np.argmin(np.linalg.norm(p[use] - mean[:3], axis=1)))]
@@ -269,39 +268,45 @@ class GestTracker:
                        centre_update(*self.centre, z, R, self.cfg.sigma_position))
         return self.centre[0]
 
-    def _blobs(self, frame: CameraImage) -> Blobs:
+    def _near(self, frame: CameraImage) -> tuple[np.ndarray, float] | None:
+        """The last estimate's centre in ``frame`` (px) and its distance from the camera (m),
+        None when there is no estimate (both cue boxes are placed around it)."""
+        if self.last is None:
+            return None
+        uv = frame.camera.project_base(self.last[:3])
+        return uv, float(np.linalg.norm(self.last[:3] - frame.camera.T_base_cam[:3, 3]))
+
+    def _blobs(self, frame: CameraImage, near: tuple[np.ndarray, float] | None) -> Blobs:
         """The frame's skin blobs that are not cut by the image border; while tracking, only
         in the box the gate projects to around the last estimate (blobs cut by that box too
         are dropped): the candidates outside it would be gated out anyway."""
         cfg = self.cfg
         box = None
-        if self.last is not None and cfg.roi:
+        if near is not None and cfg.roi:
             K = frame.camera.intrinsics
-            uv = frame.camera.project_base(self.last[:3])
-            depth = float(np.linalg.norm(self.last[:3] - frame.camera.T_base_cam[:3, 3]))
+            uv, depth = near
             r = K.fx * (cfg.gate_m + float(np.max(self.last[6:]))) / max(depth, 0.05)
             if np.isfinite(uv).all():
                 box = roi_box(np.array([[uv[0] - r, uv[1] - r, 2 * r, 2 * r]]), K.width,
                               K.height, 0.0)
-        crop = crop_frame(frame, box)
-        h, w = crop.image.shape[:2]
-        b = interior_blobs(hand_blobs(crop.image, self.lut, cfg.blob_subsample), w, h,
+        image = frame.image if box is None else frame.image[box[1]:box[3], box[0]:box[2]]
+        h, w = image.shape[:2]
+        b = interior_blobs(hand_blobs(image, self.lut, cfg.blob_subsample), w, h,
                            cfg.border_px)
         if box is None:
             return b
         shift = np.array(box[:2], float)
         return Blobs(b.centers + shift, b.boxes + np.r_[shift, 0.0, 0.0], b.areas)
 
-    def _roi(self, frame: CameraImage, blobs, centroids) -> tuple[int, int, int, int] | None:
+    def _roi(self, frame: CameraImage, blobs, centroids, near: tuple[np.ndarray, float] | None
+             ) -> tuple[int, int, int, int] | None:
         """The box the cues are computed in (:mod:`.roi`): the hand-sized blobs matched in
         stereo, the blobs near the last estimate, padded by the distance transform's cap."""
         K = frame.camera.intrinsics
-        boxes = [blobs.boxes[np.isin(np.arange(len(blobs.areas)),
-                                     _matched(blobs, centroids))]]
-        if self.last is not None:
-            uv = frame.camera.project_base(self.last[:3])
-            r = 1.5 * K.fx * float(np.max(self.last[6:])) / max(
-                float(np.linalg.norm(self.last[:3] - frame.camera.T_base_cam[:3, 3])), 0.05)
+        boxes = [blobs.boxes[_matched(blobs, centroids)]]
+        if near is not None:
+            uv, depth = near
+            r = 1.5 * K.fx * float(np.max(self.last[6:])) / max(depth, 0.05)
             boxes.append(np.array([[uv[0] - r, uv[1] - r, 2 * r, 2 * r]]))
         box = roi_box(np.concatenate(boxes), K.width, K.height, DT_CAP_PX)
         return box if box is not None else (0, 0, K.width, K.height)
@@ -343,4 +348,4 @@ class _Geometry:
 
     @property
     def T_cam_base(self):
-        return invert_transform(self.cam.T_base_cam)
+        return self.cam.T_cam_base
