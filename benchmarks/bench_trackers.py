@@ -104,7 +104,7 @@ def main() -> None:
 
     from humimic.perception.trackers.gest.tracker import GestTracker
 
-    report(f"gest N={cfg.n}", time_runs(lambda r: GestTracker(cfg, stage.tracker.lut),
+    report(f"gest N={cfg.n_particles}", time_runs(lambda r: GestTracker(cfg, stage.tracker.lut),
                                         gest_run, args.repeats), GOALS_FPS["gest"])
     report("  gest skin blobs, whole frames", time_runs(
         lambda r: None, lambda _: [skin_blobs((stage.tracker.lut.posterior(f.image) > 0.5)

@@ -7,11 +7,12 @@ from test_scenario_errors import GOOD, _run
 
 
 @pytest.mark.parametrize("text, must_contain", [
-    (GOOD + "trackers:\n  g: {kind: gest, n: 0}\n", ["trackers.g.n", "out of range"]),
+    (GOOD + "trackers:\n  g: {kind: gest, n_particles: 0}\n",
+     ["trackers.g.n_particles", "out of range"]),
     (GOOD + "trackers:\n  x: {kind: gset}\n", ["trackers.x.kind", "'gset'"]),
     *[(GOOD + f"trackers:\n  t: {{kind: {kind}, {old}: 100}}\n",
        [f"trackers.t.{old}", "unknown key", "did you mean 'n_particles'"])
-      for kind, old in (("tbp", "n"), ("kpf", "particles"), ("icu", "particles"))],
+      for kind, old in (("gest", "n"), ("tbp", "n"), ("kpf", "particles"), ("icu", "particles"))],
     (GOOD + "trackers:\n  g: {kind: gest, alpha: 0.6, beta: 0.6}\n", ["trackers.g", "alpha"]),
     (GOOD + "trackers:\n  t: {kind: tbp, torso: truth, camera: nope}\n",
      ["trackers.t.camera", "'nope'", "not rendered"]),

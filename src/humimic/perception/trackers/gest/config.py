@@ -24,7 +24,7 @@ class GestConfig(Section):
     """Images the shape, colour and skin cues are evaluated in: 1 = the left image only (the
     paper), 2 = both (measured no better: 9.5-15 mm RMS either way on menezes_gest_reach at
     three distances, the stereo cue carrying the depth; 1.5x the cost)."""
-    n: int = Field(100, ge=1, le=20000)
+    n_particles: int = Field(100, ge=1, le=20000)
     """Particles N."""
     alpha: float = Field(0.3, ge=0.0, le=1.0)
     """Share of particles drawn from the stereo importance function."""

@@ -52,7 +52,7 @@ class GestStage(PoseTrackerStage):
         self.results: list[GestResult | None] = []
         self.left_cams: list = []
         self.samples: list = []
-        """Per frame, every ``n // 20``-th particle (for the recording)."""
+        """Per frame, every ``n_particles // 20``-th particle (for the recording)."""
 
     def track(self, t: float, images: dict):
         left, right = images.get(self.cameras[0]), images.get(self.cameras[1])

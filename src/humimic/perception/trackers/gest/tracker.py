@@ -121,7 +121,7 @@ class GestTracker:
         self.orientations = UniformBox(self.prior.low[3:6], self.prior.high[3:6])
         dynamics = PoseReset(self.walk, UniformBox(self.prior.low[:6], self.prior.high[:6]),
                              cfg.reset)
-        self.pf = ParticleFilter("icondensation", dynamics, self.prior, cfg.n, cfg.alpha,
+        self.pf = ParticleFilter("icondensation", dynamics, self.prior, cfg.n_particles, cfg.alpha,
                                  cfg.beta)
         self.ref: np.ndarray | None = None
         self.orientation = np.zeros(3)
