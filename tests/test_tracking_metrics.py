@@ -18,7 +18,8 @@ from humimic.metrics.tracking import (
     raw_scores,
 )
 from humimic.metrics.ude_tables import filter_white_noise, table2, table3
-from humimic.perception.blobs.archive import load_archive, save_archive
+from humimic.perception.blobs import archive as archive_mod
+from humimic.perception.blobs.archive import load_archive, read_rows, save_archive
 from humimic.perception.blobs.record import STATE_CODE, PerceptionRecord
 from humimic.perception.blobs.stereo import StereoRig
 from humimic.sensors.visibility import VisibilityArrays
@@ -170,3 +171,21 @@ def test_archive_round_trip(tmp_path):
     np.testing.assert_array_equal(back.filter.x, fa.x)
     np.testing.assert_array_equal(back.filter_truth["hand"][0], truth["hand"][0])
     assert back.perception.camera(2, 1).T_base_cam.shape == (4, 4)
+
+
+def test_read_rows_streams_a_column_as_numpy_slices_it(tmp_path, monkeypatch):
+    """A target's column read a few rows at a time equals the whole array sliced by numpy
+    (blocks that do not divide the rows, float and bool, and an array stored Fortran-order)."""
+    monkeypatch.setattr(archive_mod, "READ_BLOCK", 7)
+    rng = np.random.default_rng(1)
+    P = rng.normal(size=(30, 2, 9, 9))
+    valid = rng.random((30, 2)) > 0.5
+    np.savez_compressed(tmp_path / "r.npz", P=P, valid=valid, F=np.asfortranarray(P[:, 0, 0]),
+                        empty=np.zeros((0, 2, 3)))
+    np.testing.assert_array_equal(read_rows(tmp_path / "r.npz", "P", lambda a: a[:, 1, :3, :3]),
+                                  P[:, 1, :3, :3])
+    np.testing.assert_array_equal(read_rows(tmp_path / "r.npz", "valid", lambda a: a[:, 0]),
+                                  valid[:, 0])
+    np.testing.assert_array_equal(read_rows(tmp_path / "r.npz", "F", lambda a: a[:, 2:]),
+                                  P[:, 0, 0, 2:])
+    assert read_rows(tmp_path / "r.npz", "empty", lambda a: a[:, 1]).shape == (0, 3)

@@ -6,10 +6,16 @@ frames' photon times, so scores and the paper's reproductions can be recomputed 
 visibility ground truth (:mod:`humimic.sensors.visibility`), its samples too (``vis_*``: sample
 times, target pixels seen and whole silhouettes per eye camera and target, from which in view,
 unoccluded fraction and size in pixels follow).
+
+:func:`read_rows` reads one array of the file a block of rows at a time, keeping only what a
+caller takes from each block (a target's column): a long run's report reads its series without
+the whole archive in memory.
 """
 
 from __future__ import annotations
 
+import zipfile
+from collections.abc import Callable
 from dataclasses import dataclass, fields
 from pathlib import Path
 
@@ -90,3 +96,31 @@ def load_archive(path: str | Path) -> TrackingArchive:
                                    [str(t) for t in z["vis_targets"]], z["vis_t"],
                                    z["vis_visible_px"], z["vis_full_px"])
     return TrackingArchive(pa, fa, truth, ftruth, vis)
+
+
+#: Rows of an archived array read per step by :func:`read_rows`.
+READ_BLOCK = 4096
+
+
+def read_rows(path: str | Path, key: str,
+              take: Callable[[np.ndarray], np.ndarray] = lambda rows: rows) -> np.ndarray:
+    """``take(a)`` of the array ``key`` of the ``.npz`` at ``path``, where ``take`` works row by
+    row (selects along the later axes, e.g. ``lambda a: a[:, i, :3]``): computed on
+    :data:`READ_BLOCK` rows at a time streamed from the file and concatenated, so memory holds
+    the result and one block, not the array."""
+    with zipfile.ZipFile(path) as zf, zf.open(f"{key}.npy") as f:
+        version = np.lib.format.read_magic(f)
+        header = (np.lib.format.read_array_header_1_0 if version == (1, 0)
+                  else np.lib.format.read_array_header_2_0)
+        shape, fortran, dtype = header(f)
+        if fortran or dtype.hasobject or not shape:  # not row-major: load it whole
+            with np.load(path, allow_pickle=False) as z:
+                return take(z[key])
+        tail = shape[1:]
+        row_bytes = dtype.itemsize * int(np.prod(tail, dtype=np.int64))
+        parts = [take(np.empty((0, *tail), dtype))]
+        for start in range(0, shape[0], READ_BLOCK):
+            n = min(READ_BLOCK, shape[0] - start)
+            block = np.frombuffer(f.read(n * row_bytes), dtype).reshape(n, *tail)
+            parts.append(np.array(take(block)))
+    return np.concatenate(parts)
