@@ -157,14 +157,24 @@ class SpillRows:
         for batch in self._batches():
             yield from batch
 
-    def columns(self) -> list[np.ndarray]:
+    def column_blocks(self, j: int):
+        """Column ``j`` one batch at a time (``np.array`` of the batch's ``row[j]`` values)."""
+        for batch in self._batches():
+            yield np.array([row[j] for row in batch])
+
+    def columns(self, take: dict | None = None) -> list[np.ndarray]:
         """Column ``j`` is ``np.array([row[j] for row in rows])``, built one batch at a time
         into its preallocated result (peak memory: the columns and one batch, not twice the
-        columns)."""
+        columns). ``take`` (``{j: function}``) keeps only those columns, each as
+        ``function(column)`` computed batch by batch: the function must work row by row
+        (select along the later axes, e.g. ``lambda c: c[:, [i]]``), so only what it keeps is
+        ever gathered."""
         out: list[np.ndarray] = []
         k = 0
         for batch in self._batches():
             cols = [np.array(c) for c in zip(*batch, strict=True)]
+            if take is not None:
+                cols = [np.asarray(f(cols[j])) for j, f in take.items()]
             if not out:
                 out = [np.empty((self._n, *c.shape[1:]), c.dtype) for c in cols]
             for j, c in enumerate(cols):
