@@ -215,6 +215,7 @@ def test_archive_streamed_from_the_records_equals_the_stacked_one(tmp_path, monk
     batch holds exactly what the stacked arrays' archive holds, and one target's arrays are
     the whole arrays' columns of that target."""
     monkeypatch.setattr(spill, "BATCH", 16)
+    monkeypatch.setattr(spill, "BLOCK", 7)  # columns read back 7 rows at a time
     prec, frec = _records(50)
     pa, fa = prec.arrays(), frec.arrays()
     truth = {"hand": (np.ones((50, 3)), np.zeros((50, 3)), np.zeros((50, 3)))}

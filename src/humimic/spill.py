@@ -157,10 +157,14 @@ class SpillRows:
         for batch in self._batches():
             yield from batch
 
-    def column_blocks(self, j: int):
-        """Column ``j`` one batch at a time (``np.array`` of the batch's ``row[j]`` values)."""
+    def column_files(self, js: list[int]) -> list[ColumnFile]:
+        """Columns ``js`` each copied to its own temporary file in one pass over the rows (a
+        column's rows then read back a block at a time, without unpickling them again)."""
+        out = [ColumnFile(self._n) for _ in js]
         for batch in self._batches():
-            yield np.array([row[j] for row in batch])
+            for f, j in zip(out, js, strict=True):
+                f.append(np.array([row[j] for row in batch]))
+        return out
 
     def columns(self, take: dict | None = None) -> list[np.ndarray]:
         """Column ``j`` is ``np.array([row[j] for row in rows])``, built one batch at a time
@@ -184,3 +188,25 @@ class SpillRows:
                 out[j][k:k + len(c)] = c
             k += len(batch)
         return out
+
+
+class ColumnFile:
+    """One column's ``n`` rows as raw bytes in an unnamed temporary file, of the dtype and row
+    shape of the first rows appended (later ones are cast to it)."""
+
+    def __init__(self, n: int):
+        self.n, self.dtype, self.tail = int(n), None, ()
+        self._file = tempfile.TemporaryFile()
+
+    def append(self, rows: np.ndarray) -> None:
+        if self.dtype is None:
+            self.dtype, self.tail = rows.dtype, rows.shape[1:]
+        self._file.write(np.ascontiguousarray(rows, self.dtype).tobytes())
+
+    def blocks(self):
+        """The rows, :data:`BLOCK` at a time."""
+        self._file.seek(0)
+        row_bytes = self.dtype.itemsize * int(np.prod(self.tail, dtype=int))
+        for start in range(0, self.n, BLOCK):
+            m = min(BLOCK, self.n - start)
+            yield np.frombuffer(self._file.read(m * row_bytes), self.dtype).reshape(m, *self.tail)

@@ -83,9 +83,15 @@ def _never_started(stage, ch) -> dict:
             "lag_ms": None, "held_pose": True, "robot_max_displacement_mm": 1e3 * moved}
 
 
-def site_series(stage, i: int, ch):
+#: Every series of :func:`site_series`.
+SERIES_KEYS = ("t", "true_now", "true_photon", "est", "cmd_raw", "cmd", "cmd_alt", "ik",
+               "robot")
+
+
+def site_series(stage, i: int, ch, keys: tuple[str, ...] = SERIES_KEYS):
     """Aligned displacement series of site ``i`` from the tick after it started: the robot at
-    ``t[k]`` with the command, IK and estimate computed for ``t[k-1] + dt = t[k]``."""
+    ``t[k]`` with the command, IK and estimate computed for ``t[k-1] + dt = t[k]``. Only the
+    series named in ``keys`` are gathered (a long run's columns are tens of MB each)."""
     rec, world = stage.rec, stage.world
     n = rec.n
     k0 = int(np.argmax(rec.active[:n, i]))
@@ -98,24 +104,23 @@ def site_series(stage, i: int, ch):
         return p - world.gt.p_base(ch.ref)[k] if ch.ref is not None else p
 
     M, p0r = ch.M, ch.p0_robot
-    scale = rec.scale[k0:n - 1, i, None]
     origin = truth(ch.t0)
-    t = rec.t[k0 + 1:n]
-    true_now = scale * ((truth(t) - origin) @ M.T)
-    t_ph = rec.t_est[k0:n - 1, i]
-    true_ph = scale * ((truth(t_ph) - origin) @ M.T)
-    s = {
-        "t": t,
-        "true_now": true_now,
-        "true_photon": true_ph,
-        "est": rec.p_est[k0:n - 1, i] - p0r,
-        "cmd_raw": rec.p_cmd_raw[k0:n - 1, i] - p0r,
-        "cmd": rec.p_cmd[k0:n - 1, i] - p0r,
-        "cmd_alt": rec.p_cmd_alt[k0:n - 1, i] - p0r,
-        "ik": rec.p_ik[k0:n - 1, i] - p0r,
-        "robot": rec.p_robot[k0 + 1:n, i] - p0r,
+
+    def mapped_truth(times) -> np.ndarray:
+        return rec.scale[k0:n - 1, i, None] * ((truth(times) - origin) @ M.T)
+
+    series = {
+        "t": lambda: rec.t[k0 + 1:n],
+        "true_now": lambda: mapped_truth(rec.t[k0 + 1:n]),
+        "true_photon": lambda: mapped_truth(rec.t_est[k0:n - 1, i]),
+        "est": lambda: rec.p_est[k0:n - 1, i] - p0r,
+        "cmd_raw": lambda: rec.p_cmd_raw[k0:n - 1, i] - p0r,
+        "cmd": lambda: rec.p_cmd[k0:n - 1, i] - p0r,
+        "cmd_alt": lambda: rec.p_cmd_alt[k0:n - 1, i] - p0r,
+        "ik": lambda: rec.p_ik[k0:n - 1, i] - p0r,
+        "robot": lambda: rec.p_robot[k0 + 1:n, i] - p0r,
     }
-    return k0, s
+    return k0, {key: series[key]() for key in keys}
 
 
 def _scale_at(stage, i: int, ch, t: np.ndarray) -> np.ndarray:

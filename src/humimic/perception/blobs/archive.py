@@ -19,7 +19,6 @@ import itertools
 import zipfile
 from collections.abc import Callable
 from dataclasses import dataclass, fields
-from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -80,16 +79,18 @@ def _columns(source, cls, prefix: str, meta: tuple[str, ...]) -> dict:
     names = [f.name for f in fields(cls) if f.name not in meta]
     if not isinstance(source, cls) and not len(source.rows):
         source = source.arrays()
+    if isinstance(source, cls):
+        return {prefix + name: getattr(source, name).astype(str) if name == "reason"
+                else getattr(source, name) for name in names}
+    numeric = [j for j, name in enumerate(names) if name != "reason"]
+    files = dict(zip(numeric, source.rows.column_files(numeric), strict=True))  # one pass
     out = {}
     for j, name in enumerate(names):
-        if isinstance(source, cls):
-            value = getattr(source, name)
-        elif name == "reason":
-            value = source.rows.columns({j: lambda c: c})[0]
+        if name == "reason":
+            out[prefix + name] = source.rows.columns({j: lambda c: c})[0].astype(str)
         else:
-            value = Blocks(len(source.rows), partial(source.rows.column_blocks, j),
-                           float if name == "t" else None)
-        out[prefix + name] = value.astype(str) if name == "reason" else value
+            out[prefix + name] = Blocks(files[j].n, files[j].blocks,
+                                        float if name == "t" else None)
     return out
 
 
