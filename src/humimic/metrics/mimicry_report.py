@@ -177,6 +177,10 @@ def site_metrics(stage, i: int, ch) -> tuple[dict, dict]:
     P = world.gt.p_base(ch.target)
     scale_at = partial(_scale_at, stage, i, ch)
     budget = {name: _mm(rmse(terms[name])) for name in (*TERMS, "total")}
+    max_error = _mm(float(np.max(np.linalg.norm(terms["total"], axis=1))))
+    shares = {k: _num(v) for k, v in mse_shares(terms).items()}
+    # whole-run columns no longer needed, freed before the cross-correlations allocate theirs
+    del terms, s["true_photon"], s["est"], s["cmd_raw"]
     primary, other = cfg.interpolation.mode, ("extrapolate" if cfg.interpolation.mode == "hold"
                                               else "hold")
     interp = {}
@@ -192,7 +196,7 @@ def site_metrics(stage, i: int, ch) -> tuple[dict, dict]:
         "target": ch.target,
         "rmse_mm": budget["total"],
         "lag_ms": _mm(xcorr_lag(s["true_now"], s["robot"], dt)),
-        "max_error_mm": _mm(float(np.max(np.linalg.norm(terms["total"], axis=1)))),
+        "max_error_mm": max_error,
         "jerk": _num(rms_jerk(s["robot"], dt)),
         "jerk_human": _num(rms_jerk(s["true_now"], dt)),
         "joint_limit_hits": hits,
@@ -206,7 +210,7 @@ def site_metrics(stage, i: int, ch) -> tuple[dict, dict]:
         "started_s": float(rec.t[k0]),
         "ticks": int(n_active),
         "error_budget_mm": budget,
-        "error_budget_share": {k: _num(v) for k, v in mse_shares(terms).items()},
+        "error_budget_share": shares,
         "measurements_rmse_mm": _event_error(rec.measurements.get(ch.target), P, ch.M,
                                              scale_at, rate, ch.t0),
         "estimates_rmse_mm": _event_error(rec.estimates.get(ch.target), P, ch.M, scale_at,
