@@ -206,7 +206,14 @@ class ColumnFile:
     def blocks(self):
         """The rows, :data:`BLOCK` at a time."""
         self._file.seek(0)
-        row_bytes = self.dtype.itemsize * int(np.prod(self.tail, dtype=int))
-        for start in range(0, self.n, BLOCK):
-            m = min(BLOCK, self.n - start)
-            yield np.frombuffer(self._file.read(m * row_bytes), self.dtype).reshape(m, *self.tail)
+        yield from read_blocks(self._file, self.n, self.dtype, self.tail, BLOCK)
+
+
+def read_blocks(f, n: int, dtype, tail: tuple[int, ...], block: int):
+    """``n`` rows of shape ``tail`` stored raw (C order) from the file object ``f``'s position
+    on, read ``block`` rows at a time (read-only arrays over the bytes read)."""
+    dtype = np.dtype(dtype)
+    row_bytes = dtype.itemsize * int(np.prod(tail, dtype=np.int64))
+    for start in range(0, n, block):
+        m = min(block, n - start)
+        yield np.frombuffer(f.read(m * row_bytes), dtype).reshape(m, *tail)

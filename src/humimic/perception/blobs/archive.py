@@ -27,6 +27,7 @@ from humimic.estimation.stage import FilterArrays, FilterRecord
 from humimic.perception.blobs.record import PerceptionArrays, PerceptionRecord
 from humimic.sensors.camera_model import Intrinsics
 from humimic.sensors.visibility import VisibilityArrays
+from humimic.spill import read_blocks
 
 _INTR = ("width", "height", "fx", "fy", "cx", "cy", "k1", "k2")
 
@@ -170,11 +171,7 @@ def read_rows(path: str | Path, key: str,
         if fortran or dtype.hasobject or not shape:  # not row-major: load it whole
             with np.load(path, allow_pickle=False) as z:
                 return take(z[key])
-        tail = shape[1:]
-        row_bytes = dtype.itemsize * int(np.prod(tail, dtype=np.int64))
-        parts = [take(np.empty((0, *tail), dtype))]
-        for start in range(0, shape[0], READ_BLOCK):
-            n = min(READ_BLOCK, shape[0] - start)
-            block = np.frombuffer(f.read(n * row_bytes), dtype).reshape(n, *tail)
-            parts.append(np.array(take(block)))
+        parts = [take(np.empty((0, *shape[1:]), dtype))]
+        parts += [np.array(take(block))
+                  for block in read_blocks(f, shape[0], dtype, shape[1:], READ_BLOCK)]
     return np.concatenate(parts)
