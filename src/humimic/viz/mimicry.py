@@ -47,6 +47,7 @@ def mimic_plots(stage, out_dir) -> list:
             title=f"{ch.target} -> {ch.site}: displacement, robot base frame", ylabel="m"))
         terms = error_terms(s["true_now"], s["true_photon"], s["est"], s["cmd_raw"], s["cmd"],
                             s["ik"], s["robot"])
+        s.clear()  # the series are drawn: their whole-run columns go before the terms' sums
         share = mse_shares(terms)
         sites.append(ch.site)
         totals.append(1e3 * rmse(terms["total"]))
