@@ -3,9 +3,10 @@
 Runs ``scenarios/mimic_tracked_wave.yaml`` (stereo colour blobs, Kalman filter, mimicry; default
 rates, rerun recording and plots as the scenario has them) once per duration, each in a fresh
 subprocess, and prints its peak resident set size (``ru_maxrss`` of the run's own process, and
-separately of its child processes, the perception worker) and the slope in MB per simulated
-minute fitted over the durations. The issue's goal: a 10-minute run within 15 % of a 5-second
-one.
+separately of its child processes, the perception worker), where the run was when its resident
+set was largest (sampled every 0.2 s: the innermost humimic frames of the main thread), and
+the slope in MB per simulated minute fitted over the durations. The issue's goal: a 10-minute
+run within 15 % of a 5-second one.
 
     python benchmarks/bench_memory.py                   # 5 s, 60 s, 120 s
     python benchmarks/bench_memory.py --durations 5 600 # the goal itself (~10 min of wall time)
@@ -25,13 +26,29 @@ ROOT = Path(__file__).resolve().parents[1]
 SCENARIO = ROOT / "scenarios" / "mimic_tracked_wave.yaml"
 
 _CHILD = """
-import json, resource, sys
+import json, os, resource, sys, threading, time, traceback
 from humimic.run import main
+
+PAGE, MAIN = os.sysconf("SC_PAGE_SIZE"), threading.get_ident()
+peak = {"mb": 0.0, "where": []}
+
+def sample():  # where the run is when its resident set is largest
+    while True:
+        with open("/proc/self/statm") as f:
+            mb = int(f.read().split()[1]) * PAGE / 2**20
+        if mb > peak["mb"]:
+            frames = traceback.extract_stack(sys._current_frames()[MAIN])
+            peak.update(mb=mb, where=[f"{os.path.basename(f.filename)}:{f.lineno} {f.name}"
+                                      for f in frames if "humimic" in f.filename][-3:])
+        time.sleep(0.2)
+
+threading.Thread(target=sample, daemon=True).start()
 args = [sys.argv[1], "--duration", sys.argv[2], "--out", sys.argv[3], "--quiet"]
 code = main(args + [a for o in sys.argv[4:] for a in ("--set", o)])
 print(json.dumps({"code": code,
                   "self_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
-                  "children_mb": resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024}))
+                  "children_mb": resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024,
+                  "peak_at": " < ".join(reversed(peak["where"]))}))
 """
 
 
@@ -65,12 +82,12 @@ def main(argv: list[str] | None = None) -> None:
     p.add_argument("--json", type=Path, default=None, help="also write the rows here")
     args = p.parse_args(argv)
     rows = []
-    print(f"{'sim s':>7} {'wall s':>7} {'peak MiB':>9} {'worker MiB':>10}")
+    print(f"{'sim s':>7} {'wall s':>7} {'peak MiB':>9} {'worker MiB':>10}  peak reached in")
     for duration in args.durations:
         r = peak_rss(duration, overrides=tuple(args.overrides))
         rows.append(r)
-        print(f"{duration:7.0f} {r['wall_s']:7.1f} {r['self_mb']:9.1f} {r['children_mb']:10.1f}",
-              flush=True)
+        print(f"{duration:7.0f} {r['wall_s']:7.1f} {r['self_mb']:9.1f} {r['children_mb']:10.1f}  "
+              f"{r['peak_at']}", flush=True)
     slope = slope_mb_per_min(rows)
     base = rows[0]["self_mb"]
     at_10 = base + slope * (600.0 - rows[0]["duration_s"]) / 60.0

@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 from _synth_vision import stereo_head
 
-from humimic.estimation.stage import FilterArrays
+from humimic import spill
+from humimic.estimation.stage import FilterArrays, FilterRecord
 from humimic.metrics.tracking import (
     axis_stats,
     detection_stats,
@@ -18,8 +19,9 @@ from humimic.metrics.tracking import (
     raw_scores,
 )
 from humimic.metrics.ude_tables import filter_white_noise, table2, table3
-from humimic.perception.blobs.archive import load_archive, save_archive
-from humimic.perception.blobs.record import STATE_CODE, PerceptionRecord
+from humimic.perception.blobs import archive as archive_mod
+from humimic.perception.blobs.archive import load_archive, read_rows, save_archive
+from humimic.perception.blobs.record import STATE_CODE, PerceptionArrays, PerceptionRecord
 from humimic.perception.blobs.stereo import StereoRig
 from humimic.sensors.visibility import VisibilityArrays
 
@@ -170,3 +172,65 @@ def test_archive_round_trip(tmp_path):
     np.testing.assert_array_equal(back.filter.x, fa.x)
     np.testing.assert_array_equal(back.filter_truth["hand"][0], truth["hand"][0])
     assert back.perception.camera(2, 1).T_base_cam.shape == (4, 4)
+
+
+def test_read_rows_streams_a_column_as_numpy_slices_it(tmp_path, monkeypatch):
+    """A target's column read a few rows at a time equals the whole array sliced by numpy
+    (blocks that do not divide the rows, float and bool, and an array stored Fortran-order)."""
+    monkeypatch.setattr(archive_mod, "READ_BLOCK", 7)
+    rng = np.random.default_rng(1)
+    P = rng.normal(size=(30, 2, 9, 9))
+    valid = rng.random((30, 2)) > 0.5
+    np.savez_compressed(tmp_path / "r.npz", P=P, valid=valid, F=np.asfortranarray(P[:, 0, 0]),
+                        empty=np.zeros((0, 2, 3)))
+    np.testing.assert_array_equal(read_rows(tmp_path / "r.npz", "P", lambda a: a[:, 1, :3, :3]),
+                                  P[:, 1, :3, :3])
+    np.testing.assert_array_equal(read_rows(tmp_path / "r.npz", "valid", lambda a: a[:, 0]),
+                                  valid[:, 0])
+    np.testing.assert_array_equal(read_rows(tmp_path / "r.npz", "F", lambda a: a[:, 2:]),
+                                  P[:, 0, 0, 2:])
+    assert read_rows(tmp_path / "r.npz", "empty", lambda a: a[:, 1]).shape == (0, 3)
+
+
+def _records(n: int, seed: int = 2):
+    """Two-target perception and filter records of ``n`` random frames (reasons of varying
+    length, as a run's are)."""
+    rng = np.random.default_rng(seed)
+    prec = PerceptionRecord(["head", "hand"], ("L", "R"), None)
+    frec = FilterRecord(["head", "hand"])
+    for k in range(n):
+        prec.append(k / 60.0, rng.normal(size=(2, 4, 4)), rng.integers(0, 3, 2),
+                    rng.random((2, 2)) > 0.5, rng.random(2) > 0.5, rng.normal(size=(2, 2, 2)),
+                    rng.normal(size=(2, 2, 2, 2)), rng.random(2) > 0.3,
+                    ["", "not_seen" if k % 3 else "epipolar_mismatch_far"],
+                    rng.normal(size=(2, 3)), rng.normal(size=(2, 3, 3)),
+                    rng.normal(size=(2, 2, 2)), rng.random(2))
+        frec.rows.append((k / 60.0, rng.random(2) > 0.2, rng.random(2) > 0.5,
+                          rng.normal(size=(2, 9)), rng.normal(size=(2, 9, 9)), rng.random(2)))
+    return prec, frec
+
+
+def test_archive_streamed_from_the_records_equals_the_stacked_one(tmp_path, monkeypatch):
+    """Records spilled over several batches: the archive written from their rows batch by
+    batch holds exactly what the stacked arrays' archive holds, and one target's arrays are
+    the whole arrays' columns of that target."""
+    monkeypatch.setattr(spill, "BATCH", 16)
+    monkeypatch.setattr(spill, "BLOCK", 7)  # columns read back 7 rows at a time
+    prec, frec = _records(50)
+    pa, fa = prec.arrays(), frec.arrays()
+    truth = {"hand": (np.ones((50, 3)), np.zeros((50, 3)), np.zeros((50, 3)))}
+    save_archive(tmp_path / "arrays.npz", pa, fa, truth, truth)
+    save_archive(tmp_path / "records.npz", prec, frec, truth, truth)
+    with np.load(tmp_path / "arrays.npz") as a, np.load(tmp_path / "records.npz") as r:
+        assert sorted(a.files) == sorted(r.files)
+        for key in a.files:
+            assert a[key].dtype == r[key].dtype, key
+            np.testing.assert_array_equal(a[key], r[key], err_msg=key)
+    one, f_one = prec.arrays(["hand"]), frec.arrays(["hand"])
+    assert one.targets == ["hand"] and f_one.targets == ["hand"]
+    for f in dataclasses.fields(PerceptionArrays)[4:]:
+        full = getattr(pa, f.name)
+        want = full if f.name == "T_base_cam" else full[:, 1:]
+        np.testing.assert_array_equal(getattr(one, f.name), want, err_msg=f.name)
+    np.testing.assert_array_equal(f_one.P, fa.P[:, 1:])
+    np.testing.assert_array_equal(f_one.since_init, fa.since_init[:, 1:])

@@ -157,14 +157,28 @@ class SpillRows:
         for batch in self._batches():
             yield from batch
 
-    def columns(self) -> list[np.ndarray]:
+    def column_files(self, js: list[int]) -> list[ColumnFile]:
+        """Columns ``js`` each copied to its own temporary file in one pass over the rows (a
+        column's rows then read back a block at a time, without unpickling them again)."""
+        out = [ColumnFile(self._n) for _ in js]
+        for batch in self._batches():
+            for f, j in zip(out, js, strict=True):
+                f.append(np.array([row[j] for row in batch]))
+        return out
+
+    def columns(self, take: dict | None = None) -> list[np.ndarray]:
         """Column ``j`` is ``np.array([row[j] for row in rows])``, built one batch at a time
         into its preallocated result (peak memory: the columns and one batch, not twice the
-        columns)."""
+        columns). ``take`` (``{j: function}``) keeps only those columns, each as
+        ``function(column)`` computed batch by batch: the function must work row by row
+        (select along the later axes, e.g. ``lambda c: c[:, [i]]``), so only what it keeps is
+        ever gathered."""
         out: list[np.ndarray] = []
         k = 0
         for batch in self._batches():
             cols = [np.array(c) for c in zip(*batch, strict=True)]
+            if take is not None:
+                cols = [np.asarray(f(cols[j])) for j, f in take.items()]
             if not out:
                 out = [np.empty((self._n, *c.shape[1:]), c.dtype) for c in cols]
             for j, c in enumerate(cols):
@@ -174,3 +188,32 @@ class SpillRows:
                 out[j][k:k + len(c)] = c
             k += len(batch)
         return out
+
+
+class ColumnFile:
+    """One column's ``n`` rows as raw bytes in an unnamed temporary file, of the dtype and row
+    shape of the first rows appended (later ones are cast to it)."""
+
+    def __init__(self, n: int):
+        self.n, self.dtype, self.tail = int(n), None, ()
+        self._file = tempfile.TemporaryFile()
+
+    def append(self, rows: np.ndarray) -> None:
+        if self.dtype is None:
+            self.dtype, self.tail = rows.dtype, rows.shape[1:]
+        self._file.write(np.ascontiguousarray(rows, self.dtype).tobytes())
+
+    def blocks(self):
+        """The rows, :data:`BLOCK` at a time."""
+        self._file.seek(0)
+        yield from read_blocks(self._file, self.n, self.dtype, self.tail, BLOCK)
+
+
+def read_blocks(f, n: int, dtype, tail: tuple[int, ...], block: int):
+    """``n`` rows of shape ``tail`` stored raw (C order) from the file object ``f``'s position
+    on, read ``block`` rows at a time (read-only arrays over the bytes read)."""
+    dtype = np.dtype(dtype)
+    row_bytes = dtype.itemsize * int(np.prod(tail, dtype=np.int64))
+    for start in range(0, n, block):
+        m = min(block, n - start)
+        yield np.frombuffer(f.read(m * row_bytes), dtype).reshape(m, *tail)

@@ -53,14 +53,19 @@ class FilterRecord:
     rows: SpillRows = field(default_factory=SpillRows)
     """One row per frame, batches on disk (memory flat in the run's duration)."""
 
-    def arrays(self) -> FilterArrays:
-        n = len(self.targets)
+    def arrays(self, targets: list[str] | None = None) -> FilterArrays:
+        """The stacked records; with ``targets``, of just those targets (only their columns
+        are gathered from the spilled rows)."""
+        targets = list(self.targets if targets is None else targets)
+        n = len(targets)
         if not self.rows:
             z = np.zeros
-            return FilterArrays(list(self.targets), z(0), z((0, n), bool), z((0, n), bool),
+            return FilterArrays(targets, z(0), z((0, n), bool), z((0, n), bool),
                                 z((0, n, 9)), z((0, n, 9, 9)), z((0, n)))
-        cols = self.rows.columns()
-        return FilterArrays(list(self.targets), cols[0].astype(float), *cols[1:])
+        idx = [self.targets.index(t) for t in targets]
+        cols = self.rows.columns({j: (lambda c: c) if j == 0 else (lambda c: c[:, idx])
+                                  for j in range(6)})
+        return FilterArrays(targets, cols[0].astype(float), *cols[1:])
 
 
 class FilterStage(Stage):

@@ -83,9 +83,15 @@ def _never_started(stage, ch) -> dict:
             "lag_ms": None, "held_pose": True, "robot_max_displacement_mm": 1e3 * moved}
 
 
-def site_series(stage, i: int, ch):
+#: Every series of :func:`site_series`.
+SERIES_KEYS = ("t", "true_now", "true_photon", "est", "cmd_raw", "cmd", "cmd_alt", "ik",
+               "robot")
+
+
+def site_series(stage, i: int, ch, keys: tuple[str, ...] = SERIES_KEYS):
     """Aligned displacement series of site ``i`` from the tick after it started: the robot at
-    ``t[k]`` with the command, IK and estimate computed for ``t[k-1] + dt = t[k]``."""
+    ``t[k]`` with the command, IK and estimate computed for ``t[k-1] + dt = t[k]``. Only the
+    series named in ``keys`` are gathered (a long run's columns are tens of MB each)."""
     rec, world = stage.rec, stage.world
     n = rec.n
     k0 = int(np.argmax(rec.active[:n, i]))
@@ -98,24 +104,23 @@ def site_series(stage, i: int, ch):
         return p - world.gt.p_base(ch.ref)[k] if ch.ref is not None else p
 
     M, p0r = ch.M, ch.p0_robot
-    scale = rec.scale[k0:n - 1, i, None]
     origin = truth(ch.t0)
-    t = rec.t[k0 + 1:n]
-    true_now = scale * ((truth(t) - origin) @ M.T)
-    t_ph = rec.t_est[k0:n - 1, i]
-    true_ph = scale * ((truth(t_ph) - origin) @ M.T)
-    s = {
-        "t": t,
-        "true_now": true_now,
-        "true_photon": true_ph,
-        "est": rec.p_est[k0:n - 1, i] - p0r,
-        "cmd_raw": rec.p_cmd_raw[k0:n - 1, i] - p0r,
-        "cmd": rec.p_cmd[k0:n - 1, i] - p0r,
-        "cmd_alt": rec.p_cmd_alt[k0:n - 1, i] - p0r,
-        "ik": rec.p_ik[k0:n - 1, i] - p0r,
-        "robot": rec.p_robot[k0 + 1:n, i] - p0r,
+
+    def mapped_truth(times) -> np.ndarray:
+        return rec.scale[k0:n - 1, i, None] * ((truth(times) - origin) @ M.T)
+
+    series = {
+        "t": lambda: rec.t[k0 + 1:n],
+        "true_now": lambda: mapped_truth(rec.t[k0 + 1:n]),
+        "true_photon": lambda: mapped_truth(rec.t_est[k0:n - 1, i]),
+        "est": lambda: rec.p_est[k0:n - 1, i] - p0r,
+        "cmd_raw": lambda: rec.p_cmd_raw[k0:n - 1, i] - p0r,
+        "cmd": lambda: rec.p_cmd[k0:n - 1, i] - p0r,
+        "cmd_alt": lambda: rec.p_cmd_alt[k0:n - 1, i] - p0r,
+        "ik": lambda: rec.p_ik[k0:n - 1, i] - p0r,
+        "robot": lambda: rec.p_robot[k0 + 1:n, i] - p0r,
     }
-    return k0, s
+    return k0, {key: series[key]() for key in keys}
 
 
 def _scale_at(stage, i: int, ch, t: np.ndarray) -> np.ndarray:
@@ -172,6 +177,10 @@ def site_metrics(stage, i: int, ch) -> tuple[dict, dict]:
     P = world.gt.p_base(ch.target)
     scale_at = partial(_scale_at, stage, i, ch)
     budget = {name: _mm(rmse(terms[name])) for name in (*TERMS, "total")}
+    max_error = _mm(float(np.max(np.linalg.norm(terms["total"], axis=1))))
+    shares = {k: _num(v) for k, v in mse_shares(terms).items()}
+    # whole-run columns no longer needed, freed before the cross-correlations allocate theirs
+    del terms, s["true_photon"], s["est"], s["cmd_raw"]
     primary, other = cfg.interpolation.mode, ("extrapolate" if cfg.interpolation.mode == "hold"
                                               else "hold")
     interp = {}
@@ -187,7 +196,7 @@ def site_metrics(stage, i: int, ch) -> tuple[dict, dict]:
         "target": ch.target,
         "rmse_mm": budget["total"],
         "lag_ms": _mm(xcorr_lag(s["true_now"], s["robot"], dt)),
-        "max_error_mm": _mm(float(np.max(np.linalg.norm(terms["total"], axis=1)))),
+        "max_error_mm": max_error,
         "jerk": _num(rms_jerk(s["robot"], dt)),
         "jerk_human": _num(rms_jerk(s["true_now"], dt)),
         "joint_limit_hits": hits,
@@ -201,7 +210,7 @@ def site_metrics(stage, i: int, ch) -> tuple[dict, dict]:
         "started_s": float(rec.t[k0]),
         "ticks": int(n_active),
         "error_budget_mm": budget,
-        "error_budget_share": {k: _num(v) for k, v in mse_shares(terms).items()},
+        "error_budget_share": shares,
         "measurements_rmse_mm": _event_error(rec.measurements.get(ch.target), P, ch.M,
                                              scale_at, rate, ch.t0),
         "estimates_rmse_mm": _event_error(rec.estimates.get(ch.target), P, ch.M, scale_at,

@@ -58,7 +58,9 @@ class NotARunError(InputError):
 class Run:
     path: Path
     metrics: dict
-    archive: object | None = None
+    tracking: Path | None = None
+    """The run's ``tracking.npz`` (None: none written); the page reads a target's series from
+    it column by column (:func:`tracking_series`), never the whole archive."""
     images: list[tuple[Path, str]] = field(default_factory=list)
     """Embedded plots and their section headings."""
 
@@ -76,27 +78,29 @@ def load_run(run_dir: str | Path) -> Run:
                            f"{err.lineno}); was the run killed?") from None
     if not isinstance(metrics, dict) or "scenario" not in metrics:
         raise NotARunError(f"{metrics_file}: not a humimic metrics file (no 'scenario' key)")
-    archive = None
-    if (path / "tracking.npz").is_file():
-        from humimic.perception.blobs.archive import load_archive
-
-        archive = load_archive(path / "tracking.npz")
+    tracking = path / "tracking.npz" if (path / "tracking.npz").is_file() else None
     images, seen = [], set()
     for pattern, heading in EMBED:
         for p in sorted(path.glob(pattern)):
             if p not in seen:
                 seen.add(p)
                 images.append((p, heading.format(name=p.stem.split("_", 1)[-1])))
-    return Run(path, metrics, archive, images)
+    return Run(path, metrics, tracking, images)
 
 
 # ---- tracking panels -----------------------------------------------------------------------
-def _filtered_targets(archive) -> list[str]:
-    fa = archive.filter if archive is not None else None
-    if fa is None or len(fa.t) == 0:
+def _filtered_targets(npz: Path | None) -> list[str]:
+    """Targets of the archive ``npz`` the filter estimated at least once, with their truth."""
+    if npz is None:
         return []
-    return [t for i, t in enumerate(fa.targets)
-            if fa.valid[:, i].any() and t in archive.filter_truth]
+    with np.load(npz, allow_pickle=False) as z:
+        if "f_targets" not in z.files:
+            return []
+        valid = z["f_valid"]  # (F, T) bool: small
+        with_truth = {str(t) for t in z["truth_targets"] if f"ftruth_{t}" in z.files}
+        targets = [str(t) for t in z["f_targets"]]
+    return [t for i, t in enumerate(targets) if len(valid) and valid[:, i].any()
+            and t in with_truth]
 
 
 def window_mean(x: np.ndarray, n: int) -> np.ndarray:
@@ -111,23 +115,26 @@ def window_mean(x: np.ndarray, n: int) -> np.ndarray:
         return np.where(c > 0.5 / n, s / c, np.nan)
 
 
-def tracking_series(archive, target: str) -> dict[str, np.ndarray]:
+def tracking_series(npz: Path, target: str) -> dict[str, np.ndarray]:
     """Times, per-axis filtered error (m), its 1σ (m) and the position NEES (3 dof, NaN in the
-    first :data:`~humimic.metrics.tracking.FILTER_SETTLE_S` after a (re)start) of a target."""
-    fa = archive.filter
-    i = fa.targets.index(target)
-    p = archive.filter_truth[target][0]
-    keep = fa.valid[:, i]
-    err = fa.x[keep, i, :3] - p[keep]
-    P = fa.P[keep, i, :3, :3]
+    first :data:`~humimic.metrics.tracking.FILTER_SETTLE_S` after a (re)start) of a target,
+    from the archive ``npz``: the target's columns only, read a block of frames at a time."""
+    from humimic.perception.blobs.archive import read_rows
+
+    with np.load(npz, allow_pickle=False) as z:
+        i = [str(t) for t in z["f_targets"]].index(target)
+        keep = z["f_valid"][:, i]
+        t, p = z["f_t"][keep], z[f"ftruth_{target}"][0][keep]
+    err = read_rows(npz, "f_x", lambda a: a[:, i, :3])[keep] - p
+    P = read_rows(npz, "f_P", lambda a: a[:, i, :3, :3])[keep]
     values = nees(err, P)
-    values[fa.since_init[keep, i] < FILTER_SETTLE_S] = np.nan
+    values[read_rows(npz, "f_since_init", lambda a: a[:, i])[keep] < FILTER_SETTLE_S] = np.nan
     sigma = np.sqrt(np.clip(np.diagonal(P, axis1=1, axis2=2), 0.0, None))
-    return {"t": fa.t[keep], "err": err, "sigma": sigma, "nees": values}
+    return {"t": t, "err": err, "sigma": sigma, "nees": values}
 
 
-def _plot_tracking(sub, archive, target: str) -> None:
-    s = tracking_series(archive, target)
+def _plot_tracking(sub, npz: Path, target: str) -> None:
+    s = tracking_series(npz, target)
     mean = window_mean(s["nees"], NEES_WINDOW)
     d = slice(None, None, max(1, -(-len(s["t"]) // MAX_POINTS)))  # what is drawn: <= MAX_POINTS
     s, mean = {k: v[d] for k, v in s.items()}, mean[d]
@@ -192,7 +199,7 @@ def write_report(run_dir: str | Path) -> tuple[Path, Path]:
     """Write ``report.png`` and ``report.html`` into ``run_dir``; return their paths."""
     run = load_run(run_dir)
     items = verdicts(run.metrics)
-    targets = _filtered_targets(run.archive)
+    targets = _filtered_targets(run.tracking)
     images = [mpimg.imread(p) for p, _ in run.images]
     width = 12.0
     heights = [0.27 * (len(items) + 1) + 0.6] + [3.4] * len(targets) + [
@@ -203,7 +210,7 @@ def write_report(run_dir: str | Path) -> tuple[Path, Path]:
     subs = np.atleast_1d(subs)
     _draw_verdicts(subs[0], run, items)
     for sub, target in zip(subs[1:], targets, strict=False):
-        _plot_tracking(sub, run.archive, target)
+        _plot_tracking(sub, run.tracking, target)
     for sub, (_, heading), im in zip(subs[1 + len(targets):], run.images, images, strict=True):
         ax = sub.subplots()
         ax.imshow(im)

@@ -16,21 +16,44 @@ from scipy.signal import lfilter
 from scipy.spatial.transform import Rotation
 
 
+def sample_dt(times: np.ndarray, start: int = 0, stop: int | None = None) -> np.ndarray:
+    """``(m, 1)`` intervals ``t_k - t_{k-1}`` (at least 1 ns) of samples ``[start, stop)``;
+    the first sample's is its successor's (1 s if alone)."""
+    n = len(times)
+    prev = (times[0] - (times[1] - times[0] if n > 1 else 1.0)) if start == 0 \
+        else times[start - 1]
+    dt = np.diff(times[start:stop], prepend=prev)
+    return np.maximum(dt, 1e-9)[:, None]
+
+
+def walk_and_white(true: np.ndarray | None, dt: np.ndarray, noise_density: float,
+                   bias_walk: float, white_normals: np.ndarray | None,
+                   step_normals: np.ndarray, first: bool, bias_before: np.ndarray,
+                   bias0: np.ndarray | None = None) -> tuple[np.ndarray | None, np.ndarray]:
+    """Measurements and biases ``(m, 3)`` of consecutive samples from standard normals: the
+    walk's steps ``N(0, sigma_b^2 dt)`` summed on from ``bias_before`` (none before the run's
+    ``first`` sample), white noise ``N(0, sigma_n^2 / dt)``. ``true`` None: the biases only."""
+    steps = step_normals * (bias_walk * np.sqrt(dt))
+    if first:
+        steps[0] = 0.0
+    bias = (np.cumsum(np.concatenate([np.asarray(bias_before, float)[None], steps]),
+                      axis=0)[1:] + (0.0 if bias0 is None else bias0))
+    if true is None:
+        return None, bias
+    return true + bias + white_normals * (noise_density / np.sqrt(dt)), bias
+
+
 def add_white_and_walk(true: np.ndarray, times: np.ndarray, noise_density: float,
                        bias_walk: float, rng: np.random.Generator,
                        bias0: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Measurements ``(N, 3)`` and biases ``(N, 3)`` for true values ``(N, 3)`` at ``times``."""
     true = np.asarray(true, dtype=float)
-    n = len(times)
-    if n == 0:
+    if len(times) == 0:
         return true.copy(), np.zeros_like(true)
-    dt = np.diff(times, prepend=times[0] - (times[1] - times[0] if n > 1 else 1.0))
-    dt = np.maximum(dt, 1e-9)[:, None]
-    white = rng.standard_normal(true.shape) * (noise_density / np.sqrt(dt))
-    steps = rng.standard_normal(true.shape) * (bias_walk * np.sqrt(dt))
-    steps[0] = 0.0
-    bias = np.cumsum(steps, axis=0) + (0.0 if bias0 is None else bias0)
-    return true + bias + white, bias
+    white = rng.standard_normal(true.shape)
+    steps = rng.standard_normal(true.shape)
+    return walk_and_white(true, sample_dt(times), noise_density, bias_walk, white, steps, True,
+                          np.zeros(true.shape[1:]), bias0)
 
 
 @dataclass(frozen=True)
@@ -79,16 +102,24 @@ def gauss_markov(n: int, dt: float, sigma: np.ndarray, tau: np.ndarray,
                     axis=1).reshape(n, len(sigma))
 
 
-def orientation_errors(n: int, dt: float, cfg, rng: np.random.Generator) -> np.ndarray:
-    """``(n, 3)`` yaw, pitch, roll errors (rad) of an orientation sensor configured by ``cfg``
-    (a ``sensors.config.HeadInertial``): slowly varying errors of RMS ``yaw_rms_deg`` and
-    ``tilt_rms_deg`` (Sugiyama & Miura, Table I), correlation times ``yaw_tau_s`` (the slow
-    yaw drift) and ``tilt_tau_s``, plus white noise of ``resolution_deg`` per axis."""
+def orientation_noise(cfg) -> tuple[np.ndarray, np.ndarray, float]:
+    """``(slow, tau, res)`` of an orientation sensor configured by ``cfg`` (a
+    ``sensors.config.HeadInertial``): RMS (rad) and correlation times (s) of the slowly
+    varying yaw, pitch, roll errors, and the white noise (rad) of ``resolution_deg``."""
     rms = np.radians([cfg.yaw_rms_deg, cfg.tilt_rms_deg, cfg.tilt_rms_deg])
     res = np.radians(cfg.resolution_deg)
     # the slow part carries rms^2 - res^2 so the total RMS per axis is the configured one
     slow = np.sqrt(np.maximum(rms**2 - res**2, 0.0))
     tau = np.array([cfg.yaw_tau_s, cfg.tilt_tau_s, cfg.tilt_tau_s])
+    return slow, tau, res
+
+
+def orientation_errors(n: int, dt: float, cfg, rng: np.random.Generator) -> np.ndarray:
+    """``(n, 3)`` yaw, pitch, roll errors (rad) of an orientation sensor configured by ``cfg``
+    (a ``sensors.config.HeadInertial``): slowly varying errors of RMS ``yaw_rms_deg`` and
+    ``tilt_rms_deg`` (Sugiyama & Miura, Table I), correlation times ``yaw_tau_s`` (the slow
+    yaw drift) and ``tilt_tau_s``, plus white noise of ``resolution_deg`` per axis."""
+    slow, tau, res = orientation_noise(cfg)
     return gauss_markov(n, dt, slow, tau, rng) + rng.standard_normal((n, 3)) * res
 
 

@@ -24,11 +24,11 @@ from humimic.world.names import ROBOT_JOINTS
 MIMICRY = f"{SERIES}/mimicry"
 
 
-def _scored(stage):
-    """``(channel, series)`` of every site with enough mimicry to score."""
+def _scored(stage, keys: tuple[str, ...]):
+    """``(channel, series keys)`` of every site with enough mimicry to score."""
     for i, ch in enumerate(stage.channels):
         if ch.started:
-            _, s = site_series(stage, i, ch)
+            _, s = site_series(stage, i, ch, ("t", *keys))
             if len(s["t"]) >= MIN_TICKS:
                 yield ch, s
 
@@ -38,7 +38,8 @@ def mimic_plots(stage, out_dir) -> list:
     from humimic.viz.plots import plot_error_budget, plot_trajectories
 
     paths, rms, shares, totals, sites = [], {}, {}, [], []
-    for ch, s in _scored(stage):
+    for ch, s in _scored(stage, ("true_now", "true_photon", "est", "cmd_raw", "cmd", "ik",
+                                 "robot")):
         paths.append(plot_trajectories(
             f"{out_dir}/mimic_{ch.site}.png", s["t"],
             {f"{ch.target} true (mapped)": s["true_now"], f"{ch.target} estimate": s["est"],
@@ -46,6 +47,7 @@ def mimic_plots(stage, out_dir) -> list:
             title=f"{ch.target} -> {ch.site}: displacement, robot base frame", ylabel="m"))
         terms = error_terms(s["true_now"], s["true_photon"], s["est"], s["cmd_raw"], s["cmd"],
                             s["ik"], s["robot"])
+        s.clear()  # the series are drawn: their whole-run columns go before the terms' sums
         share = mse_shares(terms)
         sites.append(ch.site)
         totals.append(1e3 * rmse(terms["total"]))
@@ -69,7 +71,7 @@ def log_mimicry(stage, rlog) -> None:
         rlog.log_series(f"{SERIES}/robot_joints/{name}", t,
                         np.stack([rec.q_ik[:n, j], rec.q_robot[:n, j]], axis=1),
                         names=[f"{name} target (rad)", f"{name} actual (rad)"])
-    for ch, s in _scored(stage):
+    for ch, s in _scored(stage, ("true_now", "cmd", "robot")):
         root = f"{MIMICRY}/{ch.site}"
         err = 1e3 * (s["robot"] - s["true_now"])
         rlog.log_series(f"{root}/error_mm", s["t"],

@@ -4,7 +4,8 @@ posture, and the sensors that sample it.
 Everything about the person is known before the loop starts (the avatar is kinematic): the
 ground truth of every site at every physics step is evaluated on demand, a chunk of ticks at a
 time (:class:`~humimic.motion.lazy_ground_truth.LazyGroundTruth`, so memory does not grow with
-the run's duration), and the true inertial readings at their sample ticks once; the loop writes
+the run's duration), and the inertial readings likewise, a block of samples at a time
+(:mod:`~humimic.sensors.inertial_stream`); the loop writes
 the avatar's state into the scene each step.
 """
 
@@ -22,7 +23,7 @@ from humimic.sensors.camera_model import CameraImage
 from humimic.sensors.cameras import CameraRig, CameraSpec
 from humimic.sensors.clock import Clock, Schedule
 from humimic.sensors.faults import SensorFaults
-from humimic.sensors.inertial import simulate_inertial, simulate_orientation
+from humimic.sensors.inertial_stream import stream_inertial
 from humimic.sensors.visibility import Visibility
 from humimic.world.gaze import pan_tilt_to
 from humimic.world.names import EYE_CAMERAS, ROBOT_JOINTS, ROBOT_PREFIX
@@ -132,12 +133,14 @@ class World:
             return None
         ticks = np.array(Schedule(cfg.rate, self.clock.physics_rate).ticks(self.n_ticks))
         acc, gyro = self.gt.inertial(which)
-        t = self.times[ticks]
-        samples = simulate_inertial(t, acc[ticks], gyro[ticks], cfg, rng)
-        if getattr(cfg, "orientation", False):
-            R_W_sensor = self.gt.rotation(which, "W")[ticks]
-            samples = replace(samples, orientation=simulate_orientation(t, R_W_sensor, cfg, rng))
-        return samples, ticks
+        R_W_sensor = (self.gt.rotation(which, "W") if getattr(cfg, "orientation", False)
+                      else None)
+
+        def truth(idx: np.ndarray):  # the ground truth at samples idx, evaluated on demand
+            k = ticks[idx]
+            return acc[k], gyro[k], R_W_sensor[k] if R_W_sensor is not None else None
+
+        return stream_inertial(self.times[ticks], truth, cfg, rng, R_W_sensor is not None), ticks
 
     # ---- the robot -------------------------------------------------------------------------
     def set_robot_pose(self) -> None:

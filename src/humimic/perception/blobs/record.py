@@ -78,19 +78,24 @@ class PerceptionRecord:
     def __len__(self) -> int:
         return len(self.rows)
 
-    def arrays(self) -> PerceptionArrays:
-        n = len(self.targets)
+    def arrays(self, targets: list[str] | None = None) -> PerceptionArrays:
+        """The stacked records; with ``targets``, of just those targets (their columns alone
+        are gathered from the spilled rows, the rest never is)."""
+        targets = list(self.targets if targets is None else targets)
+        n = len(targets)
         if not self.rows:
             z = np.zeros
-            return PerceptionArrays(list(self.targets), self.cameras, self.intrinsics, z(0),
+            return PerceptionArrays(targets, self.cameras, self.intrinsics, z(0),
                                     z((0, 2, 4, 4)), z((0, n), int), z((0, n, 2), bool),
                                     z((0, n), bool), z((0, n, 2, 2)), z((0, n, 2, 2, 2)),
                                     z((0, n), bool),
                                     np.empty((0, n), object), z((0, n, 3)), z((0, n, 3, 3)),
                                     z((0, n, 2, 2)), z((0, n)))
-        cols = self.rows.columns()
+        idx = [self.targets.index(t) for t in targets]
+        cols = self.rows.columns({j: (lambda c: c) if j < 2 else (lambda c: c[:, idx])
+                                  for j in range(13)})
         reason = np.empty((len(self.rows), n), object)
         reason[:] = cols[8].tolist()
         arrays = [*cols[1:8], reason, *cols[9:]]
-        return PerceptionArrays(list(self.targets), self.cameras, self.intrinsics,
+        return PerceptionArrays(targets, self.cameras, self.intrinsics,
                                 cols[0].astype(float), *arrays)

@@ -35,10 +35,15 @@ class TrackingReport(Stage):
         """:class:`~humimic.sensors.visibility.Visibility` of the eyes (None: no visibility
         scores) and detection's phase one (s), which detection rates leave out."""
 
-    def arrays(self):
-        """``(PerceptionArrays, FilterArrays | None)`` of the run so far."""
-        pa = self.perception_record.arrays()
-        fa = self.filter_record.arrays() if self.filter_record is not None else None
+    def arrays(self, target: str | None = None):
+        """``(PerceptionArrays, FilterArrays | None)`` of the run so far; with ``target``,
+        of that target alone (what a long run gathers at a time: one target's columns)."""
+        one = None if target is None else [target]
+        pa = self.perception_record.arrays(one)
+        fa = None
+        if self.filter_record is not None:
+            fa = self.filter_record.arrays(
+                None if target is None else [t for t in one if t in self.filter_record.targets])
         return pa, fa
 
     def truth(self, t: np.ndarray, target: str):
@@ -52,10 +57,10 @@ class TrackingReport(Stage):
 
     def metrics(self) -> dict:
         """``tracking.<target>`` scores."""
-        pa, fa = self.arrays()
         vis = self.visibility.arrays() if self.visibility is not None else None
         out = {}
         for target in self.targets:
+            pa, fa = self.arrays(target)
             p, _, _ = self.truth(pa.t, target)
             scores = target_scores(target, pa, fa, p,
                                    self.truth(fa.t, target) if fa is not None else None,
@@ -68,19 +73,21 @@ class TrackingReport(Stage):
         """Raw and filtered error series (and the filter's 2-sigma) per target, to rerun."""
         if rlog is None or not rlog.enabled:
             return
-        pa, fa = self.arrays()
         for target in self.targets:
+            pa, fa = self.arrays(target)
             self._log_series(rlog, target, pa, fa, self.truth(pa.t, target)[0])
         if self.visibility is not None:
             log_visibility(rlog, self.visibility.arrays(), self.targets)
 
     def archive(self, out_dir) -> list:
         """``tracking.npz``: every measurement and estimate with the truth at their times."""
-        pa, fa = self.arrays()
-        return [save_archive(
-            Path(out_dir) / "tracking.npz", pa, fa,
-            {t: self.truth(pa.t, t) for t in self.targets},
-            {t: self.truth(fa.t, t) for t in self.targets} if fa is not None else {},
+        prec, frec = self.perception_record, self.filter_record
+        t_p = _times(prec)
+        t_f = _times(frec) if frec is not None else None
+        return [save_archive(  # the records' columns written batch by batch
+            Path(out_dir) / "tracking.npz", prec, frec,
+            {t: self.truth(t_p, t) for t in self.targets},
+            {t: self.truth(t_f, t) for t in self.targets} if frec is not None else {},
             self.visibility.arrays() if self.visibility is not None else None)]
 
     def _log_series(self, rlog, target, pa, fa, p) -> None:
@@ -108,10 +115,10 @@ class TrackingReport(Stage):
                                 colors=list(AXIS_RGB) * 2, widths=[0.75] * 6)
 
     def plots(self, out_dir) -> list:
-        pa, fa = self.arrays()
         out = Path(out_dir)
         paths = []
         for target in self.targets:
+            pa, fa = self.arrays(target)
             i = pa.index(target)
             p, _, _ = self.truth(pa.t, target)
             ok = pa.ok[:, i]
@@ -134,6 +141,13 @@ class TrackingReport(Stage):
                                       gt_t, self.gt.p_base(target)[k],
                                       self.gt.v_base(target)[k], self.gt.a_base(target)[k]))
         return paths
+
+
+def _times(record) -> np.ndarray:
+    """A record's frame times (its first column) alone: ``record.arrays().t``."""
+    if not len(record.rows):
+        return np.zeros(0)
+    return record.rows.columns({0: lambda c: c})[0].astype(float)
 
 
 def log_visibility(rlog, vis, targets: list[str]) -> None:

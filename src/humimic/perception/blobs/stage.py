@@ -194,9 +194,8 @@ class PerceptionStage(Stage):
         self.flush()  # the last frame (after the loop: published to nobody, but recorded)
 
     def metrics(self) -> dict:
-        rows = self.record.arrays()
         out = {"targets": self.published, "distractors": self.targets[len(self.published):],
-               "cameras": list(self.cameras), "frames": len(rows.t),
+               "cameras": list(self.cameras), "frames": len(self.record),
                "identity_solves": self.identity_solves, "latency_ms": 1e3 * self.latency,
                "pipelined": self.pipelined, "worker": self.worker,
                "stale_frames_skipped": self.repeats.stale_frames}
