@@ -24,6 +24,9 @@ OTHER_COLOR = (200, 200, 200)
 AXIS_RGB = ((214, 39, 40), (44, 160, 44), (31, 119, 180))
 
 TIMELINE = "sim_time"
+#: Add to OpenCV pixel coordinates (pixel centres at integers) to place them on a rerun image
+#: (pixel centres at +0.5): every 2-D overlay and the pinhole's principal point.
+PIXEL_CENTRE_SHIFT = 0.5
 WORLD = "world"
 ROOM = "world/room"
 BASE = "world/base"

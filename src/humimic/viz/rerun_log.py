@@ -19,8 +19,7 @@ Usage -- always as a context manager, so Ctrl-C still leaves a complete ``.rrd``
         rlog.log_static_scene()        # then rlog.log_poses(t) in the loop; close() on exit
 
 With ``mode="off"`` no stream is created and every method returns at once.
-Pixel coordinates passed in are OpenCV's (pixel centres at integers); rerun's images put pixel
-centres at +0.5, so 2-D overlays and the pinhole's principal point are shifted by half a pixel.
+Pixel coordinates passed in are OpenCV's; overlays are shifted by :data:`PIXEL_CENTRE_SHIFT`.
 """
 
 from __future__ import annotations
@@ -39,6 +38,7 @@ from humimic.viz.entities import (  # noqa: F401 -- the names every logger uses,
     ESTIMATES,
     EVENTS,
     OTHER_COLOR,
+    PIXEL_CENTRE_SHIFT,
     ROOM,
     SERIES,
     TARGET_COLORS,
@@ -59,7 +59,6 @@ from humimic.viz.geometry import (
     scene_geoms,
 )
 
-_PIXEL_CENTRE_SHIFT = 0.5  # OpenCV pixel centre (0, 0) -> rerun (0.5, 0.5)
 #: Payload (bytes, estimated) handed to the SDK between blocking flushes, and rows of a series
 #: sent as one chunk. The SDK encodes and writes on its own threads: unbounded, ten minutes' joint
 #: series (30 x 250 000 rows) queue up faster than written, +279 MiB of peak memory; +32 MiB so.
@@ -255,7 +254,7 @@ class RerunLog:
         img = f"{entity}/image"
         self.logged.add(img)
         K = cam.intrinsics.K.copy()
-        K[:2, 2] += _PIXEL_CENTRE_SHIFT
+        K[:2, 2] += PIXEL_CENTRE_SHIFT
         h, w = cam_image.image.shape[:2]
         key = (K.tobytes(), w, h, image_plane_distance_m)
         if self._pinholes.get(img) != key:
@@ -286,7 +285,7 @@ class RerunLog:
         """
         if self._rec is None:
             return
-        c = np.asarray(centers_px, dtype=float).reshape(-1, 2) + _PIXEL_CENTRE_SHIFT
+        c = np.asarray(centers_px, dtype=float).reshape(-1, 2) + PIXEL_CENTRE_SHIFT
         cov = np.asarray(covariances_px2, dtype=float).reshape(-1, 2, 2)
         strips = ellipse_points(c, cov, n_sigma, n_points)
         self._rec.set_time(TIMELINE, duration=t)

@@ -31,7 +31,7 @@ from humimic.pipeline.stage import Stage
 from humimic.scenario.errors import ScenarioError
 from humimic.sensors.camera_model import invert_transform
 from humimic.viz.plots import plot_errors, plot_track2d
-from humimic.viz.rerun_log import EVENTS, SERIES, image_entity
+from humimic.viz.rerun_log import EVENTS, PIXEL_CENTRE_SHIFT, SERIES, image_entity
 
 GOOD, BAD, DETECTION = (40, 200, 60), (230, 40, 40), (255, 220, 0)
 HEAD_WIDTH_M = 0.156
@@ -234,16 +234,16 @@ class ImageTrackerStage(Stage):
             self._last_state = state
         if ov is None:
             return
-        shift = 0.5  # OpenCV pixel centres to rerun's
         if ov.particles is not None:
             self.rlog.log(t, f"{base}/particles", rr.Points2D(
-                ov.particles + shift, colors=weight_colors(ov.weights), radii=1.0))
-        strips = [] if ov.contour is None else [np.vstack([ov.contour, ov.contour[:1]]) + shift]
+                ov.particles + PIXEL_CENTRE_SHIFT, colors=weight_colors(ov.weights), radii=1.0))
+        strips = [] if ov.contour is None else [np.vstack([ov.contour, ov.contour[:1]])
+                                                + PIXEL_CENTRE_SHIFT]
         self.rlog.log(t, f"{base}/estimate", rr.LineStrips2D(
             strips, colors=GOOD if ov.good else BAD, radii=1.0))
         boxes = np.zeros((0, 4)) if ov.detections is None else np.asarray(ov.detections)
         self.rlog.log(t, f"{base}/detections", rr.Boxes2D(
-            mins=boxes[:, :2] + shift, sizes=boxes[:, 2:], colors=DETECTION))
+            mins=boxes[:, :2] + PIXEL_CENTRE_SHIFT, sizes=boxes[:, 2:], colors=DETECTION))
 
     def _state_codes(self) -> np.ndarray:
         return np.array([TRACK_STATES.index(tr.tracks[0].state) if tr.tracks else 0

@@ -22,7 +22,7 @@ from humimic.perception.trackers.common import BAD, GOOD, PoseTrackerStage
 from humimic.perception.trackers.gest.likelihood import hand_outlines
 from humimic.perception.trackers.gest.tracker import GestResult, GestTracker
 from humimic.sensors.camera_model import invert_transform
-from humimic.viz.rerun_log import ESTIMATES, image_entity
+from humimic.viz.rerun_log import ESTIMATES, PIXEL_CENTRE_SHIFT, image_entity
 
 PARTICLE = (90, 120, 255)
 
@@ -87,7 +87,7 @@ class GestStage(PoseTrackerStage):
             states = np.vstack([res.mean[None], sample])
             states[:, 6:] = np.maximum(states[:, 6:], 1e-3)
             outline, _ = hand_outlines(states, cam.intrinsics, invert_transform(cam.T_base_cam))
-            strips = [np.vstack([o, o[:1]]) + 0.5 for o in outline.uv[:, 0]
+            strips = [np.vstack([o, o[:1]]) + PIXEL_CENTRE_SHIFT for o in outline.uv[:, 0]
                       if np.isfinite(o).all()]
             if not strips:
                 continue
@@ -98,31 +98,31 @@ class GestStage(PoseTrackerStage):
             rlog.log_points(t, f"{ESTIMATES}/{self.tracker_name}",
                             (T[:3, :3] @ res.mean[:3] + T[:3, 3])[None], colors=GOOD)
 
-    def error_series(self) -> dict:
-        """The hand centre's 3-D error on frames it is in view and tracked (NaN elsewhere)."""
-        if not self.times:
-            return {}
-        t = np.asarray(self.times)
-        truth = truth_hand_state(self.world, self.world.gt.index_of(t), self.side, "base")
-        est = np.array([r.mean[:3] if r is not None and r.mean is not None
-                        and r.status == "tracking" else np.full(3, np.nan)
-                        for r in self.results])
-        seen = np.array([_in_view(c, p) for c, p in zip(self.left_cams, truth[:, :3],
-                                                          strict=True)])
-        err = np.linalg.norm(est - truth[:, :3], axis=1)
-        return {f"{self.side.lower()}_hand centre": (t, np.where(seen, err, np.nan))}
-
-    def scores(self) -> dict:
-        if not self.times:
-            return {}
-        gt = self.world.gt
-        truth = truth_hand_state(self.world, gt.index_of(np.asarray(self.times)), self.side,
-                                 "base")
+    def _judged(self):
+        """Per frame: the true hand state (T, 9), the estimate (T, 9; NaN without one), whether
+        the hand is in the left camera's view and whether the tracker reports tracking."""
+        truth = truth_hand_state(self.world, self.world.gt.index_of(np.asarray(self.times)),
+                                 self.side, "base")
         in_view = np.array([_in_view(c, p) for c, p in zip(self.left_cams, truth[:, :3],
                                                               strict=True)])
         tracking = np.array([r is not None and r.status == "tracking" for r in self.results])
         est = np.array([r.mean if r is not None and r.mean is not None else np.full(9, np.nan)
                         for r in self.results])
+        return truth, est, in_view, tracking
+
+    def error_series(self) -> dict:
+        """The hand centre's 3-D error on frames it is in view and tracked (NaN elsewhere)."""
+        if not self.times:
+            return {}
+        truth, est, in_view, tracking = self._judged()
+        err = np.linalg.norm(est[:, :3] - truth[:, :3], axis=1)
+        return {f"{self.side.lower()}_hand centre": (np.asarray(self.times),
+                                                     np.where(in_view & tracking, err, np.nan))}
+
+    def scores(self) -> dict:
+        if not self.times:
+            return {}
+        truth, est, in_view, tracking = self._judged()
         use = in_view & tracking
         out = {"in_view_frames": int(in_view.sum()),
                "tracked_in_view_fraction": _frac(use, in_view),

@@ -10,7 +10,7 @@ import rerun as rr
 
 from humimic import bodymodel as bm
 from humimic.perception.trackers.kpf.scores import errors
-from humimic.viz.rerun_log import image_entity
+from humimic.viz.rerun_log import PIXEL_CENTRE_SHIFT, image_entity
 
 #: Skeleton chains drawn in 3-D.
 _CHAINS = (("r_shoulder", "r_elbow", "r_wrist"), ("l_shoulder", "l_elbow", "l_wrist"),
@@ -20,7 +20,7 @@ _MODE_COLOR, _MODES_COLOR = (255, 140, 0), (80, 160, 255)
 
 def _lines_2d(rlog, t: float, entity: str, strips, color) -> None:
     """Image polylines in OpenCV pixels (rerun puts pixel centres at +0.5)."""
-    rlog.log(t, entity, rr.LineStrips2D([np.asarray(s, float) + 0.5 for s in strips],
+    rlog.log(t, entity, rr.LineStrips2D([np.asarray(s, float) + PIXEL_CENTRE_SHIFT for s in strips],
                                         colors=[color]))
 
 

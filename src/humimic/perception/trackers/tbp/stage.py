@@ -23,7 +23,7 @@ from humimic.maths.stats import rmse
 from humimic.messages import PoseEstimate
 from humimic.perception.trackers.common import GOOD, PoseTrackerStage
 from humimic.perception.trackers.tbp.tracker import ARM_NAMES, TbpTracker
-from humimic.viz.rerun_log import ESTIMATES, image_entity
+from humimic.viz.rerun_log import ESTIMATES, PIXEL_CENTRE_SHIFT, image_entity
 
 JOINTS = ("r_shoulder", "r_elbow", "r_wrist", "l_shoulder", "l_elbow", "l_wrist")
 
@@ -104,7 +104,7 @@ class TbpStage(PoseTrackerStage):
             arms = [np.stack([pose.joint(f"{s}_{j}")[0] for j in ("shoulder", "elbow", "wrist")])
                     for s in ("r", "l")]
             rlog.log(t, f"{base}/skeleton", rr.LineStrips2D(
-                [cam.project_base(a) + 0.5 for a in arms], colors=GOOD, radii=1.0))
+                [cam.project_base(a) + PIXEL_CENTRE_SHIFT for a in arms], colors=GOOD, radii=1.0))
             rlog.log_lines_3d(t, f"{ESTIMATES}/{self.tracker_name}",
                               [a @ T[:3, :3].T + T[:3, 3] for a in arms], colors=GOOD,
                               radii=0.01)
@@ -124,17 +124,26 @@ class TbpStage(PoseTrackerStage):
                                  np.random.default_rng(self.world.scenario.seed))
         return kalman_scores(kf, est[:, idx], truth, lim.lower[idx], lim.upper[idx])
 
-    def error_series(self) -> dict:
-        """Each wrist's and elbow's 3-D error per frame (NaN where nothing was estimated)."""
+    def _poses(self):
+        """Over the frames with an estimate: their indices, ticks, the true state (T, 14), the
+        estimate (T, 8) and the body model's poses of both (``p_true``, ``p_est``)."""
         use = [i for i, m in enumerate(self.means) if m is not None]
         if not use:
-            return {}
-        t = np.asarray(self.times)
-        truth = truth_state(self.world, self.world.gt.index_of(t[use]), "base")
+            return None
+        ticks = self.world.gt.index_of(np.asarray(self.times)[use])
+        truth = truth_state(self.world, ticks, "base")
+        est = np.array([self.means[i] for i in use])
         body = self.tracker.body.with_free(DOF_NAMES)
-        p_true = body.forward(truth)
-        p_est = body.forward(np.hstack([np.array([self.torsos[i] for i in use]),
-                                        np.array([self.means[i] for i in use])]))
+        torsos = np.array([self.torsos[i] for i in use])
+        return use, ticks, truth, est, body.forward(truth), body.forward(np.hstack([torsos, est]))
+
+    def error_series(self) -> dict:
+        """Each wrist's and elbow's 3-D error per frame (NaN where nothing was estimated)."""
+        poses = self._poses()
+        if poses is None:
+            return {}
+        use, _, _, _, p_true, p_est = poses
+        t = np.asarray(self.times)
         out = {}
         for joint in ("r_wrist", "l_wrist", "r_elbow", "l_elbow"):
             err = np.full(len(t), np.nan)
@@ -143,7 +152,7 @@ class TbpStage(PoseTrackerStage):
         return out
 
     def scores(self) -> dict:
-        use = [i for i, m in enumerate(self.means) if m is not None]
+        poses = self._poses()
         out = {"torso_source": "truth (oracle)" if self.cfg.torso == "truth" else "head",
                "restarts": self.tracker.restarts}
         w = self.tracker.weights
@@ -151,19 +160,12 @@ class TbpStage(PoseTrackerStage):
             out.update({"lambda_s": w["lambda_s"], "cluttered": w["cluttered"],
                         "first_edge_density": w["edge_density"],
                         "lambda_c": [float(v) for v in w["lambda_c"]]})
-        if not use:
+        if poses is None:
             return out
-        ticks = self.world.gt.index_of(np.asarray(self.times)[use])
+        use, ticks, truth, est, p_true, p_est = poses
         if self.cfg.kalman:
-            out["kalman"] = self._kalman(np.asarray(self.times)[use], ticks,
-                                         np.array([self.means[i] for i in use]))
-        truth = truth_state(self.world, ticks, "base")
-        est = np.array([self.means[i] for i in use])
+            out["kalman"] = self._kalman(np.asarray(self.times)[use], ticks, est)
         err = np.degrees((est - truth[:, 6:] + np.pi) % (2 * np.pi) - np.pi)
-        body = self.tracker.body.with_free(DOF_NAMES)
-        p_true = body.forward(truth)
-        torsos = np.array([self.torsos[i] for i in use])
-        p_est = body.forward(np.hstack([torsos, est]))
         def joint_err(name):
             return p_est.joint(name) - p_true.joint(name)
         elbow = np.vstack([joint_err("r_elbow"), joint_err("l_elbow")])
