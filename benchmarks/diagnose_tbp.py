@@ -4,7 +4,10 @@ replay the tracker over them for several seeds and options, and print per DOF an
 the error split into the camera's depth and image plane, the shoulder placement error, and how
 often the true pose scores better than the MMSE under the tracker's own likelihood (eq. 19)
 -- with the measured torso and with the true one. True better: a search failure; estimate
-better: a cue failure.
+better: a cue failure. The wrists' error is also taken to the image: how far (px) the
+estimated wrist projects from the true one, and which share of the 3-D wrist error (squared)
+falls in frames where it projects within ``--px`` pixels of the truth -- the error along the
+line of sight, which one eye cannot see (the monocular depth ambiguity).
 
 Run: ``python benchmarks/diagnose_tbp.py scenarios/fig13_tbp_clutter.yaml --seeds 0,1,2
 [--torso truth] [--set sigma_deg=1.5 --set edges=grey ...]``. CPU time per frame
@@ -56,12 +59,21 @@ def record(path: str, overrides: list[str]):
         world.close()
 
 
-def replay(tbp: TbpStage, frames, seed: int, update: dict, torso_truth: bool) -> dict:
+def monocular_share(err_mm: np.ndarray, err_px: np.ndarray, px: float) -> float:
+    """Share of the squared 3-D error ``err_mm (T,)`` in the frames whose projected error
+    ``err_px (T,)`` is at most ``px``: the part of the error the image does not show."""
+    total = float(np.sum(err_mm ** 2))
+    return float(np.sum(err_mm[err_px <= px] ** 2)) / total if total > 0 else 0.0
+
+
+def replay(tbp: TbpStage, frames, seed: int, update: dict, torso_truth: bool,
+           px: float = 2.0) -> dict:
     cfg = tbp.cfg.model_copy(update=update)
     trk = TbpTracker(cfg, tbp.tracker.body, tbp.tracker.lut)
     body = trk.body.with_free(DOF_NAMES)
     rng = np.random.default_rng(seed)
     err, d_cam, lls, cpu = [], {j: [] for j in JOINTS}, [], 0.0
+    wrist_px, wrist_mm = [], []
     for _, frame, torso, truth in frames:
         torso = truth[:6] if torso_truth else torso
         c0 = time.process_time()
@@ -72,6 +84,10 @@ def replay(tbp: TbpStage, frames, seed: int, update: dict, torso_truth: bool) ->
         R = frame.camera.T_base_cam[:3, :3]
         for j in JOINTS:
             d_cam[j].append(R.T @ (p_est.joint(j) - p_true.joint(j))[0])
+        for j in ("r_wrist", "l_wrist"):
+            uv = frame.camera.project_base(np.vstack([p_est.joint(j), p_true.joint(j)]))
+            wrist_px.append(np.linalg.norm(uv[0] - uv[1]))
+            wrist_mm.append(1e3 * np.linalg.norm(p_est.joint(j) - p_true.joint(j)))
         qs = np.stack([truth[6:], mean])
         lls.append([full_log_likelihood(project_arms(trk.body, qs, t, trk.last_view,
                                                      cfg.n_points), trk.last_view, qs,
@@ -86,6 +102,9 @@ def replay(tbp: TbpStage, frames, seed: int, update: dict, torso_truth: bool) ->
         d = np.vstack([d_cam[f"{s}_{part}"] for s in "rl"])
         out[f"{part}_mm"] = {"3d": 1e3 * rmse(d), "depth": 1e3 * rmse(d[:, 2:]),
                              "image_plane": 1e3 * rmse(d[:, :2])}
+    wrist_px, wrist_mm = np.array(wrist_px), np.array(wrist_mm)
+    out["wrist_px_rmse"] = rmse(wrist_px[:, None])
+    out[f"wrist_error_share_within_{px:g}px"] = monocular_share(wrist_mm, wrist_px, px)
     gap = lls[:, :, 0] - lls[:, :, 1]
     out["true_pose_better_fraction"] = {"measured_torso": float(np.mean(gap[:, 0] > 0)),
                                         "true_torso": float(np.mean(gap[:, 1] > 0))}
@@ -99,6 +118,9 @@ def main() -> None:
     ap.add_argument("scenario")
     ap.add_argument("--seeds", default="0,1,2")
     ap.add_argument("--torso", choices=["measured", "truth"], default="measured")
+    ap.add_argument("--px", type=float, default=2.0,
+                    help="projected wrist error (px) below which the 3-D error counts as "
+                         "along the line of sight")
     ap.add_argument("--set", action="append", default=[], metavar="KEY=JSON",
                     help="a tracker option for the replays, e.g. sigma_deg=1.5")
     ap.add_argument("-o", "--override", action="append", default=[],
@@ -108,7 +130,7 @@ def main() -> None:
     tbp, frames = record(args.scenario, args.override)
     frames = [f for f in frames if f[2] is not None]
     for seed in (int(s) for s in args.seeds.split(",")):
-        res = replay(tbp, frames, seed, update, args.torso == "truth")
+        res = replay(tbp, frames, seed, update, args.torso == "truth", args.px)
         print(f"seed {seed}:", json.dumps(res, default=lambda x: round(float(x), 2)))
 
 

@@ -28,9 +28,16 @@ class TbpConfig(Section):
     """Process noise of the constant-velocity model per frame (deg, each angle; not in Table
     6). Measured over 3 seeds on fig12/fig13: 3 deg let the weakly observed depth directions
     diffuse (wrist 179/107 mm), 0.7-1.5 deg are alike (97-122/71-83 mm)."""
-    velocity_keep: float = Field(1.0, ge=0.0, le=1.0)
-    """Fraction of the last frame's velocity the AR model keeps (1: the paper's constant
-    velocity; below 1 a damped velocity, ``q_k = q_{k-1} + a (q_{k-1} - q_{k-2}) + w``)."""
+    velocity_keep: float = Field(0.85, ge=0.0, le=1.0)
+    """Fraction of the last frame's velocity the AR model keeps, per frame (1: the paper's
+    constant velocity; below 1 a damped velocity, ``q_k = q_{k-1} + a (q_{k-1} - q_{k-2}) +
+    w``; 0.85 a frame at 30 Hz is a velocity time constant of 0.2 s). Along directions the
+    image hardly sees (a limb turning towards the camera) an undamped velocity integrates the
+    noise into a drift; measured over seeds 0-2 (joints deg / wrist mm, 1 -> 0.85): fig13
+    14.2/73 -> 12.2/72, fig13 with straight arms 12.3/73 -> 9.6/48, fig13 on a darker person
+    at 1.4 m 14.1/68 -> 11.7/63, fig12 22.2/122 -> 19.0/97, fig16 18.3/99 -> 16.2/90; 0.7 lost
+    fig16's arm raised towards the camera on 2 of 3 seeds (wrist 311 mm), 0 (a random walk)
+    cannot follow the arms at 1 deg/frame (fig13 134 mm)."""
     sigma_k_first: float | None = Field(None, gt=0.0)
     """Skin-cue standard deviation of the APF's first stage (default ``sigma_k``)."""
     sigma_s: float = Field(1.0, gt=0.0)
