@@ -51,6 +51,8 @@ def test_constant_velocity_model():
     dyn = cv_dynamics(8, 0.05)
     q1, q0 = np.arange(8.0), np.arange(8.0) - 0.1
     np.testing.assert_allclose(dyn.mean(np.r_[q1, q0][None])[0], np.r_[q1 + 0.1, q1])
+    damped = cv_dynamics(8, 0.05, keep=0.85)          # the default: q1 + 0.85 (q1 - q0)
+    np.testing.assert_allclose(damped.mean(np.r_[q1, q0][None])[0], np.r_[q1 + 0.085, q1])
 
 
 def test_collision_and_torso_from_head():
@@ -143,10 +145,11 @@ def test_kalman_filter_overshoots_an_end_stop_the_particle_filter_cannot():
 
 def test_tbp_follows_fig13s_arms_in_clutter():
     """The first 1.5 s of fig13 (both arms abducting in front of the cluttered cupboard; torso
-    from the truth so that only the tracker is scored), seed 0. Measured over seeds 0-5: joint
-    RMSE 16-21 deg, wrist RMSE 97-178 mm (40-154 in the image plane: the right arm lags its
-    abduction by up to 48 deg at 1.5 s before catching up later in the run), the left arm's
-    abduction 2 deg."""
+    from the truth so that only the tracker is scored), seed 0. Measured over seeds 0-5 with
+    the damped velocity (``velocity_keep`` 0.85): joint RMSE 16-18 deg, wrist RMSE 173-180 mm
+    (the right arm lags its abduction, R_SAA 23 deg RMS over these 1.5 s, before catching up
+    later in the run; the left elbow, flexed 46 deg towards the camera, is held near 10: 32-37
+    deg), the left arm's abduction 1.5-1.8 deg."""
     from humimic.perception.trackers.tbp.build import tbp_stage
     from humimic.world.world import World
 
@@ -174,4 +177,4 @@ def test_tbp_follows_fig13s_arms_in_clutter():
     wrist_mm = 1e3 * np.sqrt(np.mean(np.sum(np.square(wrist), axis=1)))
     assert joints < 40.0, joints
     assert wrist_mm < 400.0, wrist_mm
-    assert per_dof[ARM_NAMES.index("L_SAA")] < 6.0, per_dof
+    assert per_dof[ARM_NAMES.index("L_SAA")] < 5.0, per_dof
