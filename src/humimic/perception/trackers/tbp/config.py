@@ -57,6 +57,11 @@ class TbpConfig(Section):
     edge_density: float = Field(0.1, gt=0.0, lt=1.0)
     """Edge-pixel fraction around the person in the first frame above which the scene counts
     as cluttered (measured: 0.072 in the plain lab, 0.138 in lab_clutter)."""
+    patch_refs: Literal["rest", "first_estimate"] = "first_estimate"
+    """Where the colour patches' reference histograms are taken on the first frame: under the
+    model at the rest pose (the person may not be there: a hand's patch then learns the
+    trousers beside it and holds the arm down), or under the first frame's estimate from the
+    other cues (shape, skin, priors)."""
     sigma_c: float = Field(0.3, gt=0.0)
     """Colour-patch standard deviation (eq. 6)."""
     lambda_c: tuple[float, float] = (0.1, 1.0)

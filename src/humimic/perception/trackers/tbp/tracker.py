@@ -89,13 +89,16 @@ class TbpTracker:
         self.particles = np.hstack([q, q])
         self.log_weights = uniform_log_weights(self.cfg.n_particles)
 
-    def _first_frame(self, view: ArmView, torso: np.ndarray) -> None:
-        """Cue weights from the first frame (sec. 6.3.1) and the patches' references."""
+    def _first_frame(self, view: ArmView, torso: np.ndarray, q: np.ndarray | None = None) -> None:
+        """Cue weights from the first frame (sec. 6.3.1) and the patches' references (under
+        the arms at ``q``, default the rest pose)."""
         cfg = self.cfg
         q0 = self.q_def[None]
         density = surround_edge_density(self.body, q0, torso, view)
         cluttered = density > cfg.edge_density
-        refs = patch_histograms_all(project_arms(self.body, q0, torso, view, 4), view.qimage)[0]
+        q_ref = q0 if q is None else q[None]
+        refs = patch_histograms_all(project_arms(self.body, q_ref, torso, view, 4),
+                                    view.qimage)[0]
         uniform = np.full(refs.shape[-1], 1.0 / refs.shape[-1])
         d_uniform = bhattacharyya(refs, uniform).mean(axis=-1)                # (6,)
         lam_c = np.where(d_uniform < cfg.patch_confidence, cfg.lambda_c[1], cfg.lambda_c[0])
@@ -117,6 +120,8 @@ class TbpTracker:
         if self.particles is None:
             self._start(rng)
             self._first_frame(view, torso)
+            if cfg.patch_refs == "first_estimate":
+                self.refs = None                     # the first step without colour patches
         body, w, refs = self.body, self.weights, self.refs
 
         def first(x):                                           # skin cue of the hands
@@ -138,5 +143,7 @@ class TbpTracker:
             self.restarts += 1
             self._start(rng)
         mean = body.clamp(s.mean[None, :8])[0]
+        if refs is None and cfg.patch_refs == "first_estimate" and s.ok:
+            self._first_frame(view, torso, mean)     # references under the first estimate
         cov = weighted_cov(x[:, :8], s.log_weights)
         return mean, cov, s.ok
