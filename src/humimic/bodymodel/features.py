@@ -186,13 +186,17 @@ def limb_ridges(view: BodyView, m_r: int) -> LimbRidges:
                       np.arctan2(ax[..., 1], ax[..., 0]), _ok(view))
 
 
-def limb_bands(view: BodyView, bands: int, shrink: float = 0.0) -> np.ndarray:
+def limb_bands(view: BodyView, bands: int, shrink: float = 0.0,
+               limbs: np.ndarray | None = None) -> np.ndarray:
     """``(N, Pc, B, 4, 2)`` quadrilaterals (pixels) tiling each limb in ``bands`` equal
     slices from base to top, each pulled towards the axis by the fraction ``shrink`` of its
-    half-width (Schmidt's B_l colour polygons; ``shrink > 0`` keeps them off the edges)."""
+    half-width (Schmidt's B_l colour polygons; ``shrink > 0`` keeps them off the edges).
+    ``limbs``: only these cone positions (axis 1 then has their length)."""
     if bands < 1 or not 0.0 <= shrink < 1.0:
         raise ValueError(f"limb_bands: bands >= 1 and 0 <= shrink < 1, got {bands}, {shrink}")
     base, top = _ends(view)
+    if limbs is not None:
+        base, top = base[:, limbs], top[:, limbs]
     s = lerp(base, top, np.arange(bands + 1) / bands)                 # (N, Pc, 2, B+1, 2)
     mid = 0.5 * (s[:, :, 0] + s[:, :, 1])
     s1 = mid + (1 - shrink) * (s[:, :, 0] - mid)

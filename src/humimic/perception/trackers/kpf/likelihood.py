@@ -110,7 +110,7 @@ class Likelihood:
         if self.colour_sets:
             ok = view.valid[:, view.cone_idx] & view.generators
             for b, (js, names) in self.colour_sets.items():
-                got = C.band_colours(maps, bm.limb_bands(view, b, 0.2)[:, js])  # (N, J, B, 3)
+                got = C.band_colours(maps, bm.limb_bands(view, b, 0.2, js))    # (N, J, B, 3)
                 for k, p in enumerate(names):
                     colours[p] = got[:, k]
                 if all(p in self.references for p in names):
