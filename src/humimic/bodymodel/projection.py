@@ -209,8 +209,11 @@ def project(body: BodyModel, pose: Pose, intr: Intrinsics, T_cam_ref: np.ndarray
     c_loc = -(t_c[..., None, :] @ R_c)[..., 0, :]
     phi_c, delta, exists, facing = cones.generator_angles(a, b, L, k, c_loc)
     valid[:, ci] = cones.in_front(R_c, t_c, a, b, L, k, Z_MIN)
-    phi = np.stack([phi_c + delta, phi_c + delta, phi_c - delta, phi_c - delta], -1)
-    XYZ = cones.rim_points(phi, np.array([0, 1, 0, 1]), a, b, L, k, R_c, t_c)
+    # the generators' ends: angles phi_c + delta, phi_c + delta, phi_c - delta, phi_c - delta
+    # on rims 0, 1, 0, 1 (each generator's cosine and sine computed once)
+    g = np.stack([phi_c + delta, phi_c - delta], -1)
+    cos_sin = tuple(np.repeat(f(g), 2, axis=-1) for f in (np.cos, np.sin))
+    XYZ = cones.rim_points(None, np.array([0, 1, 0, 1]), a, b, L, k, R_c, t_c, cos_sin)
     sides = _image(intr, XYZ, valid[:, ci]).uv.reshape(n, len(ci), 2, 2, 2)
     axis_xyz = np.stack([t_c, t_c + R_c[..., :, 2] * L[:, None]], axis=-2)
 
