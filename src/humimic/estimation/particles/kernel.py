@@ -26,12 +26,17 @@ def sq_distances(x: np.ndarray, s: np.ndarray, h: np.ndarray, dtype=np.float64) 
     traffic; both point sets are first centred on ``s``'s mean, so ``|a|^2`` and ``|b|^2`` stay
     of the order of the spread and the cancellation error near a distance of 1 is ~1e-6)."""
     c = s.mean(axis=0) if len(s) else 0.0
-    a, b = (x - c) / h, (s - c) / h
-    d = x.shape[1]
-    A, B = np.empty((len(a), d + 2), dtype), np.empty((len(b), d + 2), dtype)
-    A[:, :d], A[:, d], A[:, d + 1] = a, 1.0, np.einsum("ij,ij->i", a, a)
-    B[:, :d], B[:, d], B[:, d + 1] = -2.0 * b, np.einsum("ij,ij->i", b, b), 1.0
-    d2 = A @ B.T
+    return _sq_scaled((x - c) / h, (s - c) / h, dtype)
+
+
+def _sq_scaled(a: np.ndarray, b: np.ndarray, dtype) -> np.ndarray:
+    """``(..., M, N)`` ``||a_m - b_n||^2`` of centred, scaled points ``a (..., M, d)``,
+    ``b (..., N, d)`` (:func:`sq_distances`; leading axes batched)."""
+    d = a.shape[-1]
+    A, B = np.empty(a.shape[:-1] + (d + 2,), dtype), np.empty(b.shape[:-1] + (d + 2,), dtype)
+    A[..., :d], A[..., d], A[..., d + 1] = a, 1.0, np.einsum("...j,...j->...", a, a)
+    B[..., :d], B[..., d], B[..., d + 1] = -2.0 * b, np.einsum("...j,...j->...", b, b), 1.0
+    d2 = A @ np.swapaxes(B, -1, -2)
     return np.maximum(d2, 0.0, out=d2)
 
 
@@ -193,6 +198,82 @@ def kernel_log_weights(log_lik: np.ndarray, shifted: np.ndarray, prior: np.ndarr
         return log_lik + np.log(p) - np.log(q)
 
 
+def _group_coords(x: np.ndarray, groups: list[np.ndarray], h: np.ndarray
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """Each group's dimensions of ``x (N, d)`` as ``(G, N, dm)`` (``dm`` the largest group;
+    shorter groups padded with zeros, which add nothing to a distance) and the bandwidths
+    ``(G, 1, dm)`` (1 at the padding)."""
+    dm = max(len(g) for g in groups)
+    X, H = np.zeros((len(groups), len(x), dm)), np.ones((len(groups), 1, dm))
+    for k, g in enumerate(groups):
+        X[k, :, :len(g)], H[k, 0, :len(g)] = x[:, g], h[g]
+    return X, H
+
+
+def _batched(n: int, other: int, groups: list[np.ndarray]) -> bool:
+    """Several groups' kernel matrices small enough (:data:`DEDUP_MIN`, no merging of
+    coinciding rows) to run as one stacked product: the per-call overhead dominates there."""
+    return len(groups) > 1 and n * other < DEDUP_MIN
+
+
+def mean_shift_groups(particles: np.ndarray, W: np.ndarray, h: np.ndarray,
+                      groups: list[np.ndarray], dtype=np.float64) -> np.ndarray:
+    """:func:`mean_shift` of each group's dimensions with its own weights ``W[:, k]`` (a
+    product kernel: partitioned mode seeking); small sets in one stacked pass, the weights
+    under :data:`NEGLIGIBLE` of a group's largest set to 0 (as :func:`heavy` leaves them
+    out)."""
+    n, d = particles.shape
+    h = _bandwidth(h, d)
+    out = particles.copy()
+    if not _batched(n, n, groups):
+        for k, g in enumerate(groups):
+            out[:, g] = mean_shift(particles[:, g], W[:, k], h[g], dtype)
+        return out
+    X, H = _group_coords(particles, groups, h)                         # (G, N, dm)
+    Wz = np.where(W > NEGLIGIBLE * W.max(axis=0), W, 0.0).T[:, :, None]   # (G, N, 1)
+    total = Wz.sum(axis=1, keepdims=True)                              # (G, 1, 1)
+    c = (Wz * X).sum(axis=1, keepdims=True) / np.where(total > 0.0, total, 1.0)
+    a = (X - c) / H
+    inside = _sq_scaled(a, a, dtype)                                   # (G, N, N)
+    np.less_equal(inside, 1.0, out=inside, casting="unsafe")
+    sums = inside @ np.concatenate([Wz * a, Wz], axis=-1).astype(dtype)
+    num, den = sums[..., :-1].astype(float), sums[..., -1:].astype(float)
+    stay = den <= 0.0
+    shifted = np.where(stay, X, c + H * (num / np.where(stay, 1.0, den)))
+    for k, g in enumerate(groups):
+        out[:, g] = shifted[k, :, :len(g)]
+    return out
+
+
+def kernel_log_weights_groups(log_lik: np.ndarray, shifted: np.ndarray, prior: np.ndarray,
+                              h: np.ndarray, groups: list[np.ndarray], stride: int = 1,
+                              dtype=np.float64) -> np.ndarray:
+    """:func:`kernel_log_weights` of each group's dimensions with its own log-likelihoods
+    ``log_lik[:, k]``: ``(N, G)``; small sets in one stacked pass."""
+    n, d = shifted.shape
+    h = _bandwidth(h, d)
+    ref_p, ref_q = prior[::stride], shifted[::stride]
+    if not _batched(n, len(ref_p) + len(ref_q), groups):
+        return np.column_stack([
+            kernel_log_weights(log_lik[:, k], shifted[:, g], prior[:, g], h[g], stride, dtype)
+            for k, g in enumerate(groups)])
+    X, H = _group_coords(shifted, groups, h)
+    S, _ = _group_coords(np.concatenate([ref_p, ref_q]), groups, h)
+    c = S.mean(axis=1, keepdims=True)
+    k2 = _sq_scaled((X - c) / H, (S - c) / H, dtype)                   # (G, N, K)
+    np.subtract(1.0, k2, out=k2)                       # the Epanechnikov profile; each
+    np.maximum(k2, 0.0, out=k2)                        # group's constant applied below
+    Wpq = np.zeros((len(S[0]), 2), dtype)
+    Wpq[:len(ref_p), 0], Wpq[len(ref_p):, 1] = 1.0 / len(ref_p), 1.0 / len(ref_q)
+    pq = (k2 @ Wpq).astype(float)                                      # (G, N, 2)
+    scale = np.array([epanechnikov(0.0, len(g)) / np.prod(h[g]) for g in groups])
+    p, q = pq[..., 0].T * scale, pq[..., 1].T * scale                  # (N, G)
+    if stride > 1:
+        q = q * (1.0 - 1.0 / n) + scale / n
+    with np.errstate(divide="ignore"):
+        return log_lik + np.log(p) - np.log(q)
+
+
 def dominant_mode(particles: np.ndarray, w: np.ndarray, h: np.ndarray, window: np.ndarray,
                   dtype=np.float64) -> tuple[np.ndarray, int]:
     """The dominant mode (Schmidt sec. 5.2): the particle where the posterior's KDE (eq. 11)
@@ -273,14 +354,12 @@ def kpf_modes(particles: np.ndarray, log_lik_fn: Callable[[np.ndarray], np.ndarr
     for i in range(iterations):
         h = shrink ** i * h0
         best = particles[np.argmax(W, axis=0), :]
-        shifted = particles.copy()
-        for k, g in enumerate(groups):
-            shifted[:, g] = mean_shift(particles[:, g], W[:, k], h[g], dtype)
+        shifted = mean_shift_groups(particles, W, h, groups, dtype)
         lik = lik_of(shifted)
-        for k, g in enumerate(groups):
-            lw = (kernel_log_weights(lik[:, k], shifted[:, g], prior[:, g], h[g], stride,
-                                     dtype) if reweight else lik[:, k])
-            W[:, k] = weights(lw)
+        lw = (kernel_log_weights_groups(lik, shifted, prior, h, groups, stride, dtype)
+              if reweight else lik)
+        for k in range(len(groups)):
+            W[:, k] = weights(lw[:, k])
         particles, done = shifted, i + 1
         moved = [np.linalg.norm((particles[int(np.argmax(W[:, k])), g] - best[k, g]) / h0[g])
                  for k, g in enumerate(groups)]
