@@ -13,6 +13,7 @@ import pytest
 from scipy import integrate, optimize
 
 from humimic.estimation.particles import kernel as kpf
+from humimic.estimation.particles import kernel_groups as kg
 
 
 def _kde_loop(x, s, w, h):
@@ -186,12 +187,13 @@ def test_duplicate_particles_and_single_precision_give_the_same_shift_and_weight
             assert np.allclose(got[ok], want[ok], rtol=0, atol=tol)
 
 
-def test_groups_shift_and_reweight_each_with_its_own_weights_in_one_pass():
-    """Partitioned mode seeking (:func:`kpf.mean_shift_groups`,
-    :func:`kpf.kernel_log_weights_groups`, one stacked pass for small sets): each group's
+def test_groups_shift_reweight_and_find_modes_each_with_its_own_weights_in_one_pass():
+    """Partitioned mode seeking (:func:`kg.mean_shift_groups`,
+    :func:`kg.kernel_log_weights_groups`, one stacked pass for small sets): each group's
     dimensions move to the weighted mean of its own window (a per-point loop over that group
     with its weights; negligible weights left out) and get eq. 11's prior / proposal ratio
-    from a broadcast KDE over that group's dimensions only."""
+    from a broadcast KDE over that group's dimensions only; its dominant mode
+    (:func:`kg.dominant_modes`) is the weighted mean of the window round its own KDE's peak."""
     rng = np.random.default_rng(11)
     groups = [np.arange(0, 3), np.arange(3, 5), np.arange(5, 7)]
     n = 100
@@ -200,7 +202,7 @@ def test_groups_shift_and_reweight_each_with_its_own_weights_in_one_pass():
     W[:10, 1] = 1e-12                                   # negligible in group 1
     W /= W.sum(axis=0)
     h = rng.uniform(0.4, 0.9, 7)
-    assert kpf._batched(n, n, groups)
+    assert kg._batched(n, n, groups)
     want = np.empty_like(s)
     for k, g in enumerate(groups):
         w = np.where(W[:, k] > kpf.NEGLIGIBLE * W[:, k].max(), W[:, k], 0.0)
@@ -208,9 +210,9 @@ def test_groups_shift_and_reweight_each_with_its_own_weights_in_one_pass():
             inside = w * (np.sum(((s[:, g] - x) / h[g]) ** 2, axis=1) <= 1.0)
             want[i, g] = inside @ s[:, g] / inside.sum()
     for dtype, tol in ((np.float64, 1e-12), (np.float32, 1e-5)):
-        assert np.allclose(kpf.mean_shift_groups(s, W, h, groups, dtype), want, rtol=0,
+        assert np.allclose(kg.mean_shift_groups(s, W, h, groups, dtype), want, rtol=0,
                            atol=tol)
-    shifted = kpf.mean_shift_groups(s, W, h, groups)
+    shifted = kg.mean_shift_groups(s, W, h, groups)
     prior = s + rng.normal(0, 0.1, s.shape)
     lik = rng.normal(size=(n, 3))
     for stride in (1, 4):
@@ -225,6 +227,19 @@ def test_groups_shift_and_reweight_each_with_its_own_weights_in_one_pass():
                 want[:, k] = lik[:, k] + np.log(p) - np.log(q)
         ok = np.isfinite(want)
         for dtype, tol in ((np.float64, 1e-9), (np.float32, 1e-4)):
-            got = kpf.kernel_log_weights_groups(lik, shifted, prior, h, groups, stride, dtype)
+            got = kg.kernel_log_weights_groups(lik, shifted, prior, h, groups, stride, dtype)
             assert np.array_equal(np.isfinite(got), ok)
             assert np.allclose(got[ok], want[ok], rtol=0, atol=tol)
+    # each group's dominant mode: the peak of its own KDE (broadcast), then the weighted mean
+    # of its window
+    window = 0.3 * h
+    want = np.empty(7)
+    for k, g in enumerate(groups):
+        dens = _kde_broadcast(shifted[:, g], shifted[:, g], W[:, k], h[g])
+        dens[W[:, k] <= kpf.NEGLIGIBLE * W[:, k].max()] = -np.inf
+        peak = shifted[np.argmax(dens), g]
+        near = W[:, k] * (np.sum(((shifted[:, g] - peak) / window[g]) ** 2, axis=1) <= 1.0)
+        want[g] = near @ shifted[:, g] / near.sum()
+    for dtype in (np.float64, np.float32):
+        assert np.allclose(kg.dominant_modes(shifted, W, h, window, groups, dtype), want,
+                           rtol=0, atol=1e-12)

@@ -20,6 +20,7 @@ from humimic import bodymodel as bm
 from humimic.estimation.particles import kernel as kpf
 from humimic.estimation.particles.densities import Gaussian
 from humimic.estimation.particles.filters import condensation_step
+from humimic.estimation.particles.kernel_groups import dominant_modes
 from humimic.estimation.particles.weights import uniform_log_weights
 from humimic.perception.trackers.kpf.cues import CueMaps
 from humimic.perception.trackers.kpf.depth import wrist_depth_move
@@ -211,9 +212,7 @@ class KpfTracker:
         self.best_prev = best
         h = cfg.shrink ** max(iters - 1, 0) * self.D
         win = cfg.window * self.D
-        mode = np.empty(len(self.D))
-        for k, g in enumerate(groups):
-            mode[g], _ = kpf.dominant_mode(parts[:, g], W[:, k], h[g], win[g], KERNEL_DTYPE)
+        mode = dominant_modes(parts, W, h, win, groups, KERNEL_DTYPE)
         w = W[:, 0]
         self.share = kpf.motion_share(w, moved, cfg.min_random)
         self.particles, self.w, self.W = parts, w, W
