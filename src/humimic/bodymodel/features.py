@@ -18,6 +18,7 @@ False where the part is invalid or seen end-on (no contour generators). Pixels e
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -159,12 +160,21 @@ class LimbRidges:
     """(N, Pc, M_R, 2) points on the limb's image axis (pixels)."""
     width: np.ndarray
     """(N, Pc, M_R) the limb's image width across its axis at each point (pixels)."""
-    depth: np.ndarray
-    """(N, Pc, M_R) depth of the axis point (m)."""
     angle: np.ndarray
     """(N, Pc) image angle of the axis (rad)."""
     ok: np.ndarray
     """(N, Pc) bool."""
+    inv_z: np.ndarray
+    """(N, Pc, 2) 1 / depth of the axis ends (1/m)."""
+    f: np.ndarray
+    """(M_R,) the points' fractions along the axis."""
+
+    @cached_property
+    def depth(self) -> np.ndarray:
+        """(N, Pc, M_R) depth of the axis points (m; perspective-correct interpolation of
+        the ends', computed on first use)."""
+        inv_z = self.inv_z
+        return 1.0 / lerp(inv_z[..., :1], inv_z[..., 1:], self.f)[..., 0]
 
 
 def limb_ridges(view: BodyView, m_r: int) -> LimbRidges:
@@ -180,10 +190,9 @@ def limb_ridges(view: BodyView, m_r: int) -> LimbRidges:
     across = np.stack([ax[..., 1], -ax[..., 0]], -1)[:, :, None] / length[..., None, None]
     w = np.abs(np.sum((np.stack([base[:, :, 0], top[:, :, 0]], 2)
                        - np.stack([base[:, :, 1], top[:, :, 1]], 2)) * across, axis=-1))
-    inv_z = 1.0 / view.axis_xyz[..., 2]                                # (N, Pc, 2)
     return LimbRidges(lerp(a0, a1, f), lerp(w[..., :1], w[..., 1:], f)[..., 0],
-                      1.0 / lerp(inv_z[..., :1], inv_z[..., 1:], f)[..., 0],
-                      np.arctan2(ax[..., 1], ax[..., 0]), _ok(view))
+                      np.arctan2(ax[..., 1], ax[..., 0]), _ok(view),
+                      1.0 / view.axis_xyz[..., 2], f)
 
 
 def limb_bands(view: BodyView, bands: int, shrink: float = 0.0,
