@@ -79,8 +79,8 @@ def sample(image: np.ndarray, uv: np.ndarray, origin: tuple[int, int] = (0, 0)) 
     lead, chans = uv.shape[:-1], image.shape[2:]
     n = lead[0] if lead else 1
     m = np.rint(uv).astype(np.float32).reshape(n, -1)
-    if origin != (0, 0):   # rows of (u, v) pairs: a long last axis, fast to broadcast along
-        m -= np.tile(np.asarray(origin, np.float32), m.shape[1] // 2)
+    if origin != (0, 0):   # (u, v) pairs as complex numbers: one scalar subtraction
+        m.view(np.complex64)[...] -= np.complex64(complex(*origin))
     m = m.reshape(n, -1, 2)
     if m.size == 0:
         return np.zeros(lead + chans, np.float32)
@@ -157,9 +157,8 @@ def edge_response(maps: CueMaps, uv: np.ndarray, angle: np.ndarray) -> np.ndarra
 def ridge_level(width_px: np.ndarray, levels: int) -> np.ndarray:
     """Pyramid level per limb: ``mu = round(log2(width / RIDGE_WIDTH_PX))`` clipped to the
     pyramid (the paper picks it from the limb's distance to the camera)."""
-    with np.errstate(divide="ignore", invalid="ignore"):
-        mu = np.rint(np.log2(np.maximum(width_px, 1e-3) / RIDGE_WIDTH_PX))
-    return np.clip(np.nan_to_num(mu), 0, levels - 1).astype(np.intp)
+    mu = np.rint(np.log2(np.fmax(width_px, 1e-3) / RIDGE_WIDTH_PX))   # fmax: NaN -> 1e-3
+    return np.clip(mu, 0, levels - 1).astype(np.intp)
 
 
 def ridge_response(maps: CueMaps, uv: np.ndarray, width_px: np.ndarray, angle: np.ndarray
