@@ -109,8 +109,13 @@ class Likelihood:
         colours = {}
         if self.colour_sets:
             ok = view.valid[:, view.cone_idx] & view.generators
+            quads = [bm.limb_bands(view, b, 0.2, js).reshape(n, len(js) * b, 4, 2)
+                     for b, (js, _) in self.colour_sets.items()]
+            bands = C.band_colours(maps, np.concatenate(quads, axis=1))   # every set at once
+            start = 0
             for b, (js, names) in self.colour_sets.items():
-                got = C.band_colours(maps, bm.limb_bands(view, b, 0.2, js))    # (N, J, B, 3)
+                got = bands[:, start:start + len(js) * b].reshape(n, len(js), b, 3)
+                start += len(js) * b
                 for k, p in enumerate(names):
                     colours[p] = got[:, k]
                 if all(p in self.references for p in names):
