@@ -22,6 +22,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from humimic.maths.arrays import stack
+
 
 def ellipsoid_quadric(R: np.ndarray, t: np.ndarray, semi_axes: np.ndarray
                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -55,7 +57,7 @@ def conic_to_ellipse(C: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]
         cy = (e * ux - a * uy) / det
         k = (cx * (a * cx + b * cy) + cy * (e * cx + d * cy) - c33) / det
         M[..., 0, 0], M[..., 0, 1], M[..., 1, 0], M[..., 1, 1] = k * d, -k * b, -k * e, k * a
-    centre = np.stack([cx, cy], -1)
+    centre = stack([cx, cy], -1)
     ok = (det > 0) & (M[..., 0, 0] > 0) & np.isfinite(M).all(axis=(-1, -2))
     return centre, M, ok
 

@@ -24,6 +24,7 @@ import numpy as np
 
 from humimic.bodymodel.occlusion import hidden
 from humimic.bodymodel.projection import BodyView, Outline
+from humimic.maths.arrays import stack
 
 
 @dataclass(frozen=True)
@@ -103,9 +104,9 @@ def lerp(p0: np.ndarray, p1: np.ndarray, f: np.ndarray) -> np.ndarray:
 
     One matrix product ``[p0 p1] @ [1 - f; f]``: numpy's broadcasting over a trailing axis of
     size 2 runs ~30x slower than this for the trackers' array shapes."""
-    W = np.stack([1.0 - f, f])                                          # (2, M)
+    W = stack([1.0 - f, f])                                          # (2, M)
     lead, d = p0.shape[:-1], p0.shape[-1]
-    P = np.stack([p0, p1], axis=-1).reshape(-1, 2)                     # (..., D) rows
+    P = stack([p0, p1], axis=-1).reshape(-1, 2)                     # (..., D) rows
     return (P @ W).reshape(*lead, d, len(f)).swapaxes(-1, -2)
 
 
@@ -187,9 +188,9 @@ def limb_ridges(view: BodyView, m_r: int) -> LimbRidges:
     length = np.maximum(np.hypot(ax[..., 0], ax[..., 1]), 1e-12)
     base, top = _ends(view)
     # across-axis distance between the two boundary lines at the base and top rims
-    across = np.stack([ax[..., 1], -ax[..., 0]], -1)[:, :, None] / length[..., None, None]
-    w = np.abs(np.sum((np.stack([base[:, :, 0], top[:, :, 0]], 2)
-                       - np.stack([base[:, :, 1], top[:, :, 1]], 2)) * across, axis=-1))
+    across = stack([ax[..., 1], -ax[..., 0]], -1)[:, :, None] / length[..., None, None]
+    w = np.abs(np.sum((stack([base[:, :, 0], top[:, :, 0]], 2)
+                       - stack([base[:, :, 1], top[:, :, 1]], 2)) * across, axis=-1))
     return LimbRidges(lerp(a0, a1, f), lerp(w[..., :1], w[..., 1:], f)[..., 0],
                       np.arctan2(ax[..., 1], ax[..., 0]), _ok(view),
                       1.0 / view.axis_xyz[..., 2], f)
@@ -210,4 +211,4 @@ def limb_bands(view: BodyView, bands: int, shrink: float = 0.0,
     mid = 0.5 * (s[:, :, 0] + s[:, :, 1])
     s1 = mid + (1 - shrink) * (s[:, :, 0] - mid)
     s2 = mid + (1 - shrink) * (s[:, :, 1] - mid)
-    return np.stack([s1[:, :, :-1], s1[:, :, 1:], s2[:, :, 1:], s2[:, :, :-1]], axis=3)
+    return stack([s1[:, :, :-1], s1[:, :, 1:], s2[:, :, 1:], s2[:, :, :-1]], axis=3)

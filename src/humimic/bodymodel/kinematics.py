@@ -132,7 +132,7 @@ def elbow_rotation(side: str, eb) -> np.ndarray:
 
 def _shoulders(skeleton: Skeleton) -> np.ndarray:
     """(3, 2) the shoulder joints of :data:`SIDES` as columns."""
-    return np.stack([skeleton.shoulder[side] for side in SIDES], axis=1)
+    return np.array([skeleton.shoulder[side] for side in SIDES]).T
 
 
 def _shoulder_rotations(sfe: np.ndarray, saa: np.ndarray, hr: np.ndarray) -> np.ndarray:

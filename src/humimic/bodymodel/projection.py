@@ -24,6 +24,7 @@ import numpy as np
 
 from humimic.bodymodel import cones, conics
 from humimic.bodymodel.model import BodyModel, Pose
+from humimic.maths.arrays import stack
 from humimic.sensors.camera_model import Intrinsics
 
 #: Nearest depth (m) a valid part may reach.
@@ -46,7 +47,7 @@ class Outline:
 
 def _pixels(intr: Intrinsics, xy: np.ndarray) -> np.ndarray:
     """Undistorted normalised points ``(..., 2)`` to pixels (the camera's distortion)."""
-    return np.stack(intr.distort(xy[..., 0], xy[..., 1]), axis=-1)
+    return stack(intr.distort(xy[..., 0], xy[..., 1]), axis=-1)
 
 
 def _image(intr: Intrinsics, XYZ: tuple, valid: np.ndarray) -> Outline:
@@ -56,7 +57,7 @@ def _image(intr: Intrinsics, XYZ: tuple, valid: np.ndarray) -> Outline:
     with np.errstate(divide="ignore", invalid="ignore"):
         inv_z = np.where(valid[..., None], 1.0 / Z, np.nan)
     x, y = X * inv_z, Y * inv_z
-    return Outline(np.stack(intr.distort(x, y), axis=-1), np.stack([x, y], axis=-1), inv_z,
+    return Outline(stack(intr.distort(x, y), axis=-1), stack([x, y], axis=-1), inv_z,
                    valid)
 
 
@@ -160,7 +161,7 @@ class BodyView:
         A = K[:2, :2]
         centre = centre @ A.T + K[:2, 2]
         major, minor, angle = conics.ellipse_axes(A @ M @ A.T)
-        return centre, np.stack([major, minor], -1), angle
+        return centre, stack([major, minor], -1), angle
 
     @cached_property
     def outline(self) -> Outline:
@@ -211,11 +212,11 @@ def project(body: BodyModel, pose: Pose, intr: Intrinsics, T_cam_ref: np.ndarray
     valid[:, ci] = cones.in_front(R_c, t_c, a, b, L, k, Z_MIN)
     # the generators' ends: angles phi_c + delta, phi_c + delta, phi_c - delta, phi_c - delta
     # on rims 0, 1, 0, 1 (each generator's cosine and sine computed once)
-    g = np.stack([phi_c + delta, phi_c - delta], -1)
+    g = stack([phi_c + delta, phi_c - delta], -1)
     cos_sin = tuple(np.repeat(f(g), 2, axis=-1) for f in (np.cos, np.sin))
     XYZ = cones.rim_points(None, np.array([0, 1, 0, 1]), a, b, L, k, R_c, t_c, cos_sin)
     sides = _image(intr, XYZ, valid[:, ci]).uv.reshape(n, len(ci), 2, 2, 2)
-    axis_xyz = np.stack([t_c, t_c + R_c[..., :, 2] * L[:, None]], axis=-2)
+    axis_xyz = stack([t_c, t_c + R_c[..., :, 2] * L[:, None]], axis=-2)
 
     # ellipsoids: quadrics and conics (Menezes eqs. 14-15)
     axes = lay.semi_axes

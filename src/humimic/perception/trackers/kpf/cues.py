@@ -27,6 +27,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from humimic.maths.arrays import stack
 from humimic.perception.cues.color_models import ColorLUT
 
 #: Width (px) of a bright/dark bar that the 3x3 second derivative of the pyramid responds to best.
@@ -202,7 +203,7 @@ def band_points(quads: np.ndarray) -> np.ndarray:
 
 def band_colours(maps: CueMaps, quads: np.ndarray) -> np.ndarray:
     """Mean RGB ``(..., 3)`` over each quadrilateral's sample points (off-image points black)."""
-    pts = np.stack([quads[..., 0] @ _QUAD_W, quads[..., 1] @ _QUAD_W], -1)      # (..., M_C, 2)
+    pts = stack([quads[..., 0] @ _QUAD_W, quads[..., 1] @ _QUAD_W], -1)      # (..., M_C, 2)
     got = sample(maps.rgb, pts, maps.origin)                              # (..., M_C, 3)
     flat = got.reshape(-1, got.shape[-2] * 3) @ _CHANNEL_MEAN             # a matrix product:
     return flat.reshape(got.shape[:-2] + (3,))                            # fast on rows of 27
@@ -234,5 +235,5 @@ def skin_response(maps: CueMaps, centre: np.ndarray, axes: np.ndarray, angle: np
     c, s = np.cos(angle)[..., None], np.sin(angle)[..., None]
     x = _DISC[:, 0] * axes[..., :1]
     y = _DISC[:, 1] * axes[..., 1:]
-    pts = np.stack([centre[..., :1] + c * x - s * y, centre[..., 1:] + s * x + c * y], -1)
+    pts = stack([centre[..., :1] + c * x - s * y, centre[..., 1:] + s * x + c * y], -1)
     return _mean_last(sample(maps.skin, pts, maps.origin))

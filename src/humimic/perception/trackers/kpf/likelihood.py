@@ -18,6 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from humimic import bodymodel as bm
+from humimic.maths.arrays import stack
 from humimic.perception.trackers.kpf import cues as C
 from humimic.perception.trackers.kpf.frame_cues import FrameCues, sample_box
 
@@ -119,7 +120,7 @@ class Likelihood:
                 for k, p in enumerate(names):
                     colours[p] = got[:, k]
                 if all(p in self.references for p in names):
-                    ref = np.stack([self.references[p] for p in names])
+                    ref = stack([self.references[p] for p in names])
                     f = C.colour_response(got, ref)                          # (N, J)
                 else:   # a limb before its first adaptation: no colour term
                     f = np.column_stack([
