@@ -43,7 +43,8 @@ def generator_angles(a, b, L, k, c_loc: np.ndarray
     with np.errstate(divide="ignore", invalid="ignore"):
         ratio = C / r
     exists = np.abs(ratio) < 1.0
-    delta = np.arccos(np.clip(np.nan_to_num(ratio, nan=1.0), -1.0, 1.0))
+    # NaN (r = 0: seen along the axis) as 1, +-inf clipped
+    delta = np.arccos(np.where(np.isnan(ratio), 1.0, np.clip(ratio, -1.0, 1.0)))
     return np.arctan2(B, A), delta, exists, C < 0.0
 
 
