@@ -45,8 +45,16 @@ def unique_rows(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     keyed by a fixed random projection (a 1-D sort, ~10x faster than ``np.unique(axis=0)``),
     checked exactly (falls back to ``np.unique(axis=0)`` if two distinct rows share a key)."""
     key = q @ _KEY[: q.shape[1]] if q.shape[1] <= len(_KEY) else q.sum(1)
-    _, first, inverse = np.unique(key, return_index=True, return_inverse=True)
-    inverse = inverse.reshape(-1)
+    # np.unique(key, return_index=True, return_inverse=True) without its Python overhead:
+    # a stable sort, the first of each run of equal keys
+    order = np.argsort(key, kind="stable")
+    sorted_key = key[order]
+    new = np.empty(len(key), bool)
+    new[:1] = True
+    np.not_equal(sorted_key[1:], sorted_key[:-1], out=new[1:])
+    first = order[new]
+    inverse = np.empty(len(key), np.intp)
+    inverse[order] = np.cumsum(new) - 1
     if not np.array_equal(q[first][inverse], q):
         _, first, inverse = np.unique(q, axis=0, return_index=True, return_inverse=True)
         inverse = inverse.reshape(-1)
