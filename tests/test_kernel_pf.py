@@ -243,3 +243,16 @@ def test_groups_shift_reweight_and_find_modes_each_with_its_own_weights_in_one_p
     for dtype in (np.float64, np.float32):
         assert np.allclose(kg.dominant_modes(shifted, W, h, window, groups, dtype), want,
                            rtol=0, atol=1e-12)
+
+
+def test_unique_rows_match_numpy_unique():
+    """The distinct rows (first occurrences, in the order np.unique's stable sort gives them
+    up to the key's order) and each row's representative agree with ``np.unique(axis=0)``."""
+    rng = np.random.default_rng(2)
+    for n in (0, 1, 2, 9, 300):
+        m = max(n // 3, 1)
+        q = rng.normal(size=(m, 5))[rng.integers(0, m, n)]
+        first, inverse = kpf.unique_rows(q)
+        _, first_np, _ = np.unique(q, axis=0, return_index=True, return_inverse=True)
+        assert sorted(first) == sorted(first_np)          # the first occurrence of each row
+        assert np.array_equal(q[first][inverse], q)
