@@ -20,7 +20,8 @@ def stack(arrays: Sequence[np.ndarray], axis: int = 0) -> np.ndarray:
     out = np.empty(shape[:ax] + (len(arrays),) + shape[ax:], np.result_type(*arrays))
     lead = (slice(None),) * ax
     for i, a in enumerate(arrays):
-        if np.shape(a) != shape:
-            raise ValueError(f"stack: all arrays must have shape {shape}, got {np.shape(a)}")
+        a = np.asarray(a)
+        if a.shape != shape:
+            raise ValueError(f"stack: all arrays must have shape {shape}, got {a.shape}")
         out[(*lead, i)] = a
     return out

@@ -65,6 +65,7 @@ class Likelihood:
                       for p in self.parts}
         self.used = {c: np.array([c in self.use[p] for p in self.parts]) for c in CUE_NAMES}
         """Cue -> (parts,) bool: the cue is configured on the part."""
+        self.unused = {c: np.flatnonzero(~u) for c, u in self.used.items()}
         n_l = np.array([max(len(self.use[p]), 1) for p in self.parts], float)
         self.balance = {c: self.used[c] / n_l for c in CUE_NAMES}
         """Eq. 10's 1 / N_l where the cue is used, else 0."""
@@ -135,7 +136,7 @@ class Likelihood:
             ok = view.valid[:, view.ellipsoid_idx[j]]
             cost["skin"][:, self.skin_cols] = 1.0 - np.where(ok, f, 0.0)
         for c in CUE_NAMES:   # cues not configured on a part do not count
-            cost[c][:, ~self.used[c]] = np.nan
+            cost[c][:, self.unused[c]] = np.nan
         return Evaluation(cost, self.combine(cost), colours)
 
     def sigmas(self, cost: dict[str, np.ndarray]) -> dict[str, float]:
