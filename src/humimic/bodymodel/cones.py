@@ -44,7 +44,7 @@ def generator_angles(a, b, L, k, c_loc: np.ndarray
         ratio = C / r
     exists = np.abs(ratio) < 1.0
     # NaN (r = 0: seen along the axis) as 1, +-inf clipped
-    delta = np.arccos(np.where(np.isnan(ratio), 1.0, np.clip(ratio, -1.0, 1.0)))
+    delta = np.arccos(np.where(np.isnan(ratio), 1.0, np.minimum(np.maximum(ratio, -1.0), 1.0)))
     return np.arctan2(B, A), delta, exists, C < 0.0
 
 

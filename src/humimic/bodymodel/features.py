@@ -189,7 +189,7 @@ def limb_ridges(view: BodyView, m_r: int) -> LimbRidges:
     base, top = _ends(view)
     # across-axis distance between the two boundary lines at the base and top rims
     across = stack([ax[..., 1], -ax[..., 0]], -1)[:, :, None] / length[..., None, None]
-    w = np.abs(np.sum((stack([base[:, :, 0], top[:, :, 0]], 2)
+    w = np.abs(np.add.reduce((stack([base[:, :, 0], top[:, :, 0]], 2)
                        - stack([base[:, :, 1], top[:, :, 1]], 2)) * across, axis=-1))
     return LimbRidges(lerp(a0, a1, f), lerp(w[..., :1], w[..., 1:], f)[..., 0],
                       np.arctan2(ax[..., 1], ax[..., 0]), _ok(view),

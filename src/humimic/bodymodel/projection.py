@@ -74,7 +74,7 @@ def project_ellipsoids(R: np.ndarray, t: np.ndarray, semi_axes: np.ndarray, intr
 
 
 def _ellipsoid_in_front(R, t, semi_axes) -> np.ndarray:
-    reach_z = np.sqrt(np.sum(np.square(R[..., 2, :] * semi_axes), axis=-1))
+    reach_z = np.sqrt(np.add.reduce(np.square(R[..., 2, :] * semi_axes), axis=-1))
     return t[..., 2] - reach_z > Z_MIN
 
 

@@ -159,7 +159,7 @@ def ridge_level(width_px: np.ndarray, levels: int) -> np.ndarray:
     """Pyramid level per limb: ``mu = round(log2(width / RIDGE_WIDTH_PX))`` clipped to the
     pyramid (the paper picks it from the limb's distance to the camera)."""
     mu = np.rint(np.log2(np.fmax(width_px, 1e-3) / RIDGE_WIDTH_PX))   # fmax: NaN -> 1e-3
-    return np.clip(mu, 0, levels - 1).astype(np.intp)
+    return np.minimum(np.maximum(mu, 0), levels - 1).astype(np.intp)
 
 
 def ridge_response(maps: CueMaps, uv: np.ndarray, width_px: np.ndarray, angle: np.ndarray
@@ -175,8 +175,10 @@ def ridge_response(maps: CueMaps, uv: np.ndarray, width_px: np.ndarray, angle: n
     m = np.empty(uv.shape)
     scale = 0.5 ** mu
     u0, v0 = maps.origin                                  # multiples of 2^mu (cue_maps)
-    np.clip(np.rint(uv[..., 0] * scale) - u0 * scale, -1.0, shapes[mu, 1], out=m[..., 0])
-    np.clip(np.rint(uv[..., 1] * scale) - v0 * scale, -1.0, shapes[mu, 0], out=m[..., 1])
+    np.minimum(np.maximum(np.rint(uv[..., 0] * scale) - u0 * scale, -1.0), shapes[mu, 1],
+               out=m[..., 0])              # clipped to [-1, W_mu] (ufuncs: no np.clip wrapper)
+    np.minimum(np.maximum(np.rint(uv[..., 1] * scale) - v0 * scale, -1.0), shapes[mu, 0],
+               out=m[..., 1])
     m[..., 1] += maps.level_rows[mu]
     got = sample(maps.ridge, m).view(np.complex64)                       # (N, L, M, 2)
     t = got[..., 1].real
@@ -218,7 +220,7 @@ def colour_response(colours: np.ndarray, reference: np.ndarray) -> np.ndarray:
     ``(N, L, B, 3)`` against references ``(L, B, 3)``."""
     d = colours - reference
     r, g, b = d[..., 0], d[..., 1], d[..., 2]    # components: numpy is slow on a last axis of 3
-    return np.mean(np.sqrt(r * r + g * g + b * b), axis=-1)
+    return np.add.reduce(np.sqrt(r * r + g * g + b * b), axis=-1) / colours.shape[-2]
 
 
 #: Unit-circle offsets where the skin cue samples an ellipse (centre and two rings; M_S = 17).

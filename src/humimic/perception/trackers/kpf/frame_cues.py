@@ -32,7 +32,7 @@ def sample_box(view: BodyView, ellipses=None) -> tuple[np.ndarray, np.ndarray]:
     axis points interpolate them), the skin points within the image ellipses' major radius
     of their centres (``ellipses`` as :meth:`BodyView.ellipses_px`, computed if None)."""
     centre, axes, _ = view.ellipses_px() if ellipses is None else ellipses
-    r = axes.max(axis=-1)
+    r = np.maximum.reduce(axes, axis=-1)
     lo, hi = np.zeros(2), np.zeros(2)
     for k in range(2):   # 1-D reductions (numpy is slow over a short last axis)
         c = centre[..., k]
@@ -40,7 +40,7 @@ def sample_box(view: BodyView, ellipses=None) -> tuple[np.ndarray, np.ndarray]:
                               (c - r).ravel(), (c + r).ravel()])
         pts = pts[np.isfinite(pts)]          # invalid parts (NaN, degenerate conics) sample 0
         if len(pts):
-            lo[k], hi[k] = pts.min(), pts.max()
+            lo[k], hi[k] = np.minimum.reduce(pts), np.maximum.reduce(pts)
     return lo, hi
 
 

@@ -66,6 +66,7 @@ class Likelihood:
         self.used = {c: np.array([c in self.use[p] for p in self.parts]) for c in CUE_NAMES}
         """Cue -> (parts,) bool: the cue is configured on the part."""
         self.unused = {c: np.flatnonzero(~u) for c, u in self.used.items()}
+        self.any_used = {c: bool(u.any()) for c, u in self.used.items()}
         n_l = np.array([max(len(self.use[p]), 1) for p in self.parts], float)
         self.balance = {c: self.used[c] / n_l for c in CUE_NAMES}
         """Eq. 10's 1 / N_l where the cue is used, else 0."""
@@ -106,7 +107,8 @@ class Likelihood:
             cost["edge"][:, col] = 1.0 - np.where(e.ok, C.edge_response(maps, e.uv, e.angle), 0.0)
         if "ridge" in self.need:
             r = bm.limb_ridges(view, cfg.ridge_points)
-            f = C.ridge_response(maps, r.uv, r.width.mean(-1), r.angle)
+            width = np.add.reduce(r.width, -1) / r.width.shape[-1]      # mean (no wrapper)
+            f = C.ridge_response(maps, r.uv, width, r.angle)
             cost["ridge"][:, col] = 1.0 - np.where(r.ok, f, 0.0)
         colours = {}
         if self.colour_sets:
@@ -158,7 +160,7 @@ class Likelihood:
         sig = self.sigmas(cost)
         total = 0.0
         for c, e in cost.items():
-            if self.used[c].any():
+            if self.any_used[c]:
                 e = np.where(self.used[c], e, 0.0)
                 total = total - (e * e) * (self.balance[c] / (2.0 * sig[c] ** 2))
         return np.asarray(total)
