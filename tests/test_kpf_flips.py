@@ -92,3 +92,32 @@ def test_ray_split_is_pythagorean_and_on_axis_is_the_camera_z():
     d_cam = d @ T[0, :3, :3].T
     np.testing.assert_allclose(depth, np.abs(d_cam[:, 2]), atol=1e-12)
     np.testing.assert_allclose(lateral, np.linalg.norm(d_cam[:, :2], axis=1), atol=1e-12)
+
+
+def test_tracker_flip_jumps_replace_a_share_with_same_image_poses():
+    """``flip_share``: about that share of the particles per arm get one of their flips (within
+    the joint limits): arms changed in 3-D, their elbow and wrist pixels unchanged (the camera
+    model's projection), everything else untouched."""
+    from humimic.perception.trackers.kpf.config import KpfConfig
+    from humimic.perception.trackers.kpf.tracker import KpfTracker
+    from humimic.sensors.camera_model import Intrinsics
+
+    body = kpf_body()
+    intr = Intrinsics(320, 240, 260.0, 260.0, 159.5, 119.5)
+    T = _camera()
+    q = _poses(2000, seed=7)
+    q[:, 3] = np.pi                                     # facing the camera
+    tr = KpfTracker(body, intr, KpfConfig(flip_share=0.2), np.random.default_rng(1))
+    out = tr._flip_jumps(q.copy(), T, 0.2)
+    assert np.all(body.free_limits.inside(out))
+    np.testing.assert_array_equal(out[:, :6], q[:, :6])
+    a, b = body.forward(q), body.forward(out)
+    for side, arm in (("r", slice(6, 10)), ("l", slice(10, 14))):
+        changed = np.any(out[:, arm] != q[:, arm], axis=1)
+        assert 0.05 < changed.mean() < 0.2, changed.mean()
+        moved = np.linalg.norm(b.joint(f"{side}_wrist") - a.joint(f"{side}_wrist"), axis=1)
+        assert np.median(moved[changed]) > 0.01
+        for j in ("elbow", "wrist"):                   # the same pixels
+            np.testing.assert_allclose(intr.project(b.to(T).joint(f"{side}_{j}")[changed]),
+                                       intr.project(a.to(T).joint(f"{side}_{j}")[changed]),
+                                       atol=1e-6)
