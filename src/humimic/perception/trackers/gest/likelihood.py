@@ -53,8 +53,9 @@ OFF_IMAGE = -1.0e6
 HandView = FrameCues
 
 
-def hand_view(frame: CameraImage, bins: int, lut: ColorLUT | None = None) -> HandView:
-    return frame_cues(frame, bins, lut)
+def hand_view(frame: CameraImage, bins: int, lut: ColorLUT | None = None,
+              colour_edges: bool = False) -> HandView:
+    return frame_cues(frame, bins, lut, colour_edges=colour_edges)
 
 
 @dataclass(frozen=True)
