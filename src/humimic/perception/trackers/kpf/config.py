@@ -95,6 +95,10 @@ class KpfConfig(Section):
     """Our extension: the share of particles whose wrist is moved along its camera ray per arm
     and frame (:func:`~humimic.perception.trackers.kpf.depth.wrist_depth_move`); 0: off, as
     the paper."""
+    flip_share: float = Field(0.0, ge=0.0, le=1.0)
+    """Our extension: the share of particles per arm and frame replaced by one of their
+    kinematic flips (:mod:`~humimic.perception.trackers.kpf.flips`: the arm poses with the same
+    elbow and wrist images, a jump process in the dynamics); 0: off, as the paper."""
     depth_extent_m: float = Field(0.25, gt=0.0, le=1.0)
     """Half-width (m) of the uniform range change of those depth moves."""
     kde_stride: int = Field(1, ge=1, le=100)
