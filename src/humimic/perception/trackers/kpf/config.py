@@ -23,10 +23,10 @@ ArmExtent = Annotated[float, Field(gt=0.0, le=180.0)]
 class KpfCues(Section):
     """Cues per limb type (Schmidt sec. 6)."""
 
-    torso: list[Literal["edge", "ridge", "color"]] = Field(
-        default_factory=lambda: ["edge", "color"])
-    upper_arm: list[Literal["edge", "ridge", "color"]] = Field(
-        default_factory=lambda: ["edge", "ridge", "color"])
+    torso: list[Literal["edge", "ridge", "colour"]] = Field(
+        default_factory=lambda: ["edge", "colour"])
+    upper_arm: list[Literal["edge", "ridge", "colour"]] = Field(
+        default_factory=lambda: ["edge", "ridge", "colour"])
     forearm: list[Literal["edge", "ridge"]] = Field(default_factory=lambda: ["edge", "ridge"])
     hand: list[Literal["skin"]] = Field(default_factory=lambda: ["skin"])
     head: list[Literal["skin"]] = Field(default_factory=lambda: ["skin"])
@@ -38,7 +38,7 @@ class KpfSigma(Section):
 
     edge: float = Field(0.15, gt=0.0, le=10.0)
     ridge: float = Field(0.3, gt=0.0, le=10.0)
-    color: float = Field(0.1, gt=0.0, le=10.0)
+    colour: float = Field(0.1, gt=0.0, le=10.0)
     skin: float = Field(0.3, gt=0.0, le=10.0)
 
 

@@ -22,7 +22,7 @@ from humimic.maths.arrays import stack
 from humimic.perception.trackers.kpf import cues as C
 from humimic.perception.trackers.kpf.frame_cues import FrameCues, sample_box
 
-CUE_NAMES = ("edge", "ridge", "color", "skin")
+CUE_NAMES = ("edge", "ridge", "colour", "skin")
 
 
 def limb_type(part: str) -> str:
@@ -80,7 +80,7 @@ class Likelihood:
         self.colour_sets = {}
         """Band count -> (limb positions, part names) of the limbs with the colour cue."""
         for j, p in enumerate(self.limbs):
-            if "color" in self.use[p]:
+            if "colour" in self.use[p]:
                 js, names = self.colour_sets.setdefault(self.bands[p], ([], []))
                 js.append(j)
                 names.append(p)
@@ -130,7 +130,7 @@ class Likelihood:
                         C.colour_response(got[:, k:k + 1], self.references[p][None])[:, 0]
                         if p in self.references else np.zeros(n)
                         for k, p in enumerate(names)])
-                cost["color"][:, col[js]] = np.where(ok[:, js], f, 1.0)
+                cost["colour"][:, col[js]] = np.where(ok[:, js], f, 1.0)
         if len(self.skin_js):
             centre, axes, angle = ellipses
             j = self.skin_js
