@@ -95,8 +95,9 @@ def bench(repeats: int, clock: str = "wall") -> list[Row]:
     frames, base = render()
     lut = ColorLUT(load_color_model(DEFAULT_COLOR_MODEL))
     rows = []
-    for label, cues in (("shape+motion (eq. 4)", ["shape", "motion"]),
-                        ("all fused", ["shape", "motion", "colour"]),
+    for label, cues in (("shape+motion+skin (default)", ["shape", "motion", "skin"]),
+                        ("shape+motion (eq. 4)", ["shape", "motion"]),
+                        ("all fused", ["shape", "motion", "colour", "skin"]),
                         ("shape+motion (eq. 5, dt)", ["shape", "motion"])):
         cfg = base.model_copy(update={"cues": tuple(cues)})
         if "dt" in label:

@@ -184,3 +184,27 @@ def test_eq5_and_eq4_against_direct_formulas():
     # measured 0.84, 3.0 and 1.68: every point of the disc's outline moves
     assert d_square > 1.4 and d_disc < 0.7 * d_square, (d_disc, d_square)
     assert abs(d_disc - K * d_plain) < 0.15 and d_plain > 1.4
+
+
+def test_rim_skin_distance_against_direct_pixel_sums_and_closed_forms():
+    """A skin disc (posterior 1 inside, 0 outside): the hand template's outline on the disc's
+    rim scores ~0, one outside the disc 1, the rim of a hole 2; and every value equals the
+    mean of bilinear samples computed pixel by pixel (scipy's map_coordinates)."""
+    from scipy.ndimage import map_coordinates
+
+    from humimic.perception.cues.skin import rim_skin_distance
+
+    yy, xx = np.mgrid[:120, :160]
+    disc = ((xx - 80.0) ** 2 + (yy - 60.0) ** 2 <= 30.0 ** 2).astype(np.float32)
+    t = np.linspace(0, 2 * np.pi, 24, endpoint=False)
+    ring = np.stack([np.cos(t), np.sin(t)], -1)
+    contours = np.stack([[80, 60] + r * ring for r in (30.0, 20.0, 45.0)])
+    D = rim_skin_distance(disc, contours, np.broadcast_to(ring, contours.shape), 3.0)
+    assert D[0] < 0.05 and abs(D[1] - 1.0) < 1e-6 and abs(D[2] - 1.0) < 1e-6
+    assert rim_skin_distance(1.0 - disc, contours[:1], ring[None], 3.0)[0] > 1.95
+    for c, d in zip(contours, D, strict=True):
+        inside = map_coordinates(disc, [(c - 3 * ring)[:, 1], (c - 3 * ring)[:, 0]], order=1)
+        outside = map_coordinates(disc, [(c + 3 * ring)[:, 1], (c + 3 * ring)[:, 0]], order=1)
+        assert abs(d - (1.0 - (inside.mean() - outside.mean()))) < 1e-5
+    pts, inward = hand(30).place(np.array([[80.0, 60.0, 40.0, 0.0]]))
+    assert np.all(np.sum((pts[0] - [80, 60]) * inward[0], axis=1) < 0)   # normals point in

@@ -162,9 +162,10 @@ def test_camera_not_rendered_names_the_key():
 
 
 def test_fig5_scenario_tracks_the_hand_in_clutter(tmp_path):
-    """Menezes Fig. 5, shortened to 1.5 s: the waving hand in front of the cluttered room.
-    Measured: found after 0.18 s; 1.5 s: 12 % lost (the start); 4 s: 5 % lost, centre error
-    median 1.7 px, RMSE 3.5 px (hand ~35 px wide)."""
+    """Menezes Fig. 5, shortened to 1.5 s: the waving hand in front of the cluttered room
+    (hand ~35 px wide). Measured with the skin cue: 1.5 s: 11 % lost (mostly the start),
+    centre error median 0.81 px, RMSE 2.9 px; 4 s: 10 %, 0.91 / 2.4 px. Without it (the
+    paper's shape + motion) in today's busier room: 16 %, 1.7 / 4.5 px; 4 s: 21 %."""
     from humimic.paths import SCENARIOS_DIR
     from humimic.run import run_one
     from humimic.scenario import load_scenario
@@ -173,8 +174,8 @@ def test_fig5_scenario_tracks_the_hand_in_clutter(tmp_path):
                        duration=1.5)
     m = run_one(sc, tmp_path, rerun="save", progress=False)["trackers"]["hand"]
     assert m["frames"] == 90 and m["visible_frames"] == 90
-    assert m["lost_fraction"] <= 0.25 and m["center_median_px"] < 4.0
-    assert m["center_rmse_px"] < 9.0 and m["acquire_s"] < 0.4
+    assert m["lost_fraction"] <= 0.25 and m["center_median_px"] < 2.0
+    assert m["center_rmse_px"] < 7.0 and m["acquire_s"] < 0.4
 
     from rerun.chunk import RrdReader
 
@@ -208,9 +209,9 @@ def test_keeps_the_tutors_hand_past_another_persons_skin(lut):
 
 def test_hand_people_scenario_stays_on_the_tutor(tmp_path):
     """menezes_hand_people's first 2.3 s: the other person's face passes behind the waving
-    hand (at ~2 s). Measured (whole 5 s): 0 identity switches, 0 wrong-person frames, 35 %
-    lost (27 % without the other person: the loss test and re-detection, not identity, are the
-    weak part), centre error median 2.9 px."""
+    hand (at ~2 s). Measured on these 2.3 s: 0 identity switches, 0 wrong-person frames, 9.4 %
+    lost, centre error median 1.2 px (the paper's shape + motion without the skin cue: 22 %,
+    2.9 px; whole 5 s: 13 % against 35 %)."""
     from humimic.paths import SCENARIOS_DIR
     from humimic.run import run_one
     from humimic.scenario import load_scenario
@@ -221,4 +222,4 @@ def test_hand_people_scenario_stays_on_the_tutor(tmp_path):
     m = run["trackers"]["hand"]
     assert m["others_near_frames"] >= 10  # the distraction was there
     assert m["identity_switches"] == 0 and m["wrong_person_frames"] == 0
-    assert m["lost_fraction"] < 0.5 and m["center_median_px"] < 6.0
+    assert m["lost_fraction"] < 0.2 and m["center_median_px"] < 3.0

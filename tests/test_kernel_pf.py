@@ -13,6 +13,7 @@ import pytest
 from scipy import integrate, optimize
 
 from humimic.estimation.particles import kernel as kpf
+from humimic.estimation.particles import kernel_groups as kg
 
 
 def _kde_loop(x, s, w, h):
@@ -184,3 +185,74 @@ def test_duplicate_particles_and_single_precision_give_the_same_shift_and_weight
             assert np.array_equal(np.isfinite(got), np.isfinite(want))
             ok = np.isfinite(want)
             assert np.allclose(got[ok], want[ok], rtol=0, atol=tol)
+
+
+def test_groups_shift_reweight_and_find_modes_each_with_its_own_weights_in_one_pass():
+    """Partitioned mode seeking (:func:`kg.mean_shift_groups`,
+    :func:`kg.kernel_log_weights_groups`, one stacked pass for small sets): each group's
+    dimensions move to the weighted mean of its own window (a per-point loop over that group
+    with its weights; negligible weights left out) and get eq. 11's prior / proposal ratio
+    from a broadcast KDE over that group's dimensions only; its dominant mode
+    (:func:`kg.dominant_modes`) is the weighted mean of the window round its own KDE's peak."""
+    rng = np.random.default_rng(11)
+    groups = [np.arange(0, 3), np.arange(3, 5), np.arange(5, 7)]
+    n = 100
+    s = rng.normal(size=(30, 7))[rng.integers(0, 30, n)] + rng.normal(0, 0.2, (n, 7))
+    W = rng.uniform(0.2, 1.0, (n, 3))
+    W[:10, 1] = 1e-12                                   # negligible in group 1
+    W /= W.sum(axis=0)
+    h = rng.uniform(0.4, 0.9, 7)
+    assert kg._batched(n, n, groups)
+    want = np.empty_like(s)
+    for k, g in enumerate(groups):
+        w = np.where(W[:, k] > kpf.NEGLIGIBLE * W[:, k].max(), W[:, k], 0.0)
+        for i, x in enumerate(s[:, g]):
+            inside = w * (np.sum(((s[:, g] - x) / h[g]) ** 2, axis=1) <= 1.0)
+            want[i, g] = inside @ s[:, g] / inside.sum()
+    for dtype, tol in ((np.float64, 1e-12), (np.float32, 1e-5)):
+        assert np.allclose(kg.mean_shift_groups(s, W, h, groups, dtype), want, rtol=0,
+                           atol=tol)
+    shifted = kg.mean_shift_groups(s, W, h, groups)
+    prior = s + rng.normal(0, 0.1, s.shape)
+    lik = rng.normal(size=(n, 3))
+    for stride in (1, 4):
+        want = np.empty((n, 3))
+        for k, g in enumerate(groups):
+            rp, rq = prior[::stride, g], shifted[::stride, g]
+            p = _kde_broadcast(shifted[:, g], rp, np.full(len(rp), 1 / len(rp)), h[g])
+            q = _kde_broadcast(shifted[:, g], rq, np.full(len(rq), 1 / len(rq)), h[g])
+            if stride > 1:
+                q = q * (1 - 1 / n) + kpf.epanechnikov(0.0, len(g)) / np.prod(h[g]) / n
+            with np.errstate(divide="ignore"):
+                want[:, k] = lik[:, k] + np.log(p) - np.log(q)
+        ok = np.isfinite(want)
+        for dtype, tol in ((np.float64, 1e-9), (np.float32, 1e-4)):
+            got = kg.kernel_log_weights_groups(lik, shifted, prior, h, groups, stride, dtype)
+            assert np.array_equal(np.isfinite(got), ok)
+            assert np.allclose(got[ok], want[ok], rtol=0, atol=tol)
+    # each group's dominant mode: the peak of its own KDE (broadcast), then the weighted mean
+    # of its window
+    window = 0.3 * h
+    want = np.empty(7)
+    for k, g in enumerate(groups):
+        dens = _kde_broadcast(shifted[:, g], shifted[:, g], W[:, k], h[g])
+        dens[W[:, k] <= kpf.NEGLIGIBLE * W[:, k].max()] = -np.inf
+        peak = shifted[np.argmax(dens), g]
+        near = W[:, k] * (np.sum(((shifted[:, g] - peak) / window[g]) ** 2, axis=1) <= 1.0)
+        want[g] = near @ shifted[:, g] / near.sum()
+    for dtype in (np.float64, np.float32):
+        assert np.allclose(kg.dominant_modes(shifted, W, h, window, groups, dtype), want,
+                           rtol=0, atol=1e-12)
+
+
+def test_unique_rows_match_numpy_unique():
+    """The distinct rows (first occurrences, in the order np.unique's stable sort gives them
+    up to the key's order) and each row's representative agree with ``np.unique(axis=0)``."""
+    rng = np.random.default_rng(2)
+    for n in (0, 1, 2, 9, 300):
+        m = max(n // 3, 1)
+        q = rng.normal(size=(m, 5))[rng.integers(0, m, n)]
+        first, inverse = kpf.unique_rows(q)
+        _, first_np, _ = np.unique(q, axis=0, return_index=True, return_inverse=True)
+        assert sorted(first) == sorted(first_np)          # the first occurrence of each row
+        assert np.array_equal(q[first][inverse], q)

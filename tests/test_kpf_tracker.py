@@ -73,6 +73,8 @@ def test_poses_published_per_frame_and_scored(run):
     # value moves with rounding-level changes of the maths: one seed, 15 frames)
     assert m["wrist_error_mm"] < 300.0
     assert m["wrist_lateral_mm"] < m["wrist_error_mm"] + 1e-9
+    assert m["wrist_depth_mm"] < m["wrist_error_mm"] + 1e-9
+    assert m["wrist_flip_free_mm"] < m["wrist_error_mm"] + 1e-9     # the estimate is a candidate
     assert m["frames_per_s"] > 0.0 and 0.0 <= m["lost_fraction"] <= 1.0
     assert m["joint_rmse_deg"] < 40.0                   # measured 16 deg
 

@@ -164,3 +164,28 @@ def test_likelihood_peaks_at_the_true_hand(stereo_hand, delta, margin, stereo):
     pairs = cands[3] if stereo else None
     ll = hand_log_likelihood(x, views, ref, 20, 1.5, 0.3, 0.3, None, pairs, 0.5, 1e-10)
     assert ll[0] - ll[1] > margin, ll
+
+
+def test_mean_orientation_is_scipys_chordal_mean_modulo_the_ellipsoids_symmetries():
+    """Particles about one orientation, some written as their ellipsoid's half turns and with
+    wrapped angles: the mean is scipy's weighted ``Rotation.mean`` of the same rotations
+    written without (an independent computation), and not the mean of the angles."""
+    from scipy.spatial.transform import Rotation
+
+    from humimic.perception.trackers.gest.ellipsoid import FLIPS, mean_orientation
+    from humimic.perception.trackers.gest.stage import orientation_error_deg
+
+    rng = np.random.default_rng(3)
+    base = Rotation.from_euler("ZYX", [2.9, -1.2, 0.4])
+    near = base * Rotation.from_rotvec(rng.normal(0.0, 0.15, (40, 3)))
+    flips = rng.integers(0, 4, 40)
+    written = near * Rotation.from_matrix(FLIPS[flips])                 # the same ellipsoids
+    ypr = written.as_euler("ZYX") + 2 * np.pi * rng.integers(-1, 2, (40, 3))
+    lw = np.log(rng.uniform(0.1, 1.0, 40))
+    lw[0] = 2.0                                                         # the heaviest is near
+    w = np.exp(lw - lw.max())
+    expected = near.mean(weights=w / w.sum()).as_euler("ZYX")
+    got = mean_orientation(ypr, lw)
+    assert orientation_error_deg(got[None], expected[None])[0] < 1e-6
+    naive = np.average(ypr, axis=0, weights=w)
+    assert orientation_error_deg(naive[None], expected[None])[0] > 20.0

@@ -43,7 +43,8 @@ def generator_angles(a, b, L, k, c_loc: np.ndarray
     with np.errstate(divide="ignore", invalid="ignore"):
         ratio = C / r
     exists = np.abs(ratio) < 1.0
-    delta = np.arccos(np.clip(np.nan_to_num(ratio, nan=1.0), -1.0, 1.0))
+    # NaN (r = 0: seen along the axis) as 1, +-inf clipped
+    delta = np.arccos(np.where(np.isnan(ratio), 1.0, np.minimum(np.maximum(ratio, -1.0), 1.0)))
     return np.arctan2(B, A), delta, exists, C < 0.0
 
 
@@ -92,15 +93,18 @@ def outline_angles(phi_c: np.ndarray, delta: np.ndarray, exists: np.ndarray,
     return phi, rim, np.where(exists, m_top + 2, m + 2)
 
 
-def rim_points(phi: np.ndarray, rim: np.ndarray, a, b, L, k, R: np.ndarray, t: np.ndarray
+def rim_points(phi: np.ndarray, rim: np.ndarray, a, b, L, k, R: np.ndarray, t: np.ndarray,
+               cos_sin: tuple[np.ndarray, np.ndarray] | None = None
                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Camera coordinates ``X, Y, Z`` (each ``(..., V)``) of the points at rim angles ``phi``
     on rims ``rim`` (0 base, 1 top) of cones posed at ``R (..., 3, 3)``, ``t (..., 3)``;
     ``a, b, L, k`` broadcast against ``t[..., 0]`` (component form: numpy is slow on trailing
-    axes of size 3)."""
+    axes of size 3). ``cos_sin``: ``cos phi, sin phi`` when the caller has them (``phi`` is
+    then not used)."""
     scale = 1.0 + (np.asarray(k, float)[..., None] - 1.0) * rim
-    lx = np.asarray(a, float)[..., None] * scale * np.cos(phi)
-    ly = np.asarray(b, float)[..., None] * scale * np.sin(phi)
+    cos, sin = (np.cos(phi), np.sin(phi)) if cos_sin is None else cos_sin
+    lx = np.asarray(a, float)[..., None] * scale * cos
+    ly = np.asarray(b, float)[..., None] * scale * sin
     lz = np.asarray(L, float)[..., None] * rim
     return tuple(t[..., i, None] + R[..., i, 0, None] * lx + R[..., i, 1, None] * ly
                  + R[..., i, 2, None] * lz for i in range(3))

@@ -22,6 +22,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from humimic.maths.arrays import stack
+
 
 def ellipsoid_quadric(R: np.ndarray, t: np.ndarray, semi_axes: np.ndarray
                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -31,7 +33,7 @@ def ellipsoid_quadric(R: np.ndarray, t: np.ndarray, semi_axes: np.ndarray
     inv_s2 = 1.0 / np.square(semi_axes)
     A = (R * inv_s2[..., None, :]) @ np.swapaxes(R, -1, -2)
     At = (A @ t[..., None])[..., 0]
-    c = np.sum(t * At, axis=-1) - 1.0
+    c = np.add.reduce(t * At, axis=-1) - 1.0
     return A, -At, c
 
 
@@ -55,8 +57,8 @@ def conic_to_ellipse(C: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]
         cy = (e * ux - a * uy) / det
         k = (cx * (a * cx + b * cy) + cy * (e * cx + d * cy) - c33) / det
         M[..., 0, 0], M[..., 0, 1], M[..., 1, 0], M[..., 1, 1] = k * d, -k * b, -k * e, k * a
-    centre = np.stack([cx, cy], -1)
-    ok = (det > 0) & (M[..., 0, 0] > 0) & np.isfinite(M).all(axis=(-1, -2))
+    centre = stack([cx, cy], -1)
+    ok = (det > 0) & (M[..., 0, 0] > 0) & np.logical_and.reduce(np.isfinite(M), axis=(-1, -2))
     return centre, M, ok
 
 

@@ -18,11 +18,13 @@ False where the part is invalid or seen end-on (no contour generators). Pixels e
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
 from humimic.bodymodel.occlusion import hidden
 from humimic.bodymodel.projection import BodyView, Outline
+from humimic.maths.arrays import stack
 
 
 @dataclass(frozen=True)
@@ -102,9 +104,9 @@ def lerp(p0: np.ndarray, p1: np.ndarray, f: np.ndarray) -> np.ndarray:
 
     One matrix product ``[p0 p1] @ [1 - f; f]``: numpy's broadcasting over a trailing axis of
     size 2 runs ~30x slower than this for the trackers' array shapes."""
-    W = np.stack([1.0 - f, f])                                          # (2, M)
+    W = stack([1.0 - f, f])                                          # (2, M)
     lead, d = p0.shape[:-1], p0.shape[-1]
-    P = np.stack([p0, p1], axis=-1).reshape(-1, 2)                     # (..., D) rows
+    P = stack([p0, p1], axis=-1).reshape(-1, 2)                     # (..., D) rows
     return (P @ W).reshape(*lead, d, len(f)).swapaxes(-1, -2)
 
 
@@ -159,12 +161,21 @@ class LimbRidges:
     """(N, Pc, M_R, 2) points on the limb's image axis (pixels)."""
     width: np.ndarray
     """(N, Pc, M_R) the limb's image width across its axis at each point (pixels)."""
-    depth: np.ndarray
-    """(N, Pc, M_R) depth of the axis point (m)."""
     angle: np.ndarray
     """(N, Pc) image angle of the axis (rad)."""
     ok: np.ndarray
     """(N, Pc) bool."""
+    inv_z: np.ndarray
+    """(N, Pc, 2) 1 / depth of the axis ends (1/m)."""
+    f: np.ndarray
+    """(M_R,) the points' fractions along the axis."""
+
+    @cached_property
+    def depth(self) -> np.ndarray:
+        """(N, Pc, M_R) depth of the axis points (m; perspective-correct interpolation of
+        the ends', computed on first use)."""
+        inv_z = self.inv_z
+        return 1.0 / lerp(inv_z[..., :1], inv_z[..., 1:], self.f)[..., 0]
 
 
 def limb_ridges(view: BodyView, m_r: int) -> LimbRidges:
@@ -177,24 +188,27 @@ def limb_ridges(view: BodyView, m_r: int) -> LimbRidges:
     length = np.maximum(np.hypot(ax[..., 0], ax[..., 1]), 1e-12)
     base, top = _ends(view)
     # across-axis distance between the two boundary lines at the base and top rims
-    across = np.stack([ax[..., 1], -ax[..., 0]], -1)[:, :, None] / length[..., None, None]
-    w = np.abs(np.sum((np.stack([base[:, :, 0], top[:, :, 0]], 2)
-                       - np.stack([base[:, :, 1], top[:, :, 1]], 2)) * across, axis=-1))
-    inv_z = 1.0 / view.axis_xyz[..., 2]                                # (N, Pc, 2)
+    across = stack([ax[..., 1], -ax[..., 0]], -1)[:, :, None] / length[..., None, None]
+    w = np.abs(np.add.reduce((stack([base[:, :, 0], top[:, :, 0]], 2)
+                       - stack([base[:, :, 1], top[:, :, 1]], 2)) * across, axis=-1))
     return LimbRidges(lerp(a0, a1, f), lerp(w[..., :1], w[..., 1:], f)[..., 0],
-                      1.0 / lerp(inv_z[..., :1], inv_z[..., 1:], f)[..., 0],
-                      np.arctan2(ax[..., 1], ax[..., 0]), _ok(view))
+                      np.arctan2(ax[..., 1], ax[..., 0]), _ok(view),
+                      1.0 / view.axis_xyz[..., 2], f)
 
 
-def limb_bands(view: BodyView, bands: int, shrink: float = 0.0) -> np.ndarray:
+def limb_bands(view: BodyView, bands: int, shrink: float = 0.0,
+               limbs: np.ndarray | None = None) -> np.ndarray:
     """``(N, Pc, B, 4, 2)`` quadrilaterals (pixels) tiling each limb in ``bands`` equal
     slices from base to top, each pulled towards the axis by the fraction ``shrink`` of its
-    half-width (Schmidt's B_l colour polygons; ``shrink > 0`` keeps them off the edges)."""
+    half-width (Schmidt's B_l colour polygons; ``shrink > 0`` keeps them off the edges).
+    ``limbs``: only these cone positions (axis 1 then has their length)."""
     if bands < 1 or not 0.0 <= shrink < 1.0:
         raise ValueError(f"limb_bands: bands >= 1 and 0 <= shrink < 1, got {bands}, {shrink}")
     base, top = _ends(view)
+    if limbs is not None:
+        base, top = base[:, limbs], top[:, limbs]
     s = lerp(base, top, np.arange(bands + 1) / bands)                 # (N, Pc, 2, B+1, 2)
     mid = 0.5 * (s[:, :, 0] + s[:, :, 1])
     s1 = mid + (1 - shrink) * (s[:, :, 0] - mid)
     s2 = mid + (1 - shrink) * (s[:, :, 1] - mid)
-    return np.stack([s1[:, :, :-1], s1[:, :, 1:], s2[:, :, 1:], s2[:, :, :-1]], axis=3)
+    return stack([s1[:, :, :-1], s1[:, :, 1:], s2[:, :, 1:], s2[:, :, :-1]], axis=3)

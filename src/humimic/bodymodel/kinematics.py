@@ -130,6 +130,30 @@ def elbow_rotation(side: str, eb) -> np.ndarray:
     return axis_rotation(a, s * np.asarray(eb, float))
 
 
+def _shoulders(skeleton: Skeleton) -> np.ndarray:
+    """(3, 2) the shoulder joints of :data:`SIDES` as columns."""
+    return np.array([skeleton.shoulder[side] for side in SIDES]).T
+
+
+def _shoulder_rotations(sfe: np.ndarray, saa: np.ndarray, hr: np.ndarray) -> np.ndarray:
+    """:func:`shoulder_rotation` of both :data:`SIDES` at once, angles ``(N, 2)``:
+    ``(N, 2, 3, 3)``."""
+    axes = [tuple(a for a, _ in ARM_AXES[side][:3]) for side in SIDES]
+    if all(a == (1, 0, 2) for a in axes):            # DB's y, x, z: closed form, one pass
+        sign = np.array([[s for _, s in ARM_AXES[side][:3]] for side in SIDES])   # (2, 3)
+        return yxz_matrix(sign[:, 0] * sfe, sign[:, 1] * saa, sign[:, 2] * hr)
+    return np.stack([shoulder_rotation(side, sfe[:, k], saa[:, k], hr[:, k])
+                     for k, side in enumerate(SIDES)], axis=1)
+
+
+def _elbow_rotations(eb: np.ndarray) -> np.ndarray:
+    """:func:`elbow_rotation` of both :data:`SIDES` at once, flexions ``(N, 2)``."""
+    (a0, s0), (a1, s1) = (ARM_AXES[side][3] for side in SIDES)
+    if a0 == a1:
+        return axis_rotation(a0, np.array([s0, s1]) * eb)
+    return np.stack([elbow_rotation(side, eb[:, k]) for k, side in enumerate(SIDES)], axis=1)
+
+
 def forward_kinematics(q: np.ndarray, skeleton: Skeleton) -> tuple[np.ndarray, np.ndarray]:
     """Segment frames for full states ``q`` ``(N, 14)`` (:data:`DOF_NAMES`).
 
@@ -146,14 +170,14 @@ def forward_kinematics(q: np.ndarray, skeleton: Skeleton) -> tuple[np.ndarray, n
     p_t = q[:, :3]
     R[:, 0], p[:, 0] = R_t, p_t
     R[:, 1], p[:, 1] = R_t, p_t + R_t @ skeleton.neck
-    for k, side in enumerate(SIDES):
-        j = 6 + 4 * k
-        R_u = R_t @ shoulder_rotation(side, q[:, j], q[:, j + 1], q[:, j + 2])
-        p_u = p_t + R_t @ skeleton.shoulder[side]
-        R_f = R_u @ elbow_rotation(side, q[:, j + 3])
-        p_f = p_u - skeleton.upper_arm * R_u[:, :, 2]
-        s = 2 + 3 * k
-        R[:, s], p[:, s] = R_u, p_u
-        R[:, s + 1], p[:, s + 1] = R_f, p_f
-        R[:, s + 2], p[:, s + 2] = R_f, p_f - skeleton.forearm * R_f[:, :, 2]
+    # both arms at once, (N, 2 sides, ...): the upper arms are SEGMENTS[2::3], the forearms
+    # [3::3], the hands [4::3]
+    arms = q[:, 6:14].reshape(n, 2, 4)
+    R_u = R_t[:, None] @ _shoulder_rotations(arms[..., 0], arms[..., 1], arms[..., 2])
+    p_u = p_t[:, None] + (R_t @ _shoulders(skeleton)).swapaxes(1, 2)
+    R_f = R_u @ _elbow_rotations(arms[..., 3])
+    p_f = p_u - skeleton.upper_arm * R_u[..., :, 2]
+    R[:, 2::3], p[:, 2::3] = R_u, p_u
+    R[:, 3::3], p[:, 3::3] = R_f, p_f
+    R[:, 4::3], p[:, 4::3] = R_f, p_f - skeleton.forearm * R_f[..., :, 2]
     return R, p

@@ -24,6 +24,7 @@ import numpy as np
 
 from humimic.bodymodel import cones, conics
 from humimic.bodymodel.model import BodyModel, Pose
+from humimic.maths.arrays import stack
 from humimic.sensors.camera_model import Intrinsics
 
 #: Nearest depth (m) a valid part may reach.
@@ -46,7 +47,7 @@ class Outline:
 
 def _pixels(intr: Intrinsics, xy: np.ndarray) -> np.ndarray:
     """Undistorted normalised points ``(..., 2)`` to pixels (the camera's distortion)."""
-    return np.stack(intr.distort(xy[..., 0], xy[..., 1]), axis=-1)
+    return stack(intr.distort(xy[..., 0], xy[..., 1]), axis=-1)
 
 
 def _image(intr: Intrinsics, XYZ: tuple, valid: np.ndarray) -> Outline:
@@ -56,7 +57,7 @@ def _image(intr: Intrinsics, XYZ: tuple, valid: np.ndarray) -> Outline:
     with np.errstate(divide="ignore", invalid="ignore"):
         inv_z = np.where(valid[..., None], 1.0 / Z, np.nan)
     x, y = X * inv_z, Y * inv_z
-    return Outline(np.stack(intr.distort(x, y), axis=-1), np.stack([x, y], axis=-1), inv_z,
+    return Outline(stack(intr.distort(x, y), axis=-1), stack([x, y], axis=-1), inv_z,
                    valid)
 
 
@@ -73,7 +74,7 @@ def project_ellipsoids(R: np.ndarray, t: np.ndarray, semi_axes: np.ndarray, intr
 
 
 def _ellipsoid_in_front(R, t, semi_axes) -> np.ndarray:
-    reach_z = np.sqrt(np.sum(np.square(R[..., 2, :] * semi_axes), axis=-1))
+    reach_z = np.sqrt(np.add.reduce(np.square(R[..., 2, :] * semi_axes), axis=-1))
     return t[..., 2] - reach_z > Z_MIN
 
 
@@ -160,7 +161,7 @@ class BodyView:
         A = K[:2, :2]
         centre = centre @ A.T + K[:2, 2]
         major, minor, angle = conics.ellipse_axes(A @ M @ A.T)
-        return centre, np.stack([major, minor], -1), angle
+        return centre, stack([major, minor], -1), angle
 
     @cached_property
     def outline(self) -> Outline:
@@ -209,10 +210,13 @@ def project(body: BodyModel, pose: Pose, intr: Intrinsics, T_cam_ref: np.ndarray
     c_loc = -(t_c[..., None, :] @ R_c)[..., 0, :]
     phi_c, delta, exists, facing = cones.generator_angles(a, b, L, k, c_loc)
     valid[:, ci] = cones.in_front(R_c, t_c, a, b, L, k, Z_MIN)
-    phi = np.stack([phi_c + delta, phi_c + delta, phi_c - delta, phi_c - delta], -1)
-    XYZ = cones.rim_points(phi, np.array([0, 1, 0, 1]), a, b, L, k, R_c, t_c)
+    # the generators' ends: angles phi_c + delta, phi_c + delta, phi_c - delta, phi_c - delta
+    # on rims 0, 1, 0, 1 (each generator's cosine and sine computed once)
+    g = stack([phi_c + delta, phi_c - delta], -1)
+    cos_sin = tuple(np.repeat(f(g), 2, axis=-1) for f in (np.cos, np.sin))
+    XYZ = cones.rim_points(None, np.array([0, 1, 0, 1]), a, b, L, k, R_c, t_c, cos_sin)
     sides = _image(intr, XYZ, valid[:, ci]).uv.reshape(n, len(ci), 2, 2, 2)
-    axis_xyz = np.stack([t_c, t_c + R_c[..., :, 2] * L[:, None]], axis=-2)
+    axis_xyz = stack([t_c, t_c + R_c[..., :, 2] * L[:, None]], axis=-2)
 
     # ellipsoids: quadrics and conics (Menezes eqs. 14-15)
     axes = lay.semi_axes

@@ -26,12 +26,17 @@ def sq_distances(x: np.ndarray, s: np.ndarray, h: np.ndarray, dtype=np.float64) 
     traffic; both point sets are first centred on ``s``'s mean, so ``|a|^2`` and ``|b|^2`` stay
     of the order of the spread and the cancellation error near a distance of 1 is ~1e-6)."""
     c = s.mean(axis=0) if len(s) else 0.0
-    a, b = (x - c) / h, (s - c) / h
-    d = x.shape[1]
-    A, B = np.empty((len(a), d + 2), dtype), np.empty((len(b), d + 2), dtype)
-    A[:, :d], A[:, d], A[:, d + 1] = a, 1.0, np.einsum("ij,ij->i", a, a)
-    B[:, :d], B[:, d], B[:, d + 1] = -2.0 * b, np.einsum("ij,ij->i", b, b), 1.0
-    d2 = A @ B.T
+    return _sq_scaled((x - c) / h, (s - c) / h, dtype)
+
+
+def _sq_scaled(a: np.ndarray, b: np.ndarray, dtype) -> np.ndarray:
+    """``(..., M, N)`` ``||a_m - b_n||^2`` of centred, scaled points ``a (..., M, d)``,
+    ``b (..., N, d)`` (:func:`sq_distances`; leading axes batched)."""
+    d = a.shape[-1]
+    A, B = np.empty(a.shape[:-1] + (d + 2,), dtype), np.empty(b.shape[:-1] + (d + 2,), dtype)
+    A[..., :d], A[..., d], A[..., d + 1] = a, 1.0, np.einsum("...j,...j->...", a, a)
+    B[..., :d], B[..., d], B[..., d + 1] = -2.0 * b, np.einsum("...j,...j->...", b, b), 1.0
+    d2 = A @ np.swapaxes(B, -1, -2)
     return np.maximum(d2, 0.0, out=d2)
 
 
@@ -40,8 +45,16 @@ def unique_rows(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     keyed by a fixed random projection (a 1-D sort, ~10x faster than ``np.unique(axis=0)``),
     checked exactly (falls back to ``np.unique(axis=0)`` if two distinct rows share a key)."""
     key = q @ _KEY[: q.shape[1]] if q.shape[1] <= len(_KEY) else q.sum(1)
-    _, first, inverse = np.unique(key, return_index=True, return_inverse=True)
-    inverse = inverse.reshape(-1)
+    # np.unique(key, return_index=True, return_inverse=True) without its Python overhead:
+    # a stable sort, the first of each run of equal keys
+    order = np.argsort(key, kind="stable")
+    sorted_key = key[order]
+    new = np.empty(len(key), bool)
+    new[:1] = True
+    np.not_equal(sorted_key[1:], sorted_key[:-1], out=new[1:])
+    first = order[new]
+    inverse = np.empty(len(key), np.intp)
+    inverse[order] = np.cumsum(new) - 1
     if not np.array_equal(q[first][inverse], q):
         _, first, inverse = np.unique(q, axis=0, return_index=True, return_inverse=True)
         inverse = inverse.reshape(-1)
@@ -259,6 +272,11 @@ def kpf_modes(particles: np.ndarray, log_lik_fn: Callable[[np.ndarray], np.ndarr
     samples of the prior whose KDE the reweighting uses, when ``particles`` were drawn from
     another proposal (e.g. some of them moved along a direction the dynamics rarely take).
     ``dtype``: of the kernel sums (:func:`mean_shift`, :func:`kernel_log_weights`)."""
+    from humimic.estimation.particles.kernel_groups import (
+        kernel_log_weights_groups,
+        mean_shift_groups,
+    )
+
     d = particles.shape[1]
     groups = [np.arange(d)] if groups is None else [np.asarray(g) for g in groups]
     h0 = _bandwidth(h0, d)
@@ -273,14 +291,12 @@ def kpf_modes(particles: np.ndarray, log_lik_fn: Callable[[np.ndarray], np.ndarr
     for i in range(iterations):
         h = shrink ** i * h0
         best = particles[np.argmax(W, axis=0), :]
-        shifted = particles.copy()
-        for k, g in enumerate(groups):
-            shifted[:, g] = mean_shift(particles[:, g], W[:, k], h[g], dtype)
+        shifted = mean_shift_groups(particles, W, h, groups, dtype)
         lik = lik_of(shifted)
-        for k, g in enumerate(groups):
-            lw = (kernel_log_weights(lik[:, k], shifted[:, g], prior[:, g], h[g], stride,
-                                     dtype) if reweight else lik[:, k])
-            W[:, k] = weights(lw)
+        lw = (kernel_log_weights_groups(lik, shifted, prior, h, groups, stride, dtype)
+              if reweight else lik)
+        for k in range(len(groups)):
+            W[:, k] = weights(lw[:, k])
         particles, done = shifted, i + 1
         moved = [np.linalg.norm((particles[int(np.argmax(W[:, k])), g] - best[k, g]) / h0[g])
                  for k, g in enumerate(groups)]

@@ -5,9 +5,9 @@ seeds; prints a table of loss rate, identity switches, error and speed.
     python -m humimic.perception.trackers.ablation [--scenario FILE] [--tracker NAME]
         [--seeds 0 1 2]
 
-Defaults: the hand tracker on Fig. 5 (``hand2d``: shape, colour, shape + motion, all); for the
-ICU tracker (``icu``: shape, colour, both) e.g. ``--scenario
-scenarios/menezes_fig10_crossing.yaml --tracker icu``.
+Defaults: the hand tracker on Fig. 5 (``hand2d``: shape, colour, shape + motion, shape +
+motion + skin (the default), all); for the ICU tracker (``icu``: shape, colour, both) e.g.
+``--scenario scenarios/menezes_fig10_crossing.yaml --tracker icu``.
 """
 
 from __future__ import annotations
@@ -27,7 +27,8 @@ from humimic.paths import SCENARIOS_DIR
 
 CUE_SETS = {
     "hand2d": {"shape": ["shape"], "colour": ["colour"], "shape+motion": ["shape", "motion"],
-               "all fused": ["shape", "motion", "colour"]},
+               "shape+motion+skin": ["shape", "motion", "skin"],
+               "all fused": ["shape", "motion", "colour", "skin"]},
     "icu": {"shape": ["shape"], "colour": ["colour"], "all fused": ["shape", "colour"]},
 }
 KEYS = ("lost_fraction", "identity_switches", "center_median_px", "center_rmse_px",

@@ -39,8 +39,9 @@ from humimic.bodymodel import conics
 from humimic.bodymodel.hand import hand_ellipsoids, to_camera
 from humimic.bodymodel.projection import Z_MIN, project_ellipsoids
 from humimic.perception.cues.color_models import ColorLUT
-from humimic.perception.cues.edges import DT_CAP_PX, dt_distance, sample, shape_log_likelihood
+from humimic.perception.cues.edges import DT_CAP_PX, dt_distance, shape_log_likelihood
 from humimic.perception.cues.histograms import color_log_likelihood, patch_histograms
+from humimic.perception.cues.skin import rim_skin_distance
 from humimic.perception.trackers.frame_cues import FrameCues, frame_cues
 from humimic.perception.trackers.gest.proposal import logsumexp
 from humimic.sensors.camera_model import CameraImage
@@ -53,8 +54,9 @@ OFF_IMAGE = -1.0e6
 HandView = FrameCues
 
 
-def hand_view(frame: CameraImage, bins: int, lut: ColorLUT | None = None) -> HandView:
-    return frame_cues(frame, bins, lut)
+def hand_view(frame: CameraImage, bins: int, lut: ColorLUT | None = None,
+              colour_edges: bool = False) -> HandView:
+    return frame_cues(frame, bins, lut, colour_edges=colour_edges)
 
 
 @dataclass(frozen=True)
@@ -197,10 +199,7 @@ def skin_distance(proj: HandProjection, view: HandView, offset_px: float = 2.0
                   ) -> np.ndarray:
     """``D_k = 1 - (mean skin inside - mean skin outside)`` in [0, 2] (module docstring),
     sampled ``offset_px`` either side of the contour along its normals."""
-    step = offset_px * proj.normal
-    inside, outside = sample(view.skin, np.stack([proj.contour - step, proj.contour + step]),
-                             0.0).mean(axis=2)                          # one gather
-    return 1.0 - (inside - outside)
+    return rim_skin_distance(view.skin, proj.contour, proj.normal, offset_px)
 
 
 def blob_pair_log_likelihood(centres: np.ndarray, pairs: np.ndarray, sigma_px: float,

@@ -19,6 +19,7 @@ from humimic.bodymodel.kinematics import ypr_matrix
 from humimic.maths.stats import rmse
 from humimic.messages import PoseEstimate
 from humimic.perception.trackers.common import BAD, GOOD, PoseTrackerStage
+from humimic.perception.trackers.gest.ellipsoid import FLIPS
 from humimic.perception.trackers.gest.likelihood import hand_outlines
 from humimic.perception.trackers.gest.tracker import GestResult, GestTracker
 from humimic.sensors.camera_model import invert_transform
@@ -27,9 +28,6 @@ from humimic.viz.rerun_log import ESTIMATES, PIXEL_CENTRE_SHIFT, image_entity
 PARTICLE = (90, 120, 255)
 
 STATE_NAMES = ("x", "y", "z", "yaw", "pitch", "roll", "sigma_x", "sigma_y", "sigma_z")
-#: The ellipsoid's proper symmetries (half turns about its axes).
-FLIPS = np.array([np.diag(d) for d in ((1, 1, 1), (1, -1, -1), (-1, 1, -1), (-1, -1, 1))],
-                 float)
 
 
 def orientation_error_deg(ypr_est: np.ndarray, ypr_true: np.ndarray) -> np.ndarray:

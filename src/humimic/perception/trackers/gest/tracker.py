@@ -27,7 +27,9 @@ edges by more than ``lost_px`` while its rim does not separate skin from backgro
 mean but the centre's Gaussian posterior given the stereo measurements under the random walk
 (a Kalman update per frame: every particle shares the measurement and the linear dynamics of
 the centre, so its conditional posterior is one Gaussian; the weights, collapsed by the
-orientation and size cues, would otherwise make the estimate one random draw).
+orientation and size cues, would otherwise make the estimate one random draw). The published
+orientation is the particles' mean rotation modulo the ellipsoid's symmetries
+(:func:`.ellipsoid.mean_orientation`), not the mean of their angles.
 """
 
 from __future__ import annotations
@@ -50,6 +52,7 @@ from humimic.perception.cues.histograms import update_reference
 from humimic.perception.cues.importance import Blobs
 from humimic.perception.trackers.gest.blobs import hand_blobs
 from humimic.perception.trackers.gest.config import GestConfig
+from humimic.perception.trackers.gest.ellipsoid import mean_orientation
 from humimic.perception.trackers.gest.likelihood import (
     hand_log_likelihood,
     hand_view,
@@ -215,7 +218,8 @@ class GestTracker:
         boxes = [self._roi(f, b, pairs[:, i] if len(pairs) else None, n)
                  if cfg.roi and i < cfg.views else None
                  for i, (f, b, n) in enumerate(zip(frames, blobs, near, strict=True))]
-        views = [hand_view(crop_frame(f, b), cfg.bins, self.lut) if i < cfg.views
+        views = [hand_view(crop_frame(f, b), cfg.bins, self.lut, cfg.edges == "colour")
+                 if i < cfg.views
                  else _Geometry(f.camera) for i, (f, b) in enumerate(zip(frames, boxes,
                                                                           strict=True))]
         origin = np.array([(0, 0) if b is None else b[:2] for b in boxes], float)
@@ -228,6 +232,7 @@ class GestTracker:
         s = self.pf.step(self._ll(views, pairs - origin[None], left.camera.intrinsics), rng,
                          importance=importance)
         mean = s.mean.copy()
+        mean[3:6] = mean_orientation(s.particles[:, 3:6], s.log_weights)
         mean[6:] = np.maximum(mean[6:], 1e-3)
         (proj, _), centres = project_views(mean[None], views, cfg.n_points, 1)
         d = float(shape_distance(proj, views[0])[0])

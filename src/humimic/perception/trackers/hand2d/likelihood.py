@@ -9,7 +9,10 @@ the chosen cues (eq. 7):
 * ``shape`` + ``motion``: eq. 4 (moving edges free, static ones cost ``rho``) or eq. 5
   (``min(I_DT, K I'_DT)``);
 * ``colour``: eq. 6 on one patch over the palm against a reference histogram (eq. 13 updates
-  it in the tracker).
+  it in the tracker);
+* ``skin`` (added here): the skin posterior just inside against just outside the template
+  (:mod:`humimic.perception.cues.skin`), which keeps the estimate on the hand where clutter
+  gives the shape cue edges everywhere.
 
 The shape distance is a *sum* over the ``N_p`` points, as Table 3's sigma_s = 36 for 30 points
 reads (see :mod:`humimic.perception.cues.edges`).
@@ -41,6 +44,7 @@ from humimic.perception.cues.motion import (
     motion_normal_distance,
     moving_edges,
 )
+from humimic.perception.cues.skin import rim_skin_distance
 from humimic.perception.cues.templates import Template
 
 PALM_PATCH = np.array([[0.0, 0.0, 0.6, 1.2]])
@@ -59,6 +63,7 @@ class Params:
     K: float
     search_px: int
     sigma_c: float
+    sigma_k: float = 0.15
 
 
 @dataclass(frozen=True)
@@ -69,6 +74,8 @@ class FrameCues:
     origin: np.ndarray
     """(2,) (x0, y0) of the ROI in the image."""
     qimage: QuantizedImage | None
+    skin: np.ndarray | None = None
+    """Skin posterior over the ROI (float32), for the ``skin`` cue."""
 
 
 def roi_of(points: np.ndarray, margin: float, width: int, height: int
@@ -83,8 +90,8 @@ def roi_of(points: np.ndarray, margin: float, width: int, height: int
 
 
 def frame_cues(grey_roi: np.ndarray, flow: np.ndarray | None, origin, p: Params,
-               min_flow_px: float, qimage: QuantizedImage | None, need_dt: bool = False
-               ) -> FrameCues:
+               min_flow_px: float, qimage: QuantizedImage | None, need_dt: bool = False,
+               skin: np.ndarray | None = None) -> FrameCues:
     """Edges and moving edges of a grey ROI (``flow`` over the same ROI, or None: nothing
     moves), with their distance transforms only where the similarity (or ``need_dt``) asks."""
     edges = canny(grey_roi)
@@ -94,13 +101,14 @@ def frame_cues(grey_roi: np.ndarray, flow: np.ndarray | None, origin, p: Params,
     dt_moving = (distance_transform(moving) if p.similarity == "dt" and "motion" in p.cues
                  else None)
     return FrameCues(MotionEdgeMaps(edges, moving, dt, dt_moving), np.asarray(origin, float),
-                     qimage)
+                     qimage, skin)
 
 
-def shape_distance(cues: FrameCues, states: np.ndarray, template: Template, p: Params
-                   ) -> np.ndarray:
-    """Sum over the template points of their edge distance (eqs. 2-5), ``(N,)``."""
-    pts, nrm = template.place(states)
+def shape_distance(cues: FrameCues, states: np.ndarray, template: Template, p: Params,
+                   placed: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
+    """Sum over the template points of their edge distance (eqs. 2-5), ``(N,)``; ``placed``:
+    ``template.place(states)`` if already computed."""
+    pts, nrm = placed if placed is not None else template.place(states)
     pts = pts - cues.origin
     m = cues.maps
     if "motion" in p.cues:
@@ -116,9 +124,14 @@ def log_likelihood(cues: FrameCues, states: np.ndarray, template: Template, p: P
                    reference: np.ndarray | None) -> np.ndarray:
     """Menezes eq. 7: the fused log-likelihood of the chosen cues for states ``(N, 4)``."""
     terms = []
+    placed = template.place(states)
     if "shape" in p.cues:
-        terms.append(shape_log_likelihood(shape_distance(cues, states, template, p),
+        terms.append(shape_log_likelihood(shape_distance(cues, states, template, p, placed),
                                           p.sigma_s))
+    if "skin" in p.cues and cues.skin is not None:   # the template's normals point inwards
+        pts, inward = placed
+        terms.append(shape_log_likelihood(
+            rim_skin_distance(cues.skin, pts - cues.origin, -inward), p.sigma_k))
     if "colour" in p.cues and reference is not None:
         hists = patch_histograms(cues.qimage, states, PALM_PATCH, grid=6)
         terms.append(color_log_likelihood(hists, reference, p.sigma_c))  # Menezes eq. 6

@@ -26,6 +26,7 @@ from humimic.perception.cues.edges import grey as to_grey
 from humimic.perception.cues.histograms import patch_histograms, quantize, update_reference
 from humimic.perception.cues.importance import Blobs
 from humimic.perception.cues.motion import OpticalFlow
+from humimic.perception.cues.skin import rim_skin_distance
 from humimic.perception.cues.templates import hand
 from humimic.perception.trackers.hand2d.detect import detect_hands, face_on_blob
 from humimic.perception.trackers.hand2d.likelihood import (
@@ -72,7 +73,7 @@ class Hand2DTracker:
         self.width, self.height = width, height
         self.template = hand(cfg.n_points)
         self.params = Params(tuple(cfg.cues), cfg.similarity, cfg.sigma_s, cfg.rho, cfg.K,
-                             cfg.search_px, cfg.sigma_c)
+                             cfg.search_px, cfg.sigma_c, cfg.sigma_k)
         self.dyn_sigma = np.asarray(cfg.dynamics, float)
         prior = UniformBox([0.0, 0.0, cfg.min_hand_px, -0.5],
                            [width, height, max(0.5 * width, cfg.min_hand_px + 1), 0.5])
@@ -101,8 +102,15 @@ class Hand2DTracker:
         flow = None
         if self.use_flow and self.prev_grey is not None:
             flow = self.flow(np.ascontiguousarray(self.prev_grey[y0:y1, x0:x1]), g)
+        skin = (self.lut.posterior(image[y0:y1, x0:x1]).astype(np.float32)
+                if "skin" in self.cfg.cues else None)
         return frame_cues(g, flow, (x0, y0), self.params, self.cfg.min_flow_px, qimage,
-                          need_dt)
+                          need_dt, skin)
+
+    def _rim(self, state: np.ndarray, origin: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The template of ``state`` in ROI pixels and its outward normals."""
+        pts, inward = self.template.place(np.asarray(state)[None])
+        return pts[0] - origin, -inward[0]
 
     def _skin(self, image) -> np.ndarray:
         return self.lut.posterior(image) > SKIN_POSTERIOR
@@ -152,7 +160,9 @@ class Hand2DTracker:
         mean = step.mean
         d = mean_edge_distance(cues, mean, self.template, self.params)
         skin = skin_fraction(image, self.lut, mean)
-        good = step.ok and d <= cfg.lost_edge_px and skin >= cfg.min_skin
+        fits = d <= cfg.lost_edge_px or (cues.skin is not None and rim_skin_distance(
+            cues.skin, *self._rim(mean, cues.origin)) <= cfg.lost_skin)
+        good = step.ok and fits and skin >= cfg.min_skin
         self.bad = 0 if good else self.bad + 1
         if good and q is not None and self.reference is not None:
             seen = patch_histograms(q, mean, PALM_PATCH, grid=6)[0]

@@ -23,10 +23,10 @@ ArmExtent = Annotated[float, Field(gt=0.0, le=180.0)]
 class KpfCues(Section):
     """Cues per limb type (Schmidt sec. 6)."""
 
-    torso: list[Literal["edge", "ridge", "color"]] = Field(
-        default_factory=lambda: ["edge", "color"])
-    upper_arm: list[Literal["edge", "ridge", "color"]] = Field(
-        default_factory=lambda: ["edge", "ridge", "color"])
+    torso: list[Literal["edge", "ridge", "colour"]] = Field(
+        default_factory=lambda: ["edge", "colour"])
+    upper_arm: list[Literal["edge", "ridge", "colour"]] = Field(
+        default_factory=lambda: ["edge", "ridge", "colour"])
     forearm: list[Literal["edge", "ridge"]] = Field(default_factory=lambda: ["edge", "ridge"])
     hand: list[Literal["skin"]] = Field(default_factory=lambda: ["skin"])
     head: list[Literal["skin"]] = Field(default_factory=lambda: ["skin"])
@@ -38,7 +38,7 @@ class KpfSigma(Section):
 
     edge: float = Field(0.15, gt=0.0, le=10.0)
     ridge: float = Field(0.3, gt=0.0, le=10.0)
-    color: float = Field(0.1, gt=0.0, le=10.0)
+    colour: float = Field(0.1, gt=0.0, le=10.0)
     skin: float = Field(0.3, gt=0.0, le=10.0)
 
 
@@ -95,6 +95,10 @@ class KpfConfig(Section):
     """Our extension: the share of particles whose wrist is moved along its camera ray per arm
     and frame (:func:`~humimic.perception.trackers.kpf.depth.wrist_depth_move`); 0: off, as
     the paper."""
+    flip_share: float = Field(0.0, ge=0.0, le=1.0)
+    """Our extension: the share of particles per arm and frame replaced by one of their
+    kinematic flips (:mod:`~humimic.perception.trackers.kpf.flips`: the arm poses with the same
+    elbow and wrist images, a jump process in the dynamics); 0: off, as the paper."""
     depth_extent_m: float = Field(0.25, gt=0.0, le=1.0)
     """Half-width (m) of the uniform range change of those depth moves."""
     kde_stride: int = Field(1, ge=1, le=100)

@@ -27,6 +27,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from humimic.maths.arrays import stack
 from humimic.perception.cues.color_models import ColorLUT
 
 #: Width (px) of a bright/dark bar that the 3x3 second derivative of the pyramid responds to best.
@@ -79,8 +80,8 @@ def sample(image: np.ndarray, uv: np.ndarray, origin: tuple[int, int] = (0, 0)) 
     lead, chans = uv.shape[:-1], image.shape[2:]
     n = lead[0] if lead else 1
     m = np.rint(uv).astype(np.float32).reshape(n, -1)
-    if origin != (0, 0):   # rows of (u, v) pairs: a long last axis, fast to broadcast along
-        m -= np.tile(np.asarray(origin, np.float32), m.shape[1] // 2)
+    if origin != (0, 0):   # (u, v) pairs as complex numbers: one scalar subtraction
+        m.view(np.complex64)[...] -= np.complex64(complex(*origin))
     m = m.reshape(n, -1, 2)
     if m.size == 0:
         return np.zeros(lead + chans, np.float32)
@@ -157,9 +158,8 @@ def edge_response(maps: CueMaps, uv: np.ndarray, angle: np.ndarray) -> np.ndarra
 def ridge_level(width_px: np.ndarray, levels: int) -> np.ndarray:
     """Pyramid level per limb: ``mu = round(log2(width / RIDGE_WIDTH_PX))`` clipped to the
     pyramid (the paper picks it from the limb's distance to the camera)."""
-    with np.errstate(divide="ignore", invalid="ignore"):
-        mu = np.rint(np.log2(np.maximum(width_px, 1e-3) / RIDGE_WIDTH_PX))
-    return np.clip(np.nan_to_num(mu), 0, levels - 1).astype(np.intp)
+    mu = np.rint(np.log2(np.fmax(width_px, 1e-3) / RIDGE_WIDTH_PX))   # fmax: NaN -> 1e-3
+    return np.minimum(np.maximum(mu, 0), levels - 1).astype(np.intp)
 
 
 def ridge_response(maps: CueMaps, uv: np.ndarray, width_px: np.ndarray, angle: np.ndarray
@@ -175,8 +175,10 @@ def ridge_response(maps: CueMaps, uv: np.ndarray, width_px: np.ndarray, angle: n
     m = np.empty(uv.shape)
     scale = 0.5 ** mu
     u0, v0 = maps.origin                                  # multiples of 2^mu (cue_maps)
-    np.clip(np.rint(uv[..., 0] * scale) - u0 * scale, -1.0, shapes[mu, 1], out=m[..., 0])
-    np.clip(np.rint(uv[..., 1] * scale) - v0 * scale, -1.0, shapes[mu, 0], out=m[..., 1])
+    np.minimum(np.maximum(np.rint(uv[..., 0] * scale) - u0 * scale, -1.0), shapes[mu, 1],
+               out=m[..., 0])              # clipped to [-1, W_mu] (ufuncs: no np.clip wrapper)
+    np.minimum(np.maximum(np.rint(uv[..., 1] * scale) - v0 * scale, -1.0), shapes[mu, 0],
+               out=m[..., 1])
     m[..., 1] += maps.level_rows[mu]
     got = sample(maps.ridge, m).view(np.complex64)                       # (N, L, M, 2)
     t = got[..., 1].real
@@ -203,7 +205,7 @@ def band_points(quads: np.ndarray) -> np.ndarray:
 
 def band_colours(maps: CueMaps, quads: np.ndarray) -> np.ndarray:
     """Mean RGB ``(..., 3)`` over each quadrilateral's sample points (off-image points black)."""
-    pts = np.stack([quads[..., 0] @ _QUAD_W, quads[..., 1] @ _QUAD_W], -1)      # (..., M_C, 2)
+    pts = stack([quads[..., 0] @ _QUAD_W, quads[..., 1] @ _QUAD_W], -1)      # (..., M_C, 2)
     got = sample(maps.rgb, pts, maps.origin)                              # (..., M_C, 3)
     flat = got.reshape(-1, got.shape[-2] * 3) @ _CHANNEL_MEAN             # a matrix product:
     return flat.reshape(got.shape[:-2] + (3,))                            # fast on rows of 27
@@ -216,7 +218,9 @@ _CHANNEL_MEAN = np.tile(np.eye(3, dtype=np.float32), (len(_QUAD_GRID), 1)) / len
 def colour_response(colours: np.ndarray, reference: np.ndarray) -> np.ndarray:
     """Schmidt eqs. 5-6: ``(N, L)`` mean over a limb's bands of ``||C_t - C_ref||``, colours
     ``(N, L, B, 3)`` against references ``(L, B, 3)``."""
-    return np.mean(np.linalg.norm(colours - reference, axis=-1), axis=-1)
+    d = colours - reference
+    r, g, b = d[..., 0], d[..., 1], d[..., 2]    # components: numpy is slow on a last axis of 3
+    return np.add.reduce(np.sqrt(r * r + g * g + b * b), axis=-1) / colours.shape[-2]
 
 
 #: Unit-circle offsets where the skin cue samples an ellipse (centre and two rings; M_S = 17).
@@ -233,5 +237,5 @@ def skin_response(maps: CueMaps, centre: np.ndarray, axes: np.ndarray, angle: np
     c, s = np.cos(angle)[..., None], np.sin(angle)[..., None]
     x = _DISC[:, 0] * axes[..., :1]
     y = _DISC[:, 1] * axes[..., 1:]
-    pts = np.stack([centre[..., :1] + c * x - s * y, centre[..., 1:] + s * x + c * y], -1)
+    pts = stack([centre[..., :1] + c * x - s * y, centre[..., 1:] + s * x + c * y], -1)
     return _mean_last(sample(maps.skin, pts, maps.origin))

@@ -11,6 +11,8 @@ the likelihood is unchanged. A later evaluation reaching outside recomputes over
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from humimic.bodymodel.projection import BodyView
@@ -30,7 +32,7 @@ def sample_box(view: BodyView, ellipses=None) -> tuple[np.ndarray, np.ndarray]:
     axis points interpolate them), the skin points within the image ellipses' major radius
     of their centres (``ellipses`` as :meth:`BodyView.ellipses_px`, computed if None)."""
     centre, axes, _ = view.ellipses_px() if ellipses is None else ellipses
-    r = axes.max(axis=-1)
+    r = np.maximum.reduce(axes, axis=-1)
     lo, hi = np.zeros(2), np.zeros(2)
     for k in range(2):   # 1-D reductions (numpy is slow over a short last axis)
         c = centre[..., k]
@@ -38,7 +40,7 @@ def sample_box(view: BodyView, ellipses=None) -> tuple[np.ndarray, np.ndarray]:
                               (c - r).ravel(), (c + r).ravel()])
         pts = pts[np.isfinite(pts)]          # invalid parts (NaN, degenerate conics) sample 0
         if len(pts):
-            lo[k], hi[k] = pts.min(), pts.max()
+            lo[k], hi[k] = np.minimum.reduce(pts), np.maximum.reduce(pts)
     return lo, hi
 
 
@@ -55,11 +57,12 @@ class FrameCues:
         """Maps valid for every sample point in the box ``lo``-``hi`` (pixels)."""
         h, w = self.image.shape[:2]
         a = ALIGN_PX
-        u0 = int(np.clip(np.floor((lo[0] - MARGIN_PX) / a) * a, 0, max(w - a, 0) // a * a))
-        v0 = int(np.clip(np.floor((lo[1] - MARGIN_PX) / a) * a, 0, max(h - a, 0) // a * a))
+        (lu, lv), (hu, hv) = lo.tolist(), hi.tolist()   # scalars: plain Python is faster
+        u0 = min(max(math.floor((lu - MARGIN_PX) / a) * a, 0), max(w - a, 0) // a * a)
+        v0 = min(max(math.floor((lv - MARGIN_PX) / a) * a, 0), max(h - a, 0) // a * a)
         # + 4: a point's nearest level-2 pixel may lie up to half a pixel (2 px) beyond it
-        u1 = int(np.clip(np.ceil(hi[0] + MARGIN_PX + 4), u0 + a, w))
-        v1 = int(np.clip(np.ceil(hi[1] + MARGIN_PX + 4), v0 + a, h))
+        u1 = min(max(math.ceil(hu + MARGIN_PX + 4), u0 + a), w)
+        v1 = min(max(math.ceil(hv + MARGIN_PX + 4), v0 + a), h)
         if self.region is not None:
             r = self.region
             if r[0] <= u0 and r[1] <= v0 and u1 <= r[2] and v1 <= r[3]:

@@ -18,10 +18,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from humimic import bodymodel as bm
+from humimic.maths.arrays import stack
 from humimic.perception.trackers.kpf import cues as C
 from humimic.perception.trackers.kpf.frame_cues import FrameCues, sample_box
 
-CUE_NAMES = ("edge", "ridge", "color", "skin")
+CUE_NAMES = ("edge", "ridge", "colour", "skin")
 
 
 def limb_type(part: str) -> str:
@@ -64,6 +65,8 @@ class Likelihood:
                       for p in self.parts}
         self.used = {c: np.array([c in self.use[p] for p in self.parts]) for c in CUE_NAMES}
         """Cue -> (parts,) bool: the cue is configured on the part."""
+        self.unused = {c: np.flatnonzero(~u) for c, u in self.used.items()}
+        self.any_used = {c: bool(u.any()) for c, u in self.used.items()}
         n_l = np.array([max(len(self.use[p]), 1) for p in self.parts], float)
         self.balance = {c: self.used[c] / n_l for c in CUE_NAMES}
         """Eq. 10's 1 / N_l where the cue is used, else 0."""
@@ -77,7 +80,7 @@ class Likelihood:
         self.colour_sets = {}
         """Band count -> (limb positions, part names) of the limbs with the colour cue."""
         for j, p in enumerate(self.limbs):
-            if "color" in self.use[p]:
+            if "colour" in self.use[p]:
                 js, names = self.colour_sets.setdefault(self.bands[p], ([], []))
                 js.append(j)
                 names.append(p)
@@ -104,24 +107,30 @@ class Likelihood:
             cost["edge"][:, col] = 1.0 - np.where(e.ok, C.edge_response(maps, e.uv, e.angle), 0.0)
         if "ridge" in self.need:
             r = bm.limb_ridges(view, cfg.ridge_points)
-            f = C.ridge_response(maps, r.uv, r.width.mean(-1), r.angle)
+            width = np.add.reduce(r.width, -1) / r.width.shape[-1]      # mean (no wrapper)
+            f = C.ridge_response(maps, r.uv, width, r.angle)
             cost["ridge"][:, col] = 1.0 - np.where(r.ok, f, 0.0)
         colours = {}
         if self.colour_sets:
             ok = view.valid[:, view.cone_idx] & view.generators
+            quads = [bm.limb_bands(view, b, 0.2, js).reshape(n, len(js) * b, 4, 2)
+                     for b, (js, _) in self.colour_sets.items()]
+            bands = C.band_colours(maps, np.concatenate(quads, axis=1))   # every set at once
+            start = 0
             for b, (js, names) in self.colour_sets.items():
-                got = C.band_colours(maps, bm.limb_bands(view, b, 0.2)[:, js])  # (N, J, B, 3)
+                got = bands[:, start:start + len(js) * b].reshape(n, len(js), b, 3)
+                start += len(js) * b
                 for k, p in enumerate(names):
                     colours[p] = got[:, k]
                 if all(p in self.references for p in names):
-                    ref = np.stack([self.references[p] for p in names])
+                    ref = stack([self.references[p] for p in names])
                     f = C.colour_response(got, ref)                          # (N, J)
                 else:   # a limb before its first adaptation: no colour term
                     f = np.column_stack([
                         C.colour_response(got[:, k:k + 1], self.references[p][None])[:, 0]
                         if p in self.references else np.zeros(n)
                         for k, p in enumerate(names)])
-                cost["color"][:, col[js]] = np.where(ok[:, js], f, 1.0)
+                cost["colour"][:, col[js]] = np.where(ok[:, js], f, 1.0)
         if len(self.skin_js):
             centre, axes, angle = ellipses
             j = self.skin_js
@@ -129,7 +138,7 @@ class Likelihood:
             ok = view.valid[:, view.ellipsoid_idx[j]]
             cost["skin"][:, self.skin_cols] = 1.0 - np.where(ok, f, 0.0)
         for c in CUE_NAMES:   # cues not configured on a part do not count
-            cost[c][:, ~self.used[c]] = np.nan
+            cost[c][:, self.unused[c]] = np.nan
         return Evaluation(cost, self.combine(cost), colours)
 
     def sigmas(self, cost: dict[str, np.ndarray]) -> dict[str, float]:
@@ -151,7 +160,7 @@ class Likelihood:
         sig = self.sigmas(cost)
         total = 0.0
         for c, e in cost.items():
-            if self.used[c].any():
+            if self.any_used[c]:
                 e = np.where(self.used[c], e, 0.0)
                 total = total - (e * e) * (self.balance[c] / (2.0 * sig[c] ** 2))
         return np.asarray(total)

@@ -3,8 +3,13 @@
 Per frame the true joints are the body model's forward kinematics of the avatar's true state
 (the model's skeleton is the avatar's, so they are the avatar's joints). The wrist error is
 Schmidt's: the distance between the true wrist and the end of the model's forearm, averaged
-over frames (Table 1); it is split in the camera frame into its image-plane (``lateral``) and
-depth components. ``lost_fraction``: frames with the wrist more than :data:`LOST_M` off.
+over frames (Table 1); it is split along the camera ray through the true wrist into its
+depth (along the ray) and image-plane (``lateral``, across the ray) components (the camera's
+z axis would count an off-axis wrist's depth error as lateral: at the wide eye's image edge, a
+third of it). ``wrist_flip_free_mm``: the error to the nearest of the estimate and its
+kinematic flips (:mod:`~humimic.perception.trackers.kpf.flips`, the arm poses with the same
+joint images), the part of the error the monocular depth ambiguity does not explain.
+``lost_fraction``: frames with the wrist more than :data:`LOST_M` off.
 """
 
 from __future__ import annotations
@@ -14,6 +19,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from humimic import bodymodel as bm
+from humimic.perception.trackers.kpf.flips import flip_free_error
 
 ENDPOINTS = ("r_shoulder", "r_elbow", "r_wrist", "l_shoulder", "l_elbow", "l_wrist")
 #: A frame whose wrist error exceeds this counts as lost (issue 14).
@@ -57,17 +63,37 @@ def wrap(a: np.ndarray) -> np.ndarray:
 
 def errors(rec: KpfRecord, world, body: bm.BodyModel) -> dict[str, np.ndarray]:
     """Per-frame errors: ``wrist``, ``elbow`` (m), ``lateral`` and ``depth`` wrist components
-    (m, camera frame), ``angles`` (T, 8) arm-angle errors (rad)."""
+    (m, across and along the camera ray through the true wrist), ``flip_free`` (m, the wrist's
+    to the nearest of the estimate's kinematic flips), ``angles`` (T, 8) arm-angle errors
+    (rad)."""
     q_true, j_true = truth(world, body, np.asarray(rec.t))
     ends = np.stack(rec.ends)
     wi, ei = ENDPOINTS.index("r_wrist"), ENDPOINTS.index("r_elbow")
     d = ends[:, wi] - j_true[:, wi]                                       # base frame
-    R = np.stack(rec.T_cam_base)[:, :3, :3]
-    d_cam = np.einsum("tij,tj->ti", R, d)
+    depth, lateral = ray_split(d, j_true[:, wi], np.stack(rec.T_cam_base))
+    c_base = camera_centres(np.stack(rec.T_cam_base))
     return {"wrist": np.linalg.norm(d, axis=1),
             "elbow": np.linalg.norm(ends[:, ei] - j_true[:, ei], axis=1),
-            "lateral": np.linalg.norm(d_cam[:, :2], axis=1), "depth": np.abs(d_cam[:, 2]),
+            "lateral": lateral, "depth": depth,
+            "flip_free": flip_free_error(body, np.stack(rec.q), q_true, "R", c_base),
             "angles": wrap(np.stack(rec.q)[:, ARM] - q_true[:, ARM])}
+
+
+def camera_centres(T_cam_ref: np.ndarray) -> np.ndarray:
+    """``(T, 3)`` camera centres in the reference frame of ``T_cam_ref (T, 4, 4)``."""
+    R, t = T_cam_ref[:, :3, :3], T_cam_ref[:, :3, 3]
+    return -np.einsum("tji,tj->ti", R, t)
+
+
+def ray_split(d: np.ndarray, p_true: np.ndarray, T_cam_ref: np.ndarray
+              ) -> tuple[np.ndarray, np.ndarray]:
+    """Errors ``d (T, 3)`` at true points ``p_true (T, 3)`` (reference frame) split along the
+    camera ray through ``p_true``: ``|d . u|`` (depth) and ``|d - (d . u) u|`` (image plane),
+    ``u`` the ray's unit direction."""
+    u = p_true - camera_centres(T_cam_ref)
+    u /= np.linalg.norm(u, axis=1, keepdims=True)
+    along = np.sum(d * u, axis=1)
+    return np.abs(along), np.linalg.norm(d - along[:, None] * u, axis=1)
 
 
 def kpf_metrics(rec: KpfRecord, world, body: bm.BodyModel, camera: str) -> dict:
@@ -84,6 +110,7 @@ def kpf_metrics(rec: KpfRecord, world, body: bm.BodyModel, camera: str) -> dict:
         "wrist_error_mm": mm * float(e["wrist"].mean()),
         "wrist_lateral_mm": mm * float(e["lateral"].mean()),
         "wrist_depth_mm": mm * float(e["depth"].mean()),
+        "wrist_flip_free_mm": mm * float(e["flip_free"].mean()),
         "elbow_error_mm": mm * float(e["elbow"].mean()),
         "joint_rmse_deg": float(np.degrees(np.sqrt(np.mean(e["angles"] ** 2)))),
         "right_arm_rmse_deg": float(np.degrees(np.sqrt(np.mean(e["angles"][:, :4] ** 2)))),

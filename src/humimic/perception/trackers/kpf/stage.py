@@ -82,10 +82,12 @@ class KpfStage(Stage):
         log_run(rlog, self.name, self.rec, self.world, self.body)
 
     def plots(self, out_dir) -> list:
-        """``tracker_<name>.png``: the wrist error (whole, image plane, depth) and the elbow's."""
+        """``tracker_<name>.png``: the wrist error (whole, image plane, depth, to the nearest
+        kinematic flip) and the elbow's."""
         if not self.rec.t:
             return []
         e, t = errors(self.rec, self.world, self.body), np.asarray(self.rec.t)
         return pose_error_plot(out_dir, self.name, {
             "wrist": (t, e["wrist"]), "wrist, image plane": (t, e["lateral"]),
-            "wrist, depth": (t, e["depth"]), "elbow": (t, e["elbow"])})
+            "wrist, depth": (t, e["depth"]), "wrist, flips forgiven": (t, e["flip_free"]),
+            "elbow": (t, e["elbow"])})

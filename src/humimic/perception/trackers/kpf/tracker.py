@@ -20,9 +20,11 @@ from humimic import bodymodel as bm
 from humimic.estimation.particles import kernel as kpf
 from humimic.estimation.particles.densities import Gaussian
 from humimic.estimation.particles.filters import condensation_step
+from humimic.estimation.particles.kernel_groups import dominant_modes
 from humimic.estimation.particles.weights import uniform_log_weights
 from humimic.perception.trackers.kpf.cues import CueMaps
-from humimic.perception.trackers.kpf.depth import wrist_depth_move
+from humimic.perception.trackers.kpf.depth import SIDES, wrist_depth_move
+from humimic.perception.trackers.kpf.flips import FLIPS, arm_flips
 from humimic.perception.trackers.kpf.frame_cues import FrameCues
 from humimic.perception.trackers.kpf.likelihood import Likelihood
 
@@ -184,6 +186,8 @@ class KpfTracker:
         pred, moved = kpf.mixed_propagate(resampled, velocity, self.share, self.D,
                                           rng, self.limits.inside, cfg.motion_noise)
         pred = self.limits.clamp(pred)
+        if cfg.flip_share > 0.0:   # part of the dynamics: the reweighting's prior has them
+            pred = self._flip_jumps(pred, T_cam_base, cfg.flip_share)
         prior = pred
         if cfg.depth_share > 0.0:   # a proposal: the reweighting keeps the dynamics' KDE
             pred = self._depth_moves(pred.copy(), T_cam_base, cfg.depth_share)
@@ -211,9 +215,7 @@ class KpfTracker:
         self.best_prev = best
         h = cfg.shrink ** max(iters - 1, 0) * self.D
         win = cfg.window * self.D
-        mode = np.empty(len(self.D))
-        for k, g in enumerate(groups):
-            mode[g], _ = kpf.dominant_mode(parts[:, g], W[:, k], h[g], win[g], KERNEL_DTYPE)
+        mode = dominant_modes(parts, W, h, win, groups, KERNEL_DTYPE)
         w = W[:, 0]
         self.share = kpf.motion_share(w, moved, cfg.min_random)
         self.particles, self.w, self.W = parts, w, W
@@ -229,6 +231,24 @@ class KpfTracker:
             pick = np.flatnonzero(rng.random(len(pred)) < share)
             delta = rng.uniform(-1.0, 1.0, len(pick)) * cfg.depth_extent_m
             pred[pick] = wrist_depth_move(self.body, pred[pick], side, delta, T_cam_base)
+        return pred
+
+    def _flip_jumps(self, pred: np.ndarray, T_cam_base: np.ndarray, share: float
+                    ) -> np.ndarray:
+        """Kinematic jumps (:mod:`~humimic.perception.trackers.kpf.flips`): a ``share`` of the
+        particles per arm replaced by one of their flips (drawn uniformly; kept where it exists
+        and lies within the joint limits)."""
+        c_base = np.linalg.inv(np.asarray(T_cam_base, float))[:3, 3]
+        for side in SIDES:
+            pick = np.flatnonzero(self.rng.random(len(pred)) < share)
+            if len(pick) == 0:
+                continue
+            kind = self.rng.integers(0, len(FLIPS), len(pick))
+            flips = arm_flips(self.body, pred[pick], side, c_base)
+            new = np.stack([flips[f] for f in FLIPS])[kind, np.arange(len(pick))]
+            ok = np.all(np.isfinite(new), axis=1)
+            ok[ok] = self.limits.inside(new[ok])
+            pred[pick[ok]] = new[ok]
         return pred
 
     def _condensation(self, maps, T_cam_base):
