@@ -58,6 +58,17 @@ def test_colour_canny_sees_an_equal_brightness_boundary_grey_canny_misses():
     blurred = cv2.GaussianBlur(grey, (0, 0), 1.0)
     np.testing.assert_array_equal(colour_canny(g3),
                                   cv2.Canny(blurred, 50.0, 150.0, L2gradient=True))
+    # the strongest channel's gradient, as an integer argmax over the squared magnitudes picks
+    rgb = cv2.GaussianBlur(np.random.default_rng(1).integers(0, 256, (70, 90, 3), np.uint8),
+                           (0, 0), 1.5)
+    b = cv2.GaussianBlur(rgb, (0, 0), 1.0)
+    dx = cv2.Sobel(b, cv2.CV_16S, 1, 0, ksize=3, borderType=cv2.BORDER_REPLICATE)
+    dy = cv2.Sobel(b, cv2.CV_16S, 0, 1, ksize=3, borderType=cv2.BORDER_REPLICATE)
+    k = np.argmax(dx.astype(np.int64) ** 2 + dy.astype(np.int64) ** 2, axis=2)[..., None]
+    gx = np.ascontiguousarray(np.take_along_axis(dx, k, 2)[..., 0])
+    gy = np.ascontiguousarray(np.take_along_axis(dy, k, 2)[..., 0])
+    np.testing.assert_array_equal(colour_canny(rgb),
+                                  cv2.Canny(gx, gy, 50.0, 150.0, L2gradient=True))
 
 
 def test_distance_transform_is_the_brute_force_nearest_edge_distance():
