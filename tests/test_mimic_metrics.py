@@ -6,11 +6,12 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
+from humimic.maths.stats import rmse
 from humimic.metrics.mimicry import (
+    TERMS,
     add_budget_sums,
     budget_from_sums,
     budget_sums,
-    TERMS,
     error_terms,
     head_motion,
     image_offsets,
@@ -19,7 +20,6 @@ from humimic.metrics.mimicry import (
     summary_stats,
     xcorr_lag,
 )
-from humimic.maths.stats import rmse
 from humimic.sensors.camera_model import Intrinsics
 
 DT = 1.0 / 420.0

@@ -5,7 +5,8 @@ their whole-run columns, tens of MB stay resident although nothing uses them, an
 that asks for large blocks (a figure's pixel buffer is ``mmap``-ed) adds to them instead of
 reusing them. :func:`release_free_heap` collects Python's garbage and calls glibc's
 ``malloc_trim(0)``, which returns every free page of every arena (measured: 20-45 MB after
-the scores of a 60 s run). Elsewhere (musl, macOS, Windows) it only collects garbage.
+the scores of a 60 s run; 20 MB in the middle of a run's loop, which :func:`trim_heap` does
+every few simulated seconds). Elsewhere (musl, macOS, Windows) they only collect garbage.
 """
 
 from __future__ import annotations
@@ -30,12 +31,18 @@ def _malloc_trim():
     return fn
 
 
-def release_free_heap() -> bool:
-    """Collect Python's garbage and return the C heap's free pages to the OS; whether the C
-    library could (glibc: ``malloc_trim(0)``; it returns 1 when it released memory)."""
-    gc.collect()
+def trim_heap() -> bool:
+    """Return the C heap's free pages to the OS (glibc's ``malloc_trim(0)``; a few ms); whether
+    the C library could. Cheap enough to call every few simulated seconds of a run's loop,
+    where freed per-frame buffers otherwise stay resident between the blocks still in use."""
     trim = _malloc_trim()
     if trim is None:
         return False
     trim(0)
     return True
+
+
+def release_free_heap() -> bool:
+    """Collect Python's garbage, then :func:`trim_heap` (between a run's phases)."""
+    gc.collect()
+    return trim_heap()
