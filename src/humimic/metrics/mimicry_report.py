@@ -31,6 +31,7 @@ from functools import partial
 
 import numpy as np
 
+from humimic import spill
 from humimic.control.ik import on_limit_band
 from humimic.maths.stats import finite_or_none as _num
 from humimic.maths.stats import rms_of, rmse, sum_squares
@@ -48,7 +49,7 @@ from humimic.metrics.mimicry import (
     xcorr_lag,
 )
 from humimic.sensors.camera_model import R_MJCAM_CV, Intrinsics
-from humimic.spill import BLOCK, row_blocks
+from humimic.spill import row_blocks
 from humimic.world.names import ROBOT_JOINTS, TORSO_JOINTS
 
 #: Joints whose limits matter for a site (its arm and the torso).
@@ -136,9 +137,11 @@ def site_series(stage, i: int, ch, keys: tuple[str, ...] = SERIES_KEYS,
     return k0, {key: series[key]() for key in keys}
 
 
-def series_blocks(stage, i: int, ch, keys: tuple[str, ...], block: int = BLOCK):
-    """:func:`site_series`' ``keys``, ``block`` rows at a time (reductions over a long run)."""
+def series_blocks(stage, i: int, ch, keys: tuple[str, ...], block: int | None = None):
+    """:func:`site_series`' ``keys``, ``block`` rows (default: the record's
+    :data:`~humimic.spill.BLOCK`) at a time (reductions over a long run)."""
     _, m = aligned_rows(stage, i)
+    block = block or spill.BLOCK
     for a in range(0, m, block):
         yield site_series(stage, i, ch, keys, slice(a, a + block))[1]
 
