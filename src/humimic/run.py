@@ -185,6 +185,7 @@ def _plots(out: Path, world, stages, ticks: int) -> None:
                       title="Ground truth, robot base frame", ylabel="position (m)")
     for stage in stages:
         stage.plots(out)
+        release_free_heap()  # its figures, before the next stage's stack on them
 
 
 class OneLineParser(argparse.ArgumentParser):
