@@ -69,3 +69,21 @@ def test_chi2_band_of_window_means_holds_95_percent_of_consistent_windows():
     assert 0.93 < np.mean((means >= lo) & (means <= hi)) < 0.97
     over = nees(e, P / 4).reshape(-1, window).mean(axis=1)
     assert np.mean((over >= lo) & (over <= hi)) < 0.01
+
+
+def test_sum_squares_add_over_blocks_to_the_whole_rmse():
+    """rmse's partial sums over blocks (NaN rows skipped in each) give the whole array's RMS,
+    computed here directly, to rounding."""
+    from humimic.maths.stats import rms_of, sum_squares
+
+    rng = np.random.default_rng(7)
+    err = rng.normal(size=(9001, 3))
+    err[rng.choice(9001, 50, replace=False), 0] = np.nan
+    ok = np.all(np.isfinite(err), axis=1)
+    direct = math.sqrt(np.mean(np.linalg.norm(err[ok], axis=1) ** 2))
+    sums = [sum_squares(err[a:a + 1000]) for a in range(0, 9001, 1000)]
+    total, count = sum(s[0] for s in sums), sum(s[1] for s in sums)
+    assert count == ok.sum()
+    assert rms_of(total, count) == pytest.approx(direct, rel=1e-12)
+    assert rmse(err) == pytest.approx(direct, rel=1e-12)
+    assert math.isnan(rms_of(0.0, 0))

@@ -6,8 +6,12 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
+from humimic.maths.stats import rmse
 from humimic.metrics.mimicry import (
     TERMS,
+    add_budget_sums,
+    budget_from_sums,
+    budget_sums,
     error_terms,
     head_motion,
     image_offsets,
@@ -65,6 +69,60 @@ def test_mse_shares_against_closed_forms():
     terms = {k: z for k in TERMS} | {"latency": 2 * a, "interpolation": -a, "total": a}
     s = mse_shares(terms)
     assert s["latency"] == pytest.approx(2.0) and s["interpolation"] == pytest.approx(-1.0)
+
+
+def _whole_run_budget(terms):
+    """The budget as computed on whole arrays, independently of budget_sums: rmse per term,
+    shares from their definition, the largest error norm."""
+    total = terms["total"]
+    ok = np.all(np.isfinite(total), axis=1)
+    for name in TERMS:
+        ok &= np.all(np.isfinite(terms[name]), axis=1)
+    ms = np.einsum("ij,ij->", total[ok], total[ok])
+    shares = {name: np.einsum("ij,ij->", terms[name][ok], total[ok]) / ms for name in TERMS}
+    return ({name: rmse(terms[name]) for name in (*TERMS, "total")}, shares,
+            np.max(np.sqrt(np.einsum("ij,ij->i", total, total))))
+
+
+@pytest.mark.parametrize("with_nan", [False, True])
+def test_budget_summed_over_blocks_equals_the_whole_arrays(with_nan):
+    """A long run is scored block by block: the sums of uneven blocks give each term's RMS
+    (humimic.maths.stats.rmse on the whole array), the shares and the largest error to
+    rounding (rel 1e-12; the sums are only grouped differently)."""
+    rng = np.random.default_rng(3)
+    n = 10_007
+    parts = {k: rng.normal(scale=s, size=(n, 3)) for k, s in
+             zip(("true_now", "true_photon", "est", "cmd_raw", "cmd", "ik", "robot"),
+                 (0.1, 0.1, 0.1, 0.1, 0.1, 0.1, 0.1), strict=True)}
+    if with_nan:  # rows a term was not measured in (e.g. lost estimates): skipped per term
+        parts["est"][rng.choice(n, 300, replace=False), 1] = np.nan
+    terms = error_terms(*parts.values())
+    rms, shares, top = _whole_run_budget(terms)
+    if with_nan:  # the total has no NaN: its max is finite, the shares skip the NaN rows
+        assert np.isfinite(top)
+    sums = None
+    edges = [0, 1, 4096, 4097, 9000, n]
+    for a, b in zip(edges[:-1], edges[1:], strict=True):
+        sums = add_budget_sums(sums, budget_sums({k: v[a:b] for k, v in terms.items()}))
+    b_rms, b_shares, b_top = budget_from_sums(sums)
+    for name in rms:
+        assert b_rms[name] == pytest.approx(rms[name], rel=1e-12)
+    for name in TERMS:
+        assert b_shares[name] == pytest.approx(shares[name], rel=1e-9, abs=1e-12)
+    assert sum(b_shares.values()) == pytest.approx(1.0, rel=1e-12)
+    assert b_top == top  # a max is exact
+
+
+def test_budget_sums_of_no_rows_and_nan_rows():
+    z = np.zeros((0, 3))
+    rms, shares, top = budget_from_sums(budget_sums({k: z for k in (*TERMS, "total")}))
+    assert all(np.isnan(v) for v in (*rms.values(), *shares.values(), top))
+    one = np.ones((4, 3))
+    nan = one.copy()
+    nan[2] = np.nan
+    sums = add_budget_sums(budget_sums({k: one for k in (*TERMS, "total")}),
+                           budget_sums({k: nan for k in (*TERMS, "total")}))
+    assert np.isnan(budget_from_sums(sums)[2])  # as np.max over the whole array
 
 
 def test_head_motion():

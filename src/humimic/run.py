@@ -12,7 +12,6 @@ from humimic import select_gl_backend
 select_gl_backend()  # an entry point: MuJoCo's OpenGL backend, before anything imports mujoco
 
 import argparse
-import gc
 import json
 import sys
 import time
@@ -21,6 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from humimic.errors import InputError
+from humimic.heap import release_free_heap
 from humimic.metrics.summary import print_summary, verdict_warning
 from humimic.pipeline.build import build_stages
 from humimic.pipeline.simulation import simulate
@@ -71,8 +71,11 @@ def run_one(scenario: Scenario, out_dir: str | Path | None = None, rerun: str | 
             _log_ground_truth(rlog, world, result.ticks_done)
             rlog.send_blueprint(run_layout(rlog.logged, cameras))
         # scored once the recording is closed: the scores' whole-run columns do not add to
-        # the recording's buffers at the run's peak
+        # the recording's buffers at the run's peak; each phase after the loop starts from a
+        # trimmed heap, so that its large blocks reuse the memory the previous one freed
+        release_free_heap()
         metrics = _metrics(scenario, world, stages, result, setup_s, wall0)
+        release_free_heap()
     finally:
         for stage in stages:
             stage.close()
@@ -82,11 +85,12 @@ def run_one(scenario: Scenario, out_dir: str | Path | None = None, rerun: str | 
     for stage in stages:
         stage.archive(out)
     if scenario.output.plots:
+        release_free_heap()
         _plots(out, world, stages, result.ticks_done)
         # the report reads only the files: the run's records, caches and models go first,
         # so that its figure reuses their memory instead of adding to it
         del world, stages, result
-        gc.collect()
+        release_free_heap()
         write_report(out)
     return metrics
 
@@ -181,6 +185,7 @@ def _plots(out: Path, world, stages, ticks: int) -> None:
                       title="Ground truth, robot base frame", ylabel="position (m)")
     for stage in stages:
         stage.plots(out)
+        release_free_heap()  # its figures, before the next stage's stack on them
 
 
 class OneLineParser(argparse.ArgumentParser):

@@ -21,10 +21,20 @@ def _rows(err) -> np.ndarray:
 
 def rmse(err) -> float:
     """Root mean squared norm of the finite rows of ``err``; NaN if there are none."""
+    return rms_of(*sum_squares(err))
+
+
+def sum_squares(err) -> tuple[float, int]:
+    """``(sum of squared norms, count)`` of the finite rows of ``err``: :func:`rmse`'s partial
+    sums, which add over blocks of rows (a long run's RMS without its whole columns; equal to
+    the whole array's to rounding, as the sums are grouped differently)."""
     e = _rows(err)
-    if len(e) == 0:
-        return math.nan
-    return float(np.sqrt(np.mean(np.sum(e * e, axis=1))))
+    return float(np.sum(np.sum(e * e, axis=1))), len(e)
+
+
+def rms_of(total: float, count: int) -> float:
+    """``sqrt(total / count)`` from :func:`sum_squares`' (added) sums; NaN if ``count`` is 0."""
+    return math.sqrt(total / count) if count else math.nan
 
 
 def nees(err, P) -> np.ndarray:

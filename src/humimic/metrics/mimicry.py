@@ -6,7 +6,9 @@
 * :func:`rms_jerk` - RMS of the third time derivative, estimated with a Savitzky-Golay filter
   (a local polynomial fit; plain third differences would amplify noise by ``1/dt^3``).
 * :func:`error_terms` - the total error split into stage terms that add up to it (vectors);
-* :func:`mse_shares` - each term's share of the total's mean square (shares add up to 1).
+* :func:`mse_shares` - each term's share of the total's mean square (shares add up to 1);
+* :func:`budget_sums` - their partial sums over a block of rows (a long run scored block by
+  block: the whole run's RMS values and shares to rounding).
 * :func:`head_motion` - how far the eyes' base moved and turned.
 * :func:`image_offsets` - where a target appears relative to an image's centre.
 """
@@ -16,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.signal import correlate, savgol_filter
 
-from humimic.maths.stats import rmse
+from humimic.maths.stats import rms_of, rmse, sum_squares
 
 
 def xcorr_lag(reference: np.ndarray, signal: np.ndarray, dt: float,
@@ -103,14 +105,51 @@ def mse_shares(terms: dict[str, np.ndarray]) -> dict[str, float]:
     (over rows where every term is finite). Because the terms add up to the total, the shares
     add up to 1 exactly; a negative share is a term that cancels others. NaN when the total is
     zero or there are no rows."""
+    return budget_from_sums(budget_sums(terms))[1]
+
+
+def budget_sums(terms: dict[str, np.ndarray]) -> dict[str, float]:
+    """Partial sums of :func:`error_terms`' output over a block of rows, from which
+    :func:`budget_from_sums` gives each term's RMS, :func:`mse_shares` and the largest error:
+    sums over blocks (:func:`add_budget_sums`) give the whole run's values to rounding, without
+    its whole columns. Keys: ``sq:<name>``/``n:<name>`` (``sum_squares`` of each term and the
+    total), ``dot:<term>`` (``sum term . total``) and ``ms`` (``sum |total|^2``) over the
+    ``ok`` rows where every term is finite, ``max`` (the largest ``|total|``; NaN if any row is
+    NaN, as ``np.max``; -inf for no rows)."""
     total = np.asarray(terms["total"], float)
+    out: dict[str, float] = {}
+    for name in (*TERMS, "total"):
+        out[f"sq:{name}"], out[f"n:{name}"] = sum_squares(terms[name])
     ok = np.all(np.isfinite(total), axis=1)
     for name in TERMS:
         ok &= np.all(np.isfinite(terms[name]), axis=1)
-    ms = float(np.sum(total[ok] ** 2))
-    if not ok.any() or ms == 0.0:
-        return dict.fromkeys(TERMS, float("nan"))
-    return {name: float(np.sum(terms[name][ok] * total[ok])) / ms for name in TERMS}
+    for name in TERMS:
+        out[f"dot:{name}"] = float(np.sum(terms[name][ok] * total[ok]))
+    out["ms"], out["ok"] = float(np.sum(total[ok] ** 2)), int(ok.sum())
+    out["max"] = float(np.max(np.linalg.norm(total, axis=1))) if len(total) else -np.inf
+    return out
+
+
+def add_budget_sums(a: dict[str, float] | None, b: dict[str, float]) -> dict[str, float]:
+    """:func:`budget_sums` of two blocks of rows together (``a`` None: ``b``)."""
+    if a is None:
+        return dict(b)
+    return {k: float(np.max([a[k], b[k]])) if k == "max" else a[k] + b[k] for k in a}
+
+
+def budget_from_sums(sums: dict[str, float]) -> tuple[dict[str, float], dict[str, float],
+                                                       float]:
+    """``(RMS of each term and of the total (m), each term's share of the total's mean square,
+    largest |total| (m))`` from :func:`budget_sums` (shares NaN when the total is zero or no
+    row is finite in every term; the largest error NaN for no rows)."""
+    rms = {name: rms_of(sums[f"sq:{name}"], sums[f"n:{name}"]) for name in (*TERMS, "total")}
+    ms = sums["ms"]
+    if sums["ok"] == 0 or ms == 0.0:
+        shares = dict.fromkeys(TERMS, float("nan"))
+    else:
+        shares = {name: sums[f"dot:{name}"] / ms for name in TERMS}
+    top = sums["max"]
+    return rms, shares, (top if top != -np.inf else float("nan"))
 
 
 def rotation_angle(R: np.ndarray) -> np.ndarray:

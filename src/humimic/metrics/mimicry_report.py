@@ -31,16 +31,19 @@ from functools import partial
 
 import numpy as np
 
+from humimic import spill
 from humimic.control.ik import on_limit_band
 from humimic.maths.stats import finite_or_none as _num
-from humimic.maths.stats import rmse
+from humimic.maths.stats import rms_of, rmse, sum_squares
 from humimic.metrics import mm as _mm
 from humimic.metrics.mimicry import (
     TERMS,
+    add_budget_sums,
+    budget_from_sums,
+    budget_sums,
     error_terms,
     head_motion,
     image_offsets,
-    mse_shares,
     rms_jerk,
     summary_stats,
     xcorr_lag,
@@ -88,13 +91,24 @@ SERIES_KEYS = ("t", "true_now", "true_photon", "est", "cmd_raw", "cmd", "cmd_alt
                "robot")
 
 
-def site_series(stage, i: int, ch, keys: tuple[str, ...] = SERIES_KEYS):
+def aligned_rows(stage, i: int) -> tuple[int, int]:
+    """``(k0, m)``: the record's row at which site ``i`` started and the length of its aligned
+    series (:func:`site_series`)."""
+    rec = stage.rec
+    k0 = int(np.argmax(rec.active[:rec.n, i]))
+    return k0, max(rec.n - 1 - k0, 0)
+
+
+def site_series(stage, i: int, ch, keys: tuple[str, ...] = SERIES_KEYS,
+                rows: slice = slice(None)):
     """Aligned displacement series of site ``i`` from the tick after it started: the robot at
     ``t[k]`` with the command, IK and estimate computed for ``t[k-1] + dt = t[k]``. Only the
-    series named in ``keys`` are gathered (a long run's columns are tens of MB each)."""
+    series named in ``keys`` are gathered, and only their ``rows`` (a slice of the aligned
+    series: a long run's columns are tens of MB each)."""
     rec, world = stage.rec, stage.world
-    n = rec.n
-    k0 = int(np.argmax(rec.active[:n, i]))
+    k0, m = aligned_rows(stage, i)
+    a, b, step = rows.indices(m)
+    now, before = slice(k0 + 1 + a, k0 + 1 + b, step), slice(k0 + a, k0 + b, step)
     rate = world.scenario.timing.physics_rate
     N = len(world.gt.t)
 
@@ -107,20 +121,41 @@ def site_series(stage, i: int, ch, keys: tuple[str, ...] = SERIES_KEYS):
     origin = truth(ch.t0)
 
     def mapped_truth(times) -> np.ndarray:
-        return rec.scale[k0:n - 1, i, None] * ((truth(times) - origin) @ M.T)
+        return rec.scale[before, i, None] * ((truth(times) - origin) @ M.T)
 
     series = {
-        "t": lambda: rec.t[k0 + 1:n],
-        "true_now": lambda: mapped_truth(rec.t[k0 + 1:n]),
-        "true_photon": lambda: mapped_truth(rec.t_est[k0:n - 1, i]),
-        "est": lambda: rec.p_est[k0:n - 1, i] - p0r,
-        "cmd_raw": lambda: rec.p_cmd_raw[k0:n - 1, i] - p0r,
-        "cmd": lambda: rec.p_cmd[k0:n - 1, i] - p0r,
-        "cmd_alt": lambda: rec.p_cmd_alt[k0:n - 1, i] - p0r,
-        "ik": lambda: rec.p_ik[k0:n - 1, i] - p0r,
-        "robot": lambda: rec.p_robot[k0 + 1:n, i] - p0r,
+        "t": lambda: rec.t[now],
+        "true_now": lambda: mapped_truth(rec.t[now]),
+        "true_photon": lambda: mapped_truth(rec.t_est[before, i]),
+        "est": lambda: rec.p_est[before, i] - p0r,
+        "cmd_raw": lambda: rec.p_cmd_raw[before, i] - p0r,
+        "cmd": lambda: rec.p_cmd[before, i] - p0r,
+        "cmd_alt": lambda: rec.p_cmd_alt[before, i] - p0r,
+        "ik": lambda: rec.p_ik[before, i] - p0r,
+        "robot": lambda: rec.p_robot[now, i] - p0r,
     }
     return k0, {key: series[key]() for key in keys}
+
+
+def series_blocks(stage, i: int, ch, keys: tuple[str, ...], block: int | None = None):
+    """:func:`site_series`' ``keys``, ``block`` rows (default: the record's
+    :data:`~humimic.spill.BLOCK`) at a time (reductions over a long run)."""
+    _, m = aligned_rows(stage, i)
+    block = block or spill.BLOCK
+    for a in range(0, m, block):
+        yield site_series(stage, i, ch, keys, slice(a, a + block))[1]
+
+
+def site_budget(stage, i: int, ch) -> tuple[dict[str, float], dict[str, float], float]:
+    """:func:`~humimic.metrics.mimicry.budget_from_sums` of site ``i``'s error terms, summed
+    block by block (m; the whole run's values to rounding)."""
+    sums = None
+    for s in series_blocks(stage, i, ch, SERIES_KEYS[1:]):
+        sums = add_budget_sums(sums, budget_sums(error_terms(
+            s["true_now"], s["true_photon"], s["est"], s["cmd_raw"], s["cmd"], s["ik"],
+            s["robot"])))
+    return budget_from_sums(sums if sums is not None else budget_sums(
+        {name: np.zeros((0, 3)) for name in (*TERMS, "total")}))
 
 
 def _scale_at(stage, i: int, ch, t: np.ndarray) -> np.ndarray:
@@ -154,49 +189,57 @@ def _limit_hits(stage, site: str, k0: int) -> tuple[int, dict[str, int]]:
     rec = stage.rec
     names = ARM_JOINTS[site[0]] + TORSO_JOINTS
     j = np.array([ROBOT_JOINTS.index(x) for x in names])
-    hit = on_limit_band(rec.q_ik[k0:rec.n, j], stage.ik_model.jnt_range[j],
-                        stage.cfg.ik.limit_margin)
-    per_joint = {name: int(n) for name, n in zip(names, hit.sum(axis=0), strict=True) if n}
-    return int(np.any(hit, axis=1).sum()), per_joint
+    ticks, per = 0, np.zeros(len(j), int)
+    for q in row_blocks(rec.q_ik, k0, rec.n):  # a block of rows at a time: 60 MB at 10 min
+        hit = on_limit_band(q[:, j], stage.ik_model.jnt_range[j], stage.cfg.ik.limit_margin)
+        ticks += int(np.any(hit, axis=1).sum())
+        per += hit.sum(axis=0)
+    return ticks, {name: int(n) for name, n in zip(names, per, strict=True) if n}
 
 
 def site_metrics(stage, i: int, ch) -> tuple[dict, dict]:
-    """``(cumulative lags per stage (ms), the site's scores)``."""
+    """``(cumulative lags per stage (ms), the site's scores)``. RMS values and shares are
+    summed block by block (:func:`site_budget`); lags and jerk need whole series, gathered
+    one beside the truth at a time."""
     if not ch.started:
         return {}, _never_started(stage, ch)
     rec, world, cfg = stage.rec, stage.world, stage.cfg
-    k0, s = site_series(stage, i, ch)
-    if len(s["t"]) < MIN_TICKS:
+    k0, m = aligned_rows(stage, i)
+    if m < MIN_TICKS:
         return {}, {"status": "too_short", "target": ch.target, "rmse_mm": None,
-                    "lag_ms": None, "reason": f"mimicry ran {len(s['t'])} servo ticks; scores "
+                    "lag_ms": None, "reason": f"mimicry ran {m} servo ticks; scores "
                                               f"need at least {MIN_TICKS}"}
     dt = rec.dt
-    terms = error_terms(s["true_now"], s["true_photon"], s["est"], s["cmd_raw"], s["cmd"],
-                        s["ik"], s["robot"])
     rate = world.scenario.timing.physics_rate
     P = world.gt.p_base(ch.target)
     scale_at = partial(_scale_at, stage, i, ch)
-    budget = {name: _mm(rmse(terms[name])) for name in (*TERMS, "total")}
-    max_error = _mm(float(np.max(np.linalg.norm(terms["total"], axis=1))))
-    shares = {k: _num(v) for k, v in mse_shares(terms).items()}
-    # whole-run columns no longer needed, freed before the cross-correlations allocate theirs
-    del terms, s["true_photon"], s["est"], s["cmd_raw"]
+    rms, share, top = site_budget(stage, i, ch)
+    budget = {name: _mm(v) for name, v in rms.items()}
+    shares = {k: _num(v) for k, v in share.items()}
     primary, other = cfg.interpolation.mode, ("extrapolate" if cfg.interpolation.mode == "hold"
                                               else "hold")
-    interp = {}
-    for mode, key in ((primary, "cmd"), (other, "cmd_alt")):
-        interp[mode] = {"rmse_mm": _mm(rmse(s[key] - s["true_now"])),
-                        "lag_ms": _mm(xcorr_lag(s["true_now"], s[key], dt))}
+    sq = {key: [0.0, 0] for key in ("cmd", "cmd_alt")}
+    for s in series_blocks(stage, i, ch, ("true_now", "cmd", "cmd_alt")):
+        for key, acc in sq.items():
+            total, count = sum_squares(s[key] - s["true_now"])
+            acc[0] += total
+            acc[1] += count
+    _, s = site_series(stage, i, ch, ("true_now", "robot"))
+
+    def lag(key: str) -> float:  # one more whole series at a time
+        return _mm(xcorr_lag(s["true_now"], site_series(stage, i, ch, (key,))[1][key], dt))
+
+    interp = {mode: {"rmse_mm": _mm(rms_of(*sq[key])), "lag_ms": lag(key)}
+              for mode, key in ((primary, "cmd"), (other, "cmd_alt"))}
     n_active = rec.n - k0
     hits, hits_by_joint = _limit_hits(stage, ch.site, k0)
-    stage_lags = {"interpolation": interp[primary]["lag_ms"],
-                  "ik": _mm(xcorr_lag(s["true_now"], s["ik"], dt))}
+    stage_lags = {"interpolation": interp[primary]["lag_ms"], "ik": lag("ik")}
     return stage_lags, {
         "status": "ok",
         "target": ch.target,
         "rmse_mm": budget["total"],
         "lag_ms": _mm(xcorr_lag(s["true_now"], s["robot"], dt)),
-        "max_error_mm": max_error,
+        "max_error_mm": _mm(top),
         "jerk": _num(rms_jerk(s["robot"], dt)),
         "jerk_human": _num(rms_jerk(s["true_now"], dt)),
         "joint_limit_hits": hits,

@@ -8,7 +8,9 @@ Per physics tick ``k`` (time ``t = k / physics_rate``):
 3. deliver every bus value that is ready at ``t`` (stages run here, in causal order);
 4. at servo ticks, let control stages write actuator targets, then step the planar base's
    controller (``world.base``) towards its target;
-5. log poses to rerun at ``output.pose_rate``; ``mj_step2`` integrates to ``t + dt``.
+5. log poses to rerun at ``output.pose_rate``; ``mj_step2`` integrates to ``t + dt``;
+6. every :data:`TRIM_EVERY_S` simulated seconds, give the C heap's free pages back
+   (:func:`humimic.heap.trim_heap`: a long run's resident set otherwise creeps up).
 
 A Ctrl-C stops the loop cleanly: the caller still gets the metrics so far. Every stage's
 :meth:`~humimic.pipeline.stage.Stage.finish` runs when the loop ends.
@@ -23,12 +25,16 @@ import mujoco
 import numpy as np
 from tqdm import tqdm
 
+from humimic.heap import trim_heap
 from humimic.messages import InertialReading
 from humimic.pipeline.bus import Bus
 from humimic.pipeline.stage import Stage, StageTimer
 from humimic.sensors.clock import Schedule
 from humimic.spill import SpillArray
 from humimic.stamped import Stamped
+
+#: Simulated seconds between :func:`~humimic.heap.trim_heap` calls in the loop.
+TRIM_EVERY_S = 10.0
 
 
 @dataclass
@@ -86,6 +92,7 @@ def simulate(world, stages: list[Stage], rlog, bus: Bus | None = None,
                disable=None if progress else True,
                bar_format="{l_bar}{bar}| {n:.2f}/{total:.2f} sim s [{elapsed}<{remaining}]")
     update_every = max(1, int(phys_rate // 10))
+    trim_every = max(1, round(TRIM_EVERY_S * phys_rate))
     wall0 = time.perf_counter()
     try:
         for tick in range(world.n_ticks):
@@ -145,6 +152,8 @@ def simulate(world, stages: list[Stage], rlog, bus: Bus | None = None,
             if tick % update_every == 0:
                 bar.n = round(t, 3)
                 bar.refresh()
+            if tick % trim_every == trim_every - 1:
+                trim_heap()
         else:
             tick = world.n_ticks
     except KeyboardInterrupt:

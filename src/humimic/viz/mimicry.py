@@ -14,45 +14,49 @@ from __future__ import annotations
 
 import numpy as np
 
-from humimic.maths.stats import rmse
-from humimic.metrics.mimicry import TERMS, error_terms, mse_shares
-from humimic.metrics.mimicry_report import MIN_TICKS, site_series
-from humimic.viz.rerun_log import AXIS_RGB, SERIES
+from humimic.metrics.mimicry import TERMS
+from humimic.metrics.mimicry_report import (
+    MIN_TICKS,
+    aligned_rows,
+    series_blocks,
+    site_budget,
+    site_series,
+)
+from humimic.viz.rerun_log import AXIS_RGB, SERIES, SERIES_CHUNK
 from humimic.world.names import ROBOT_JOINTS
 
 #: The default layout's time-series root of mimicry.
 MIMICRY = f"{SERIES}/mimicry"
 
 
-def _scored(stage, keys: tuple[str, ...]):
-    """``(channel, series keys)`` of every site with enough mimicry to score."""
+def _scored(stage):
+    """``(site index, channel, aligned rows)`` of every site with enough mimicry to score."""
     for i, ch in enumerate(stage.channels):
         if ch.started:
-            _, s = site_series(stage, i, ch, ("t", *keys))
-            if len(s["t"]) >= MIN_TICKS:
-                yield ch, s
+            m = aligned_rows(stage, i)[1]
+            if m >= MIN_TICKS:
+                yield i, ch, m
 
 
 def mimic_plots(stage, out_dir) -> list:
     """``mimic_<site>.png`` (truth, estimate, command, robot) and ``mimic_error_budget.png``."""
-    from humimic.viz.plots import plot_error_budget, plot_trajectories
+    from humimic.viz.plots import MAX_POINTS, plot_error_budget, plot_trajectories
 
     paths, rms, shares, totals, sites = [], {}, {}, [], []
-    for ch, s in _scored(stage, ("true_now", "true_photon", "est", "cmd_raw", "cmd", "ik",
-                                 "robot")):
+    for i, ch, m in _scored(stage):
+        # only the rows drawn (every k-th, as plot_trajectories would take them)
+        _, s = site_series(stage, i, ch, ("t", "true_now", "est", "cmd", "robot"),
+                           slice(None, None, max(1, -(-m // MAX_POINTS))))
         paths.append(plot_trajectories(
             f"{out_dir}/mimic_{ch.site}.png", s["t"],
             {f"{ch.target} true (mapped)": s["true_now"], f"{ch.target} estimate": s["est"],
              f"{ch.site} commanded": s["cmd"], f"{ch.site} robot": s["robot"]},
             title=f"{ch.target} -> {ch.site}: displacement, robot base frame", ylabel="m"))
-        terms = error_terms(s["true_now"], s["true_photon"], s["est"], s["cmd_raw"], s["cmd"],
-                            s["ik"], s["robot"])
-        s.clear()  # the series are drawn: their whole-run columns go before the terms' sums
-        share = mse_shares(terms)
+        term_rms, share, _ = site_budget(stage, i, ch)  # summed block by block
         sites.append(ch.site)
-        totals.append(1e3 * rmse(terms["total"]))
+        totals.append(1e3 * term_rms["total"])
         for term in TERMS:
-            rms.setdefault(term, []).append(1e3 * rmse(terms[term]))
+            rms.setdefault(term, []).append(1e3 * term_rms[term])
             shares.setdefault(term, []).append(share[term])
     if sites:
         paths.append(plot_error_budget(f"{out_dir}/mimic_error_budget.png", sites, rms, shares,
@@ -71,18 +75,22 @@ def log_mimicry(stage, rlog) -> None:
         rlog.log_series(f"{SERIES}/robot_joints/{name}", t,
                         np.stack([rec.q_ik[:n, j], rec.q_robot[:n, j]], axis=1),
                         names=[f"{name} target (rad)", f"{name} actual (rad)"])
-    for ch, s in _scored(stage, ("true_now", "cmd", "robot")):
+    for i, ch, _ in _scored(stage):
         root = f"{MIMICRY}/{ch.site}"
-        err = 1e3 * (s["robot"] - s["true_now"])
-        rlog.log_series(f"{root}/error_mm", s["t"],
-                        np.column_stack([err, np.linalg.norm(err, axis=1)]),
-                        names=[f"{a} error (mm)" for a in "xyz"] + ["|error| (mm)"],
-                        colors=[*AXIS_RGB, (30, 30, 30)], widths=[1.0, 1.0, 1.0, 2.0])
-        for a, axis in enumerate("xyz"):
-            rlog.log_series(f"{root}/position_m/{axis}", s["t"],
-                            np.stack([s["true_now"][:, a], s["cmd"][:, a], s["robot"][:, a]],
-                                     axis=1),
-                            names=[f"{axis} {ch.target} true, mapped (m)",
+        # a chunk's rows at a time (log_series sends the same chunks as for the whole series)
+        for s in series_blocks(stage, i, ch, ("t", "true_now", "cmd", "robot"), SERIES_CHUNK):
+            err = 1e3 * (s["robot"] - s["true_now"])
+            rlog.log_series(f"{root}/error_mm", s["t"],
+                            np.column_stack([err, np.linalg.norm(err, axis=1)]))
+            for a, axis in enumerate("xyz"):
+                rlog.log_series(f"{root}/position_m/{axis}", s["t"], np.stack(
+                    [s["true_now"][:, a], s["cmd"][:, a], s["robot"][:, a]], axis=1))
+        rlog.set_series_names(f"{root}/error_mm",
+                              [f"{a} error (mm)" for a in "xyz"] + ["|error| (mm)"],
+                              colors=[*AXIS_RGB, (30, 30, 30)], widths=[1.0, 1.0, 1.0, 2.0])
+        for axis in "xyz":
+            rlog.set_series_names(f"{root}/position_m/{axis}",
+                                  [f"{axis} {ch.target} true, mapped (m)",
                                    f"{axis} commanded (m)", f"{axis} {ch.site} robot (m)"])
     ks = np.arange(0, n, max(1, int(round(1.0 / (30.0 * rec.dt)))))  # 30 Hz
     p_cmd, p_robot = rec.p_cmd[ks], rec.p_robot[ks]  # gathered a block at a time, not per row

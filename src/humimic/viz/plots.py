@@ -32,6 +32,9 @@ def _save(fig: Figure, path: Path | str) -> Path:
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=DPI)
+    # a figure is freed only when the garbage collector finds its reference cycles: its
+    # artists (a long run's lines) go now, not after the next few plots have stacked on them
+    fig.clear()
     return path
 
 
