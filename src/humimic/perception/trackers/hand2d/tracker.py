@@ -96,14 +96,16 @@ class Hand2DTracker:
         finally:
             self.prev_grey = grey
 
-    def _cues(self, image, grey, roi, qimage=None, need_dt=False) -> FrameCues:
+    def _cues(self, image, grey, roi, qimage=None, need_dt=False, skin=None) -> FrameCues:
+        """The cue images over ``roi``; ``skin``: the skin posterior over it if already
+        computed (else computed here when the ``skin`` cue is on)."""
         x0, y0, x1, y1 = roi
         g = np.ascontiguousarray(grey[y0:y1, x0:x1])
         flow = None
         if self.use_flow and self.prev_grey is not None:
             flow = self.flow(np.ascontiguousarray(self.prev_grey[y0:y1, x0:x1]), g)
-        skin = (self.lut.posterior(image[y0:y1, x0:x1]).astype(np.float32)
-                if "skin" in self.cfg.cues else None)
+        if skin is None and "skin" in self.cfg.cues:
+            skin = self.lut.posterior(image[y0:y1, x0:x1]).astype(np.float32)
         return frame_cues(g, flow, (x0, y0), self.params, self.cfg.min_flow_px, qimage,
                           need_dt, skin)
 
@@ -116,11 +118,13 @@ class Hand2DTracker:
         return self.lut.posterior(image) > SKIN_POSTERIOR
 
     def _search(self, image, grey) -> HandStep:
-        cues = self._cues(image, grey, (0, 0, self.width, self.height), need_dt=True)
+        posterior = self.lut.posterior(image)          # one pass for the detector and the cue
+        cues = self._cues(image, grey, (0, 0, self.width, self.height), need_dt=True,
+                          skin=posterior)
         is_face = (None if self.faces is None
                    else lambda box: face_on_blob(grey, box, self.faces))
-        det = detect_hands(self._skin(image), cues.maps.dt, cues.maps.moving, self.template,
-                           self.cfg.min_hand_px, self.cfg.init_edge_px, is_face)
+        det = detect_hands(posterior > SKIN_POSTERIOR, cues.maps.dt, cues.maps.moving,
+                           self.template, self.cfg.min_hand_px, self.cfg.init_edge_px, is_face)
         best = det.best
         nan = np.full(4, np.nan)
         if best is None:
