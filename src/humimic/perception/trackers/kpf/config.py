@@ -66,6 +66,13 @@ class KpfConfig(Section):
     """Bandwidth factor per iteration, h = shrink^i D."""
     window: float = Field(0.25, gt=0.0, le=2.0)
     """Dominant-mode window, as a fraction of D."""
+    bandwidth: float = Field(1.0, gt=0.0, le=5.0)
+    """The initial mean-shift bandwidth h0, as a fraction of D (the paper: h0 = D)."""
+    mode_margin: float = Field(1.0, gt=0.0, le=1.0)
+    """Our extension: the dominant mode's peak is the one nearest to the motion model's
+    prediction among the particles whose posterior density is within this factor of the
+    largest (a temporally consistent choice among nearly equal modes); 1: the largest, as the
+    paper."""
     motion_noise: float = Field(0.25, gt=0.0, le=1.0)
     """The motion model's noise extent, as a fraction of D."""
     min_random: float = Field(0.2, ge=0.0, le=1.0)
@@ -104,6 +111,10 @@ class KpfConfig(Section):
     kde_stride: int = Field(1, ge=1, le=100)
     """The reweighting's KDEs from every k-th particle (1: all, exact; more: faster)."""
     cues: KpfCues = Field(default_factory=KpfCues)
+    colour_gradients: bool = False
+    """Our extension: the edge and ridge cues on the strongest colour channel's derivatives
+    at each pixel instead of grey levels' (clothes as bright as the background keep their
+    edges); False: grey levels, as the paper."""
     edge_points: int = Field(20, ge=2, le=200, multiple_of=2)
     """M_E, even."""
     ridge_points: int = Field(30, ge=1, le=200)
