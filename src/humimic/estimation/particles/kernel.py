@@ -206,33 +206,14 @@ def kernel_log_weights(log_lik: np.ndarray, shifted: np.ndarray, prior: np.ndarr
         return log_lik + np.log(p) - np.log(q)
 
 
-def pick_peak(density: np.ndarray, x: np.ndarray, h: np.ndarray,
-              prefer: np.ndarray | None = None, margin: float = 1.0) -> int:
-    """Index of the peak among candidate points ``x (M, d)`` with KDE values ``density (M,)``
-    (``-inf``: not a candidate): the largest, or with ``prefer (d,)`` (e.g. the motion model's
-    prediction) the candidate nearest to it (scaled by ``h``) among those within a factor
-    ``margin`` of the largest (our extension: a temporally consistent choice among nearly
-    equal modes; ``margin = 1``: the largest, as the paper)."""
-    best = int(np.argmax(density))
-    if prefer is None or margin >= 1.0:
-        return best
-    near = np.flatnonzero(density >= margin * density[best])
-    d2 = np.sum(((x[near] - prefer) / h) ** 2, axis=1)
-    return int(near[np.argmin(d2)])
-
-
 def dominant_mode(particles: np.ndarray, w: np.ndarray, h: np.ndarray, window: np.ndarray,
-                  dtype=np.float64, prefer: np.ndarray | None = None, margin: float = 1.0
-                  ) -> tuple[np.ndarray, int]:
+                  dtype=np.float64) -> tuple[np.ndarray, int]:
     """The dominant mode (Schmidt sec. 5.2): the particle where the posterior's KDE (eq. 11)
     peaks, then the weighted mean of the particles within ``window`` (scaled distance <= 1) of
     it. Returns the mode ``(d,)`` and the peak particle's index. Only particles of
-    non-negligible weight are candidates for the peak (the others' KDE value is no larger).
-    ``prefer``, ``margin``: :func:`pick_peak`."""
+    non-negligible weight are candidates for the peak (the others' KDE value is no larger)."""
     keep = heavy(w)
-    h = _bandwidth(h, particles.shape[1])
-    density = kde(particles[keep], particles, w, h, dtype)
-    peak = int(keep[pick_peak(density, particles[keep], h, prefer, margin)])
+    peak = int(keep[np.argmax(kde(particles[keep], particles, w, h, dtype))])
     near = sq_distances(particles[peak:peak + 1], particles, window)[0] <= 1.0
     wn = w * near
     if wn.sum() <= 0.0:

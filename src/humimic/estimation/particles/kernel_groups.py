@@ -21,7 +21,6 @@ from humimic.estimation.particles.kernel import (
     epanechnikov,
     kernel_log_weights,
     mean_shift,
-    pick_peak,
 )
 
 
@@ -102,19 +101,16 @@ def kernel_log_weights_groups(log_lik: np.ndarray, shifted: np.ndarray, prior: n
 
 
 def dominant_modes(particles: np.ndarray, W: np.ndarray, h: np.ndarray, window: np.ndarray,
-                   groups: list[np.ndarray], dtype=np.float64, prefer: np.ndarray | None = None,
-                   margin: float = 1.0) -> np.ndarray:
+                   groups: list[np.ndarray], dtype=np.float64) -> np.ndarray:
     """:func:`dominant_mode` of each group's dimensions with its own weights ``W[:, k]``: the
     state ``(d,)`` made of the groups' modes; small sets in one stacked pass (the KDE at
-    every particle, the peak among those of non-negligible weight). ``prefer (d,)``,
-    ``margin``: :func:`~humimic.estimation.particles.kernel.pick_peak` per group."""
+    every particle, the peak among those of non-negligible weight)."""
     n, d = particles.shape
     h, window = _bandwidth(h, d), _bandwidth(window, d)
     mode = np.empty(d)
     if not _batched(n, n, groups):
         for k, g in enumerate(groups):
-            mode[g], _ = dominant_mode(particles[:, g], W[:, k], h[g], window[g], dtype,
-                                       None if prefer is None else prefer[g], margin)
+            mode[g], _ = dominant_mode(particles[:, g], W[:, k], h[g], window[g], dtype)
         return mode
     X, H = _group_coords(particles, groups, h)
     heavy = W > NEGLIGIBLE * W.max(axis=0)
@@ -124,9 +120,7 @@ def dominant_modes(particles: np.ndarray, W: np.ndarray, h: np.ndarray, window: 
     np.subtract(1.0, k2, out=k2)                   # the Epanechnikov profile: a positive
     np.maximum(k2, 0.0, out=k2)                    # constant per group does not move a peak
     density = np.where(heavy.T, (k2 @ Wz.astype(dtype))[..., 0], -np.inf)   # (G, N)
-    peak = [pick_peak(density[k], particles[:, g], h[g],
-                      None if prefer is None else prefer[g], margin)
-            for k, g in enumerate(groups)]
+    peak = np.argmax(density, axis=1)
     for k, g in enumerate(groups):
         near = np.sum(((particles[:, g] - particles[peak[k], g]) / window[g]) ** 2, 1) <= 1.0
         wn = W[:, k] * near

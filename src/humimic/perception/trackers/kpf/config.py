@@ -66,13 +66,6 @@ class KpfConfig(Section):
     """Bandwidth factor per iteration, h = shrink^i D."""
     window: float = Field(0.25, gt=0.0, le=2.0)
     """Dominant-mode window, as a fraction of D."""
-    bandwidth: float = Field(1.0, gt=0.0, le=5.0)
-    """The initial mean-shift bandwidth h0, as a fraction of D (the paper: h0 = D)."""
-    mode_margin: float = Field(1.0, gt=0.0, le=1.0)
-    """Our extension: the dominant mode's peak is the one nearest to the motion model's
-    prediction among the particles whose posterior density is within this factor of the
-    largest (a temporally consistent choice among nearly equal modes); 1: the largest, as the
-    paper."""
     motion_noise: float = Field(0.25, gt=0.0, le=1.0)
     """The motion model's noise extent, as a fraction of D."""
     min_random: float = Field(0.2, ge=0.0, le=1.0)

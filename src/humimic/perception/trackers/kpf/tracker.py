@@ -192,8 +192,7 @@ class KpfTracker:
         if cfg.depth_share > 0.0:   # a proposal: the reweighting keeps the dynamics' KDE
             pred = self._depth_moves(pred.copy(), T_cam_base, cfg.depth_share)
         lik = (self._group_log_lik if cfg.partitioned else self._log_lik)(maps, T_cam_base)
-        h0 = cfg.bandwidth * self.D
-        parts, W, ll, iters = kpf.kpf_modes(pred, lik, h0, cfg.iterations, cfg.tol,
+        parts, W, ll, iters = kpf.kpf_modes(pred, lik, self.D, cfg.iterations, cfg.tol,
                                             cfg.shrink, cfg.reweight == "kernel", groups,
                                             cfg.kde_stride, prior, KERNEL_DTYPE)
         best = float(np.max(ll[:, 0]))
@@ -207,17 +206,16 @@ class KpfTracker:
             again = self.limits.clamp(again + rng.uniform(-1.0, 1.0, again.shape) * self.D)
             if cfg.rescue_depth_share > 0.0:
                 again = self._depth_moves(again, T_cam_base, cfg.rescue_depth_share)
-            p2, W2, ll2, it2 = kpf.kpf_modes(again, lik, h0, cfg.iterations, cfg.tol,
+            p2, W2, ll2, it2 = kpf.kpf_modes(again, lik, self.D, cfg.iterations, cfg.tol,
                                              cfg.shrink, cfg.reweight == "kernel", groups,
                                              cfg.kde_stride, dtype=KERNEL_DTYPE)
             iters += it2
             if float(np.max(ll2[:, 0])) > best:
                 parts, W, ll, best = p2, W2, ll2, float(np.max(ll2[:, 0]))
         self.best_prev = best
-        h = cfg.shrink ** max(iters - 1, 0) * h0
+        h = cfg.shrink ** max(iters - 1, 0) * self.D
         win = cfg.window * self.D
-        mode = dominant_modes(parts, W, h, win, groups, KERNEL_DTYPE,
-                              self.limits.clamp(self.mode + velocity), cfg.mode_margin)
+        mode = dominant_modes(parts, W, h, win, groups, KERNEL_DTYPE)
         w = W[:, 0]
         self.share = kpf.motion_share(w, moved, cfg.min_random)
         self.particles, self.w, self.W = parts, w, W
