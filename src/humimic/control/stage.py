@@ -21,6 +21,7 @@ import time
 
 import numpy as np
 
+from humimic.control.decimate import Decimator
 from humimic.control.gaze import Gaze
 from humimic.control.ik import MimicIK, build_robot_model, on_limit_band
 from humimic.control.interpolation import CartesianInterpolator
@@ -131,7 +132,7 @@ class MimicStage(Stage):
         self._strain_ranges = [self.ik_model.jnt_range[j] for j in self._strain_joints]
         self.latest: dict[str, tuple] = {}
         self.v_prev = np.zeros(len(ROBOT_JOINTS))
-        self._calls = 0
+        self._turns = Decimator(self.every)
         self._timer = None
 
     def _channel(self, target: str, site: str, p0_base: np.ndarray) -> Channel:
@@ -175,9 +176,7 @@ class MimicStage(Stage):
 
     # ---- servo ----------------------------------------------------------------------------
     def servo(self, t: float, bus) -> None:
-        call = self._calls
-        self._calls += 1
-        if call % self.every:
+        if self._turns() is None:
             return
         t0 = time.perf_counter()
         self._tick(t)
