@@ -20,11 +20,11 @@ from __future__ import annotations
 
 import argparse
 import json
-import sys
 from pathlib import Path
 
 import numpy as np
 
+from humimic.errors import report_error
 from humimic.paths import SCENARIOS_DIR
 from humimic.scenario.errors import ScenarioError
 from humimic.scenario.load import parse_override
@@ -123,8 +123,7 @@ def main(argv: list[str] | None = None) -> int:
         out = args.out or default_out_dir(sweep)
         planned = plan_sweep(sweep, out)   # every run's scenario validated before any runs
     except ScenarioError as err:
-        print(f"error: {err}", file=sys.stderr)
-        return 2
+        return report_error(err)
     if not args.no_run:
         run_sweep(sweep, out, jobs=args.jobs, progress=True)
     print(table(collect(planned)))
