@@ -107,14 +107,23 @@ def _norm_factor(mag: np.ndarray, k: float) -> np.ndarray:
 
 
 def strongest_channel(*planes: np.ndarray) -> list[np.ndarray]:
-    """Per pixel, the channel whose derivatives ``planes`` (each ``(H, W, C)``) have the
-    largest squared sum: ``(H, W)`` each (the colour gradient of the strongest channel: an edge
-    between two colours of equal brightness has none in grey)."""
+    """Per pixel, the channel whose derivatives ``planes`` (each ``(H, W, 3)``) have the
+    largest squared sum (the first on ties): ``(H, W)`` each. The colour gradient of Dalal &
+    Triggs' HOG (the channel of the largest norm): an edge between two colours of equal
+    brightness has none in grey. ``(H, W)`` planes are returned as they are."""
     if planes[0].ndim == 2:
         return list(planes)
-    mag = sum(p * p for p in planes)
-    k = np.argmax(mag, axis=-1)[..., None]
-    return [np.take_along_axis(p, k, axis=-1)[..., 0] for p in planes]
+    mag = planes[0] * planes[0]
+    for p in planes[1:]:
+        mag += p * p
+    first = mag[..., 1] > mag[..., 0]
+    third = mag[..., 2] > np.where(first, mag[..., 1], mag[..., 0])
+    out = []
+    for p in planes:
+        o = np.where(first, p[..., 1], p[..., 0])
+        np.copyto(o, p[..., 2], where=third)
+        out.append(o)
+    return out
 
 
 def cue_maps(image: np.ndarray, skin_lut: ColorLUT, levels: int = 3, k_edge: float = 0.15,
