@@ -82,6 +82,12 @@ class GestConfig(Section):
     at full resolution in its box (:mod:`.blobs`). Measured at the subsampled resolution the
     nearest triangulated blob is 23 mm RMS from the hand, at full resolution 10 mm
     (menezes_gest_reach at 1.2 m; 73 against 16 mm at 1.5 m)."""
+    blob_min_area_px: float = Field(16.0, ge=1.0)
+    """Smallest skin blob (full-resolution px) the importance function looks at. A hand
+    1.5 m from the wide eyes (f = 134 px) covers 28-37 px of skin, about 19 px at 2 m (the
+    workspace's far end); with the earlier 40 px it was no candidate beyond ~1.3 m and the
+    filter lost it: menezes_gest_reach at ``human.distance: 1.75`` (hand 1.24-1.56 m), seeds
+    3-5, tracked on 58-62 % of the in-view frames, with 16 px on all of them."""
     border_px: float = Field(1.0, ge=0.0)
     """Skin blobs whose box comes closer than this (px) to an image border are cut by it (the
     hand leaving the view) and are not candidates."""
