@@ -20,6 +20,16 @@ class GestConfig(Section):
     proposes every hand-sized skin blob)."""
     cameras: tuple[str, str] | None = None
     """(left, right) eye cameras; default the rendered pair."""
+    foveal: tuple[str, str] | None = None
+    """(left, right) narrow cameras (e.g. ``[L_foveal, R_foveal]``, with ``cameras.which:
+    both``) measured instead of ``cameras`` while the last estimate's hand lies inside both
+    of their images (``foveal_margin_px``): 5.6x the wide eyes' focal length, 5.6x less
+    depth per pixel of disparity. The wide pair (re-)initialises the filter and takes over
+    when the hand leaves the narrow view; keep the hand in it with active gaze
+    (``mimic.gaze.tracker``). Each frame's camera poses are the eyes' at that frame."""
+    foveal_margin_px: float = Field(4.0, ge=0.0)
+    """The hand's image (a circle of its longest semi-axis about its centre) must keep this
+    far (px) from the narrow images' borders."""
     views: Literal[1, 2] = 1
     """Images the shape, colour and skin cues are evaluated in: 1 = the left image only (the
     paper), 2 = both (measured no better: 9.5-15 mm RMS either way on menezes_gest_reach at
