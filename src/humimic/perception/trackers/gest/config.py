@@ -154,6 +154,12 @@ class GestConfig(Section):
     lost_px: float = Field(5.0, gt=0.0)
     """The estimate is ``lost`` when its mean contour distance to edges exceeds this (px) or
     it left the image; then the filter re-initialises from the importance function."""
+    lost_rel: float = Field(0.3, ge=0.0)
+    """... or than this fraction of the hand's image radius (``fx`` times the longest
+    semi-axis over its depth), if larger: the ellipsoid's misfit to the hand's outline grows
+    with its image (3-5 px for a hand 40 px across in the foveal pair, 5-8 px on a fifth of
+    its frames, which with 5 px alone were declared lost; a hand in the wide eyes beyond
+    0.55 m keeps 5 px) ..."""
     lost_skin: float = Field(0.5, ge=0.0, le=2.0)
     """... unless its rim still separates skin from background: the skin cue's distance
     ``D_k = 1 - (skin inside - skin outside)`` at most this (a dark hand over a dark shirt has

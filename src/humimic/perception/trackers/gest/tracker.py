@@ -239,7 +239,8 @@ class GestTracker:
         support = len(use) > 0 and float(np.min(np.linalg.norm(p[use] - mean[:3], axis=1))
                                          ) <= cfg.lost_m
         self.unsupported = 0 if support else self.unsupported + 1
-        fits = d <= cfg.lost_px or float(skin_distance(proj, views[0])[0]) <= cfg.lost_skin
+        fits = (d <= lost_threshold_px(mean, left.camera, cfg.lost_px, cfg.lost_rel)
+                or float(skin_distance(proj, views[0])[0]) <= cfg.lost_skin)
         status = ("tracking" if (s.ok and proj.valid[0] and fits
                                  and _centre_in_image(mean, left)
                                  and self.unsupported < cfg.lost_frames) else "lost")
@@ -316,6 +317,17 @@ class GestTracker:
             boxes.append(np.array([[uv[0] - r, uv[1] - r, 2 * r, 2 * r]]))
         box = roi_box(np.concatenate(boxes), K.width, K.height, DT_CAP_PX)
         return box if box is not None else (0, 0, K.width, K.height)
+
+
+def lost_threshold_px(state: np.ndarray, camera, floor_px: float, rel: float) -> float:
+    """The largest mean contour distance (px) of a tracked hand: ``rel`` times its image
+    radius (``fx`` times the longest semi-axis over the centre's depth; the ellipsoid's misfit
+    to the hand's outline grows with its image), at least ``floor_px``."""
+    T = camera.T_cam_base
+    depth = float(T[2, :3] @ state[:3] + T[2, 3])
+    if depth <= 0.0:
+        return floor_px
+    return max(floor_px, rel * camera.intrinsics.fx * float(np.max(state[6:9])) / depth)
 
 
 def centre_update(x: np.ndarray, P: np.ndarray, z: np.ndarray, R: np.ndarray, sigma: float
