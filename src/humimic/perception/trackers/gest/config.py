@@ -30,6 +30,13 @@ class GestConfig(Section):
     foveal_margin_px: float = Field(4.0, ge=0.0)
     """The hand's image (a circle of its longest semi-axis about its centre) must keep this
     far (px) from the narrow images' borders."""
+    foveal_offset: bool = False
+    """Correct the foveal pair's candidates by the estimate's silhouette offset as the wide
+    pair's (:mod:`.tracker`). Off: with the eyes on the hand it images near both optical
+    axes, where the offset is small and its estimate carries the orientation's error (50-80
+    deg): menezes_gest_far with the person at 0.9 m (hand 0.5-0.9 m), seed 4, 19.3 mm RMS
+    with it, 9.4 without; at 1.75 m, seeds 3-4, 8.6-9.5 with, 8.5 without. (In the wide
+    pair, the hand off-axis, it helps: menezes_gest_reach 7.1 mm with, 8.8 without.)"""
     views: Literal[1, 2] = 1
     """Images the shape, colour and skin cues are evaluated in: 1 = the left image only (the
     paper), 2 = both (measured no better: 9.5-15 mm RMS either way on menezes_gest_reach at

@@ -70,7 +70,9 @@ class GestStage(PoseTrackerStage):
         left, right = choose_pair(wide, narrow, self.tracker.last, self.cfg.foveal_margin_px)
         if self.used and self.used[-1] is not None and self.used[-1].name != left.camera.name:
             self.tracker.offset = np.zeros(3)    # the silhouette offset is the other pair's
-        res = self.tracker.step(left, right, self.rng)
+        narrowed = narrow is not None and left is narrow[0]
+        res = self.tracker.step(left, right, self.rng,
+                                silhouette_offset=self.cfg.foveal_offset or not narrowed)
         self.results.append(res)
         self.left_cams.append(wide[0].camera)
         self.used.append(left.camera)

@@ -188,8 +188,10 @@ class GestTracker:
             idx = idx[[int(np.argmax(p[idx, 2]))]]
         return idx
 
-    def step(self, left: CameraImage, right: CameraImage, rng: np.random.Generator
-             ) -> GestResult:
+    def step(self, left: CameraImage, right: CameraImage, rng: np.random.Generator,
+             silhouette_offset: bool = True) -> GestResult:
+        """One stereo frame; ``silhouette_offset`` False: the candidates are taken as the
+        hand's centre (no :meth:`_silhouette_offset`)."""
         cfg = self.cfg
         frames = (left, right)
         near = [self._near(f) for f in frames]
@@ -248,8 +250,9 @@ class GestTracker:
             self.orientation = mean[3:6]
             self.last, self.anchor = mean, mean[:3]
             self.lost_for = 0
-            self.offset = self._silhouette_offset(mean, proj, centres[0, 1] + origin[1], origin[0],
-                                                  (left.camera, right.camera))
+            self.offset = (self._silhouette_offset(mean, proj, centres[0, 1] + origin[1],
+                                                   origin[0], (left.camera, right.camera))
+                           if silhouette_offset else np.zeros(3))
             if cfg.position == "kalman" and len(use):
                 j = use[int(np.argmin(np.linalg.norm(p[use] - mean[:3], axis=1)))]
                 mean[:3] = self._centre_update(p[j] + self.offset,
