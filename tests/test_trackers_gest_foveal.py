@@ -92,11 +92,13 @@ def test_both_kinds_of_eye_camera_are_rendered_wide_first():
 
 
 def test_far_reach_position_error(tmp_path):
-    """menezes_gest_far (hand 1.24-1.56 m from the eyes), seed 3, first 2.5 s. Measured
-    over the whole 4 s: 8.7 mm RMS (seeds 3-5: 8.7-9.5; skins (0.45, 0.30, 0.22) and (0.55,
-    0.38, 0.28): 6.3, 6.6; person at 1.5 / 2.0 m: 7.9 / 6.5), tracked on every in-view frame,
-    99 % of them in the foveal pair; in the wide pair alone 22-23 mm (before the 16 px blob
-    floor: 16-21 mm on the 58-62 % of frames it tracked)."""
+    """menezes_gest_far (hand 1.24-1.56 m from the eyes), seed 3, first 2.5 s: measured
+    8.9 mm RMS (2.9 median; the first frame, from the wide pair, 60 mm), tracked on every
+    in-view frame, 99 % in the foveal pair. Over the whole 4 s, seeds 3-5: 8.8 mm (skins
+    (0.45, 0.30, 0.22) and (0.55, 0.38, 0.28): 6.7-6.9; person at 0.9 / 1.5 / 2.0 m: 11.5 /
+    6.3 / 6.0); the same run in the wide pair: 21 mm (this test fails it on the foveal
+    fraction); the wide pair with the eyes still 22-23 mm (before the 16 px blob floor: 16-21
+    mm on the 58-62 % of frames it tracked)."""
     from humimic.paths import SCENARIOS_DIR
     from humimic.run import run_one
     from humimic.scenario import load_scenario
