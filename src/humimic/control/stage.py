@@ -21,6 +21,7 @@ import time
 
 import numpy as np
 
+from humimic.control.decimate import Decimator
 from humimic.control.gaze import Gaze
 from humimic.control.ik import MimicIK, build_robot_model, on_limit_band
 from humimic.control.interpolation import CartesianInterpolator
@@ -136,7 +137,7 @@ class MimicStage(Stage):
         self.gaze_latest: tuple | None = None
         """``(t, TargetEstimate, t_ready)`` of the gaze target from ``gaze.tracker``."""
         self.v_prev = np.zeros(len(ROBOT_JOINTS))
-        self._calls = 0
+        self._turns = Decimator(self.every)
         self._timer = None
 
     def _channel(self, target: str, site: str, p0_base: np.ndarray) -> Channel:
@@ -191,9 +192,7 @@ class MimicStage(Stage):
 
     # ---- servo ----------------------------------------------------------------------------
     def servo(self, t: float, bus) -> None:
-        call = self._calls
-        self._calls += 1
-        if call % self.every:
+        if self._turns() is None:
             return
         t0 = time.perf_counter()
         self._tick(t)
