@@ -130,3 +130,16 @@ def test_bad_foveal_input_exits_2_naming_the_key(tmp_path, capsys, text, must_co
     assert len(err.splitlines()) == 1, err
     for piece in must_contain:
         assert piece in err, f"{piece!r} not in {err!r}"
+
+
+def test_covering_an_eye_covers_both_its_cameras_when_both_are_rendered():
+    from humimic.paths import SCENARIOS_DIR
+    from humimic.rngs import Rngs
+    from humimic.scenario import load_scenario
+    from humimic.world.world import World
+
+    sc = load_scenario(SCENARIOS_DIR / "static.yaml",
+                       ["cameras.which=both", "cameras.covered=[{camera: left, start: 0, end: 1}]"])
+    w = World(sc, Rngs(0))
+    assert w.eye_cameras == ["L_wide", "R_wide", "L_foveal", "R_foveal"]
+    assert w.faults.frames.covered == {"L_wide": [(0.0, 1.0)], "L_foveal": [(0.0, 1.0)]}
