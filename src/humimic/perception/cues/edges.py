@@ -17,6 +17,7 @@ printed equation lacks the minus sign). Table 3's sigma_s = 36 for N_p = 30 poin
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import cv2
@@ -104,7 +105,7 @@ def remap_uv(image: np.ndarray, u: np.ndarray, v: np.ndarray, outside, interpola
         mx = np.asarray(u, np.float32).reshape(-1, last)
         my = np.asarray(v, np.float32).reshape(-1, last)
     else:
-        m = int(np.prod(shape))
+        m = math.prod(shape)
         rows = max(1, -(-m // 1024))
         mx = np.full(rows * 1024, -1e6, np.float32)
         my = np.full(rows * 1024, -1e6, np.float32)
@@ -112,7 +113,7 @@ def remap_uv(image: np.ndarray, u: np.ndarray, v: np.ndarray, outside, interpola
         mx, my = mx.reshape(rows, 1024), my.reshape(rows, 1024)
     out = cv2.remap(image, mx, my, interpolation, borderMode=cv2.BORDER_CONSTANT,
                     borderValue=outside)
-    m = int(np.prod(shape))
+    m = math.prod(shape)                    # np.prod of a tuple costs ~10 us, an array's
     return out.reshape(mx.size, -1)[:m].reshape(shape + out.shape[2:])
 
 
