@@ -104,8 +104,7 @@ def views_components(ellipsoids: tuple, T_cam_base: np.ndarray) -> tuple[np.ndar
     e = np.stack(conics.dual_ellipse(Bc, t)[:5])                          # Menezes eq. 15
     # wholly in front: the ellipsoid's reach along the optical axis is sqrt(B_22)
     valid = t[..., 2] - np.sqrt(np.maximum(Bc[..., 5], 0.0)) > Z_MIN
-    with np.errstate(invalid="ignore"):
-        valid &= np.isfinite(e.sum(axis=0))
+    valid &= np.isfinite(e).all(axis=0)
     return np.where(valid, e, _INVALID[:, None, None]), valid
 
 

@@ -170,7 +170,7 @@ class GestTracker:
         (cropped) left view, ``centre_right`` its ellipse's centre in the right image (px)."""
         c_l = proj_left.patch_state[0, :2] + origin_left
         c_r = centre_right
-        if not (proj_left.valid[0] and np.isfinite(np.r_[c_l, c_r]).all()
+        if not (proj_left.valid[0] and np.isfinite(c_l).all() and np.isfinite(c_r).all()
                 and np.abs(c_r).max() < 1e5):
             return np.zeros(3)
         off = mean[:3] - triangulate_pixels(cams[0], cams[1], c_l[None], c_r[None])[0]
