@@ -1,7 +1,7 @@
 """GEST's measurement function (Menezes sec. 6.1.2): ``p(z^S, z^C | x) = p(z^S|x) p(z^C|x)``
 for hand-ellipsoid states, vectorised over particles.
 
-The ellipsoids are projected with eq. 15 (:func:`image_ellipses`, the body model's conics);
+The ellipsoids are projected with eq. 15 (its dual form, :func:`views_components`);
 ``n_points`` contour points (at equal steps of the ellipse's parameter, normals in closed
 form; checked against the dual-quadric projection in tests) sample the frame's distance
 transform (shape cue,
@@ -149,19 +149,12 @@ def _circle(n_points: int) -> tuple[np.ndarray, np.ndarray]:
     return cos, sin
 
 
-def ellipse_projection(centre: np.ndarray, M: np.ndarray, valid: np.ndarray, intrinsics,
-                       n_points: int) -> HandProjection:
-    """Contour points, normals and colour patch of image ellipses ``(centre (N, 2), M
-    (N, 2, 2), valid (N,))`` (:func:`project_hands`)."""
-    e = np.stack([centre[:, 0], centre[:, 1], M[:, 0, 0], M[:, 0, 1], M[:, 1, 1]])
-    return components_projection(e, valid, intrinsics, n_points)
-
-
 def components_projection(e: np.ndarray, valid: np.ndarray, intrinsics, n_points: int
                           ) -> HandProjection:
-    """:func:`ellipse_projection` of image ellipses given as ``e (5, N)`` = ``cx, cy, m00,
-    m01, m11`` (:func:`views_components`): ``centre + L (cos psi, sin psi)`` with ``L`` the
-    Cholesky factor of ``M``, normals ``L^-T (cos psi, sin psi)``."""
+    """Contour points, normals and colour patch (:func:`project_hands`) of image ellipses
+    given as ``e (5, N)`` = ``cx, cy, m00, m01, m11`` (:func:`views_components`) and ``valid
+    (N,)``: ``centre + L (cos psi, sin psi)`` with ``L`` the Cholesky factor of ``M``, normals
+    ``L^-T (cos psi, sin psi)``."""
     cx, cy, m00, m01, m11 = e
     n = len(cx)
     l00 = np.sqrt(np.maximum(m00, 1e-300))
