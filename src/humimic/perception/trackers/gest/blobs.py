@@ -24,7 +24,7 @@ def hand_blobs(image: np.ndarray, lut: ColorLUT, subsample: int = 2,
     """Skin blobs of an RGB ``image`` (``lut``'s posterior above ``threshold``), found at
     ``subsample`` and measured at full resolution (module docstring)."""
     s = int(subsample)
-    small = np.ascontiguousarray(image[::s, ::s])
+    small = image[::s, ::s]                      # a view: the posterior is per pixel
     coarse = skin_blobs((lut.posterior(small) > threshold).astype(np.uint8), 1,
                         min_area_px=40.0 / (s * s))
     if s == 1 or len(coarse.areas) == 0:

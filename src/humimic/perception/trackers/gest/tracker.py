@@ -290,7 +290,7 @@ class GestTracker:
         if near is not None and cfg.roi:
             K = frame.camera.intrinsics
             uv, depth = near
-            r = K.fx * (cfg.gate_m + float(np.max(self.last[6:]))) / max(depth, 0.05)
+            r = K.fx * (cfg.gate_m + float(self.last[6:].max())) / max(depth, 0.05)
             if np.isfinite(uv).all():
                 box = roi_box(np.array([[uv[0] - r, uv[1] - r, 2 * r, 2 * r]]), K.width,
                               K.height, 0.0)
@@ -301,7 +301,7 @@ class GestTracker:
         if box is None:
             return b
         shift = np.array(box[:2], float)
-        return Blobs(b.centers + shift, b.boxes + np.r_[shift, 0.0, 0.0], b.areas)
+        return Blobs(b.centers + shift, b.boxes + (box[0], box[1], 0.0, 0.0), b.areas)
 
     def _roi(self, frame: CameraImage, blobs, centroids, near: tuple[np.ndarray, float] | None
              ) -> tuple[int, int, int, int] | None:
