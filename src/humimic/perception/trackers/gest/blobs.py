@@ -25,7 +25,7 @@ def hand_blobs(image: np.ndarray, lut: ColorLUT, subsample: int = 2,
     ``min_area_px`` (full-resolution px), found at ``subsample`` and measured at full
     resolution (module docstring)."""
     s = int(subsample)
-    small = np.ascontiguousarray(image[::s, ::s])
+    small = image[::s, ::s]                      # a view: the posterior is per pixel
     coarse = skin_blobs((lut.posterior(small) > threshold).astype(np.uint8), 1,
                         min_area_px=min_area_px / (s * s))
     if s == 1 or len(coarse.areas) == 0:

@@ -170,7 +170,7 @@ class GestTracker:
         (cropped) left view, ``centre_right`` its ellipse's centre in the right image (px)."""
         c_l = proj_left.patch_state[0, :2] + origin_left
         c_r = centre_right
-        if not (proj_left.valid[0] and np.isfinite(np.r_[c_l, c_r]).all()
+        if not (proj_left.valid[0] and np.isfinite(c_l).all() and np.isfinite(c_r).all()
                 and np.abs(c_r).max() < 1e5):
             return np.zeros(3)
         off = mean[:3] - triangulate_pixels(cams[0], cams[1], c_l[None], c_r[None])[0]
@@ -294,7 +294,7 @@ class GestTracker:
         if near is not None and cfg.roi:
             K = frame.camera.intrinsics
             uv, depth = near
-            r = K.fx * (cfg.gate_m + float(np.max(self.last[6:]))) / max(depth, 0.05)
+            r = K.fx * (cfg.gate_m + float(self.last[6:].max())) / max(depth, 0.05)
             if np.isfinite(uv).all():
                 box = roi_box(np.array([[uv[0] - r, uv[1] - r, 2 * r, 2 * r]]), K.width,
                               K.height, 0.0)
@@ -306,7 +306,7 @@ class GestTracker:
         if box is None:
             return b
         shift = np.array(box[:2], float)
-        return Blobs(b.centers + shift, b.boxes + np.r_[shift, 0.0, 0.0], b.areas)
+        return Blobs(b.centers + shift, b.boxes + (box[0], box[1], 0.0, 0.0), b.areas)
 
     def _roi(self, frame: CameraImage, blobs, centroids, near: tuple[np.ndarray, float] | None
              ) -> tuple[int, int, int, int] | None:
