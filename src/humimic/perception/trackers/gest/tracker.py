@@ -228,7 +228,7 @@ class GestTracker:
                  else np.zeros(3))
         # cue images where the likelihood looks (the left image only with ``views: 1``;
         # the right camera then only places its ellipse centres for the stereo cue)
-        boxes = [self._roi(f, b, pairs[:, i] if len(pairs) else None, n)
+        boxes = [self._roi(f, b, pairs[:, i] if len(pairs) else None, n, k)
                  if cfg.roi and i < cfg.views else None
                  for i, (f, b, n) in enumerate(zip(frames, blobs, near, strict=True))]
         views = [hand_view(crop_frame(f, b, k), cfg.bins, self.lut, cfg.edges == "colour")
@@ -321,7 +321,7 @@ class GestTracker:
                               K.height, 0.0)
         image = frame.image if box is None else frame.image[box[1]:box[3], box[0]:box[2]]
         h, w = image.shape[:2]
-        b = interior_blobs(hand_blobs(image, self.lut, cfg.blob_subsample * k,
+        b = interior_blobs(hand_blobs(image, self.lut, cfg.blob_subsample * (1 if __import__("os").environ.get("I13_NOSUB") else k),
                                             min_area_px=cfg.blob_min_area_px), w, h,
                            cfg.border_px)
         if box is None:
@@ -329,17 +329,18 @@ class GestTracker:
         shift = np.array(box[:2], float)
         return Blobs(b.centers + shift, b.boxes + (box[0], box[1], 0.0, 0.0), b.areas)
 
-    def _roi(self, frame: CameraImage, blobs, centroids, near: tuple[np.ndarray, float] | None
-             ) -> tuple[int, int, int, int] | None:
+    def _roi(self, frame: CameraImage, blobs, centroids, near: tuple[np.ndarray, float] | None,
+             k: int = 1) -> tuple[int, int, int, int] | None:
         """The box the cues are computed in (:mod:`.roi`): the hand-sized blobs matched in
-        stereo, the blobs near the last estimate, padded by the distance transform's cap."""
+        stereo, the blobs near the last estimate, padded by the distance transform's cap (in
+        the pixels of the cue images, decimated by ``k``)."""
         K = frame.camera.intrinsics
         boxes = [blobs.boxes[_matched(blobs, centroids)]]
         if near is not None:
             uv, depth = near
             r = 1.5 * K.fx * float(np.max(self.last[6:])) / max(depth, 0.05)
             boxes.append(np.array([[uv[0] - r, uv[1] - r, 2 * r, 2 * r]]))
-        box = roi_box(np.concatenate(boxes), K.width, K.height, DT_CAP_PX)
+        box = roi_box(np.concatenate(boxes), K.width, K.height, DT_CAP_PX * k)
         return box if box is not None else (0, 0, K.width, K.height)
 
 
