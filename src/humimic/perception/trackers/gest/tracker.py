@@ -321,7 +321,7 @@ class GestTracker:
                               K.height, 0.0)
         image = frame.image if box is None else frame.image[box[1]:box[3], box[0]:box[2]]
         h, w = image.shape[:2]
-        b = interior_blobs(hand_blobs(image, self.lut, cfg.blob_subsample * (1 if __import__("os").environ.get("I13_NOSUB") else k),
+        b = interior_blobs(hand_blobs(image, self.lut, cfg.blob_subsample * k,
                                             min_area_px=cfg.blob_min_area_px), w, h,
                            cfg.border_px)
         if box is None:
