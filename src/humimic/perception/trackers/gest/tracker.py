@@ -206,7 +206,7 @@ class GestTracker:
         frames = (left, right)
         near = [self._near(f) for f in frames]
         k = self._decimation(left, near[0])
-        blobs = [self._blobs(f, n, k) for f, n in zip(frames, near, strict=True)]
+        blobs = [self._blobs(f, n) for f, n in zip(frames, near, strict=True)]
         p, cov, cen1, pairs = stereo_candidates(blobs[0], blobs[1], left.camera, right.camera,
                                                 cfg.max_epipolar_px, cfg.blob_size,
                                                 cfg.blob_sigma_scale, 1.0)
@@ -298,15 +298,14 @@ class GestTracker:
         return uv, float(np.linalg.norm(self.last[:3] - frame.camera.T_base_cam[:3, 3]))
 
     def _decimation(self, frame: CameraImage, near: tuple[np.ndarray, float] | None) -> int:
-        """The block size the frame's cue images and blob search work at (``cue_radius_px``):
+        """The block size the frame's cue images are computed at (``cue_radius_px``):
         from the last estimate's image radius in ``frame`` (1 without an estimate)."""
         if near is None or self.cfg.cue_radius_px is None:
             return 1
         r = frame.camera.intrinsics.fx * float(np.max(self.last[6:])) / max(near[1], 0.05)
         return decimation(r, self.cfg.cue_radius_px)
 
-    def _blobs(self, frame: CameraImage, near: tuple[np.ndarray, float] | None, k: int = 1
-               ) -> Blobs:
+    def _blobs(self, frame: CameraImage, near: tuple[np.ndarray, float] | None) -> Blobs:
         """The frame's skin blobs that are not cut by the image border; while tracking, only
         in the box the gate projects to around the last estimate (blobs cut by that box too
         are dropped): the candidates outside it would be gated out anyway."""
@@ -321,7 +320,7 @@ class GestTracker:
                               K.height, 0.0)
         image = frame.image if box is None else frame.image[box[1]:box[3], box[0]:box[2]]
         h, w = image.shape[:2]
-        b = interior_blobs(hand_blobs(image, self.lut, cfg.blob_subsample * k,
+        b = interior_blobs(hand_blobs(image, self.lut, cfg.blob_subsample,
                                             min_area_px=cfg.blob_min_area_px), w, h,
                            cfg.border_px)
         if box is None:
