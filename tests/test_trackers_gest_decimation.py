@@ -73,7 +73,7 @@ def test_block_size_keeps_the_hand_within_one_to_two_budgets():
 def test_the_stereo_cue_in_decimated_pixels_is_the_full_resolution_one_plus_a_constant():
     """Centres and pairs mapped to block ``k``, sigma / k, outlier density * k^4 (two 2-D
     images): the same log-likelihood up to ``4 log k`` (what the tracker does)."""
-    rng = np.random.default_rng(1)
+    rng = np.random.default_rng(0)
     centres = rng.uniform(0, 300, (50, 2, 2))
     pairs = centres[rng.integers(0, 50, 3)] + rng.normal(0, 0.2, (3, 2, 2))
     full = blob_pair_log_likelihood(centres, pairs, 0.08, 1e-12)
@@ -87,23 +87,27 @@ def test_the_stereo_cue_in_decimated_pixels_is_the_full_resolution_one_plus_a_co
 
 def test_tracks_a_large_hand_image_on_decimated_cues():
     """A hand 22 px in radius (1 m from 60-degree eyes) moving 5 mm per frame, its cues at
-    block 2 (``cue_radius_px`` 10): measured (seed 0) as accurate as at full resolution
-    (the blob centroids stay full resolution): errors <= 14 mm either way."""
+    blocks of 2 (``cue_radius_px`` 8) from the second frame on. Measured (seeds 0-3): tracked
+    throughout; the outline's mean distance to the edges 1.3-2.9 full-resolution px (at full
+    resolution 0.9-2.9); the centre as at full resolution (from the full-resolution blobs),
+    <= 14 mm off."""
     lut = ColorLUT(load_color_model(DEFAULT_COLOR_MODEL), 6)
     cams = stereo_head(k1=0.0, k2=0.0)
     bgs = [np.full((240, 320, 3), 70, np.uint8)] * 2
     path = [HAND + np.r_[0.0, 0.005 * k, 0.0, np.zeros(6)] for k in range(12)]
     frames = [_draw(bgs, cams, [hand]) for hand in path]
     errs = {}
-    for budget in (None, 10.0):
+    for budget in (None, 8.0):
         trk = GestTracker(GestConfig(cue_radius_px=budget), lut)
         rng = np.random.default_rng(0)
-        blocks, err = [], []
+        blocks, err, fit = [], [], []
         for hand, (left, right) in zip(path, frames, strict=True):
             blocks.append(trk._decimation(left, trk._near(left)))
             res = trk.step(left, right, rng)
             assert res.status == "tracking"
             err.append(np.linalg.norm(res.mean[:3] - hand[:3]))
+            fit.append(res.shape_px * blocks[-1])             # full-resolution px
         errs[budget] = max(err)
+        assert max(fit[1:]) < 5.0
         assert blocks[1:] == [1 if budget is None else 2] * 11
-    assert errs[10.0] < 0.035 and errs[None] < 0.035
+    assert errs[8.0] < 0.03 and errs[None] < 0.03
