@@ -7,6 +7,10 @@ cropped frame is an ordinary :class:`~humimic.sensors.camera_model.CameraImage` 
 function works on it unchanged. A contour point outside the box counts as off the image (the
 distance transform's cap), as it would at the border of a smaller image; the box is padded by
 that cap so that a point near the hand sees the same distance as in the full image.
+
+A hand that images large (the foveal pair) is seen in the box averaged over ``k x k`` pixel
+blocks (``cue_radius_px``): a change of the intrinsics too (``f / k``, ``(c + 0.5) / k -
+0.5``), so the cues work on it unchanged, at a cost bounded by the hand's size in blocks.
 """
 
 from __future__ import annotations
@@ -58,6 +62,13 @@ def crop_frame(frame: CameraImage, box: tuple[int, int, int, int] | None, k: int
         image = cv2.resize(image, (crop.width, crop.height), interpolation=cv2.INTER_AREA)
     cam = dataclasses.replace(frame.camera, intrinsics=crop)
     return CameraImage(frame.t, cam, image)
+
+
+def decimated_camera(camera, k: int):
+    """``camera`` with its intrinsics decimated by ``k`` (as is for 1)."""
+    if k == 1:
+        return camera
+    return dataclasses.replace(camera, intrinsics=camera.intrinsics.decimated(k))
 
 
 def to_view_px(uv: np.ndarray, origin: np.ndarray, k: int = 1) -> np.ndarray:

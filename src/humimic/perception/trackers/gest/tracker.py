@@ -34,7 +34,6 @@ orientation is the particles' mean rotation modulo the ellipsoid's symmetries
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -65,6 +64,7 @@ from humimic.perception.trackers.gest.likelihood import (
 from humimic.perception.trackers.gest.proposal import CandidateProposal, PoseReset
 from humimic.perception.trackers.gest.roi import (
     crop_frame,
+    decimated_camera,
     decimation,
     roi_box,
     to_full_px,
@@ -233,7 +233,7 @@ class GestTracker:
                  for i, (f, b, n) in enumerate(zip(frames, blobs, near, strict=True))]
         views = [hand_view(crop_frame(f, b, k), cfg.bins, self.lut, cfg.edges == "colour")
                  if i < cfg.views
-                 else _Geometry(_decimated(f.camera, k)) for i, (f, b) in
+                 else _Geometry(decimated_camera(f.camera, k)) for i, (f, b) in
                  enumerate(zip(frames, boxes, strict=True))]
         origin = np.array([(0, 0) if b is None else b[:2] for b in boxes], float)
         importance = None
@@ -376,13 +376,6 @@ def _centre_in_image(state: np.ndarray, frame: CameraImage) -> bool:
     K = frame.camera.intrinsics
     uv = frame.camera.project_base(state[:3])
     return bool(np.isfinite(uv).all() and 0 <= uv[0] < K.width and 0 <= uv[1] < K.height)
-
-
-def _decimated(camera, k: int):
-    """``camera`` with its intrinsics decimated by ``k`` (as is for 1)."""
-    if k == 1:
-        return camera
-    return dataclasses.replace(camera, intrinsics=camera.intrinsics.decimated(k))
 
 
 @dataclass(frozen=True)
