@@ -115,7 +115,8 @@ def test_far_reach_position_error(tmp_path, budget):
 
 
 @pytest.mark.parametrize("bad", [{"blob_min_area_px": 0.5}, {"lost_rel": -0.1},
-                                 {"foveal_margin_px": -1.0}, {"foveal": ["L_foveal"]}])
+                                 {"foveal_margin_px": -1.0}, {"foveal": ["L_foveal"]},
+                                 {"cue_radius_px": 0.0}])
 def test_bad_foveal_settings_are_rejected(bad):
     with pytest.raises(ValueError):
         GestConfig(**bad)
