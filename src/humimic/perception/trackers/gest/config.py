@@ -49,11 +49,11 @@ class GestConfig(Section):
     px: the foveal frames as accurate at every distance (5.3-7.1 mm RMS against 6.5-7.2),
     the scenario's RMS unchanged at 1.75 m (8.7-8.8 mm) and 1.2 m (7.0-7.9 against
     7.2-8.1); a foveal frame's thread CPU 4.5-5.1 against 5.2-5.8 ms at 1.75 m, 4.7-4.8
-    against 6.0-6.6 at 1.2 m (load 3-4; bench_trackers: 4.5 against 5.1-5.2 ms, the wide
-    pair 3.6-4.2). Not on by default: with the person at 0.9 m (hand 0.5-0.9 m, 40-45 % of
-    the frames foveal) the wide pair's frames after the foveal ones came out worse in all 6
-    runs with 12 or 20 px (13.2-24.6 mm RMS on them against 12.3-13.9; the scenario
-    10.7-19.6 against 10.2-11.5 mm), cause not found."""
+    against 6.0-6.6 at 1.2 m (load 3-4; bench_trackers, 4 runs: 4.1-4.6 against 4.6-5.2 ms,
+    the wide pair on the same frames 3.2-4.2). Not on by default: with the person at 0.9 m
+    (hand 0.5-0.9 m, 40-45 % of the frames foveal) the wide pair's frames after the foveal
+    ones came out worse in all 6 runs with 12 or 20 px (13.2-24.6 mm RMS on them against
+    12.3-13.9; the scenario 10.7-19.6 against 10.2-11.5 mm), cause not found."""
     views: Literal[1, 2] = 1
     """Images the shape, colour and skin cues are evaluated in: 1 = the left image only (the
     paper), 2 = both (measured no better: 9.5-15 mm RMS either way on menezes_gest_reach at
