@@ -1,13 +1,16 @@
 """Speed of Menezes' 3-D trackers per frame, rendering excluded (issue 13's goals: GEST >= 250
 fps at N = 100, TBP >= 20 fps at N = 400, on this 2-core machine).
 
-Run: ``python benchmarks/bench_trackers.py [--frames 30] [--repeats 3]``. Renders the frames
-of ``menezes_gest_reach`` (stereo) and ``fig12_tbp_pointing`` (left eye) once, then times the
-trackers' ``step`` over them (median and interquartile range over repeats of the whole
-sequence, each from a fresh tracker), and the per-frame image preparation alone. ``--clock cpu``
-(default) is ``time.process_time``, every thread of this process: on a shared machine the wall
-clock mostly measures the other sessions, but on a quiet one OpenCV's idle workers make CPU time
-exceed the wall; ``--clock wall`` is what a user of a quiet machine sees.
+Run: ``python benchmarks/bench_trackers.py [--frames 30] [--repeats 3] [--only gest-far]``.
+Renders the frames of ``menezes_gest_reach`` (stereo), ``menezes_gest_far`` (both eyes' wide
+and foveal cameras, the eyes on the hand) and ``fig12_tbp_pointing`` (left eye) once, then
+times the trackers' ``step`` over them (GEST on the far frames in the foveal pair with its cue
+images at full resolution and within ``cue_radius_px``, and in the wide pair; median and
+interquartile range over repeats of the whole sequence, each from a fresh tracker), and the
+per-frame image preparation alone. ``--clock cpu`` (default) is ``time.process_time``, every
+thread of this process: on a shared machine the wall clock mostly measures the other sessions,
+but on a quiet one OpenCV's idle workers make CPU time exceed the wall; ``--clock wall`` is
+what a user of a quiet machine sees.
 """
 
 # ruff: noqa: I001  -- humimic must be imported before mujoco (headless GL)
