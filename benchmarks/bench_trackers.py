@@ -1,13 +1,16 @@
 """Speed of Menezes' 3-D trackers per frame, rendering excluded (issue 13's goals: GEST >= 250
 fps at N = 100, TBP >= 20 fps at N = 400, on this 2-core machine).
 
-Run: ``python benchmarks/bench_trackers.py [--frames 30] [--repeats 3]``. Renders the frames
-of ``menezes_gest_reach`` (stereo) and ``fig12_tbp_pointing`` (left eye) once, then times the
-trackers' ``step`` over them (median and interquartile range over repeats of the whole
-sequence, each from a fresh tracker), and the per-frame image preparation alone. ``--clock cpu``
-(default) is ``time.process_time``, every thread of this process: on a shared machine the wall
-clock mostly measures the other sessions, but on a quiet one OpenCV's idle workers make CPU time
-exceed the wall; ``--clock wall`` is what a user of a quiet machine sees.
+Run: ``python benchmarks/bench_trackers.py [--frames 30] [--repeats 3] [--only gest-far]``.
+Renders the frames of ``menezes_gest_reach`` (stereo), ``menezes_gest_far`` (both eyes' wide
+and foveal cameras, the eyes on the hand) and ``fig12_tbp_pointing`` (left eye) once, then
+times the trackers' ``step`` over them (GEST on the far frames in the foveal pair with its cue
+images at full resolution and within ``cue_radius_px``, and in the wide pair; median and
+interquartile range over repeats of the whole sequence, each from a fresh tracker), and the
+per-frame image preparation alone. ``--clock cpu`` (default) is ``time.process_time``, every
+thread of this process: on a shared machine the wall clock mostly measures the other sessions,
+but on a quiet one OpenCV's idle workers make CPU time exceed the wall; ``--clock wall`` is
+what a user of a quiet machine sees.
 """
 
 # ruff: noqa: I001  -- humimic must be imported before mujoco (headless GL)
@@ -24,7 +27,7 @@ select_gl_backend()  # before anything imports mujoco
 import mujoco
 import numpy as np
 
-from humimic.bodymodel.avatar import truth_state
+from humimic.bodymodel.avatar import truth_hand_state, truth_state
 from humimic.paths import SCENARIOS_DIR
 from humimic.rngs import Rngs
 from humimic.scenario import load_scenario
@@ -33,7 +36,10 @@ from humimic.world.world import World
 GOALS_FPS = {"gest": 250.0, "tbp": 20.0}
 
 
-def render(name: str, n: int, cams: int):
+def render(name: str, n: int, cams: int, gaze: bool = False):
+    """The first ``n`` frames of scenario ``name`` from its first ``cams`` eye cameras; with
+    ``gaze`` the eyes turned to the person's right hand in every frame (as the active gaze
+    keeps it in the foveal pair)."""
     sc = load_scenario(SCENARIOS_DIR / name, duration=n / 30 + 0.2)
     rngs = Rngs(sc.seed)
     world = World(sc, rngs)
@@ -43,6 +49,8 @@ def render(name: str, n: int, cams: int):
         tick = world.gt.index_of(t)
         world.apply_human(tick)
         mujoco.mj_forward(world.scene.model, world.scene.data)
+        if gaze:
+            world._look_at(truth_hand_state(world, tick, "R", np.eye(4))[:3])
         imgs = world.eye_rig.capture(t)
         frames.append((t, tick, [imgs[c] for c in world.eye_cameras[:cams]]))
     return sc, world, rngs, frames
@@ -82,6 +90,9 @@ def main() -> None:
     ap.add_argument("--cv-threads", type=int, default=None,
                     help="cv2.setNumThreads before timing (default: OpenCV's own, one worker "
                          "per core; on these small images 1 is faster and spins no workers)")
+    ap.add_argument("--only", nargs="+", choices=("gest", "gest-far", "tbp"),
+                    help="time only these (default all): GEST on menezes_gest_reach, on "
+                         "menezes_gest_far (foveal and wide pairs), TBP")
     args = ap.parse_args()
     global clock
     clock = CLOCK[args.clock]
@@ -90,6 +101,17 @@ def main() -> None:
 
         cv2.setNumThreads(args.cv_threads)
 
+    sections = {"gest": wide_gest, "gest-far": foveal_gest, "tbp": tbp}
+    for name in args.only or tuple(sections):
+        sections[name](args)
+    import cv2
+
+    print(f"({args.clock} time; quartiles over {args.repeats} runs of {args.frames} frames each; "
+          f"OpenCV threads {cv2.getNumThreads()}; load average {os.getloadavg()[0]:.1f})")
+
+
+def wide_gest(args) -> None:
+    """GEST on ``menezes_gest_reach`` (the wide pair)."""
     from humimic.perception.cues.importance import skin_blobs
     from humimic.perception.trackers.gest.build import gest_stage
 
@@ -113,6 +135,9 @@ def main() -> None:
         args.repeats))
     world.eye_rig.close()
 
+
+def tbp(args) -> None:
+    """TBP on ``fig12_tbp_pointing`` (left eye)."""
     from humimic.perception.trackers.tbp.build import tbp_stage
     from humimic.perception.trackers.tbp.likelihood import arm_view
     from humimic.perception.trackers.tbp.tracker import TbpTracker
@@ -135,10 +160,44 @@ def main() -> None:
         lambda trk: [arm_view(f, None, trk.lut, 32) for _, _, (f,) in frames] and len(frames),
         args.repeats))
     world.eye_rig.close()
-    import cv2
 
-    print(f"({args.clock} time; quartiles over {args.repeats} runs of {args.frames} frames each; "
-          f"OpenCV threads {cv2.getNumThreads()}; load average {os.getloadavg()[0]:.1f})")
+
+def foveal_gest(args) -> None:
+    """GEST on ``menezes_gest_far`` (hand 1.2-1.6 m away) with the eyes on the hand: in the
+    foveal pair (its cue images at full resolution and within ``cue_radius_px``) and, on
+    the same frames, in the wide pair."""
+    from humimic.perception.trackers.gest.build import gest_stage
+    from humimic.perception.trackers.gest.foveal import choose_pair
+    from humimic.perception.trackers.gest.tracker import GestTracker
+
+    sc, world, rngs, frames = render("menezes_gest_far.yaml", args.frames, 4, gaze=True)
+    cfg = sc.trackers["gest"]
+    lut = gest_stage("gest", cfg, sc, world, rngs, None).tracker.lut
+    used = []
+
+    def run(foveal: bool):
+        def go(trk):
+            for _, _, (lw, rw, lf, rf) in frames:
+                left, right = choose_pair((lw, rw), (lf, rf) if foveal else None, trk.last,
+                                          cfg.foveal_margin_px)
+                used.append(left is lf)
+                trk.step(left, right, np.random.default_rng(0),
+                         silhouette_offset=cfg.foveal_offset or left is lw)
+            return len(frames)
+        return go
+
+    budget = cfg.cue_radius_px or 12.0
+    for label, c, foveal in (
+            ("gest far, wide pair", cfg, False),
+            ("gest far, foveal, full res", cfg.model_copy(update={"cue_radius_px": None}), True),
+            (f"gest far, foveal, r<={budget:g}px",
+             cfg.model_copy(update={"cue_radius_px": budget}), True)):
+        used.clear()
+        report(label, time_runs(lambda r, c=c: GestTracker(c, lut), run(foveal), args.repeats),
+               GOALS_FPS["gest"])
+        if foveal:
+            print(f"{'':28s} {np.mean(used):.0%} of the frames in the foveal pair")
+    world.eye_rig.close()
 
 
 if __name__ == "__main__":

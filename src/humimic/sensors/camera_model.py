@@ -160,6 +160,15 @@ class Intrinsics:
         J[..., 1, 2] = -self.fy * (b * x + c * y) * iz
         return J
 
+    def decimated(self, k: int) -> Intrinsics:
+        """The camera of this one's image averaged over ``k x k`` pixel blocks (trimmed to whole
+        blocks, ``cv2.resize`` with ``INTER_AREA`` to ``width // k x height // k``): block
+        ``i`` spans pixels ``k i`` to ``k i + k - 1``, so a pixel coordinate ``u`` becomes
+        ``(u + 0.5) / k - 0.5``."""
+        k = int(k)
+        return Intrinsics(self.width // k, self.height // k, self.fx / k, self.fy / k,
+                          (self.cx + 0.5) / k - 0.5, (self.cy + 0.5) / k - 0.5, self.k1, self.k2)
+
     def pinhole(self) -> Intrinsics:
         """The same camera without distortion (what an undistorted image is taken with)."""
         return Intrinsics(self.width, self.height, self.fx, self.fy, self.cx, self.cy)

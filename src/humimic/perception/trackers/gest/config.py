@@ -37,6 +37,25 @@ class GestConfig(Section):
     deg): menezes_gest_far with the person at 0.9 m (hand 0.5-0.9 m), seed 4, 19.3 mm RMS
     with it, 9.4 without; at 1.75 m, seeds 3-4, 8.6-9.5 with, 8.5 without. (In the wide
     pair, the hand off-axis, it helps: menezes_gest_reach 7.1 mm with, 8.8 without.)"""
+    cue_radius_px: float | None = Field(12.0, gt=0.0)
+    """Pixel budget of the cue images (speed, not in the paper; None: always full resolution):
+    when the last estimate's hand image (radius ``fx`` times its longest semi-axis over its
+    distance) is ``k >= 2`` times this, its shape, colour and skin cues are computed on the
+    region of interest averaged over ``k x k`` blocks (intrinsics scaled to match: the hand
+    images 12-24 px in radius with 12, as in the wide eyes at 0.45-0.9 m); the blobs stay full
+    resolution (their centroids' disparity is the depth; searched at ``k`` times
+    ``blob_subsample`` they cost 15.8 against 6.7 mm RMS on the foveal frames of
+    menezes_gest_far at ``human.distance: 0.9``, seed 4). menezes_gest_far, seeds 3-5, 12
+    px: the foveal frames as accurate at every distance (5.3-7.1 mm RMS against 6.5-7.2),
+    the scenario's RMS unchanged at 1.75 m (8.7-8.8 mm) and 1.2 m (7.0-7.9 against
+    7.2-8.1); a foveal frame's thread CPU 4.5-5.1 against 5.2-5.8 ms at 1.75 m, 4.7-4.8
+    against 6.0-6.6 at 1.2 m (load 3-4; bench_trackers, 4 runs: 4.1-4.6 against 4.6-5.2 ms,
+    the wide pair on the same frames 3.2-4.2). With the person at 0.9 m (hand 0.5-0.9 m,
+    40-45 % of the frames foveal) the scenario's RMS is 10.7-19.6 mm with 12 or 20 px
+    against 10.2-11.5 at full resolution, all of it on the wide pair's frames (13.2-24.6
+    mm RMS on them against 12.3-13.9) -- within what the wide pair gives there at full
+    resolution after any small change: ``sigma_s`` 1.52 or ``n_points`` 21, seeds 3-5,
+    13.5-23.3 mm on them, 10.8-18.6 mm overall."""
     views: Literal[1, 2] = 1
     """Images the shape, colour and skin cues are evaluated in: 1 = the left image only (the
     paper), 2 = both (measured no better: 9.5-15 mm RMS either way on menezes_gest_reach at

@@ -7,6 +7,10 @@ cropped frame is an ordinary :class:`~humimic.sensors.camera_model.CameraImage` 
 function works on it unchanged. A contour point outside the box counts as off the image (the
 distance transform's cap), as it would at the border of a smaller image; the box is padded by
 that cap so that a point near the hand sees the same distance as in the full image.
+
+A hand that images large (the foveal pair) is seen in the box averaged over ``k x k`` pixel
+blocks (``cue_radius_px``): a change of the intrinsics too (``f / k``, ``(c + 0.5) / k -
+0.5``), so the cues work on it unchanged, at a cost bounded by the hand's size in blocks.
 """
 
 from __future__ import annotations
@@ -14,6 +18,7 @@ from __future__ import annotations
 import dataclasses
 import math
 
+import cv2
 import numpy as np
 
 from humimic.sensors.camera_model import CameraImage
@@ -39,12 +44,47 @@ def roi_box(boxes: np.ndarray, width: int, height: int, pad_px: float
     return x0, y0, x1, y1
 
 
-def crop_frame(frame: CameraImage, box: tuple[int, int, int, int] | None) -> CameraImage:
-    """``frame`` cut to ``box`` with the principal point shifted accordingly (None: as is)."""
-    if box is None:
+def crop_frame(frame: CameraImage, box: tuple[int, int, int, int] | None, k: int = 1
+               ) -> CameraImage:
+    """``frame`` cut to ``box`` with the principal point shifted accordingly (None: as is),
+    then with ``k > 1`` averaged over ``k x k`` blocks (the box trimmed to whole blocks;
+    :meth:`~humimic.sensors.camera_model.Intrinsics.decimated`)."""
+    if box is None and k == 1:
         return frame
-    x0, y0, x1, y1 = box
     K = frame.camera.intrinsics
+    x0, y0, x1, y1 = (0, 0, K.width, K.height) if box is None else box
+    if k > 1:
+        x1, y1 = x0 + max(1, (x1 - x0) // k) * k, y0 + max(1, (y1 - y0) // k) * k
     crop = dataclasses.replace(K, width=x1 - x0, height=y1 - y0, cx=K.cx - x0, cy=K.cy - y0)
+    image = np.ascontiguousarray(frame.image[y0:y1, x0:x1])
+    if k > 1:
+        crop = crop.decimated(k)
+        image = cv2.resize(image, (crop.width, crop.height), interpolation=cv2.INTER_AREA)
     cam = dataclasses.replace(frame.camera, intrinsics=crop)
-    return CameraImage(frame.t, cam, np.ascontiguousarray(frame.image[y0:y1, x0:x1]))
+    return CameraImage(frame.t, cam, image)
+
+
+def decimated_camera(camera, k: int):
+    """``camera`` with its intrinsics decimated by ``k`` (as is for 1)."""
+    if k == 1:
+        return camera
+    return dataclasses.replace(camera, intrinsics=camera.intrinsics.decimated(k))
+
+
+def to_view_px(uv: np.ndarray, origin: np.ndarray, k: int = 1) -> np.ndarray:
+    """Full-image pixels ``uv (..., 2)`` in the :func:`crop_frame` of corner ``origin`` and
+    block ``k``."""
+    return uv - origin if k == 1 else (uv - origin + 0.5) / k - 0.5
+
+
+def to_full_px(uv: np.ndarray, origin: np.ndarray, k: int = 1) -> np.ndarray:
+    """:func:`to_view_px`'s inverse."""
+    return uv + origin if k == 1 else (uv + 0.5) * k - 0.5 + origin
+
+
+def decimation(radius_px: float, budget_px: float | None) -> int:
+    """The block size ``k`` that brings a hand image of ``radius_px`` down to between
+    ``budget_px`` and twice that (1: no budget, or the hand no larger than it)."""
+    if budget_px is None or not math.isfinite(radius_px):
+        return 1
+    return max(1, int(radius_px // budget_px))

@@ -62,7 +62,14 @@ from humimic.perception.trackers.gest.likelihood import (
     skin_distance,
 )
 from humimic.perception.trackers.gest.proposal import CandidateProposal, PoseReset
-from humimic.perception.trackers.gest.roi import crop_frame, roi_box
+from humimic.perception.trackers.gest.roi import (
+    crop_frame,
+    decimated_camera,
+    decimation,
+    roi_box,
+    to_full_px,
+    to_view_px,
+)
 from humimic.perception.trackers.gest.stereo import (
     interior_blobs,
     stereo_candidates,
@@ -142,17 +149,22 @@ class GestTracker:
         """The centre's Gaussian posterior ``(mean, cov)`` (``position: kalman``)."""
         """The last estimate's silhouette offset (:meth:`_silhouette_offset`)."""
 
-    def _ll(self, views, pairs, K):
+    def _ll(self, views, pairs, K, k: int = 1):
+        """The likelihood over ``views`` (decimated by ``k``: the stereo cue's sigma and
+        outlier density in its pixels, the same cue as at full resolution)."""
         cfg = self.cfg
         w, h = K.width, K.height
         outlier = cfg.stereo_outlier / float(w * h) ** 2
+        sigma_px = cfg.centroid_px
+        if k > 1:
+            outlier, sigma_px = outlier * float(k) ** 4, sigma_px / k
 
         def log_likelihood(x: np.ndarray) -> np.ndarray:
             x = x.copy()
             x[:, 6:] = np.maximum(x[:, 6:], 1e-3)
             return hand_log_likelihood(x, views, self.ref, cfg.n_points, cfg.sigma_s,
                                        cfg.sigma_c, cfg.sigma_k, cfg.views,
-                                       pairs if cfg.stereo_cue else None, cfg.centroid_px,
+                                       pairs if cfg.stereo_cue else None, sigma_px,
                                        outlier)
         return log_likelihood
 
@@ -162,15 +174,13 @@ class GestTracker:
         return importance_function(p, cov, self.orientation, self.cfg,
                                    self.cfg.orientation_sigma_deg)
 
-    def _silhouette_offset(self, mean: np.ndarray, proj_left, centre_right: np.ndarray,
-                           origin_left: np.ndarray, cams) -> np.ndarray:
+    def _silhouette_offset(self, mean: np.ndarray, valid: bool, c_l: np.ndarray,
+                           c_r: np.ndarray, cams) -> np.ndarray:
         """``x - g(c_L(x), c_R(x))``: the estimate's centre minus the triangulation of its
         projected ellipses' centres (an ellipsoid's outline is not centred on the image of its
-        centre: 0.3-0.5 px here, centimetres of depth); ``proj_left`` its projection in the
-        (cropped) left view, ``centre_right`` its ellipse's centre in the right image (px)."""
-        c_l = proj_left.patch_state[0, :2] + origin_left
-        c_r = centre_right
-        if not (proj_left.valid[0] and np.isfinite(c_l).all() and np.isfinite(c_r).all()
+        centre: 0.3-0.5 px here, centimetres of depth); ``c_l``, ``c_r`` its ellipses' centres
+        in the left and right images (full-resolution px), ``valid`` its left projection's."""
+        if not (valid and np.isfinite(c_l).all() and np.isfinite(c_r).all()
                 and np.abs(c_r).max() < 1e5):
             return np.zeros(3)
         off = mean[:3] - triangulate_pixels(cams[0], cams[1], c_l[None], c_r[None])[0]
@@ -195,6 +205,7 @@ class GestTracker:
         cfg = self.cfg
         frames = (left, right)
         near = [self._near(f) for f in frames]
+        k = self._decimation(left, near[0])
         blobs = [self._blobs(f, n) for f, n in zip(frames, near, strict=True)]
         p, cov, cen1, pairs = stereo_candidates(blobs[0], blobs[1], left.camera, right.camera,
                                                 cfg.max_epipolar_px, cfg.blob_size,
@@ -217,13 +228,13 @@ class GestTracker:
                  else np.zeros(3))
         # cue images where the likelihood looks (the left image only with ``views: 1``;
         # the right camera then only places its ellipse centres for the stereo cue)
-        boxes = [self._roi(f, b, pairs[:, i] if len(pairs) else None, n)
+        boxes = [self._roi(f, b, pairs[:, i] if len(pairs) else None, n, k)
                  if cfg.roi and i < cfg.views else None
                  for i, (f, b, n) in enumerate(zip(frames, blobs, near, strict=True))]
-        views = [hand_view(crop_frame(f, b), cfg.bins, self.lut, cfg.edges == "colour")
+        views = [hand_view(crop_frame(f, b, k), cfg.bins, self.lut, cfg.edges == "colour")
                  if i < cfg.views
-                 else _Geometry(f.camera) for i, (f, b) in enumerate(zip(frames, boxes,
-                                                                          strict=True))]
+                 else _Geometry(decimated_camera(f.camera, k)) for i, (f, b) in
+                 enumerate(zip(frames, boxes, strict=True))]
         origin = np.array([(0, 0) if b is None else b[:2] for b in boxes], float)
         importance = None
         if len(use):
@@ -231,8 +242,8 @@ class GestTracker:
                 Mixture(tuple(Gaussian(p[j] + delta, pos_cov[j]) for j in use)),
                 self.pf.particles, self.pf.log_weights, self.walk, self.orientations,
                 cfg.fresh_orientation)
-        s = self.pf.step(self._ll(views, pairs - origin[None], left.camera.intrinsics), rng,
-                         importance=importance)
+        s = self.pf.step(self._ll(views, to_view_px(pairs, origin[None], k),
+                                  left.camera.intrinsics, k), rng, importance=importance)
         mean = s.mean.copy()
         mean[3:6] = mean_orientation(s.particles[:, 3:6], s.log_weights)
         mean[6:] = np.maximum(mean[6:], 1e-3)
@@ -241,7 +252,7 @@ class GestTracker:
         support = len(use) > 0 and float(np.min(np.linalg.norm(p[use] - mean[:3], axis=1))
                                          ) <= cfg.lost_m
         self.unsupported = 0 if support else self.unsupported + 1
-        fits = (d <= lost_threshold_px(mean, left.camera, cfg.lost_px, cfg.lost_rel)
+        fits = (d <= lost_threshold_px(mean, views[0], cfg.lost_px, cfg.lost_rel)
                 or float(skin_distance(proj, views[0])[0]) <= cfg.lost_skin)
         status = ("tracking" if (s.ok and proj.valid[0] and fits
                                  and _centre_in_image(mean, left)
@@ -250,8 +261,9 @@ class GestTracker:
             self.orientation = mean[3:6]
             self.last, self.anchor = mean, mean[:3]
             self.lost_for = 0
-            self.offset = (self._silhouette_offset(mean, proj, centres[0, 1] + origin[1],
-                                                   origin[0], (left.camera, right.camera))
+            c_lr = to_full_px(np.stack([proj.patch_state[0, :2], centres[0, 1]]), origin, k)
+            self.offset = (self._silhouette_offset(mean, bool(proj.valid[0]), c_lr[0], c_lr[1],
+                                                   (left.camera, right.camera))
                            if silhouette_offset else np.zeros(3))
             if cfg.position == "kalman" and len(use):
                 j = use[int(np.argmin(np.linalg.norm(p[use] - mean[:3], axis=1)))]
@@ -285,6 +297,14 @@ class GestTracker:
         uv = frame.camera.project_base(self.last[:3])
         return uv, float(np.linalg.norm(self.last[:3] - frame.camera.T_base_cam[:3, 3]))
 
+    def _decimation(self, frame: CameraImage, near: tuple[np.ndarray, float] | None) -> int:
+        """The block size the frame's cue images are computed at (``cue_radius_px``):
+        from the last estimate's image radius in ``frame`` (1 without an estimate)."""
+        if near is None or self.cfg.cue_radius_px is None:
+            return 1
+        r = frame.camera.intrinsics.fx * float(np.max(self.last[6:])) / max(near[1], 0.05)
+        return decimation(r, self.cfg.cue_radius_px)
+
     def _blobs(self, frame: CameraImage, near: tuple[np.ndarray, float] | None) -> Blobs:
         """The frame's skin blobs that are not cut by the image border; while tracking, only
         in the box the gate projects to around the last estimate (blobs cut by that box too
@@ -308,17 +328,18 @@ class GestTracker:
         shift = np.array(box[:2], float)
         return Blobs(b.centers + shift, b.boxes + (box[0], box[1], 0.0, 0.0), b.areas)
 
-    def _roi(self, frame: CameraImage, blobs, centroids, near: tuple[np.ndarray, float] | None
-             ) -> tuple[int, int, int, int] | None:
+    def _roi(self, frame: CameraImage, blobs, centroids, near: tuple[np.ndarray, float] | None,
+             k: int = 1) -> tuple[int, int, int, int] | None:
         """The box the cues are computed in (:mod:`.roi`): the hand-sized blobs matched in
-        stereo, the blobs near the last estimate, padded by the distance transform's cap."""
+        stereo, the blobs near the last estimate, padded by the distance transform's cap (in
+        the pixels of the cue images, decimated by ``k``)."""
         K = frame.camera.intrinsics
         boxes = [blobs.boxes[_matched(blobs, centroids)]]
         if near is not None:
             uv, depth = near
             r = 1.5 * K.fx * float(np.max(self.last[6:])) / max(depth, 0.05)
             boxes.append(np.array([[uv[0] - r, uv[1] - r, 2 * r, 2 * r]]))
-        box = roi_box(np.concatenate(boxes), K.width, K.height, DT_CAP_PX)
+        box = roi_box(np.concatenate(boxes), K.width, K.height, DT_CAP_PX * k)
         return box if box is not None else (0, 0, K.width, K.height)
 
 
