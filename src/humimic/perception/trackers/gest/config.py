@@ -37,8 +37,9 @@ class GestConfig(Section):
     deg): menezes_gest_far with the person at 0.9 m (hand 0.5-0.9 m), seed 4, 19.3 mm RMS
     with it, 9.4 without; at 1.75 m, seeds 3-4, 8.6-9.5 with, 8.5 without. (In the wide
     pair, the hand off-axis, it helps: menezes_gest_reach 7.1 mm with, 8.8 without.)"""
-    cue_radius_px: float | None = Field(12.0, gt=0.0)
-    """Pixel budget of the cue images (speed, not in the paper; None: always full resolution):
+    cue_radius_px: float | None = Field(None, gt=0.0)
+    """Pixel budget of the cue images (speed, not in the paper; None, the default: always full
+    resolution -- off because of the 0.9 m runs at the end of this note):
     when the last estimate's hand image (radius ``fx`` times its longest semi-axis over its
     distance) is ``k >= 2`` times this, its shape, colour and skin cues are computed on the
     region of interest averaged over ``k x k`` blocks (intrinsics scaled to match: the hand
