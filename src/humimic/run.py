@@ -29,6 +29,7 @@ from humimic.rngs import Rngs
 from humimic.scenario import Scenario, dump_scenario, load_scenario
 from humimic.viz.blueprint import run_layout
 from humimic.viz.plots import MAX_POINTS, plot_trajectories
+from humimic.viz.rerun_columns import SERIES_CHUNK
 from humimic.viz.rerun_log import SERIES, TRUTH, RerunLog, camera_entity
 from humimic.world.world import World
 
@@ -173,9 +174,10 @@ def _log_ground_truth(rlog, world, ticks: int) -> None:
     for target in GT_TARGETS:
         rlog.log_series(f"{SERIES}/ground_truth/{target}", gt.t[ks], gt.p_base(target)[ks],
                         names=[f"{target} {a} (m)" for a in "xyz"])
-    for k, pos in zip(ks, gt.pos[ks], strict=True):
-        rlog.log_points(float(gt.t[k]), f"{TRUTH}/sites", pos, colors=[40, 200, 40],
-                        radii=0.01, labels=list(gt.targets))
+    for k0 in range(0, len(ks), SERIES_CHUNK):  # as columns, a block at a time
+        kb = ks[k0:k0 + SERIES_CHUNK]
+        rlog.log_points_rows(f"{TRUTH}/sites", gt.t[kb], gt.pos[kb], colors=[40, 200, 40],
+                             radii=0.01, labels=list(gt.targets))
 
 
 def _plots(out: Path, world, stages, ticks: int) -> None:
