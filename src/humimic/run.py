@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from humimic.errors import InputError
-from humimic.heap import release_free_heap
+from humimic.heap import release_free_heap, tune_heap
 from humimic.metrics.summary import print_summary, verdict_warning
 from humimic.pipeline.build import build_stages
 from humimic.pipeline.simulation import simulate
@@ -45,6 +45,7 @@ def run_one(scenario: Scenario, out_dir: str | Path | None = None, rerun: str | 
             progress: bool = True) -> dict:
     """Run ``scenario`` (its own seed) and return the metrics written to ``metrics.json``."""
     wall0 = time.perf_counter()
+    tune_heap()  # large blocks mapped on their own: a long run's heap does not fragment
     out = prepare_out_dir(Path(out_dir) if out_dir is not None else default_out_dir(scenario))
     (out / "scenario.resolved.yaml").write_text(dump_scenario(scenario))
     mode = rerun or scenario.output.rerun
