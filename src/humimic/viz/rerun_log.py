@@ -76,6 +76,8 @@ _LOG_CALL_BYTES = 512
 
 class RerunLog(ColumnLog):
     """Thin wrapper around one ``RecordingStream``; every method takes simulated time in s.
+    Whole-run series and per-row trails (``log_series``, ``log_points_rows``,
+    ``log_arrows_rows``) are :class:`~humimic.viz.rerun_columns.ColumnLog`'s.
 
     ``mode``: ``off`` (no-op), ``save`` (stream to ``path``, no viewer) or ``spawn`` (open a
     viewer; also write ``path`` if given). ``blueprint`` (see :mod:`humimic.viz.blueprint`) is
