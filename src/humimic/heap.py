@@ -15,12 +15,20 @@ freed, blocks of that size come from the arenas instead of ``mmap`` and leave ho
 long-lived blocks that ``malloc_trim`` cannot return. Fixed, a large block is its own mapping,
 unmapped when freed. Measured on a 120-s ``mimic_tracked_wave``: the loop's resident set
 546 -> 517 MiB, the run's peak (its report) 628 -> 583 MiB.
+
+:func:`purge_freed_pages_at_once` (an entry point, before ``rerun`` or ``pyarrow`` is imported)
+sets ``MIMALLOC_PURGE_DELAY=0`` unless the user set it: the rerun SDK (and pyarrow) allocate with
+their own mimalloc, which keeps freed pages for a while before returning them; while a run
+streams images to the recording they pile up. Measured, 36 000 JPEG-sized images and their
+overlays logged (ten minutes of eye frames): +55 MiB resident with the default, +7 MiB with 0,
+for +3.4 s of system time.
 """
 
 from __future__ import annotations
 
 import ctypes
 import gc
+import os
 import platform
 import sys
 from functools import cache
@@ -43,6 +51,13 @@ def _glibc(name: str, argtypes: tuple):
         return None
     fn.argtypes, fn.restype = list(argtypes), ctypes.c_int
     return fn
+
+
+def purge_freed_pages_at_once() -> None:
+    """mimalloc returns freed pages to the OS at once (module doc); call before anything imports
+    ``rerun`` or ``pyarrow`` (their allocators read it when they start). A user's own
+    ``MIMALLOC_PURGE_DELAY`` is kept."""
+    os.environ.setdefault("MIMALLOC_PURGE_DELAY", "0")
 
 
 def _malloc_trim():

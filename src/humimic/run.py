@@ -8,8 +8,10 @@ prints one line and exits with status 2.
 from __future__ import annotations
 
 from humimic import select_gl_backend
+from humimic.heap import purge_freed_pages_at_once
 
 select_gl_backend()  # an entry point: MuJoCo's OpenGL backend, before anything imports mujoco
+purge_freed_pages_at_once()  # and the recording's allocator, before anything imports rerun
 
 import argparse
 import json
