@@ -73,12 +73,13 @@ def main() -> None:
             rates, cpu_rates, per_frame = [], [], []
             for r in range(args.repeats):
                 tr = KpfTracker(body, intr, cfg, np.random.default_rng(0 if args.same_seed else r))
-                tr.start(q0, FrameCues(frames[0][0], lut), frames[0][1])
+                kw = {"colour_gradients": cfg.colour_gradients}
+                tr.start(q0, FrameCues(frames[0][0], lut, **kw), frames[0][1])
                 t0, c0 = time.perf_counter(), time.thread_time()
                 cpu = []
                 for img, T in frames[1:]:
                     c1 = time.thread_time()
-                    tr.step(FrameCues(img, lut), T)
+                    tr.step(FrameCues(img, lut, **kw), T)
                     cpu.append(time.thread_time() - c1)
                 rates.append((len(frames) - 1) / (time.perf_counter() - t0))
                 cpu_rates.append((len(frames) - 1) / (time.thread_time() - c0))

@@ -225,3 +225,10 @@ def test_an_error_found_after_the_perception_worker_started_is_one_line(tmp_path
     err = capfd.readouterr().err.strip()
     assert code == 2 and len(err.splitlines()) == 1, err
     assert "trackers.tbp.camera: camera 'X_wide' is not rendered" in err
+
+
+def test_report_error_prints_one_line_and_returns_2(capsys):
+    from humimic.errors import report_error
+
+    assert report_error(ValueError("a\n  b\tc ")) == 2
+    assert capsys.readouterr().err == "error: a b c\n"

@@ -128,3 +128,30 @@ def test_ellipse_axes_and_behind_camera_invalid():
     outline, _, _ = project_ellipsoids(R, t, np.full((3, 3), 0.1), INTR, 8)
     assert outline.valid.tolist() == [True, False, False]
     assert np.isnan(outline.uv[1:]).all()
+
+
+def test_dual_ellipse_matches_the_point_conic_and_the_inverted_dual_quadric():
+    """The image ellipse in components from ``C* = B - t t^T`` against Menezes eq. 15's point
+    conic ``C = cA - bb^T`` (:func:`conics.conic_to_ellipse`) and against the inverse of H&Z's
+    projected dual quadric, for off-axis, rotated ellipsoids."""
+    rng = np.random.default_rng(3)
+    R, t, axes = random_ellipsoids(rng, 200)
+    B = ((R * axes[:, None, :] ** 2) @ np.swapaxes(R, 1, 2)).reshape(-1, 9)[:, conics.UPPER]
+    cx, cy, m00, m01, m11, k = conics.dual_ellipse(B, t)
+    assert (k > 0).all()
+    centre, M, ok = conics.conic_to_ellipse(conics.quadric_to_conic(
+        *conics.ellipsoid_quadric(R, t, axes)))
+    assert ok.all()
+    np.testing.assert_allclose(np.c_[cx, cy], centre, atol=1e-12)
+    np.testing.assert_allclose(np.c_[m00, m01, m11], M.reshape(-1, 4)[:, [0, 1, 3]],
+                               rtol=1e-9, atol=1e-14)
+    for i in range(0, 200, 20):                  # an ellipse's point conic from H&Z
+        T = np.eye(4)
+        T[:3, :3], T[:3, 3] = R[i], t[i]
+        C = np.linalg.inv(np.eye(3, 4) @ T @ np.diag([*axes[i] ** 2, -1.0]) @ T.T
+                          @ np.eye(3, 4).T)
+        c = np.linalg.solve(C[:2, :2], -C[:2, 2])
+        kappa = c @ C[:2, :2] @ c - C[2, 2]
+        np.testing.assert_allclose([cx[i], cy[i]], c, atol=1e-12)
+        np.testing.assert_allclose([[m00[i], m01[i]], [m01[i], m11[i]]],
+                                   kappa * np.linalg.inv(C[:2, :2]), rtol=1e-9)

@@ -51,3 +51,11 @@ def test_none_feedforward_commands_the_target_itself():
     q = scene.data.qpos[scene.robot_qpos].copy()
     ctrl = servo.command(q, np.ones_like(q), np.ones_like(q))
     np.testing.assert_array_equal(ctrl, q)
+
+
+def test_decimator_lets_through_the_first_and_every_nth_call():
+    from humimic.control.decimate import Decimator
+
+    turns = Decimator(3)
+    assert [turns() for _ in range(8)] == [0, None, None, 1, None, None, 2, None]
+    assert [Decimator(0)() for _ in range(2)] == [0, 0]  # every < 1 means every call

@@ -126,3 +126,32 @@ def test_skin_blobs_centroids_and_filters():
     for k, (u, v) in zip(order, [(100, 80), (220, 150)], strict=True):
         assert np.hypot(*(b.centers[k] - [u, v])) < 1.0
     assert b.areas[order[0]] == pytest.approx(np.pi * 12**2, rel=0.15)
+
+
+def test_colour_likelihood_from_counts_is_calchist_and_comparehist():
+    """Eq. 6 straight from the bin counts (``patch_color_log_likelihood``) against OpenCV's
+    histogram of the patch and its Bhattacharyya distance; an off-image patch is at D = 1 in
+    every channel, a patch half off the image counts the pixels on it only."""
+    from humimic.perception.cues.histograms import patch_color_log_likelihood
+
+    img = _image()
+    q = quantize(img, 32)
+    rng = np.random.default_rng(5)
+    ref = rng.random((1, 3, 32))
+    ref /= ref.sum(-1, keepdims=True)
+    states = np.array([[49.5, 41.5, 20.0], [150.5, 9.5, 20.0], [-500.0, -500.0, 20.0]])
+    patch = np.array([[0.0, 0.0, 1.0, 1.0]])
+    sigma = 0.3
+    ours = patch_color_log_likelihood(q, states, patch, ref, sigma, grid=20)
+    expect = []
+    for roi in (img[32:52, 40:60], img[0:20, 141:160], img[:0, :0]):
+        d2 = 0.0
+        for c in range(3):
+            if roi.size == 0:
+                d2 += 1.0
+                continue
+            h = cv2.calcHist([roi], [c], None, [32], [0, 256])[:, 0]
+            d2 += cv2.compareHist((h / h.sum()).astype(np.float32),
+                                  ref[0, c].astype(np.float32), cv2.HISTCMP_BHATTACHARYYA) ** 2
+        expect.append(-d2 / (2 * sigma ** 2))
+    np.testing.assert_allclose(ours, expect, atol=2e-5)

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import cv2
 import numpy as np
+import pytest
 
 from humimic import bodymodel as bm
 from humimic.perception.blobs.config import DEFAULT_COLOR_MODEL
@@ -56,18 +57,20 @@ def test_region_maps_give_the_whole_frame_likelihood():
     assert np.isfinite(view.sides_uv).all()
 
 
-def test_region_maps_equal_the_whole_image_maps_inside_the_margin():
+@pytest.mark.parametrize("colour", [False, True], ids=["grey", "colour_gradients"])
+def test_region_maps_equal_the_whole_image_maps_inside_the_margin(colour):
     """A region's gradient, ridge (every pyramid level) and colour maps against the whole
     image's, at every pixel at least ``MARGIN_PX`` inside the region's inner edges: equal (to
-    float32 rounding); the level-2 ridge map differs nearer than that (the margin is needed)."""
+    float32 rounding); the level-2 ridge map differs nearer than that (the margin is needed).
+    The same with the derivatives of the strongest colour channel."""
     from humimic.perception.trackers.kpf.frame_cues import MARGIN_PX
 
     rng = np.random.default_rng(3)
     img = cv2.GaussianBlur(rng.integers(0, 255, (240, 320, 3)).astype(np.uint8), (0, 0), 3.0)
     lut = ColorLUT(load_color_model(DEFAULT_COLOR_MODEL), 6)
-    full = cue_maps(img, lut)
+    full = cue_maps(img, lut, colour_gradients=colour)
     u0, v0, u1, v1 = 64, 40, 200, 184
-    part = cue_maps(img, lut, region=(u0, v0, u1, v1))
+    part = cue_maps(img, lut, region=(u0, v0, u1, v1), colour_gradients=colour)
     m = MARGIN_PX
     np.testing.assert_allclose(part.gradient[m:-m, m:-m],
                                full.gradient[v0 + m:v1 - m, u0 + m:u1 - m], atol=1e-6)

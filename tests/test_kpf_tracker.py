@@ -107,3 +107,19 @@ def test_bad_tracker_config_exits_2_naming_the_key(tmp_path, capsys, tracker, ke
     err = capsys.readouterr().err.strip()
     assert code == 2
     assert len(err.splitlines()) == 1 and key in err, err
+
+
+@pytest.mark.parametrize("item, key", [("human.distanc=3", "human.distanc"),
+                                       ("human.distance=99", "human.distance"),
+                                       ("nonsense", "--set")])
+def test_table1_bad_override_exits_2_naming_the_key(tmp_path, capsys, item, key):
+    """``schmidt-table1 --set`` (e.g. a sensitivity study at another distance): a bad key or
+    value exits 2 with one line naming it, before anything runs."""
+    from humimic.perception.trackers.kpf.table1 import main as table1
+
+    code = table1(["--no-run", "--particles", "1000", "--seeds", "5", "7", "--set", item,
+                   "--out", str(tmp_path / "sweep")])
+    err = capsys.readouterr().err.strip()
+    assert code == 2
+    assert len(err.splitlines()) == 1 and key in err, err
+    assert not (tmp_path / "sweep").exists()

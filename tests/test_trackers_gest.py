@@ -21,7 +21,12 @@ from humimic.perception.trackers.gest.likelihood import (
     patch_histogram,
     project_hands,
 )
-from humimic.perception.trackers.gest.proposal import CandidateProposal, PoseReset, logsumexp
+from humimic.perception.trackers.gest.proposal import (
+    CandidateProposal,
+    PoseReset,
+    logsumexp,
+    walk_predictive,
+)
 from humimic.perception.trackers.gest.stereo import stereo_candidates
 from humimic.perception.trackers.gest.tracker import skin_mask
 from humimic.sensors.camera_model import CameraImage, invert_transform
@@ -122,6 +127,23 @@ def test_logsumexp_matches_scipy_over_underflowing_tables():
     for axis in (0, 1):
         np.testing.assert_allclose(logsumexp(a, axis=axis),
                                    scipy_logsumexp(a, axis=axis), rtol=1e-15, atol=0)
+
+
+def test_walk_predictive_is_scipys_mixture_of_gaussians():
+    """The fused predictive density of a random walk against scipy's normal densities summed
+    with scipy's logsumexp, with tight walks (most terms underflow) and zero weights."""
+    rng = np.random.default_rng(4)
+    sigma = np.array([0.02, 0.05, 1e-3, 1e-4])
+    particles = rng.normal(0.0, 0.05, (30, 4))
+    x = particles[rng.integers(0, 30, 12)] + rng.normal(0.0, 1.0, (12, 4)) * sigma * 3
+    lw = rng.normal(0.0, 2.0, 30)
+    lw[:5] = -np.inf
+    lw -= scipy_logsumexp(lw)
+    table = np.stack([multivariate_normal.logpdf(x, p, np.diag(sigma ** 2)) for p in particles],
+                     1)
+    # |x - p|^2 as |x|^2 + |p|^2 - 2 x.p (as RandomWalk's table has it) cancels: ~eps |x/sigma|^2
+    np.testing.assert_allclose(walk_predictive(x, particles, lw, sigma),
+                               scipy_logsumexp(table + lw, axis=1), rtol=0, atol=1e-9)
 
 
 @pytest.fixture(scope="module")

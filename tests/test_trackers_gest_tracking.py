@@ -74,6 +74,21 @@ def test_both_views_in_one_batch_match_the_dual_quadric_projection():
                                atol=1e-9)
 
 
+def test_only_ellipsoids_wholly_in_front_of_the_camera_are_valid():
+    """An ellipsoid straddling the camera's plane or behind it has no image ellipse: invalid,
+    off-image contour and patch, as the body model's projection has it."""
+    cam, _ = stereo_head(k1=0.0, k2=0.0)
+    view = hand_view(CameraImage(0.0, cam, np.zeros((240, 320, 3), np.uint8)), 32)
+    T_base_cam = cam.T_base_cam
+    states = np.tile(HAND, (3, 1))
+    for i, depth in enumerate((1.0, 0.03, -1.0)):            # in front, straddling, behind
+        states[i, :3] = T_base_cam[:3, :3] @ [0.0, 0.0, depth] + T_base_cam[:3, 3]
+    proj = project_hands(states, view, 20)
+    assert proj.valid.tolist() == [True, False, False]
+    assert (proj.contour[1:] == -1.0e6).all() and (proj.patch_state[1:, :2] == -1.0e6).all()
+    assert np.isfinite(proj.normal).all()
+
+
 def test_a_crop_is_a_shift_of_the_principal_point():
     cam, _ = stereo_head()
     frame = CameraImage(0.0, cam, clutter_background(np.random.default_rng(0)))

@@ -15,6 +15,7 @@ from __future__ import annotations
 import argparse
 import sys
 
+from humimic.errors import report_error
 from humimic.maths.align import ALIGNMENTS
 from humimic.maths.trajectory import MAX_DIFF_S, ape, read_tum, rpe
 
@@ -48,8 +49,7 @@ def main(argv: list[str] | None = None) -> int:
         else:
             err = rpe(t_ref, T_ref, t_est, T_est, args.delta, args.align, args.max_diff)
     except (OSError, ValueError) as e:
-        print(f"error: {e}", file=sys.stderr)
-        return 2
+        return report_error(e)
     scale = f", scale {err.scale:.6g}" if args.align == "sim3" else ""
     print(f"{args.metric} rmse {err.rmse_m:.6f} m ({err.pairs} pairs, align {args.align}"
           f"{scale})")

@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from humimic.errors import InputError
+from humimic.errors import InputError, report_error
 from humimic.heap import release_free_heap, tune_heap
 from humimic.metrics.summary import print_summary, verdict_warning
 from humimic.pipeline.build import build_stages
@@ -230,8 +230,7 @@ def main(argv: list[str] | None = None) -> int:
             return 0
         metrics = run_one(scenario, args.out, args.rerun, progress=not args.quiet)
     except InputError as err:
-        print(f"error: {' '.join(str(err).split())}", file=sys.stderr)  # always one line
-        return 2
+        return report_error(err)
     if not args.quiet:
         print_summary(metrics, args.out or default_out_dir(scenario))
     warning = verdict_warning(metrics)

@@ -112,3 +112,31 @@ def conic_to_pixels(C: np.ndarray, K: np.ndarray) -> np.ndarray:
     """The conic in pixel coordinates, ``K^-T C K^-1`` (no distortion)."""
     K_inv = np.linalg.inv(K)
     return K_inv.T @ C @ K_inv
+
+
+#: Row-major indices of the upper triangle of a symmetric 3x3 matrix: 00 01 02 11 12 22.
+UPPER = np.array([0, 1, 2, 4, 5, 8])
+
+
+def dual_ellipse(B: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, ...]:
+    """The image ellipse of ellipsoids from their projected *dual* quadric, in components:
+    ``B (..., 6)`` the upper triangle (:data:`UPPER`) of ``R S^2 R^T`` and ``t (..., 3)`` the
+    centre, both in the normalised camera. The dual quadric ``H diag(S^2, -1) H^T`` (``H`` the
+    ellipsoid's pose) projects to the dual conic ``C* = B - t t^T`` (Hartley & Zisserman
+    result 8.9, the dual form of Menezes eq. 15); an ellipse with centre ``c`` and shape matrix
+    ``M`` has ``C* ∝ [[M - c c^T, -c], [-c^T, -1]]``, so with ``k = t_z^2 - B_22``:
+    ``c = (t_xy t_z - B_{xy,2}) / k``, ``M = (B_xy - t_xy t_xy^T) / k + c c^T``. Returns
+    ``cx, cy, m00, m01, m11`` and ``k`` (each ``(...)``); a real ellipse needs ``k > 0`` (the
+    ellipsoid wholly on one side of the camera's plane ``z = 0``). No inverse, no
+    determinant: a third of :func:`quadric_to_conic` then :func:`conic_to_ellipse`'s work."""
+    b00, b01, b02, b11, b12, b22 = (B[..., i] for i in range(6))
+    tx, ty, tz = t[..., 0], t[..., 1], t[..., 2]
+    k = tz * tz - b22
+    with np.errstate(divide="ignore", invalid="ignore"):
+        inv = 1.0 / k
+        cx = (tx * tz - b02) * inv
+        cy = (ty * tz - b12) * inv
+        m00 = (b00 - tx * tx) * inv + cx * cx
+        m01 = (b01 - tx * ty) * inv + cx * cy
+        m11 = (b11 - ty * ty) * inv + cy * cy
+    return cx, cy, m00, m01, m11, k

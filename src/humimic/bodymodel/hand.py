@@ -27,7 +27,7 @@ def hand_ellipsoids(state: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarr
     if state.shape[-1] != len(HAND_STATE):
         raise ValueError(f"hand state must have {len(HAND_STATE)} values "
                          f"({', '.join(HAND_STATE)}), got {state.shape[-1]}")
-    if np.any(state[:, 6:] <= 0.0):
+    if len(state) and state[:, 6:].min() <= 0.0:         # (np.any's dispatch: 3x the cost)
         raise ValueError("hand state: semi-axes sigma_x, sigma_y, sigma_z must be > 0 m")
     return ypr_matrix(state[:, 3], state[:, 4], state[:, 5]), state[:, :3], state[:, 6:]
 

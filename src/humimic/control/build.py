@@ -28,6 +28,10 @@ def check_mimic(scenario) -> None:
             raise ScenarioError(where, "mimic.tracker", "no such tracker in trackers:",
                                 cfg.tracker, ", ".join(angles) or None)
         return
+    trackers = getattr(scenario, "trackers", None) or {}
+    if cfg.gaze.enabled and cfg.gaze.tracker is not None and cfg.gaze.tracker not in trackers:
+        raise ScenarioError(where, "mimic.gaze.tracker", "no such tracker in trackers:",
+                            cfg.gaze.tracker, ", ".join(trackers) or None)
     if cfg.perception == "tracked" and getattr(scenario, "filter", None) is None:
         raise ScenarioError(where, "mimic.perception",
                             "tracked perception needs the scenario's perception and filter "

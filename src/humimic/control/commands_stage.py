@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from humimic.control import commands as cmds
+from humimic.control.decimate import Decimator
 from humimic.control.follow import PAN, TILT
 from humimic.estimation.ekf.arm_record import truth_in_head
 from humimic.estimation.ekf.head_track import OracleHeadTrack, SlamHeadTrack
@@ -48,7 +49,7 @@ class CommandStage(Stage):
         self.targets: list[tuple[float, dict]] = []
         """``(t, {kind: target})`` at every check (the commands' would-be targets)."""
         self.seq = dict.fromkeys(cmds.KINDS, 0)
-        self._calls = 0
+        self._turns = Decimator(self.every)
         self._bus = self._timer = None
         self.follower = None
         """The :class:`~humimic.control.follow.FollowStage` (read after the run, for the
@@ -71,9 +72,7 @@ class CommandStage(Stage):
         return self.arm
 
     def servo(self, t: float, bus) -> None:
-        call = self._calls
-        self._calls += 1
-        if call % self.every:
+        if self._turns() is None:
             return
         with self._timer.time(self.name):
             self._check(t)

@@ -160,6 +160,11 @@ class GazeConfig(Section):
     """Eye speed limit (rad/s)."""
     lead: bool = True
     """Predict the target to the current time with its estimated v and a."""
+    tracker: str | None = None
+    """Look at the pose this tracker (its name under ``trackers:``) publishes on ``poses`` for
+    ``target`` (``right_hand`` -> the pose's ``r_hand``), while it reports ``tracking``,
+    instead of the estimates (e.g. GEST on the foveal pair, its hand kept in the narrow
+    view); the eyes hold while it does not track."""
 
     @field_validator("target")
     @classmethod
@@ -256,6 +261,6 @@ class MimicConfig(Section):
         out = list(self.map or {})
         if self.relative_to is not None:
             out.append(self.relative_to)
-        if self.gaze.enabled and self.gaze.target not in out:
+        if self.gaze.enabled and self.gaze.tracker is None and self.gaze.target not in out:
             out.append(self.gaze.target)
         return out

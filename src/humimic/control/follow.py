@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from humimic.control.decimate import Decimator
 from humimic.control.ik import MimicIK, build_robot_model, posture_costs
 from humimic.control.mapping import reach_shell
 from humimic.control.servo import Servo
@@ -122,7 +123,7 @@ class FollowStage(Stage):
         self.rec = FollowRecord()
         self._record_every = max(1, int(round(1.0 / (RECORD_RATE * self.dt))))
         self._settled = False
-        self._calls = 0
+        self._turns = Decimator(self.every)
         self._bus = self._timer = None
 
     def _to_base0(self, p_world: np.ndarray) -> np.ndarray:
@@ -157,9 +158,8 @@ class FollowStage(Stage):
 
     # ---- servo ----------------------------------------------------------------------------
     def servo(self, t: float, bus) -> None:
-        call = self._calls
-        self._calls += 1
-        if call % self.every:
+        turn = self._turns()
+        if turn is None:
             return
         t0 = time.perf_counter()
         self._t = t
@@ -180,7 +180,7 @@ class FollowStage(Stage):
         palm = (d.site_xpos[self.palm_site] - T_wb[:3, 3]) @ T_wb[:3, :3]
         head = d.qpos[self.scene.robot_qpos[[PAN, TILT]]]
         self._check_done(t, palm, head)
-        if (call // self.every) % self._record_every == 0:
+        if turn % self._record_every == 0:
             r = self.rec
             r.t.append(t)
             base = self.world.base

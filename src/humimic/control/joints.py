@@ -21,6 +21,7 @@ import numpy as np
 from humimic.bodymodel.avatar import truth_angles
 from humimic.bodymodel.dimensions import db_skeleton
 from humimic.bodymodel.kinematics import ARM_DOFS, DOF_NAMES, forward_kinematics
+from humimic.control.decimate import Decimator
 from humimic.control.servo import Servo
 from humimic.maths.stats import rmse
 from humimic.pipeline.stage import Stage
@@ -67,7 +68,7 @@ class JointMimicStage(Stage):
         self.t: list[float] = []
         self.q_robot: list[np.ndarray] = []
         self.q_target: list[np.ndarray] = []
-        self._calls = 0
+        self._turns = Decimator(self.every)
         self._timer = None
         self.skeleton = db_skeleton(m, ROBOT_PREFIX)
 
@@ -85,8 +86,7 @@ class JointMimicStage(Stage):
             self.latest = np.array([est.angles[n] for n in ARM_NAMES])
 
     def servo(self, t: float, bus) -> None:
-        self._calls += 1
-        if (self._calls - 1) % self.every == 0:
+        if self._turns() is not None:
             with self._timer.time(self.name):
                 self._tick(t)
 

@@ -21,6 +21,7 @@ import time
 
 import numpy as np
 
+from humimic.control.decimate import Decimator
 from humimic.control.gaze import Gaze
 from humimic.control.ik import MimicIK, build_robot_model, on_limit_band
 from humimic.control.interpolation import CartesianInterpolator
@@ -34,6 +35,7 @@ from humimic.control.mapping import (
 )
 from humimic.control.record import MimicRecord
 from humimic.control.servo import Servo
+from humimic.messages import TargetEstimate
 from humimic.motion.arm_ik import arm_lengths
 from humimic.motion.avatar import AvatarGeometry
 from humimic.pipeline.stage import Stage
@@ -42,6 +44,8 @@ from humimic.world.names import HUMAN_PREFIX, ROBOT_JOINTS
 #: An estimate older than this (s) counts as lost: the command stops where it was.
 MAX_AGE = 0.25
 EYES = np.array([ROBOT_JOINTS.index(j) for j in ("L_EP", "L_ET", "R_EP", "R_ET")])
+#: A human target's name among a tracker's pose joints (``PoseEstimate.joints``).
+POSE_JOINT = {"right_hand": "r_hand", "left_hand": "l_hand"}
 #: Joints of a driven arm whose limit band strains it (the wrists hardly move a palm).
 STRAIN_JOINTS = ("SFE", "SAA", "HR", "EB")
 
@@ -130,8 +134,10 @@ class MimicStage(Stage):
                                          for j in STRAIN_JOINTS]) for s in self.sites]
         self._strain_ranges = [self.ik_model.jnt_range[j] for j in self._strain_joints]
         self.latest: dict[str, tuple] = {}
+        self.gaze_latest: tuple | None = None
+        """``(t, TargetEstimate, t_ready)`` of the gaze target from ``gaze.tracker``."""
         self.v_prev = np.zeros(len(ROBOT_JOINTS))
-        self._calls = 0
+        self._turns = Decimator(self.every)
         self._timer = None
 
     def _channel(self, target: str, site: str, p0_base: np.ndarray) -> Channel:
@@ -161,12 +167,23 @@ class MimicStage(Stage):
         self._timer = timer
         bus.subscribe("estimates", self._on_estimates)
         bus.subscribe("measurements", self._on_measurements)
+        if self.gaze is not None and self.cfg.gaze.tracker is not None:
+            bus.subscribe("poses", self._on_pose)
 
     def _on_estimates(self, topic: str, msg) -> None:
         for target, est in msg.value.targets.items():
             if target in self.wanted:
                 self.latest[target] = (msg.t, est, msg.t_ready)
                 self.rec.estimates[target].add(msg.t, msg.t_ready, est.p_base)
+
+    def _on_pose(self, topic: str, msg) -> None:
+        """The gaze target from a tracker's pose (``gaze.tracker``) while it tracks."""
+        g, est = self.cfg.gaze, msg.value
+        joint = POSE_JOINT.get(g.target, g.target)
+        if est.tracker == g.tracker and est.status == "tracking" and joint in est.joints:
+            z = np.zeros(3)
+            self.gaze_latest = (msg.t, TargetEstimate(g.target, est.joints[joint], z, z),
+                                msg.t_ready)
 
     def _on_measurements(self, topic: str, msg) -> None:
         for target, meas in msg.value.targets.items():
@@ -175,9 +192,7 @@ class MimicStage(Stage):
 
     # ---- servo ----------------------------------------------------------------------------
     def servo(self, t: float, bus) -> None:
-        call = self._calls
-        self._calls += 1
-        if call % self.every:
+        if self._turns() is None:
             return
         t0 = time.perf_counter()
         self._tick(t)
@@ -238,7 +253,8 @@ class MimicStage(Stage):
 
     def _gaze(self, t: float, q_d: np.ndarray, v_d: np.ndarray, a_d: np.ndarray) -> None:
         """Overwrite the eyes' entries of the joint targets with the gaze law's."""
-        latest = self.latest.get(self.cfg.gaze.target)
+        latest = (self.gaze_latest if self.cfg.gaze.tracker is not None
+                  else self.latest.get(self.cfg.gaze.target))
         gi = self.gaze_interp
         if latest is None:
             q_eyes, qdot_eyes = self.gaze.q, np.zeros(4)

@@ -32,7 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
-from humimic.errors import InputError
+from humimic.errors import InputError, report_error
 from humimic.paths import SCENARIOS_DIR
 
 SCENARIOS = {"table2": "sugiyama_table2.yaml", "fig8": "sugiyama_fig8.yaml",
@@ -160,8 +160,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         {"table2": table2, "fig8": fig8, "cycle": cycle, "arm-mask": arm_mask}[args.which](args)
     except (InputError, ValueError) as err:
-        print(f"error: {err}", file=sys.stderr)
-        return 2
+        return report_error(err)
     return 0
 
 

@@ -33,7 +33,7 @@ from pathlib import Path
 
 import numpy as np
 
-from humimic.errors import InputError
+from humimic.errors import InputError, report_error
 from humimic.maths.stats import fraction_in_band, nees
 from humimic.metrics.tracking import FILTER_SETTLE_S
 from humimic.perception.blobs.stereo import (
@@ -135,8 +135,7 @@ def main(argv: list[str] | None = None) -> int:
             run_one(scenario, out, rerun="off", progress=True)
             s_c, s_m, report = calibrate(load_archive(out / "tracking.npz"))
     except InputError as err:
-        print(f"error: {err}", file=sys.stderr)
-        return 2
+        return report_error(err)
     cfg = scenario.perception
     print(f"{scenario.name}, seed {scenario.seed}: fitted pixel_std {s_c:.3f} px, match_std "
           f"{s_m:.3f} px (scenario: {cfg.pixel_std:g}, {cfg.match_std:g})")

@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from humimic.errors import InputError
+from humimic.errors import InputError, report_error
 from humimic.metrics.tracking import FILTER_SETTLE_S
 from humimic.metrics.ude_tables import (
     PAPER_TABLE2,
@@ -195,8 +195,7 @@ def main(argv: list[str] | None = None) -> int:
         {"table2": print_table2, "table3": print_table3,
          "fig1": lambda a: print_fig1(a, out)}[args.which](archive)
     except (InputError, ValueError) as err:
-        print(f"error: {err}", file=sys.stderr)
-        return 2
+        return report_error(err)
     return 0
 
 

@@ -9,7 +9,7 @@ select_gl_backend()  # an entry point: MuJoCo's OpenGL backend, before anything 
 import argparse
 import sys
 
-from humimic.errors import InputError
+from humimic.errors import InputError, report_error
 from humimic.report.page import write_report
 
 
@@ -21,8 +21,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         png, page = write_report(args.run_dir)
     except InputError as err:
-        print(f"error: {err}", file=sys.stderr)
-        return 2
+        return report_error(err)
     print(f"wrote {png} and {page}")
     return 0
 

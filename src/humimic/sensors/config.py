@@ -57,8 +57,10 @@ class Cameras(Section):
 
     enabled: bool = True
     """Render the robot's eyes (a wearable scenario without robot vision turns them off)."""
-    which: Literal["wide", "foveal"] = "wide"
-    """Wide: 100 deg horizontal field of view; foveal: 24 deg."""
+    which: Literal["wide", "foveal", "both"] = "wide"
+    """Wide: 100 deg horizontal field of view; foveal: 24 deg; both: each eye's wide and
+    foveal cameras (the wide ones first: a stage that takes the first two gets the wide
+    pair)."""
     eyes: Literal["stereo", "left", "right"] = "stereo"
     resolution: tuple[int, int] = (320, 240)
     """Width, height in pixels."""
@@ -88,7 +90,8 @@ class Cameras(Section):
     @model_validator(mode="after")
     def _check_resolution(self) -> Cameras:
         check_resolution(self.resolution)
-        check_distortion(self.distortion, EYE_HFOV_DEG[self.which], self.resolution)
+        kinds = ("wide", "foveal") if self.which == "both" else (self.which,)
+        check_distortion(self.distortion, max(EYE_HFOV_DEG[k] for k in kinds), self.resolution)
         return self
 
 

@@ -170,8 +170,9 @@ class SensorFaults:
         covered: dict[str, list[tuple[float, float]]] = {}
         for i, w in enumerate(c.covered):
             eyes = ("left", "right") if w.camera == "both" else (w.camera,)
-            for eye in eyes:
-                name = EYE_CAMERAS[(eye, c.which)]
+            kinds = ("wide", "foveal") if c.which == "both" else (c.which,)
+            for eye, kind in ((e, k) for e in eyes for k in kinds):
+                name = EYE_CAMERAS[(eye, kind)]
                 if name not in eye_cameras:
                     raise ScenarioError(f"scenario {scenario.name!r}", f"cameras.covered.{i}."
                                         "camera", f"the {eye} eye's camera is not rendered "

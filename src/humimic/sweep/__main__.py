@@ -19,7 +19,7 @@ from pathlib import Path
 
 from rich.console import Console
 
-from humimic.errors import InputError
+from humimic.errors import InputError, report_error
 from humimic.sweep.backends import BACKENDS
 
 
@@ -49,8 +49,7 @@ def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
     console = Console()
     if args.jobs is not None and args.jobs < 1:
-        print(f"error: --jobs must be >= 1, got {args.jobs}", file=sys.stderr)
-        return 2
+        return report_error(f"--jobs must be >= 1, got {args.jobs}")
     from humimic.sweep.config import load_sweep
     from humimic.sweep.driver import default_out_dir, run_sweep
     from humimic.sweep.plan import plan_sweep
@@ -68,8 +67,7 @@ def main(argv: list[str] | None = None) -> int:
         result = run_sweep(sweep, args.out, args.jobs, args.backend, args.address,
                            force=args.force, progress=not args.quiet, console=console)
     except InputError as err:
-        print(f"error: {err}", file=sys.stderr)
-        return 2
+        return report_error(err)
     except KeyboardInterrupt:
         print("interrupted: the summary lists the runs done so far; run the same command "
               "again to resume", file=sys.stderr)

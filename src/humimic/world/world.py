@@ -50,7 +50,8 @@ def scene_options(scenario) -> SceneOptions:
 def eye_camera_names(cameras) -> list[str]:
     """Scene camera names for the scenario's ``cameras`` section (left first)."""
     eyes = {"stereo": ("left", "right"), "left": ("left",), "right": ("right",)}[cameras.eyes]
-    return [EYE_CAMERAS[(eye, cameras.which)] for eye in eyes]
+    kinds = ("wide", "foveal") if cameras.which == "both" else (cameras.which,)
+    return [EYE_CAMERAS[(eye, kind)] for kind in kinds for eye in eyes]
 
 
 class World:

@@ -17,6 +17,7 @@ printed equation lacks the minus sign). Table 3's sigma_s = 36 for N_p = 30 poin
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import cv2
@@ -75,13 +76,18 @@ def colour_canny(image: np.ndarray, low: float = 50.0, high: float = 150.0,
     dy = cv2.Sobel(img, cv2.CV_16S, 0, 1, ksize=3, borderType=cv2.BORDER_REPLICATE)
     mag = cv2.magnitude(dx.astype(np.float32).ravel(), dy.astype(np.float32).ravel()
                         ).reshape(dx.shape)                 # 1.6x faster than int32 squares
-    m0, m1, m2 = mag[..., 0], mag[..., 1], mag[..., 2]
-    second = m1 > m0                                      # argmax's first maximum
-    third = m2 > np.maximum(m0, m1)
-    gx = np.where(third, dx[..., 2], np.where(second, dx[..., 1], dx[..., 0]))
-    gy = np.where(third, dy[..., 2], np.where(second, dy[..., 1], dy[..., 0]))
-    return cv2.Canny(np.ascontiguousarray(gx), np.ascontiguousarray(gy), low, high,
-                     L2gradient=True)
+    m0, m1, m2 = cv2.split(mag)
+    second = cv2.compare(m1, m0, cv2.CMP_GT)              # argmax's first maximum
+    third = cv2.compare(m2, cv2.max(m0, m1), cv2.CMP_GT)
+    # the gradient of the strongest channel: channel 0, overwritten where 1, then 2 is stronger
+    # (OpenCV's masked copies on contiguous planes: half the time of nested np.where)
+    gx, x1, x2 = cv2.split(dx)
+    gy, y1, y2 = cv2.split(dy)
+    cv2.copyTo(x1, second, gx)
+    cv2.copyTo(x2, third, gx)
+    cv2.copyTo(y1, second, gy)
+    cv2.copyTo(y2, third, gy)
+    return cv2.Canny(gx, gy, low, high, L2gradient=True)
 
 
 def edge_maps(image: np.ndarray, low: float = 50.0, high: float = 150.0,
@@ -104,7 +110,7 @@ def remap_uv(image: np.ndarray, u: np.ndarray, v: np.ndarray, outside, interpola
         mx = np.asarray(u, np.float32).reshape(-1, last)
         my = np.asarray(v, np.float32).reshape(-1, last)
     else:
-        m = int(np.prod(shape))
+        m = math.prod(shape)
         rows = max(1, -(-m // 1024))
         mx = np.full(rows * 1024, -1e6, np.float32)
         my = np.full(rows * 1024, -1e6, np.float32)
@@ -112,7 +118,7 @@ def remap_uv(image: np.ndarray, u: np.ndarray, v: np.ndarray, outside, interpola
         mx, my = mx.reshape(rows, 1024), my.reshape(rows, 1024)
     out = cv2.remap(image, mx, my, interpolation, borderMode=cv2.BORDER_CONSTANT,
                     borderValue=outside)
-    m = int(np.prod(shape))
+    m = math.prod(shape)                    # np.prod of a tuple costs ~10 us, an array's
     return out.reshape(mx.size, -1)[:m].reshape(shape + out.shape[2:])
 
 

@@ -68,7 +68,9 @@ def skin_blobs(mask: np.ndarray, subsample: int = 2, min_area_px: float = 40.0,
     """Skin blobs of a binary (or 0..255) skin mask: subsampled by ``subsample``, grouped by
     ``cv2.connectedComponentsWithStats`` (8-connected), kept if their area (full-resolution
     px) is at least ``min_area_px`` and their box's height/width ratio within ``aspect``."""
-    m = (np.asarray(mask) > 0).astype(np.uint8)
+    m = np.asarray(mask)
+    if m.dtype != np.uint8:          # a uint8 mask (0/1 or 0/255) is labelled as it is
+        m = (m > 0).astype(np.uint8)
     if subsample > 1:
         m = m[::subsample, ::subsample]
     n, _, stats, cent = cv2.connectedComponentsWithStats(m, connectivity=8)

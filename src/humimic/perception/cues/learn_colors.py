@@ -30,7 +30,7 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
-from humimic.errors import InputError
+from humimic.errors import InputError, report_error
 from humimic.paths import SCENARIOS_DIR
 from humimic.perception.cues.color_models import ColorModel, fit_color_model, save_color_model
 from humimic.rngs import Rngs
@@ -203,8 +203,7 @@ def main(argv: list[str] | None = None) -> int:
         model, samples = learn(scenario, args.which, args.frames, args.space, args.components,
                                rng, args.material)
     except InputError as err:
-        print(f"error: {err}", file=sys.stderr)
-        return 2
+        return report_error(err)
     args.out.parent.mkdir(parents=True, exist_ok=True)
     save_color_model(model, args.out)
     hit, false = separation(model, samples)

@@ -61,10 +61,10 @@ def motion_edge_maps(maps: EdgeMaps, flow: np.ndarray | None, min_flow_px: float
                      cap: float = DT_CAP_PX) -> MotionEdgeMaps:
     """Add the moving edges and their distance transform to a frame's edge maps (no flow, as
     on the first frame: nothing moves)."""
-    if flow is None:
-        moving = np.zeros_like(maps.edges)
-    else:
-        moving = moving_edges(maps.edges, flow, min_flow_px)
+    if flow is None:                 # no moving edge: the transform is the cap everywhere
+        return MotionEdgeMaps(maps.edges, np.zeros_like(maps.edges), maps.dt,
+                              np.full(maps.edges.shape, cap, np.float32))
+    moving = moving_edges(maps.edges, flow, min_flow_px)
     return MotionEdgeMaps(maps.edges, moving, maps.dt, distance_transform(moving, cap))
 
 

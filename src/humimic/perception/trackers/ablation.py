@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from humimic.errors import InputError
+from humimic.errors import InputError, report_error
 from humimic.paths import SCENARIOS_DIR
 
 CUE_SETS = {
@@ -80,8 +80,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         results = run(args.scenario, args.seeds, args.tracker, args.duration, args.overrides)
     except InputError as err:
-        print(f"error: {err}", file=sys.stderr)
-        return 2
+        return report_error(err)
     print(table(results))
     return 0
 

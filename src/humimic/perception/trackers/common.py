@@ -62,18 +62,20 @@ def skin_model_lut(scenario, world, cameras, key: str, bits: int = 6) -> ColorLU
                             "learn_colors") from None
 
 
-def check_cameras(scenario, world, name: str, cameras, needed: int) -> tuple[str, ...]:
+def check_cameras(scenario, world, name: str, cameras, needed: int, key: str = "cameras"
+                  ) -> tuple[str, ...]:
     """The cameras a tracker uses (``cameras`` or the first ``needed`` rendered eyes); a
-    camera that is not rendered is a :class:`ScenarioError` naming the key."""
+    camera that is not rendered is a :class:`ScenarioError` naming the key
+    (``trackers.<name>.<key>``)."""
     where = f"scenario {scenario.name!r}"
     cams = tuple(cameras) if cameras is not None else tuple(world.eye_cameras[:needed])
     if len(cams) < needed:
-        raise ScenarioError(where, f"trackers.{name}.cameras",
+        raise ScenarioError(where, f"trackers.{name}.{key}",
                             f"this tracker needs {needed} camera(s)", list(cams),
                             "cameras.eyes: stereo")
     for i, cam in enumerate(cams):
         if cam not in world.eye_cameras:
-            raise ScenarioError(where, f"trackers.{name}.cameras.{i}",
+            raise ScenarioError(where, f"trackers.{name}.{key}.{i}",
                                 f"camera {cam!r} is not rendered by this scenario", cam,
                                 f"{', '.join(world.eye_cameras) or 'none'} (set cameras.which)")
     return cams

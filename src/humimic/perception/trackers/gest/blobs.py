@@ -20,13 +20,14 @@ from humimic.perception.cues.importance import Blobs, skin_blobs
 
 
 def hand_blobs(image: np.ndarray, lut: ColorLUT, subsample: int = 2,
-               threshold: float = 0.5) -> Blobs:
-    """Skin blobs of an RGB ``image`` (``lut``'s posterior above ``threshold``), found at
-    ``subsample`` and measured at full resolution (module docstring)."""
+               threshold: float = 0.5, min_area_px: float = 40.0) -> Blobs:
+    """Skin blobs of an RGB ``image`` (``lut``'s posterior above ``threshold``) of at least
+    ``min_area_px`` (full-resolution px), found at ``subsample`` and measured at full
+    resolution (module docstring)."""
     s = int(subsample)
-    small = np.ascontiguousarray(image[::s, ::s])
+    small = image[::s, ::s]                      # a view: the posterior is per pixel
     coarse = skin_blobs((lut.posterior(small) > threshold).astype(np.uint8), 1,
-                        min_area_px=40.0 / (s * s))
+                        min_area_px=min_area_px / (s * s))
     if s == 1 or len(coarse.areas) == 0:
         return coarse
     h, w = image.shape[:2]

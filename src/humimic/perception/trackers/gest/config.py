@@ -20,6 +20,23 @@ class GestConfig(Section):
     proposes every hand-sized skin blob)."""
     cameras: tuple[str, str] | None = None
     """(left, right) eye cameras; default the rendered pair."""
+    foveal: tuple[str, str] | None = None
+    """(left, right) narrow cameras (e.g. ``[L_foveal, R_foveal]``, with ``cameras.which:
+    both``) measured instead of ``cameras`` while the last estimate's hand lies inside both
+    of their images (``foveal_margin_px``): 5.6x the wide eyes' focal length, 5.6x less
+    depth per pixel of disparity. The wide pair (re-)initialises the filter and takes over
+    when the hand leaves the narrow view; keep the hand in it with active gaze
+    (``mimic.gaze.tracker``). Each frame's camera poses are the eyes' at that frame."""
+    foveal_margin_px: float = Field(4.0, ge=0.0)
+    """The hand's image (a circle of its longest semi-axis about its centre) must keep this
+    far (px) from the narrow images' borders."""
+    foveal_offset: bool = False
+    """Correct the foveal pair's candidates by the estimate's silhouette offset as the wide
+    pair's (:mod:`.tracker`). Off: with the eyes on the hand it images near both optical
+    axes, where the offset is small and its estimate carries the orientation's error (50-80
+    deg): menezes_gest_far with the person at 0.9 m (hand 0.5-0.9 m), seed 4, 19.3 mm RMS
+    with it, 9.4 without; at 1.75 m, seeds 3-4, 8.6-9.5 with, 8.5 without. (In the wide
+    pair, the hand off-axis, it helps: menezes_gest_reach 7.1 mm with, 8.8 without.)"""
     views: Literal[1, 2] = 1
     """Images the shape, colour and skin cues are evaluated in: 1 = the left image only (the
     paper), 2 = both (measured no better: 9.5-15 mm RMS either way on menezes_gest_reach at
@@ -82,6 +99,12 @@ class GestConfig(Section):
     at full resolution in its box (:mod:`.blobs`). Measured at the subsampled resolution the
     nearest triangulated blob is 23 mm RMS from the hand, at full resolution 10 mm
     (menezes_gest_reach at 1.2 m; 73 against 16 mm at 1.5 m)."""
+    blob_min_area_px: float = Field(16.0, ge=1.0)
+    """Smallest skin blob (full-resolution px) the importance function looks at. A hand
+    1.5 m from the wide eyes (f = 134 px) covers 28-37 px of skin, about 19 px at 2 m (the
+    workspace's far end); with the earlier 40 px it was no candidate beyond ~1.3 m and the
+    filter lost it: menezes_gest_reach at ``human.distance: 1.75`` (hand 1.24-1.56 m), seeds
+    3-5, tracked on 58-62 % of the in-view frames, with 16 px on all of them."""
     border_px: float = Field(1.0, ge=0.0)
     """Skin blobs whose box comes closer than this (px) to an image border are cut by it (the
     hand leaving the view) and are not candidates."""
@@ -138,6 +161,12 @@ class GestConfig(Section):
     lost_px: float = Field(5.0, gt=0.0)
     """The estimate is ``lost`` when its mean contour distance to edges exceeds this (px) or
     it left the image; then the filter re-initialises from the importance function."""
+    lost_rel: float = Field(0.3, ge=0.0)
+    """... or than this fraction of the hand's image radius (``fx`` times the longest
+    semi-axis over its depth), if larger: the ellipsoid's misfit to the hand's outline grows
+    with its image (3-5 px for a hand 40 px across in the foveal pair, 5-8 px on a fifth of
+    its frames, which with 5 px alone were declared lost; a hand in the wide eyes beyond
+    0.55 m keeps 5 px) ..."""
     lost_skin: float = Field(0.5, ge=0.0, le=2.0)
     """... unless its rim still separates skin from background: the skin cue's distance
     ``D_k = 1 - (skin inside - skin outside)`` at most this (a dark hand over a dark shirt has

@@ -36,7 +36,10 @@ def mean_orientation(ypr: np.ndarray, log_weights: np.ndarray) -> np.ndarray:
     signs = np.diagonal(FLIPS, axis1=1, axis2=2)                           # (4, 3)
     c = np.einsum("ij,nij->nj", R0, R)                                     # (N, 3)
     d = signs[np.argmax(c @ signs.T, axis=1)]                              # (N, 3)
-    M = np.einsum("n,nij,nj->ij", w, R, d)
+    M = np.einsum("nij,nj->ij", R, w[:, None] * d)
     U, _, Vt = np.linalg.svd(M)
-    D = np.diag([1.0, 1.0, np.sign(np.linalg.det(U @ Vt))])
-    return ypr_from_matrix(U @ D @ Vt)
+    R_mean = U @ Vt
+    (a, b, c), (d_, e, f), (g, h, i) = R_mean.tolist()
+    if a * (e * i - f * h) - b * (d_ * i - f * g) + c * (d_ * h - e * g) < 0.0:  # reflection
+        R_mean = U @ (Vt * np.array([1.0, 1.0, -1.0])[:, None])   # U diag(1, 1, -1) Vt
+    return ypr_from_matrix(R_mean)

@@ -1,7 +1,7 @@
 """GEST's measurement function (Menezes sec. 6.1.2): ``p(z^S, z^C | x) = p(z^S|x) p(z^C|x)``
 for hand-ellipsoid states, vectorised over particles.
 
-The ellipsoids are projected with eq. 15 (:func:`image_ellipses`, the body model's conics);
+The ellipsoids are projected with eq. 15 (its dual form, :func:`views_components`);
 ``n_points`` contour points (at equal steps of the ellipse's parameter, normals in closed
 form; checked against the dual-quadric projection in tests) sample the frame's distance
 transform (shape cue,
@@ -40,7 +40,7 @@ from humimic.bodymodel.hand import hand_ellipsoids, to_camera
 from humimic.bodymodel.projection import Z_MIN, project_ellipsoids
 from humimic.perception.cues.color_models import ColorLUT
 from humimic.perception.cues.edges import DT_CAP_PX, dt_distance, shape_log_likelihood
-from humimic.perception.cues.histograms import color_log_likelihood, patch_histograms
+from humimic.perception.cues.histograms import patch_color_log_likelihood, patch_histograms
 from humimic.perception.cues.skin import rim_skin_distance
 from humimic.perception.trackers.frame_cues import FrameCues, frame_cues
 from humimic.perception.trackers.gest.proposal import logsumexp
@@ -80,24 +80,42 @@ def hand_outlines(states: np.ndarray, intrinsics, T_cam_base: np.ndarray, n: int
     return outline, conic
 
 
+#: ``(cx, cy, m00, m01, m11)`` of an invalid part: a unit circle at the origin (masked later).
+_INVALID = np.array([0.0, 0.0, 1.0, 0.0, 1.0])
+
+
+def views_components(ellipsoids: tuple, T_cam_base: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Eq. 15 (in its dual form, :func:`~humimic.bodymodel.conics.dual_ellipse`) for
+    ellipsoids ``(R, centre, semi-axes)`` (base frame, as
+    :func:`~humimic.bodymodel.hand.hand_ellipsoids` gives them, ``N`` of them) in ``V``
+    cameras at once (``T_cam_base (V, 4, 4)``): the image ellipses ``(5, V, N)`` as ``cx, cy,
+    m00, m01, m11`` (centre and shape matrix, normalised coordinates; a unit circle where
+    invalid) and whether each ellipsoid lies wholly in front of each camera ``(V, N)``.
+    ``R S^2 R^T`` is formed once in the base frame and turned into every camera by one matrix
+    product with ``kron(R_cam, R_cam)`` (no batched 3x3 products: numpy's cost ~1 us each)."""
+    R, c, axes = ellipsoids
+    T = np.asarray(T_cam_base, float)
+    v = len(T)
+    Rc = T[:, :3, :3]
+    B = np.einsum("nik,njk->nij", R * np.square(axes)[:, None, :], R).reshape(-1, 9)
+    K = np.einsum("vik,vjl->vijkl", Rc, Rc).reshape(v, 9, 9)[:, conics.UPPER]   # (V, 6, 9)
+    Bc = (B @ K.reshape(v * 6, 9).T).reshape(-1, v, 6).transpose(1, 0, 2)     # (V, N, 6)
+    t = (c @ Rc.reshape(v * 3, 3).T).reshape(-1, v, 3).transpose(1, 0, 2) + T[:, None, :3, 3]
+    e = np.stack(conics.dual_ellipse(Bc, t)[:5])                          # Menezes eq. 15
+    # wholly in front: the ellipsoid's reach along the optical axis is sqrt(B_22)
+    valid = t[..., 2] - np.sqrt(np.maximum(Bc[..., 5], 0.0)) > Z_MIN
+    valid &= np.isfinite(e).all(axis=0)
+    return np.where(valid, e, _INVALID[:, None, None]), valid
+
+
 def views_ellipses(ellipsoids: tuple, T_cam_base: np.ndarray
                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Eq. 15 for ellipsoids ``(R, centre, semi-axes)`` (base frame, as
-    :func:`~humimic.bodymodel.hand.hand_ellipsoids` gives them, ``N`` of them) in ``V`` cameras
-    at once (``T_cam_base (V, 4, 4)``): the image ellipses' centres ``(V, N, 2)`` and shape
+    """:func:`views_components` as the image ellipses' centres ``(V, N, 2)`` and shape
     matrices ``(V, N, 2, 2)`` (normalised coordinates) and whether each ellipsoid lies wholly
     in front of each camera ``(V, N)``."""
-    T = np.asarray(T_cam_base, float)
-    R = T[:, None, :3, :3] @ ellipsoids[0][None]                       # into each camera
-    c = ellipsoids[1][None] @ np.swapaxes(T[:, :3, :3], 1, 2) + T[:, None, :3, 3]
-    axes = ellipsoids[2]
-    A, b, c0 = conics.ellipsoid_quadric(R, c, axes)
-    conic = conics.quadric_to_conic(A, b, c0)                           # Menezes eq. 15
-    centre, M, ok = conics.conic_to_ellipse(conic)
-    M = np.where(ok[..., None, None], M, np.eye(2))
-    valid = ok & (c0 > 0.0) & (c[..., 2] - np.sqrt(np.sum(np.square(R[..., 2, :] * axes), -1))
-                                > Z_MIN)
-    return centre, M, valid
+    (cx, cy, m00, m01, m11), valid = views_components(ellipsoids, T_cam_base)
+    M = np.stack([np.stack([m00, m01], -1), np.stack([m01, m11], -1)], -2)
+    return np.stack([cx, cy], -1), M, valid
 
 
 def image_ellipses(ellipsoids: tuple, view) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -131,27 +149,36 @@ def _circle(n_points: int) -> tuple[np.ndarray, np.ndarray]:
     return cos, sin
 
 
-def ellipse_projection(centre: np.ndarray, M: np.ndarray, valid: np.ndarray, intrinsics,
-                       n_points: int) -> HandProjection:
-    """Contour points, normals and colour patch of image ellipses ``(centre (N, 2), M
-    (N, 2, 2), valid (N,))`` (:func:`project_hands`)."""
-    m00 = np.sqrt(np.maximum(M[:, 0, 0], 1e-300))
-    l10 = M[:, 1, 0] / m00
-    l11 = np.sqrt(np.maximum(M[:, 1, 1] - l10 * l10, 1e-300))
+def components_projection(e: np.ndarray, valid: np.ndarray, intrinsics, n_points: int
+                          ) -> HandProjection:
+    """Contour points, normals and colour patch (:func:`project_hands`) of image ellipses
+    given as ``e (5, N)`` = ``cx, cy, m00, m01, m11`` (:func:`views_components`) and ``valid
+    (N,)``: ``centre + L (cos psi, sin psi)`` with ``L`` the Cholesky factor of ``M``, normals
+    ``L^-T (cos psi, sin psi)``."""
+    cx, cy, m00, m01, m11 = e
+    n = len(cx)
+    l00 = np.sqrt(np.maximum(m00, 1e-300))
+    l10 = m01 / l00
+    l11 = np.sqrt(np.maximum(m11 - l10 * l10, 1e-300))
     cos, sin = _circle(n_points)
-    x = centre[:, 0, None] + m00[:, None] * cos
-    y = centre[:, 1, None] + l10[:, None] * cos + l11[:, None] * sin
-    nx = cos / m00[:, None] - (l10 / (m00 * l11))[:, None] * sin
-    ny = sin / l11[:, None]
-    norm = np.hypot(nx, ny)
     K = intrinsics
-    u, v = K.distort(x, y)
-    uv = np.where(valid[:, None, None], np.stack([u, v], -1), OFF_IMAGE)
-    normal = np.stack([nx / norm, ny / norm], -1)
-    _, minor, _ = conics.ellipse_axes(M)
-    cu, cv = K.distort(centre[:, 0], centre[:, 1])
-    side = np.sqrt(2.0) * minor * K.fx
-    patch = np.where(valid[:, None], np.stack([cu, cv, side], -1), [OFF_IMAGE, OFF_IMAGE, 1.0])
+    uv = np.empty((n, n_points, 2))
+    uv[..., 0], uv[..., 1] = K.distort(cx[:, None] + l00[:, None] * cos,
+                                       cy[:, None] + l10[:, None] * cos + l11[:, None] * sin)
+    normal = np.empty((n, n_points, 2))
+    nx, ny = normal[..., 0], normal[..., 1]
+    np.multiply(cos, (1.0 / l00)[:, None], out=nx)
+    nx -= (l10 / (l00 * l11))[:, None] * sin
+    np.multiply(sin, (1.0 / l11)[:, None], out=ny)
+    normal /= np.hypot(nx, ny)[..., None]
+    # semi-minor axis: the smaller eigenvalue of M (conics.ellipse_axes in components)
+    minor = np.sqrt(np.maximum(0.5 * (m00 + m11) - np.hypot(0.5 * (m00 - m11), m01), 0.0))
+    patch = np.empty((n, 3))
+    patch[:, 0], patch[:, 1] = K.distort(cx, cy)
+    patch[:, 2] = np.sqrt(2.0) * K.fx * minor
+    if not valid.all():
+        uv[~valid] = OFF_IMAGE
+        patch[~valid] = (OFF_IMAGE, OFF_IMAGE, 1.0)
     return HandProjection(uv, normal, patch, valid)
 
 
@@ -166,7 +193,8 @@ def project_hands(states: np.ndarray, view: HandView, n_points: int,
     are (that resampling was most of the likelihood's cost)."""
     if ellipsoids is None:
         ellipsoids = hand_ellipsoids(states)
-    return ellipse_projection(*image_ellipses(ellipsoids, view), view.intrinsics, n_points)
+    e, valid = views_components(ellipsoids, np.asarray(view.T_cam_base)[None])
+    return components_projection(e[:, 0], valid[0], view.intrinsics, n_points)
 
 
 def project_views(states: np.ndarray, views: list, n_points: int,
@@ -177,17 +205,18 @@ def project_views(states: np.ndarray, views: list, n_points: int,
     eq. 15 evaluated for all views in one batch."""
     if ellipsoids is None:
         ellipsoids = hand_ellipsoids(states)
-    centre, M, valid = views_ellipses(ellipsoids, np.stack([v.T_cam_base for v in views]))
-    projs, centres = [], []
+    e, valid = views_components(ellipsoids, np.stack([v.T_cam_base for v in views]))
+    projs = []
+    centres = np.empty((e.shape[2], len(views), 2))
     for i, view in enumerate(views):
         if image_views is not None and i >= image_views:
             projs.append(None)
-            centres.append(pixel_centres(centre[i], valid[i], view.intrinsics))
+            centres[:, i] = pixel_centres(e[:2, i].T, valid[i], view.intrinsics)
             continue
-        proj = ellipse_projection(centre[i], M[i], valid[i], view.intrinsics, n_points)
+        proj = components_projection(e[:, i], valid[i], view.intrinsics, n_points)
         projs.append(proj)
-        centres.append(proj.patch_state[:, :2])
-    return projs, np.stack(centres, 1)
+        centres[:, i] = proj.patch_state[:, :2]
+    return projs, centres
 
 
 def shape_distance(proj: HandProjection, view: HandView) -> np.ndarray:
@@ -233,8 +262,8 @@ def hand_log_likelihood(states: np.ndarray, views: list[HandView], ref: np.ndarr
         if view.skin is not None:
             out += shape_log_likelihood(skin_distance(proj, view), sigma_k)
         if ref is not None:
-            h = patch_histograms(view.qimage, proj.patch_state, INSCRIBED, grid=8)
-            out += color_log_likelihood(h, ref[None], sigma_c)          # Menezes eq. 6
+            out += patch_color_log_likelihood(view.qimage, proj.patch_state, INSCRIBED,
+                                              ref[None], sigma_c)       # Menezes eq. 6
     if pairs is not None:
         out += blob_pair_log_likelihood(centres, pairs, sigma_px, outlier)
     return out

@@ -33,6 +33,7 @@ POSE = slice(0, 6)
 #: particle filter's ``(N, N)`` density table are that far below the row's maximum; at -700
 #: the term is 1e-304, which leaves a sum that is >= 1 unchanged.
 EXP_FLOOR = -700.0
+_LOG_2PI = math.log(2.0 * math.pi)
 
 
 def logsumexp(a: np.ndarray, axis: int = -1) -> np.ndarray:
@@ -46,6 +47,27 @@ def logsumexp(a: np.ndarray, axis: int = -1) -> np.ndarray:
     with np.errstate(divide="ignore"):
         out = np.log(np.sum(np.exp(a - safe), axis=axis)) + np.squeeze(safe, axis)
     return np.where(np.isfinite(np.squeeze(m, axis)), out, np.squeeze(m, axis))
+
+
+def walk_predictive(x: np.ndarray, particles: np.ndarray, log_weights: np.ndarray,
+                    sigma: np.ndarray) -> np.ndarray:
+    """``log sum_j w_j N(x_i; x_j, diag(sigma^2))`` for every row of ``x (n, d)``: a random
+    walk's predictive density from weighted ``particles (N, d)`` (normalised ``log_weights``),
+    i.e. :func:`logsumexp` of ``RandomWalk(sigma).pairwise_log_density(x, particles) +
+    log_weights`` with the ``(n, N)`` table built and reduced in place (``-|x_i - x_j|^2 / 2``
+    as ``x_i . x_j - |x_i|^2 / 2 - |x_j|^2 / 2`` in the scaled coordinates; equal to rounding,
+    a third fewer passes over the table)."""
+    xs, ps = x / sigma, particles / sigma
+    t = xs @ ps.T
+    t -= 0.5 * np.einsum("ij,ij->i", xs, xs)[:, None]
+    t += (log_weights - 0.5 * np.einsum("ij,ij->i", ps, ps))[None]
+    m = t.max(axis=1, keepdims=True)
+    const = float(np.sum(np.log(sigma))) + 0.5 * len(sigma) * _LOG_2PI
+    if not np.isfinite(m).all():                     # a row with no finite term
+        return logsumexp(t, axis=1) - const
+    t -= m
+    np.maximum(t, EXP_FLOOR, out=t)
+    return np.log(np.sum(np.exp(t, out=t), axis=1)) + (m[:, 0] - const)
 
 
 @dataclass(frozen=True)
@@ -90,10 +112,9 @@ class PoseReset:
         semi-axes (normalised weights): two ``(n, N)`` tables reduced by rows, no table-wide
         ``logaddexp``."""
         x, particles = np.asarray(x, float), np.asarray(particles, float)
-        lw = np.asarray(log_weights, float)[None]
-        f = logsumexp(self.walk.pairwise_log_density(x, particles) + lw, axis=1)
-        f_a = logsumexp(self._axes().pairwise_log_density(x[:, AXES], particles[:, AXES]) + lw,
-                        axis=1)
+        lw = np.asarray(log_weights, float)
+        f = walk_predictive(x, particles, lw, self.walk.sigma)
+        f_a = walk_predictive(x[:, AXES], particles[:, AXES], lw, self.walk.sigma[AXES])
         return np.logaddexp(math.log1p(-self.eps) + f,
                             math.log(self.eps) + self.box.log_density(x[:, POSE]) + f_a)
 
@@ -113,11 +134,6 @@ class CandidateProposal:
     orientations: UniformBox
     fresh: float = 0.5
 
-    def __post_init__(self):
-        s = self.walk.sigma
-        object.__setattr__(self, "_walk_oa", RandomWalk(s[3:]))
-        object.__setattr__(self, "_walk_axes", RandomWalk(s[AXES]))
-
     @property
     def empty(self) -> bool:
         return self.positions.empty
@@ -133,11 +149,9 @@ class CandidateProposal:
 
     def log_density(self, x: np.ndarray) -> np.ndarray:
         x = np.asarray(x, float)
-        lw = self.log_weights[None]
-        f_oa = logsumexp(self._walk_oa.pairwise_log_density(x[:, 3:], self.particles[:, 3:])
-                         + lw, axis=1)
-        f_a = logsumexp(self._walk_axes.pairwise_log_density(x[:, AXES], self.particles[:, AXES])
-                        + lw, axis=1)
+        lw, s = self.log_weights, self.walk.sigma
+        f_oa = walk_predictive(x[:, 3:], self.particles[:, 3:], lw, s[3:])
+        f_a = walk_predictive(x[:, AXES], self.particles[:, AXES], lw, s[AXES])
         with np.errstate(divide="ignore"):
             mix = np.logaddexp(math.log1p(-self.fresh) + f_oa if self.fresh < 1 else -np.inf,
                                math.log(self.fresh) + self.orientations.log_density(x[:, ORI])

@@ -12,6 +12,7 @@ that cap so that a point near the hand sees the same distance as in the full ima
 from __future__ import annotations
 
 import dataclasses
+import math
 
 import numpy as np
 
@@ -23,12 +24,16 @@ def roi_box(boxes: np.ndarray, width: int, height: int, pad_px: float
     """``(x0, y0, x1, y1)`` (integer pixels, exclusive end) of the union of ``boxes (K, 4)``
     (x, y, w, h) padded by ``pad_px`` and clipped to the image; None when there is no box."""
     b = np.asarray(boxes, float).reshape(-1, 4)
-    b = b[np.isfinite(b).all(axis=1)]
+    finite = np.isfinite(b).all(axis=1)
+    if not finite.all():
+        b = b[finite]
     if len(b) == 0:
         return None
-    lo = np.clip(np.floor(b[:, :2].min(axis=0) - pad_px), 0, (width, height))
-    hi = np.clip(np.ceil((b[:, :2] + b[:, 2:]).max(axis=0) + pad_px), 0, (width, height))
-    x0, y0, x1, y1 = (int(a) for a in (*lo, *hi))
+    lo = (b[:, :2].min(axis=0) - pad_px).tolist()              # scalars: np.clip costs more
+    hi = (b[:, :2] + b[:, 2:]).max(axis=0).tolist()
+    size = (width, height)
+    x0, y0 = (int(min(max(math.floor(v), 0), m)) for v, m in zip(lo, size, strict=True))
+    x1, y1 = (int(min(max(math.ceil(v + pad_px), 0), m)) for v, m in zip(hi, size, strict=True))
     if x1 - x0 < 2 or y1 - y0 < 2:
         return None
     return x0, y0, x1, y1

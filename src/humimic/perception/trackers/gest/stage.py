@@ -20,6 +20,7 @@ from humimic.maths.stats import rmse
 from humimic.messages import PoseEstimate
 from humimic.perception.trackers.common import BAD, GOOD, PoseTrackerStage
 from humimic.perception.trackers.gest.ellipsoid import FLIPS
+from humimic.perception.trackers.gest.foveal import choose_pair
 from humimic.perception.trackers.gest.likelihood import hand_outlines
 from humimic.perception.trackers.gest.tracker import GestResult, GestTracker
 from humimic.sensors.camera_model import invert_transform
@@ -42,26 +43,39 @@ def orientation_error_deg(ypr_est: np.ndarray, ypr_true: np.ndarray) -> np.ndarr
 class GestStage(PoseTrackerStage):
     kind = "gest"
 
-    def __init__(self, name: str, cfg, cameras: tuple[str, str], lut, world, rng, rlog=None):
+    def __init__(self, name: str, cfg, cameras: tuple[str, str], lut, world, rng, rlog=None,
+                 foveal: tuple[str, str] | None = None):
         super().__init__(name, cfg.latency)
         self.cfg, self.cameras, self.world, self.rng, self.rlog = cfg, cameras, world, rng, rlog
+        self.foveal = foveal
         self.tracker = GestTracker(cfg, lut)
         self.side = "R" if cfg.hand == "right" else "L"
         self.results: list[GestResult | None] = []
         self.left_cams: list = []
+        """Per frame, the wide pair's left camera (the scores' view)."""
+        self.used: list = []
+        """Per frame, the left camera the tracker measured in (None without a frame)."""
         self.samples: list = []
         """Per frame, every ``n_particles // 20``-th particle (for the recording)."""
 
     def track(self, t: float, images: dict):
-        left, right = images.get(self.cameras[0]), images.get(self.cameras[1])
-        if left is None or right is None:
+        wide = images.get(self.cameras[0]), images.get(self.cameras[1])
+        if wide[0] is None or wide[1] is None:
             self.results.append(None)
             self.left_cams.append(None)
+            self.used.append(None)
             self.samples.append(None)
             return None
-        res = self.tracker.step(left, right, self.rng)
+        narrow = None if self.foveal is None else tuple(images.get(c) for c in self.foveal)
+        left, right = choose_pair(wide, narrow, self.tracker.last, self.cfg.foveal_margin_px)
+        if self.used and self.used[-1] is not None and self.used[-1].name != left.camera.name:
+            self.tracker.offset = np.zeros(3)    # the silhouette offset is the other pair's
+        narrowed = narrow is not None and left is narrow[0]
+        res = self.tracker.step(left, right, self.rng,
+                                silhouette_offset=self.cfg.foveal_offset or not narrowed)
         self.results.append(res)
-        self.left_cams.append(left.camera)
+        self.left_cams.append(wide[0].camera)
+        self.used.append(left.camera)
         pf = self.tracker.pf
         self.samples.append(None if pf.particles is None else
                             pf.particles[::max(1, len(pf.particles) // 20)].copy())
@@ -76,12 +90,12 @@ class GestStage(PoseTrackerStage):
         of particles (blue); in 3-D, the estimated centre beside the avatar."""
         if rlog is None or not rlog.enabled:
             return
-        base = f"{image_entity(self.cameras[0])}/{self.tracker_name}"
         T = self.world.gt.T_world_base
-        for t, res, cam, sample in zip(self.times, self.results, self.left_cams, self.samples,
+        for t, res, cam, sample in zip(self.times, self.results, self.used, self.samples,
                                        strict=True):
             if res is None or res.mean is None:
                 continue
+            base = f"{image_entity(cam.name)}/{self.tracker_name}"
             states = np.vstack([res.mean[None], sample])
             states[:, 6:] = np.maximum(states[:, 6:], 1e-3)
             outline, _ = hand_outlines(states, cam.intrinsics, invert_transform(cam.T_base_cam))
@@ -125,6 +139,9 @@ class GestStage(PoseTrackerStage):
         out = {"in_view_frames": int(in_view.sum()),
                "tracked_in_view_fraction": _frac(use, in_view),
                "tracking_out_of_view_fraction": _frac(tracking & ~in_view, ~in_view)}
+        if self.foveal is not None:
+            narrow = np.array([c is not None and c.name == self.foveal[0] for c in self.used])
+            out["foveal_tracked_fraction"] = _frac(narrow & use, use)
         if use.any():
             err = est[use, :3] - truth[use, :3]
             dist = np.linalg.norm(err, axis=1)

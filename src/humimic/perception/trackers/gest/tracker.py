@@ -170,7 +170,7 @@ class GestTracker:
         (cropped) left view, ``centre_right`` its ellipse's centre in the right image (px)."""
         c_l = proj_left.patch_state[0, :2] + origin_left
         c_r = centre_right
-        if not (proj_left.valid[0] and np.isfinite(np.r_[c_l, c_r]).all()
+        if not (proj_left.valid[0] and np.isfinite(c_l).all() and np.isfinite(c_r).all()
                 and np.abs(c_r).max() < 1e5):
             return np.zeros(3)
         off = mean[:3] - triangulate_pixels(cams[0], cams[1], c_l[None], c_r[None])[0]
@@ -188,8 +188,10 @@ class GestTracker:
             idx = idx[[int(np.argmax(p[idx, 2]))]]
         return idx
 
-    def step(self, left: CameraImage, right: CameraImage, rng: np.random.Generator
-             ) -> GestResult:
+    def step(self, left: CameraImage, right: CameraImage, rng: np.random.Generator,
+             silhouette_offset: bool = True) -> GestResult:
+        """One stereo frame; ``silhouette_offset`` False: the candidates are taken as the
+        hand's centre (no :meth:`_silhouette_offset`)."""
         cfg = self.cfg
         frames = (left, right)
         near = [self._near(f) for f in frames]
@@ -239,7 +241,8 @@ class GestTracker:
         support = len(use) > 0 and float(np.min(np.linalg.norm(p[use] - mean[:3], axis=1))
                                          ) <= cfg.lost_m
         self.unsupported = 0 if support else self.unsupported + 1
-        fits = d <= cfg.lost_px or float(skin_distance(proj, views[0])[0]) <= cfg.lost_skin
+        fits = (d <= lost_threshold_px(mean, left.camera, cfg.lost_px, cfg.lost_rel)
+                or float(skin_distance(proj, views[0])[0]) <= cfg.lost_skin)
         status = ("tracking" if (s.ok and proj.valid[0] and fits
                                  and _centre_in_image(mean, left)
                                  and self.unsupported < cfg.lost_frames) else "lost")
@@ -247,8 +250,9 @@ class GestTracker:
             self.orientation = mean[3:6]
             self.last, self.anchor = mean, mean[:3]
             self.lost_for = 0
-            self.offset = self._silhouette_offset(mean, proj, centres[0, 1] + origin[1], origin[0],
-                                                  (left.camera, right.camera))
+            self.offset = (self._silhouette_offset(mean, proj, centres[0, 1] + origin[1],
+                                                   origin[0], (left.camera, right.camera))
+                           if silhouette_offset else np.zeros(3))
             if cfg.position == "kalman" and len(use):
                 j = use[int(np.argmin(np.linalg.norm(p[use] - mean[:3], axis=1)))]
                 mean[:3] = self._centre_update(p[j] + self.offset,
@@ -290,18 +294,19 @@ class GestTracker:
         if near is not None and cfg.roi:
             K = frame.camera.intrinsics
             uv, depth = near
-            r = K.fx * (cfg.gate_m + float(np.max(self.last[6:]))) / max(depth, 0.05)
+            r = K.fx * (cfg.gate_m + float(self.last[6:].max())) / max(depth, 0.05)
             if np.isfinite(uv).all():
                 box = roi_box(np.array([[uv[0] - r, uv[1] - r, 2 * r, 2 * r]]), K.width,
                               K.height, 0.0)
         image = frame.image if box is None else frame.image[box[1]:box[3], box[0]:box[2]]
         h, w = image.shape[:2]
-        b = interior_blobs(hand_blobs(image, self.lut, cfg.blob_subsample), w, h,
+        b = interior_blobs(hand_blobs(image, self.lut, cfg.blob_subsample,
+                                            min_area_px=cfg.blob_min_area_px), w, h,
                            cfg.border_px)
         if box is None:
             return b
         shift = np.array(box[:2], float)
-        return Blobs(b.centers + shift, b.boxes + np.r_[shift, 0.0, 0.0], b.areas)
+        return Blobs(b.centers + shift, b.boxes + (box[0], box[1], 0.0, 0.0), b.areas)
 
     def _roi(self, frame: CameraImage, blobs, centroids, near: tuple[np.ndarray, float] | None
              ) -> tuple[int, int, int, int] | None:
@@ -315,6 +320,17 @@ class GestTracker:
             boxes.append(np.array([[uv[0] - r, uv[1] - r, 2 * r, 2 * r]]))
         box = roi_box(np.concatenate(boxes), K.width, K.height, DT_CAP_PX)
         return box if box is not None else (0, 0, K.width, K.height)
+
+
+def lost_threshold_px(state: np.ndarray, camera, floor_px: float, rel: float) -> float:
+    """The largest mean contour distance (px) of a tracked hand: ``rel`` times its image
+    radius (``fx`` times the longest semi-axis over the centre's depth; the ellipsoid's misfit
+    to the hand's outline grows with its image), at least ``floor_px``."""
+    T = camera.T_cam_base
+    depth = float(T[2, :3] @ state[:3] + T[2, 3])
+    if depth <= 0.0:
+        return floor_px
+    return max(floor_px, rel * camera.intrinsics.fx * float(np.max(state[6:9])) / depth)
 
 
 def centre_update(x: np.ndarray, P: np.ndarray, z: np.ndarray, R: np.ndarray, sigma: float

@@ -104,6 +104,10 @@ class KpfConfig(Section):
     kde_stride: int = Field(1, ge=1, le=100)
     """The reweighting's KDEs from every k-th particle (1: all, exact; more: faster)."""
     cues: KpfCues = Field(default_factory=KpfCues)
+    colour_gradients: bool = False
+    """Our extension: the edge and ridge cues on the strongest colour channel's derivatives
+    at each pixel instead of grey levels' (clothes as bright as the background keep their
+    edges); False: grey levels, as the paper."""
     edge_points: int = Field(20, ge=2, le=200, multiple_of=2)
     """M_E, even."""
     ridge_points: int = Field(30, ge=1, le=200)

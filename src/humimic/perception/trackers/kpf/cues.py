@@ -106,35 +106,60 @@ def _norm_factor(mag: np.ndarray, k: float) -> np.ndarray:
     return np.tanh(mag / k) / np.maximum(mag, 1e-6)
 
 
+def strongest_channel(*planes: np.ndarray) -> list[np.ndarray]:
+    """Per pixel, the channel whose derivatives ``planes`` (each ``(H, W, 3)``) have the
+    largest squared sum (the first on ties): ``(H, W)`` each. The colour gradient of Dalal &
+    Triggs' HOG (the channel of the largest norm): an edge between two colours of equal
+    brightness has none in grey. ``(H, W)`` planes are returned as they are."""
+    if planes[0].ndim == 2:
+        return list(planes)
+    mag = planes[0] * planes[0]
+    for p in planes[1:]:
+        mag += p * p
+    first = mag[..., 1] > mag[..., 0]
+    third = mag[..., 2] > np.where(first, mag[..., 1], mag[..., 0])
+    out = []
+    for p in planes:
+        o = np.where(first, p[..., 1], p[..., 0])
+        np.copyto(o, p[..., 2], where=third)
+        out.append(o)
+    return out
+
+
 def cue_maps(image: np.ndarray, skin_lut: ColorLUT, levels: int = 3, k_edge: float = 0.15,
-             k_ridge: float = 0.05, region: tuple[int, int, int, int] | None = None
-             ) -> CueMaps:
+             k_ridge: float = 0.05, region: tuple[int, int, int, int] | None = None,
+             colour_gradients: bool = False) -> CueMaps:
     """Cue maps of an RGB uint8 image; ``k_edge`` / ``k_ridge`` the normalisation's contrast
     scales (grey levels in [0, 1] per pixel, per pixel^2). ``region`` ``(u0, v0, u1, v1)``:
     only that part of the image (``u0``, ``v0`` multiples of ``2^(levels - 1)`` keep the
     pyramid aligned with the whole image's; the maps equal the whole image's farther than
     :data:`~humimic.perception.trackers.kpf.frame_cues.MARGIN_PX` inside the region's edges
-    that are not the image's)."""
+    that are not the image's). ``colour_gradients`` (our extension; the paper: grey levels):
+    the edge and ridge derivatives of the R, G, B channel that is strongest at each pixel
+    (:func:`strongest_channel`), so clothes as bright as the background still have edges."""
     origin = (0, 0)
     if region is not None:
         u0, v0, u1, v1 = region
         image, origin = image[v0:v1, u0:u1], (u0, v0)
-    grey = cv2.cvtColor(image, cv2.COLOR_RGB2GRAY).astype(np.float32) / 255.0
+    if colour_gradients:
+        grey = image.astype(np.float32) / 255.0
+    else:
+        grey = cv2.cvtColor(image, cv2.COLOR_RGB2GRAY).astype(np.float32) / 255.0
     g = cv2.GaussianBlur(grey, (5, 5), 1.0)
-    gu = cv2.Sobel(g, cv2.CV_32F, 1, 0, ksize=3, scale=1.0 / 8.0)
-    gv = cv2.Sobel(g, cv2.CV_32F, 0, 1, ksize=3, scale=1.0 / 8.0)
+    gu, gv = strongest_channel(cv2.Sobel(g, cv2.CV_32F, 1, 0, ksize=3, scale=1.0 / 8.0),
+                               cv2.Sobel(g, cv2.CV_32F, 0, 1, ksize=3, scale=1.0 / 8.0))
     f = _norm_factor(cv2.magnitude(gu, gv), k_edge)
     gradient = cv2.merge([gu * f, gv * f])
     pyramid = [g]
     for _ in range(1, levels):
         pyramid.append(cv2.pyrDown(pyramid[-1]))
-    shapes = np.array([lv.shape for lv in pyramid])
+    shapes = np.array([lv.shape[:2] for lv in pyramid])
     rows = np.concatenate([[0], np.cumsum(shapes[:-1, 0] + 1)])
     ridge = np.zeros((int(np.sum(shapes[:, 0] + 1)), shapes[0, 1], 4), np.float32)
     for lv, (h, w), r in zip(pyramid, shapes, rows, strict=True):
-        uu = cv2.Sobel(lv, cv2.CV_32F, 2, 0, ksize=3, scale=0.25)
-        uv = cv2.Sobel(lv, cv2.CV_32F, 1, 1, ksize=3, scale=0.25)
-        vv = cv2.Sobel(lv, cv2.CV_32F, 0, 2, ksize=3, scale=0.25)
+        uu, uv, vv = strongest_channel(cv2.Sobel(lv, cv2.CV_32F, 2, 0, ksize=3, scale=0.25),
+                                       cv2.Sobel(lv, cv2.CV_32F, 1, 1, ksize=3, scale=0.25),
+                                       cv2.Sobel(lv, cv2.CV_32F, 0, 2, ksize=3, scale=0.25))
         f = _norm_factor(np.sqrt(uu * uu + uv * uv + vv * vv), k_ridge)
         planes = [0.5 * (uu - vv) * f, uv * f, 0.5 * (uu + vv) * f, np.zeros_like(f)]
         if w == ridge.shape[1]:

@@ -52,7 +52,8 @@ class KpfStage(Stage):
         t = msg.t
         T_cam_base = invert_transform(frame.camera.T_base_cam)
         t0, c0 = time.perf_counter(), time.thread_time()
-        maps = FrameCues(frame.image, self.skin_lut)     # computed where the particles look
+        maps = FrameCues(frame.image, self.skin_lut,     # computed where the particles look
+                         colour_gradients=self.cfg.colour_gradients)
         if self.tracker is None:
             self.tracker = KpfTracker(self.body, frame.camera.intrinsics, self.cfg, self.rng,
                                       self.frame_rate)

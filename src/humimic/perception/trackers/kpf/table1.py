@@ -1,9 +1,11 @@
 """Reproduce Schmidt, Fritsch & Kwolek's Table 1 (mean wrist error over runs, by particles and
 mean-shift iterations, side and angular pointing) and print it beside the paper's.
 
-``python -m humimic.perception.reproduce schmidt-table1 [--out DIR] [--jobs N] [--seeds N]
-[--duration S] [--particles N ...] [--no-run]`` runs ``sweeps/schmidt_table1.yaml`` (the rows
-of those particle counts; default all) through the sweep tool (complete runs are skipped),
+``python -m humimic.perception.reproduce schmidt-table1 [--out DIR] [--jobs N] [--seeds N | S S
+...] [--duration S] [--particles N ...] [--set KEY=VALUE ...] [--no-run]`` runs
+``sweeps/schmidt_table1.yaml`` (the rows of those particle counts, default all; ``--seeds``: N
+seeds 0..N-1, or the seeds listed; ``--set``: scenario overrides for every run, e.g. a
+sensitivity study at another distance) through the sweep tool (complete runs are skipped),
 then reads every run's ``metrics.json``. Each run holds three trackers on the same frames
 (``scenarios/schmidt_table1.yaml``): ``kpf`` (ours: partitioned mean shift, torso prior),
 ``kpf_paper`` (the published method) and ``condensation``. Per run the error is the mean over
@@ -22,7 +24,10 @@ from pathlib import Path
 
 import numpy as np
 
+from humimic.errors import report_error
 from humimic.paths import SCENARIOS_DIR
+from humimic.scenario.errors import ScenarioError
+from humimic.scenario.load import parse_override
 
 SWEEP = SCENARIOS_DIR.parent / "sweeps" / "schmidt_table1.yaml"
 CONFIGS = ((1000, 3), (500, 3), (250, 3), (150, 2))
@@ -94,22 +99,32 @@ def main(argv: list[str] | None = None) -> int:
                                 description=__doc__.split("\n")[0])
     p.add_argument("--out", type=Path, default=None, help="sweep directory")
     p.add_argument("--jobs", type=int, default=1, help="parallel runs (default 1)")
-    p.add_argument("--seeds", type=int, default=None, help="seeds per point (default: 5)")
+    p.add_argument("--seeds", type=int, nargs="+", default=None,
+                   help="N: seeds 0..N-1 per point (default: 5); several: these seeds")
     p.add_argument("--duration", type=float, default=None, help="simulated s per run")
     p.add_argument("--no-run", action="store_true", help="only read finished runs")
     p.add_argument("--particles", type=int, nargs="+", default=None,
                    help="only these rows of Table 1 (by particles, e.g. 1000 150)")
+    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                   help="scenario override for every run (repeatable), e.g. human.distance=3")
     args = p.parse_args(argv)
     sweep = load_sweep(SWEEP)
     if args.particles is not None:
         sweep.config.cases = [c for c in sweep.config.cases
                               if c["trackers.kpf.n_particles"] in args.particles]
     if args.seeds is not None:
-        sweep.config.seeds = args.seeds
+        sweep.config.seeds = args.seeds[0] if len(args.seeds) == 1 else args.seeds
     if args.duration is not None:
         sweep.config.set["duration"] = args.duration
-    out = args.out or default_out_dir(sweep)
+    try:
+        for item in args.set:
+            key, value = parse_override(item)
+            sweep.config.set[key] = value
+        out = args.out or default_out_dir(sweep)
+        planned = plan_sweep(sweep, out)   # every run's scenario validated before any runs
+    except ScenarioError as err:
+        return report_error(err)
     if not args.no_run:
         run_sweep(sweep, out, jobs=args.jobs, progress=True)
-    print(table(collect(plan_sweep(sweep, out))))
+    print(table(collect(planned)))
     return 0
