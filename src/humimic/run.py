@@ -8,8 +8,10 @@ prints one line and exits with status 2.
 from __future__ import annotations
 
 from humimic import select_gl_backend
+from humimic.heap import purge_freed_pages_at_once
 
 select_gl_backend()  # an entry point: MuJoCo's OpenGL backend, before anything imports mujoco
+purge_freed_pages_at_once()  # and the recording's allocator, before anything imports rerun
 
 import argparse
 import json
@@ -20,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from humimic.errors import InputError, report_error
-from humimic.heap import release_free_heap
+from humimic.heap import release_free_heap, tune_heap
 from humimic.metrics.summary import print_summary, verdict_warning
 from humimic.pipeline.build import build_stages
 from humimic.pipeline.simulation import simulate
@@ -29,6 +31,7 @@ from humimic.rngs import Rngs
 from humimic.scenario import Scenario, dump_scenario, load_scenario
 from humimic.viz.blueprint import run_layout
 from humimic.viz.plots import MAX_POINTS, plot_trajectories
+from humimic.viz.rerun_columns import SERIES_CHUNK
 from humimic.viz.rerun_log import SERIES, TRUTH, RerunLog, camera_entity
 from humimic.world.world import World
 
@@ -44,6 +47,7 @@ def run_one(scenario: Scenario, out_dir: str | Path | None = None, rerun: str | 
             progress: bool = True) -> dict:
     """Run ``scenario`` (its own seed) and return the metrics written to ``metrics.json``."""
     wall0 = time.perf_counter()
+    tune_heap()  # large blocks mapped on their own: a long run's heap does not fragment
     out = prepare_out_dir(Path(out_dir) if out_dir is not None else default_out_dir(scenario))
     (out / "scenario.resolved.yaml").write_text(dump_scenario(scenario))
     mode = rerun or scenario.output.rerun
@@ -173,9 +177,10 @@ def _log_ground_truth(rlog, world, ticks: int) -> None:
     for target in GT_TARGETS:
         rlog.log_series(f"{SERIES}/ground_truth/{target}", gt.t[ks], gt.p_base(target)[ks],
                         names=[f"{target} {a} (m)" for a in "xyz"])
-    for k, pos in zip(ks, gt.pos[ks], strict=True):
-        rlog.log_points(float(gt.t[k]), f"{TRUTH}/sites", pos, colors=[40, 200, 40],
-                        radii=0.01, labels=list(gt.targets))
+    for k0 in range(0, len(ks), SERIES_CHUNK):  # as columns, a block at a time
+        kb = ks[k0:k0 + SERIES_CHUNK]
+        rlog.log_points_rows(f"{TRUTH}/sites", gt.t[kb], gt.pos[kb], colors=[40, 200, 40],
+                             radii=0.01, labels=list(gt.targets))
 
 
 def _plots(out: Path, world, stages, ticks: int) -> None:

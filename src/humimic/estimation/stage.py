@@ -53,18 +53,20 @@ class FilterRecord:
     rows: SpillRows = field(default_factory=SpillRows)
     """One row per frame, batches on disk (memory flat in the run's duration)."""
 
-    def arrays(self, targets: list[str] | None = None) -> FilterArrays:
+    def arrays(self, targets: list[str] | None = None, cov_block: int = 9) -> FilterArrays:
         """The stacked records; with ``targets``, of just those targets (only their columns
-        are gathered from the spilled rows)."""
+        are gathered from the spilled rows); with ``cov_block`` < 9, ``P`` holds only its
+        leading ``cov_block`` x ``cov_block`` block (3: the position's; 1/9 of the memory)."""
         targets = list(self.targets if targets is None else targets)
-        n = len(targets)
+        n, b = len(targets), int(cov_block)
         if not self.rows:
             z = np.zeros
             return FilterArrays(targets, z(0), z((0, n), bool), z((0, n), bool),
-                                z((0, n, 9)), z((0, n, 9, 9)), z((0, n)))
+                                z((0, n, 9)), z((0, n, b, b)), z((0, n)))
         idx = [self.targets.index(t) for t in targets]
-        cols = self.rows.columns({j: (lambda c: c) if j == 0 else (lambda c: c[:, idx])
-                                  for j in range(6)})
+        take = {j: (lambda c: c) if j == 0 else (lambda c: c[:, idx]) for j in range(6)}
+        take[4] = lambda c: c[:, idx, :b, :b]
+        cols = self.rows.columns(take)
         return FilterArrays(targets, cols[0].astype(float), *cols[1:])
 
 

@@ -2,7 +2,8 @@
 
 * :class:`RerunLog` (:mod:`humimic.viz.rerun_log`) -- one run's rerun recording: scene, body
   poses, eye images, blobs, estimates, series and events against simulated time; a no-op
-  when rerun is off. The entity layout is documented there.
+  when rerun is off. The entity layout is documented there. Its whole-run series and 3-D
+  trails go out as columns in bounded chunks (:mod:`humimic.viz.rerun_columns`).
 * :func:`default_blueprint` (:mod:`humimic.viz.blueprint`) -- the layout stored with it.
 * :func:`plot_trajectories`, :func:`plot_errors`, :func:`plot_error_budget`
   (:mod:`humimic.viz.plots`) -- matplotlib PNGs.

@@ -22,7 +22,8 @@ from humimic.metrics.mimicry_report import (
     site_budget,
     site_series,
 )
-from humimic.viz.rerun_log import AXIS_RGB, SERIES, SERIES_CHUNK
+from humimic.viz.rerun_columns import SERIES_CHUNK
+from humimic.viz.rerun_log import AXIS_RGB, SERIES
 from humimic.world.names import ROBOT_JOINTS
 
 #: The default layout's time-series root of mimicry.
@@ -93,14 +94,16 @@ def log_mimicry(stage, rlog) -> None:
                                   [f"{axis} {ch.target} true, mapped (m)",
                                    f"{axis} commanded (m)", f"{axis} {ch.site} robot (m)"])
     ks = np.arange(0, n, max(1, int(round(1.0 / (30.0 * rec.dt)))))  # 30 Hz
-    p_cmd, p_robot = rec.p_cmd[ks], rec.p_robot[ks]  # gathered a block at a time, not per row
-    gaze = (rec.cam_mat[ks], rec.cam_pos[ks]) if stage.gaze is not None else None
-    for i, k in enumerate(ks.tolist()):
-        rlog.log_points(t[k], "world/mimic/commanded", stage.to_world(p_cmd[i]),
-                        colors=[255, 160, 0], radii=0.015)
-        rlog.log_points(t[k], "world/mimic/reached", stage.to_world(p_robot[i]),
-                        colors=[0, 200, 255], radii=0.012)
-        if gaze is not None:
-            axes = gaze[0][i].reshape(2, 3, 3)[:, :, 2] * -1.5  # camera -z, 1.5 m
-            rlog.log_arrow(t[k], "world/mimic/gaze", gaze[1][i], axes,
-                           colors=[[255, 0, 255], [255, 0, 255]])
+    for k0 in range(0, len(ks), SERIES_CHUNK):  # as columns (one log call a row: see
+        kb = ks[k0:k0 + SERIES_CHUNK]          # humimic.viz.rerun_columns), a block at a time
+        t_k = t[kb]
+        rlog.log_points_rows("world/mimic/commanded", t_k, stage.to_world(rec.p_cmd[kb]),
+                             colors=[255, 160, 0], radii=0.015)
+        rlog.log_points_rows("world/mimic/reached", t_k, stage.to_world(rec.p_robot[kb]),
+                             colors=[0, 200, 255], radii=0.012)
+        if stage.gaze is not None:
+            cam_mat = rec.cam_mat[kb].reshape(len(kb), 2, 3, 3)
+            rlog.log_arrows_rows("world/mimic/gaze", t_k, rec.cam_pos[kb],
+                                 cam_mat[:, :, :, 2] * -1.5,  # camera -z, 1.5 m
+                                 colors=[[255, 0, 255], [255, 0, 255]])
+

@@ -58,11 +58,13 @@ from humimic.viz.geometry import (
     rigid_root,
     scene_geoms,
 )
+from humimic.viz.rerun_columns import ColumnLog
 
-#: Payload (bytes, estimated) handed to the SDK between blocking flushes, and rows of a series
-#: sent as one chunk. The SDK encodes and writes on its own threads: unbounded, ten minutes' joint
-#: series (30 x 250 000 rows) queue up faster than written, +279 MiB of peak memory; +32 MiB so.
-BACKLOG_BYTES, SERIES_CHUNK = 8 << 20, 1 << 15
+#: Payload (bytes, estimated) handed to the SDK between blocking flushes. The SDK encodes and
+#: writes on its own threads: unbounded, ten minutes' joint series (30 x 250 000 rows, sent in
+#: chunks of :data:`~humimic.viz.rerun_columns.SERIES_CHUNK` rows) queue up faster than written,
+#: +279 MiB of peak memory; +32 MiB so.
+BACKLOG_BYTES = 8 << 20
 #: Wall seconds between the SDK's own flushes when saving. Its default, 0.2 s, cuts a chunk per
 #: entity five times a second, and the file sink keeps an index entry per chunk until it closes,
 #: then builds its footer from them: 120 000 small chunks held +43 MiB and peaked +59 MiB more at
@@ -72,8 +74,10 @@ FLUSH_TICK_S = 5.0
 _LOG_CALL_BYTES = 512
 
 
-class RerunLog:
+class RerunLog(ColumnLog):
     """Thin wrapper around one ``RecordingStream``; every method takes simulated time in s.
+    Whole-run series and per-row trails (``log_series``, ``log_points_rows``,
+    ``log_arrows_rows``) are :class:`~humimic.viz.rerun_columns.ColumnLog`'s.
 
     ``mode``: ``off`` (no-op), ``save`` (stream to ``path``, no viewer) or ``spawn`` (open a
     viewer; also write ``path`` if given). ``blueprint`` (see :mod:`humimic.viz.blueprint`) is
@@ -359,30 +363,6 @@ class RerunLog:
         self._rec.set_time(TIMELINE, duration=t)
         self._rec.log(entity, rr.Scalars(np.atleast_1d(np.asarray(value, dtype=float))))
         self._sent(0)
-
-    def log_series(self, entity: str, times: np.ndarray, values: np.ndarray,
-                   names: list[str] | None = None, colors=None, widths=None) -> None:
-        """A whole series in one call: ``values`` (N,) or (N, k) at ``times`` (N,) in s; one
-        legend name (with its unit) per line, optionally colours and widths."""
-        if self._rec is None or len(times) == 0:
-            return
-        self.logged.add(entity)
-        v = np.asarray(values, dtype=float)
-        v, times = (v if v.ndim == 2 else v.reshape(-1, 1)), np.asarray(times, dtype=float)
-        for k in range(0, len(times), SERIES_CHUNK):  # bounded chunks: bounded SDK buffers
-            self._rec.send_columns(
-                entity, indexes=[rr.TimeColumn(TIMELINE, duration=times[k:k + SERIES_CHUNK])],
-                columns=rr.Scalars.columns(scalars=v[k:k + SERIES_CHUNK]))
-            self._sent(v[k:k + SERIES_CHUNK].nbytes + 8 * len(times[k:k + SERIES_CHUNK]))
-        if names is not None:
-            self.set_series_names(entity, names, colors, widths)
-
-    def set_series_names(self, entity: str, names: list[str], colors=None,
-                         widths=None) -> None:
-        """Legend names (and colours, widths) of the lines of a scalar entity (static)."""
-        if self._rec is not None:
-            self._rec.log(entity, rr.SeriesLines(names=list(names), colors=colors,
-                                                 widths=widths), static=True)
 
     def log_text(self, t: float, entity: str, text: str, level: str = "INFO") -> None:
         """A text event (``INFO``, ``WARN``, ``ERROR`` ...), e.g. ``searching -> tracking``."""

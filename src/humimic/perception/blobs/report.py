@@ -35,15 +35,18 @@ class TrackingReport(Stage):
         """:class:`~humimic.sensors.visibility.Visibility` of the eyes (None: no visibility
         scores) and detection's phase one (s), which detection rates leave out."""
 
-    def arrays(self, target: str | None = None):
+    def arrays(self, target: str | None = None, cov_block: int = 9):
         """``(PerceptionArrays, FilterArrays | None)`` of the run so far; with ``target``,
-        of that target alone (what a long run gathers at a time: one target's columns)."""
+        of that target alone (what a long run gathers at a time: one target's columns); the
+        filter's covariances cut to their leading ``cov_block`` block (the series and plots
+        show the position's 3 x 3)."""
         one = None if target is None else [target]
         pa = self.perception_record.arrays(one)
         fa = None
         if self.filter_record is not None:
             fa = self.filter_record.arrays(
-                None if target is None else [t for t in one if t in self.filter_record.targets])
+                None if target is None else [t for t in one if t in self.filter_record.targets],
+                cov_block)
         return pa, fa
 
     def truth(self, t: np.ndarray, target: str):
@@ -74,7 +77,7 @@ class TrackingReport(Stage):
         if rlog is None or not rlog.enabled:
             return
         for target in self.targets:
-            pa, fa = self.arrays(target)
+            pa, fa = self.arrays(target, cov_block=3)
             self._log_series(rlog, target, pa, fa, self.truth(pa.t, target)[0])
         if self.visibility is not None:
             log_visibility(rlog, self.visibility.arrays(), self.targets)
@@ -118,7 +121,7 @@ class TrackingReport(Stage):
         out = Path(out_dir)
         paths = []
         for target in self.targets:
-            pa, fa = self.arrays(target)
+            pa, fa = self.arrays(target, cov_block=3)
             i = pa.index(target)
             p, _, _ = self.truth(pa.t, target)
             ok = pa.ok[:, i]
