@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import subprocess
 import sys
 import tempfile
@@ -71,7 +72,7 @@ def slope_mb_per_min(rows: list[dict]) -> float:
 
     d = np.array([r["duration_s"] for r in rows]) / 60.0
     m = np.array([r["self_mb"] for r in rows])
-    return float(np.polyfit(d, m, 1)[0]) if len(rows) > 1 else float("nan")
+    return float(np.polyfit(d, m, 1)[0]) if len(set(d)) > 1 else float("nan")
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -89,6 +90,10 @@ def main(argv: list[str] | None = None) -> None:
         print(f"{duration:7.0f} {r['wall_s']:7.1f} {r['self_mb']:9.1f} {r['children_mb']:10.1f}  "
               f"{r['peak_at']}", flush=True)
     slope = slope_mb_per_min(rows)
+    if math.isnan(slope):   # one duration (repeated or not): peaks only, nothing to fit
+        print(f"peak {min(r['self_mb'] for r in rows):.1f}-{max(r['self_mb'] for r in rows):.1f}"
+              " MiB; give two or more different durations for the slope")
+        return
     base = rows[0]["self_mb"]
     at_10 = base + slope * (600.0 - rows[0]["duration_s"]) / 60.0
     print(f"slope {slope:.2f} MiB per simulated minute; a 10-minute run extrapolates to "
