@@ -31,6 +31,21 @@ def test_nees_matches_explicit_inverse_and_flags_singular():
     assert math.isnan(out[7]) and np.isfinite(np.delete(out, 7)).all()
 
 
+def test_nees_in_blocks_matches_explicit_inverse_across_block_edges():
+    from humimic.maths.stats import NEES_BLOCK
+
+    rng = np.random.default_rng(2)
+    n = 2 * NEES_BLOCK + 5
+    A = rng.normal(size=(n, 3, 3))
+    P = A @ A.transpose(0, 2, 1) + 0.1 * np.eye(3)
+    e = rng.normal(size=(n, 3))
+    P[NEES_BLOCK + 1] = 0.0                                   # singular, in the second block
+    e[2 * NEES_BLOCK + 2, 0] = np.nan                        # not finite, in the third
+    want = np.einsum("ni,nij,nj->n", e, np.linalg.pinv(P), e)
+    want[[NEES_BLOCK + 1, 2 * NEES_BLOCK + 2]] = np.nan
+    np.testing.assert_allclose(nees(e, P), want, rtol=1e-8)
+
+
 def test_nees_of_consistent_samples_is_chi_square():
     rng = np.random.default_rng(1)
     L = np.array([[0.2, 0, 0], [0.05, 0.1, 0], [0.0, 0.02, 0.3]])

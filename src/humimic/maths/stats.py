@@ -37,15 +37,27 @@ def rms_of(total: float, count: int) -> float:
     return math.sqrt(total / count) if count else math.nan
 
 
+NEES_BLOCK = 4096
+"""Samples per block in :func:`nees` (its temporaries stay small in a long run's scores)."""
+
+
 def nees(err, P) -> np.ndarray:
     """Normalised estimation error squared ``e_k^T P_k^-1 e_k`` per sample.
 
     ``err (N, n)``, ``P (N, n, n)`` (or one ``(n, n)`` for all); NaN where ``P`` is singular
     or ``e`` is not finite. For a consistent filter each value is chi-square with ``n``
-    degrees of freedom (Bar-Shalom, Li & Kirubarajan 2001, sec. 5.4.2).
+    degrees of freedom (Bar-Shalom, Li & Kirubarajan 2001, sec. 5.4.2). Computed
+    :data:`NEES_BLOCK` samples at a time.
     """
     e = np.atleast_2d(np.asarray(err, dtype=float))
     P = np.broadcast_to(np.asarray(P, dtype=float), (len(e),) + (e.shape[1],) * 2)
+    out = np.full(len(e), np.nan)
+    for s in range(0, len(e), NEES_BLOCK):
+        out[s:s + NEES_BLOCK] = _nees_block(e[s:s + NEES_BLOCK], P[s:s + NEES_BLOCK])
+    return out
+
+
+def _nees_block(e: np.ndarray, P: np.ndarray) -> np.ndarray:
     out = np.full(len(e), np.nan)
     ok = np.all(np.isfinite(e), axis=1) & np.all(np.isfinite(P), axis=(1, 2))
     if not ok.any():
