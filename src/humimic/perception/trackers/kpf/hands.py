@@ -1,0 +1,119 @@
+"""A skin-blob proposal for the arms (our extension of Schmidt et al.'s kernel particle filter,
+importance sampling from a detector as Isard & Blake's ICONDENSATION).
+
+The tracker's likelihood prefers the true pose over its estimate in almost every frame (the
+Table-1 side runs: by 3 nats while the arm rises), but a random walk of extent D rarely
+lands a fast-moving arm near it, and the motion model's velocity (from the last two
+estimates) lags while the arm accelerates. The hand, though, is a skin blob the skin cue
+already segments. :func:`hand_blob_moves` moves a share of the particles' hands onto the
+skin blob nearest to each (within ``radius_px``): the hand's centre goes to a point of the
+blob (its centroid, jittered by half the blob's size) at the hand's own range from the camera,
+and the arm is re-solved for the wrist moved by the same displacement
+(:func:`~humimic.perception.trackers.kpf.depth.wrist_move_to`). Each particle keeps its
+depth: the proposal fixes where the hand is in the image, the likelihood and the dynamics
+decide the rest. The reweighting keeps the dynamics' KDE as the prior (the moved particles
+are a proposal, as the depth moves).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from humimic import bodymodel as bm
+from humimic.perception.trackers.kpf.depth import SIDES, _rotation_between
+
+
+def part_centres(body: bm.BodyModel, pose: bm.Pose, part: str) -> np.ndarray:
+    """``(N, 3)`` the centre of ``part`` (reference frame) in each posed skeleton."""
+    lay = body.layout
+    i = body.part_names.index(part)
+    R, p = pose.R[:, lay.segment[i]], pose.p[:, lay.segment[i]]
+    return p + R @ lay.p_seg_part[i]
+
+
+def ray_points(intr, T_cam_ref: np.ndarray, uv: np.ndarray, ranges: np.ndarray) -> np.ndarray:
+    """``(N, 3)`` reference-frame points seen at pixels ``uv (N, 2)`` at distances ``ranges
+    (N,)`` (m) from the camera centre (``T_cam_ref``: reference-frame points -> camera)."""
+    xy = intr.undistort_normalized(np.asarray(uv, float))
+    d = np.concatenate([xy, np.ones(xy.shape[:-1] + (1,))], axis=-1)
+    d /= np.linalg.norm(d, axis=-1, keepdims=True)
+    T = np.asarray(T_cam_ref, float)
+    R_ref_cam, c = T[:3, :3].T, -T[:3, :3].T @ T[:3, 3]
+    return c + (d @ R_ref_cam.T) * np.asarray(ranges, float)[:, None]
+
+
+def nearest_blob(uv: np.ndarray, centres: np.ndarray, radius: float) -> np.ndarray:
+    """``(N,)`` index of the blob centre (``centres (B, 2)``) nearest to each point ``uv (N,
+    2)``, -1 where none lies within ``radius`` (or the point is NaN)."""
+    if len(centres) == 0 or len(uv) == 0:
+        return np.full(len(uv), -1)
+    d2 = np.sum((uv[:, None, :] - centres[None, :, :]) ** 2, axis=-1)
+    with np.errstate(invalid="ignore"):
+        d2 = np.where(np.isfinite(d2), d2, np.inf)
+    k = np.argmin(d2, axis=1)
+    return np.where(d2[np.arange(len(uv)), k] <= radius * radius, k, -1)
+
+
+def sphere_ray_points(c: np.ndarray, ray: np.ndarray, S: np.ndarray, radius: np.ndarray,
+                      near: np.ndarray) -> np.ndarray:
+    """``(N, 3)`` where the rays ``c + t ray`` (``c (3,)``, unit ``ray (N, 3)``, ``t > 0``) meet
+    the spheres of centres ``S (N, 3)`` and ``radius (N,)``: of the two crossings the one
+    nearer to the point ``near (N, 3)``; NaN where the ray misses its sphere."""
+    b = np.sum(ray * (S - c), axis=1)
+    disc = b * b - np.sum((S - c) ** 2, axis=1) + radius * radius
+    with np.errstate(invalid="ignore"):
+        root = np.sqrt(disc)
+    t = np.stack([b - root, b + root], axis=1)                              # (N, 2)
+    pts = c + t[..., None] * ray[:, None, :]                                # (N, 2, 3)
+    d = np.linalg.norm(pts - near[:, None, :], axis=2)
+    d = np.where((t > 0) & np.isfinite(d), d, np.inf)
+    k = np.argmin(d, axis=1)
+    out = pts[np.arange(len(ray)), k]
+    return np.where(np.isfinite(d[np.arange(len(ray)), k])[:, None], out, np.nan)
+
+
+def arm_turn_to(body: bm.BodyModel, q: np.ndarray, side: str, H: np.ndarray, H_new: np.ndarray,
+                pose: bm.Pose) -> np.ndarray:
+    """States ``(N, 14)``: arm ``side`` of ``q`` turned rigidly about the shoulder (elbow kept)
+    by the smallest rotation taking its point ``H (N, 3)`` (e.g. the hand's centre) to the
+    direction of ``H_new (N, 3)``; unchanged where ``H_new`` is NaN or the new shoulder
+    angles leave the joint limits."""
+    prefix, j = SIDES[side]
+    S = pose.joint(f"{prefix}_shoulder")
+    ok = np.all(np.isfinite(H_new), axis=1)
+    R = _rotation_between(H - S, np.where(ok[:, None], H_new, H) - S)
+    R_ref_upper = pose.segment(f"{prefix}_upper_arm")[0]
+    R_ref_torso = pose.segment("torso")[0]
+    angles = bm.shoulder_angles(np.swapaxes(R_ref_torso, -1, -2) @ R @ R_ref_upper, side)
+    out = q.copy()
+    out[:, j:j + 3] = angles
+    ok &= np.all(np.isfinite(out), axis=1) & body.free_limits.inside(out)
+    return np.where(ok[:, None], out, q)
+
+
+def hand_blob_moves(body: bm.BodyModel, q: np.ndarray, side: str, centres: np.ndarray,
+                    areas: np.ndarray, intr, T_cam_ref: np.ndarray, radius_px: float,
+                    rng: np.random.Generator) -> np.ndarray:
+    """States ``(N, 14)``: arm ``side`` of each ``q (N, 14)`` turned about the shoulder (elbow
+    kept) so its hand's centre lies on the nearest skin blob (centres ``(B, 2)`` px, areas
+    ``(B,)`` px^2) within ``radius_px`` (a point of the blob: its centre jittered by half its
+    size), of the two such arm positions the one nearer the old hand; particles without a
+    blob in reach, or whose arm cannot reach the blob's ray or would leave the joint limits,
+    are left unchanged."""
+    q = np.asarray(q, float)
+    pose = body.forward(q)
+    T = np.asarray(T_cam_ref, float)
+    H = part_centres(body, pose, f"{SIDES[side][0]}_hand")
+    H_cam = H @ T[:3, :3].T + T[:3, 3]
+    k = nearest_blob(intr.project(H_cam), centres, radius_px)
+    ok = k >= 0
+    if not ok.any():
+        return q
+    half = 0.5 * np.sqrt(areas[k[ok]])[:, None]
+    uv = centres[k[ok]] + rng.uniform(-1.0, 1.0, (int(ok.sum()), 2)) * half
+    c = -T[:3, :3].T @ T[:3, 3]
+    ray = ray_points(intr, T, uv, np.ones(len(uv))) - c
+    S = pose.joint(f"{SIDES[side][0]}_shoulder")[ok]
+    H_new = np.full_like(H, np.nan)
+    H_new[ok] = sphere_ray_points(c, ray, S, np.linalg.norm(H[ok] - S, axis=1), H[ok])
+    return arm_turn_to(body, q, side, H, H_new, pose)

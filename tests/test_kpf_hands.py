@@ -1,0 +1,130 @@
+"""The kpf's skin-blob proposal (:mod:`humimic.perception.trackers.kpf.hands`) against
+independent computations: back-projected pixels re-projected by the camera model, nearest
+blobs against scipy's k-d tree, sphere-ray crossings against the closed-form geometry, and the
+turned arm's hand against the rasterised body model's hand pixels."""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from humimic import bodymodel as bm
+from humimic.perception.trackers.kpf.hands import (
+    arm_turn_to,
+    hand_blob_moves,
+    nearest_blob,
+    part_centres,
+    ray_points,
+    sphere_ray_points,
+)
+from humimic.perception.trackers.kpf.tracker import kpf_body
+from humimic.sensors.camera_model import Intrinsics
+
+
+def _camera() -> np.ndarray:
+    """T_cam_base of a camera 2 m in front of the body looking back at it (OpenCV axes)."""
+    R_base_cam = np.column_stack([[0, 1, 0], [0, 0, -1], [-1, 0, 0]]).astype(float)
+    T = np.eye(4)
+    T[:3, :3], T[:3, 3] = R_base_cam.T, -R_base_cam.T @ np.array([2.0, 0.0, 0.2])
+    return T
+
+
+def test_ray_points_reproject_to_their_pixels_at_their_ranges():
+    rng = np.random.default_rng(0)
+    intr = Intrinsics(320, 240, 260.0, 255.0, 161.0, 118.0, k1=-0.05)
+    T = _camera()
+    uv = rng.uniform([20, 20], [300, 220], (50, 2))
+    ranges = rng.uniform(0.5, 4.0, 50)
+    P = ray_points(intr, T, uv, ranges)
+    P_cam = P @ T[:3, :3].T + T[:3, 3]
+    np.testing.assert_allclose(intr.project(P_cam), uv, atol=1e-3)
+    np.testing.assert_allclose(np.linalg.norm(P_cam, axis=1), ranges, atol=1e-12)
+
+
+def test_nearest_blob_matches_a_kd_tree():
+    rng = np.random.default_rng(1)
+    centres = rng.uniform(0, 100, (7, 2))
+    uv = rng.uniform(-20, 120, (300, 2))
+    uv[:5] = np.nan
+    got = nearest_blob(uv, centres, 12.0)
+    d, k = cKDTree(centres).query(np.nan_to_num(uv, nan=1e9), distance_upper_bound=12.0)
+    want = np.where(np.isfinite(d), k, -1)
+    want[:5] = -1
+    np.testing.assert_array_equal(got, want)
+    assert 0 < np.mean(got >= 0) < 1                      # both cases occur
+    assert np.all(nearest_blob(uv, np.zeros((0, 2)), 12.0) == -1)
+
+
+def test_sphere_ray_points_lie_on_both_and_take_the_nearer_crossing():
+    rng = np.random.default_rng(2)
+    n = 400
+    c = np.array([0.1, -0.2, 0.3])
+    S = rng.uniform(-1, 1, (n, 3)) + [0, 0, 3]
+    radius = rng.uniform(0.2, 0.8, n)
+    ray = S - c + rng.normal(0, 0.3, (n, 3))
+    ray /= np.linalg.norm(ray, axis=1, keepdims=True)
+    near = S + rng.normal(0, 0.5, (n, 3))
+    P = sphere_ray_points(c, ray, S, radius, near)
+    # closed form: the foot of the perpendicular from S on the ray and the half chord
+    foot = c + np.sum((S - c) * ray, axis=1)[:, None] * ray
+    dist = np.linalg.norm(S - foot, axis=1)
+    hits = dist < radius
+    assert 0.2 < hits.mean() < 1.0
+    assert np.all(np.isnan(P[~hits]))
+    half = np.sqrt(radius[hits] ** 2 - dist[hits] ** 2)[:, None]
+    a, b = foot[hits] - half * ray[hits], foot[hits] + half * ray[hits]
+    pick_a = np.linalg.norm(a - near[hits], axis=1) <= np.linalg.norm(b - near[hits], axis=1)
+    np.testing.assert_allclose(P[hits], np.where(pick_a[:, None], a, b), atol=1e-9)
+
+
+def test_arm_turn_keeps_the_elbow_and_takes_the_hand_to_its_target_direction():
+    body = kpf_body()
+    rng = np.random.default_rng(3)
+    n = 100
+    q = np.zeros((n, 14))
+    q[:, 3] = np.pi
+    q[:, 6:10] = rng.uniform([-0.2, 0.2, -0.4, 0.3], [1.0, 1.0, 0.4, 1.2], (n, 4))
+    q = body.free_limits.clamp(q)
+    pose = body.forward(q)
+    S, H = pose.joint("r_shoulder"), part_centres(body, pose, "r_hand")
+    turn = rng.normal(0, 0.15, (n, 3))
+    target = S + (H - S) + turn                      # a nearby direction from the shoulder
+    out = arm_turn_to(body, q, "R", H, target, pose)
+    moved = np.any(out != q, axis=1)
+    assert moved.mean() > 0.5
+    np.testing.assert_array_equal(out[:, 9], q[:, 9])          # elbow flexion kept
+    p1 = body.forward(out)
+    H1 = part_centres(body, p1, "r_hand")[moved]
+    u = (target - S)[moved]
+    u /= np.linalg.norm(u, axis=1, keepdims=True)
+    v = H1 - S[moved]
+    np.testing.assert_allclose(v / np.linalg.norm(v, axis=1, keepdims=True), u, atol=1e-9)
+    np.testing.assert_allclose(p1.joint("r_shoulder"), S, atol=1e-12)
+    assert np.all(body.free_limits.inside(out))
+
+
+def test_hand_blob_move_puts_the_rendered_hand_on_the_blob():
+    """A skin blob 6 px beside the hand: after the move the rasterised hand's pixels are
+    centred on it (within 1 px: the jitter is half the blob's size, here a 1-px blob)."""
+    body = kpf_body()
+    intr = Intrinsics(320, 240, 260.0, 260.0, 159.5, 119.5)
+    T = _camera()
+    q = np.zeros((1, 14))
+    q[0, 3] = np.pi
+    q[0, 6:10] = [0.3, 0.7, 0.0, 0.6]
+    hand = body.part_names.index("r_hand") + 1
+
+    def rendered_hand(qq):
+        lab = bm.label_mask(bm.project(body, body.forward(qq), intr, T))
+        v, u = np.nonzero(lab == hand)
+        return np.array([u.mean(), v.mean()])
+
+    start = rendered_hand(q)
+    blob = start + np.array([-6.0, 3.0])
+    out = hand_blob_moves(body, q, "R", blob[None], np.array([1.0]), intr, T, 15.0,
+                          np.random.default_rng(0))
+    assert np.any(out != q)
+    np.testing.assert_allclose(rendered_hand(out), blob, atol=1.0)
+    far = hand_blob_moves(body, q, "R", (start + 40.0)[None], np.array([1.0]), intr, T,
+                          15.0, np.random.default_rng(0))
+    np.testing.assert_array_equal(far, q)                       # no blob in reach
