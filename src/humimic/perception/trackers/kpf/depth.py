@@ -50,32 +50,17 @@ def wrist_depth_move(body: bm.BodyModel, q: np.ndarray, side: str, delta: np.nda
     frame points -> camera) through it. Where the new wrist is out of the arm's reach, or
     the solution out of the joint limits, the particle is left unchanged."""
     q = np.asarray(q, float)
-    pose = body.forward(q)
-    W = pose.joint(f"{SIDES[side][0]}_wrist")
-    T_ref_cam = np.linalg.inv(np.asarray(T_cam_ref, float))
-    ray = W - T_ref_cam[:3, 3]
-    ray /= np.linalg.norm(ray, axis=1, keepdims=True)
-    return wrist_move_to(body, q, side, W + np.asarray(delta, float)[:, None] * ray, pose)
-
-
-def wrist_move_to(body: bm.BodyModel, q: np.ndarray, side: str, W_new: np.ndarray,
-                  pose: bm.Pose | None = None) -> np.ndarray:
-    """States ``(N, 14)`` with arm ``side`` of ``q (N, 14)`` re-solved so its wrist lies at
-    ``W_new (N, 3)`` (reference frame): the elbow flexion from the shoulder-wrist distance,
-    the upper arm turned by the smallest rotation that takes the wrist there. Where
-    ``W_new`` is out of reach (or NaN), or the solution out of the joint limits, the particle
-    is left unchanged. ``pose``: ``body.forward(q)`` if already computed."""
-    q = np.asarray(q, float)
     prefix, j = SIDES[side]
     sk = body.skeleton
     lu, lf = sk.upper_arm, sk.forearm
-    pose = body.forward(q) if pose is None else pose
-    S = pose.joint(f"{prefix}_shoulder")
-    d_new = np.asarray(W_new, float) - S                                # shoulder -> new wrist
+    pose = body.forward(q)
+    S, W = pose.joint(f"{prefix}_shoulder"), pose.joint(f"{prefix}_wrist")
+    T_ref_cam = np.linalg.inv(np.asarray(T_cam_ref, float))
+    ray = W - T_ref_cam[:3, 3]
+    ray /= np.linalg.norm(ray, axis=1, keepdims=True)
+    d_new = W + np.asarray(delta, float)[:, None] * ray - S            # shoulder -> new wrist
     r = np.linalg.norm(d_new, axis=1)
     ok = (r < lu + lf - 1e-6) & (r > abs(lu - lf) + 1e-6)
-    d_new = np.where(ok[:, None], d_new, pose.joint(f"{prefix}_wrist") - S)
-    r = np.linalg.norm(d_new, axis=1)
     eb = np.arccos(np.clip((r * r - lu * lu - lf * lf) / (2 * lu * lf), -1.0, 1.0))
     # the shoulder -> wrist vector in the upper arm's frame for the new elbow flexion
     d_local = np.array([0.0, 0.0, -lu]) + (elbow_rotation(side, eb) @ np.array([0, 0, -lf]))
