@@ -5,14 +5,14 @@ The tracker's likelihood prefers the true pose over its estimate in almost every
 Table-1 side runs: by 3 nats while the arm rises), but a random walk of extent D rarely
 lands a fast-moving arm near it, and the motion model's velocity (from the last two
 estimates) lags while the arm accelerates. The hand, though, is a skin blob the skin cue
-already segments. :func:`hand_blob_moves` moves a share of the particles' hands onto the
-skin blob nearest to each (within ``radius_px``): the hand's centre goes to a point of the
-blob (its centroid, jittered by half the blob's size) at the hand's own range from the camera,
-and the arm is re-solved for the wrist moved by the same displacement
-(:func:`~humimic.perception.trackers.kpf.depth.wrist_move_to`). Each particle keeps its
-depth: the proposal fixes where the hand is in the image, the likelihood and the dynamics
-decide the rest. The reweighting keeps the dynamics' KDE as the prior (the moved particles
-are a proposal, as the depth moves).
+already segments. :func:`hand_blob_moves` turns a share of the particles' arms rigidly
+about the shoulder (elbow flexion kept) so that each hand's centre lies on the skin blob
+nearest to it (within ``radius_px``; a point of the blob: its centroid jittered by half the
+blob's size), of the two such arm positions the one nearer the old hand: the proposal fixes
+where the hand is in the image and changes the arm's depth as little as it can (a move that
+kept the hand's range and re-solved the elbow instead added depth diversity the likelihood
+cannot judge: measured worse). The reweighting keeps the dynamics' KDE as the prior (the
+moved particles are a proposal, as the depth moves).
 """
 
 from __future__ import annotations
