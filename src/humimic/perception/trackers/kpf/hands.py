@@ -8,10 +8,11 @@ estimates) lags while the arm accelerates. The hand, though, is a skin blob the 
 already segments. :func:`hand_blob_moves` turns a share of the particles' arms rigidly
 about the shoulder (elbow flexion kept) so that each hand's centre lies on the skin blob
 nearest to it (within ``radius_px``; a point of the blob: its centroid jittered by half the
-blob's size), of the two such arm positions the one nearer the old hand: the proposal fixes
-where the hand is in the image and changes the arm's depth as little as it can (a move that
-kept the hand's range and re-solved the elbow instead added depth diversity the likelihood
-cannot judge: measured worse). The reweighting keeps the dynamics' KDE as the prior (the
+blob's size), turned towards the point of the blob's ray nearest to the hand: the proposal
+moves the hand across the ray, towards the blob in the image, and keeps its depth to first
+order (moves that kept the hand's range and re-solved the elbow, or put the hand exactly on
+the ray at the crossing nearer the old hand, added depth changes the likelihood cannot
+judge: measured worse). The reweighting keeps the dynamics' KDE as the prior (the
 moved particles are a proposal, as the depth moves).
 """
 
@@ -54,22 +55,10 @@ def nearest_blob(uv: np.ndarray, centres: np.ndarray, radius: float) -> np.ndarr
     return np.where(d2[np.arange(len(uv)), k] <= radius * radius, k, -1)
 
 
-def sphere_ray_points(c: np.ndarray, ray: np.ndarray, S: np.ndarray, radius: np.ndarray,
-                      near: np.ndarray) -> np.ndarray:
-    """``(N, 3)`` where the rays ``c + t ray`` (``c (3,)``, unit ``ray (N, 3)``, ``t > 0``) meet
-    the spheres of centres ``S (N, 3)`` and ``radius (N,)``: of the two crossings the one
-    nearer to the point ``near (N, 3)``; NaN where the ray misses its sphere."""
-    b = np.sum(ray * (S - c), axis=1)
-    disc = b * b - np.sum((S - c) ** 2, axis=1) + radius * radius
-    with np.errstate(invalid="ignore"):
-        root = np.sqrt(disc)
-    t = np.stack([b - root, b + root], axis=1)                              # (N, 2)
-    pts = c + t[..., None] * ray[:, None, :]                                # (N, 2, 3)
-    d = np.linalg.norm(pts - near[:, None, :], axis=2)
-    d = np.where((t > 0) & np.isfinite(d), d, np.inf)
-    k = np.argmin(d, axis=1)
-    out = pts[np.arange(len(ray)), k]
-    return np.where(np.isfinite(d[np.arange(len(ray)), k])[:, None], out, np.nan)
+def closest_on_rays(c: np.ndarray, ray: np.ndarray, X: np.ndarray) -> np.ndarray:
+    """``(N, 3)`` the points of the rays ``c + t ray`` (``c (3,)``, unit ``ray (N, 3)``)
+    nearest to the points ``X (N, 3)`` (the feet of the perpendiculars)."""
+    return c + np.sum((X - c) * ray, axis=1)[:, None] * ray
 
 
 def arm_turn_to(body: bm.BodyModel, q: np.ndarray, side: str, H: np.ndarray, H_new: np.ndarray,
@@ -95,11 +84,13 @@ def hand_blob_moves(body: bm.BodyModel, q: np.ndarray, side: str, centres: np.nd
                     areas: np.ndarray, intr, T_cam_ref: np.ndarray, radius_px: float,
                     rng: np.random.Generator) -> np.ndarray:
     """States ``(N, 14)``: arm ``side`` of each ``q (N, 14)`` turned about the shoulder (elbow
-    kept) so its hand's centre lies on the nearest skin blob (centres ``(B, 2)`` px, areas
-    ``(B,)`` px^2) within ``radius_px`` (a point of the blob: its centre jittered by half its
-    size), of the two such arm positions the one nearer the old hand; particles without a
-    blob in reach, or whose arm cannot reach the blob's ray or would leave the joint limits,
-    are left unchanged."""
+    kept) towards the point nearest to its hand's centre on the ray through the nearest
+    skin blob (centres ``(B, 2)`` px, areas ``(B,)`` px^2) within ``radius_px`` (a point of
+    the blob: its centre jittered by half its size): the hand moves across the ray, its
+    depth kept to first order (the two arm positions with the hand exactly on the ray, where
+    it exists, are each other's depth flip near the fronto-parallel plane: measured to make
+    the tracker jump between them). Particles without a blob in reach, or whose new shoulder
+    angles leave the joint limits, are left unchanged."""
     q = np.asarray(q, float)
     pose = body.forward(q)
     T = np.asarray(T_cam_ref, float)
@@ -113,7 +104,7 @@ def hand_blob_moves(body: bm.BodyModel, q: np.ndarray, side: str, centres: np.nd
     uv = centres[k[ok]] + rng.uniform(-1.0, 1.0, (int(ok.sum()), 2)) * half
     c = -T[:3, :3].T @ T[:3, 3]
     ray = ray_points(intr, T, uv, np.ones(len(uv))) - c
-    S = pose.joint(f"{SIDES[side][0]}_shoulder")[ok]
+    ray /= np.linalg.norm(ray, axis=1, keepdims=True)
     H_new = np.full_like(H, np.nan)
-    H_new[ok] = sphere_ray_points(c, ray, S, np.linalg.norm(H[ok] - S, axis=1), H[ok])
+    H_new[ok] = closest_on_rays(c, ray, H[ok])
     return arm_turn_to(body, q, side, H, H_new, pose)
