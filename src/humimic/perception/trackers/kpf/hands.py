@@ -22,7 +22,8 @@ from __future__ import annotations
 import numpy as np
 
 from humimic import bodymodel as bm
-from humimic.perception.trackers.kpf.depth import SIDES, _rotation_between
+from humimic.maths.rotations import rotation_between
+from humimic.perception.trackers.kpf.depth import SIDES
 
 
 def part_centres(body: bm.BodyModel, pose: bm.Pose, part: str) -> np.ndarray:
@@ -71,7 +72,7 @@ def arm_turn_to(body: bm.BodyModel, q: np.ndarray, side: str, H: np.ndarray, H_n
     prefix, j = SIDES[side]
     S = pose.joint(f"{prefix}_shoulder")
     ok = np.all(np.isfinite(H_new), axis=1)
-    R = _rotation_between(H - S, np.where(ok[:, None], H_new, H) - S)
+    R = rotation_between(H - S, np.where(ok[:, None], H_new, H) - S)
     R_ref_upper = pose.segment(f"{prefix}_upper_arm")[0]
     R_ref_torso = pose.segment("torso")[0]
     angles = bm.shoulder_angles(np.swapaxes(R_ref_torso, -1, -2) @ R @ R_ref_upper, side)
