@@ -92,7 +92,7 @@ class GestResult:
 
 
 def skin_mask(image: np.ndarray, lut: ColorLUT) -> np.ndarray:
-    return (lut.posterior(image) > 0.5).astype(np.uint8)
+    return lut.mask(image, 0.5)
 
 
 def hand_prior(cfg: GestConfig) -> UniformBox:
