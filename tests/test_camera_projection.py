@@ -149,3 +149,23 @@ def test_undistortion_inverts_projection_over_the_whole_image(k1, k2):
     xy = intr.undistort_normalized(uv.reshape(-1, 2))
     back = intr.project(np.column_stack([xy, np.ones(len(xy))]))
     assert np.abs(back - uv.reshape(-1, 2)).max() < 1e-6
+
+
+@pytest.mark.parametrize("k1, k2", [(-0.12, 0.03), (0.0, 0.0)])
+def test_one_point_projects_like_opencv(k1, k2):
+    """``Intrinsics.project`` of a single point (its scalar path) against
+    ``cv2.projectPoints``; behind the camera it is NaN like a batch's rows."""
+    import math
+
+    import cv2
+
+    from humimic.sensors.camera_model import Intrinsics, fovy_from_hfov
+
+    intr = Intrinsics.from_fovy(fovy_from_hfov(math.radians(100), 320, 240), 320, 240, k1, k2)
+    rng = np.random.default_rng(0)
+    pts = np.column_stack([rng.uniform(-0.8, 0.8, (50, 2)), rng.uniform(0.5, 3.0, 50)])
+    ref, _ = cv2.projectPoints(pts, np.zeros(3), np.zeros(3), intr.K, intr.dist)
+    one = np.array([intr.project(p) for p in pts])
+    assert np.abs(one - ref[:, 0]).max() < 1e-9
+    assert np.array_equal(one, intr.project(pts))
+    assert np.isnan(intr.project(np.array([0.1, 0.2, -1.0]))).all()

@@ -113,6 +113,11 @@ class Intrinsics:
         Points behind the camera (z <= 0) give NaN.
         """
         p = np.asarray(p_cam, dtype=float)
+        if p.shape == (3,):     # one point: the same arithmetic on scalars (~5x less overhead)
+            x, y, z = p.tolist()
+            if not z > 0:
+                return np.array([np.nan, np.nan])
+            return np.array(self.distort(x / z, y / z))
         z = p[..., 2]
         with np.errstate(divide="ignore", invalid="ignore"):
             x = np.where(z > 0, p[..., 0] / z, np.nan)
