@@ -169,3 +169,22 @@ def test_one_point_projects_like_opencv(k1, k2):
     assert np.abs(one - ref[:, 0]).max() < 1e-9
     assert np.array_equal(one, intr.project(pts))
     assert np.isnan(intr.project(np.array([0.1, 0.2, -1.0]))).all()
+
+
+def test_camera_with_other_intrinsics_keeps_its_pose():
+    """``CameraModel.with_intrinsics`` (GEST's crops): the pose's inverse carried over equals
+    ``numpy.linalg.inv`` of the pose, and a point projects by the crop's shift."""
+    import dataclasses
+
+    from humimic.sensors.camera_model import CameraModel, Intrinsics
+
+    c, s = np.cos(0.3), np.sin(0.3)
+    T = np.array([[c, 0, s, 0.1], [0, 1, 0, -0.2], [-s, 0, c, 1.3], [0, 0, 0, 1.0]])
+    cam = CameraModel("c", Intrinsics.from_fovy(np.radians(60), 320, 240), T)
+    _ = cam.T_cam_base                                   # computed, then carried over
+    K = cam.intrinsics
+    crop = cam.with_intrinsics(dataclasses.replace(K, width=100, height=80, cx=K.cx - 40,
+                                                   cy=K.cy - 30))
+    assert np.abs(crop.T_cam_base - np.linalg.inv(T)).max() < 1e-12
+    p = T[:3, :3] @ np.array([0.05, -0.03, 1.0]) + T[:3, 3]
+    assert np.abs(cam.project_base(p) - crop.project_base(p) - (40, 30)).max() < 1e-9

@@ -60,7 +60,7 @@ def crop_frame(frame: CameraImage, box: tuple[int, int, int, int] | None, k: int
     if k > 1:
         crop = crop.decimated(k)
         image = cv2.resize(image, (crop.width, crop.height), interpolation=cv2.INTER_AREA)
-    cam = dataclasses.replace(frame.camera, intrinsics=crop)
+    cam = frame.camera.with_intrinsics(crop)
     return CameraImage(frame.t, cam, image)
 
 
@@ -68,7 +68,7 @@ def decimated_camera(camera, k: int):
     """``camera`` with its intrinsics decimated by ``k`` (as is for 1)."""
     if k == 1:
         return camera
-    return dataclasses.replace(camera, intrinsics=camera.intrinsics.decimated(k))
+    return camera.with_intrinsics(camera.intrinsics.decimated(k))
 
 
 def to_view_px(uv: np.ndarray, origin: np.ndarray, k: int = 1) -> np.ndarray:
