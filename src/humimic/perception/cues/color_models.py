@@ -284,4 +284,3 @@ class ColorLUT:
         if table is None:
             table = self._masks[threshold] = (self.post_table > threshold).astype(np.uint8)
         return np.take(table, self.index(rgb_u8))
-
