@@ -26,7 +26,7 @@ def hand_blobs(image: np.ndarray, lut: ColorLUT, subsample: int = 2,
     resolution (module docstring)."""
     s = int(subsample)
     small = image[::s, ::s]                      # a view: the posterior is per pixel
-    coarse = skin_blobs((lut.posterior(small) > threshold).astype(np.uint8), 1,
+    coarse = skin_blobs(lut.mask(small, threshold), 1,
                         min_area_px=min_area_px / (s * s))
     if s == 1 or len(coarse.areas) == 0:
         return coarse
@@ -35,7 +35,7 @@ def hand_blobs(image: np.ndarray, lut: ColorLUT, subsample: int = 2,
     for x, y, bw, bh in coarse.boxes:
         x0, y0 = max(int(x * s) - s, 0), max(int(y * s) - s, 0)
         x1, y1 = min(int((x + bw) * s) + s, w), min(int((y + bh) * s) + s, h)
-        mask = (lut.posterior(image[y0:y1, x0:x1]) > threshold).astype(np.uint8)
+        mask = lut.mask(image[y0:y1, x0:x1], threshold)
         n, _, stats, cent = cv2.connectedComponentsWithStats(mask, connectivity=8)
         if n < 2:
             continue
