@@ -62,6 +62,14 @@ class TbpConfig(Section):
     model at the rest pose (the person may not be there: a hand's patch then learns the
     trousers beside it and holds the arm down), or under the first frame's estimate from the
     other cues (shape, skin, priors)."""
+    patch_colours: Literal["rgb", "chromaticity"] = "rgb"
+    """The colour space of the patches' histograms: ``rgb`` (the paper), or ``chromaticity``
+    (normalised rgb, blind to shading)."""
+    patch_refs_wait: int = Field(0, ge=0)
+    """With ``first_estimate``: the references wait until the estimate's hands both lie on
+    skin (``hands_found_skin``), at most this many frames (0: the first frame's estimate, as
+    before)."""
+    hands_found_skin: float = Field(0.5, ge=0.0, le=1.0)
     sigma_c: float = Field(0.3, gt=0.0)
     """Colour-patch standard deviation (eq. 6)."""
     lambda_c: tuple[float, float] = (0.1, 1.0)
@@ -78,6 +86,16 @@ class TbpConfig(Section):
     rest_deg: tuple[float, float, float, float] = (5.0, 5.0, 0.0, 10.0)
     """Rest pose ``SFE SAA HR EB`` (deg) of each arm: the stabiliser's x_def and the start."""
     init_sigma_deg: float = Field(10.0, gt=0.0)
+    reinit_fraction: float = Field(0.0, ge=0.0, le=0.5)
+    """Fraction of the particles whose arm is re-drawn every frame from arm configurations
+    whose hand projects onto a skin blob (automatic (re-)initialisation,
+    :mod:`humimic.perception.trackers.tbp.reinit`); 0: never."""
+    reinit_table: int = Field(20000, ge=100, le=200000)
+    """Arm configurations in the table the re-drawn arms come from."""
+    reinit_min_area_px: float = Field(10.0, gt=0.0)
+    """Smallest skin blob (px) taken for a hand."""
+    reinit_radius_px: float = Field(2.0, ge=0.0)
+    """A configuration's hand counts as on a blob within the blob's radius plus this."""
     limits: JointLimitsConfig = Field(default_factory=JointLimitsConfig)
     """Joint limits of the model (``R_EB_deg: [0, 150]`` ...; default the library's); samples
     beyond them are clamped."""

@@ -46,8 +46,8 @@ ArmView = FrameCues
 
 
 def arm_view(frame: CameraImage, flow: np.ndarray | None, lut: ColorLUT, bins: int,
-             colour_edges: bool = False) -> ArmView:
-    return frame_cues(frame, bins, lut, flow, colour_edges)
+             colour_edges: bool = False, colours: str = "rgb") -> ArmView:
+    return frame_cues(frame, bins, lut, flow, colour_edges, colours)
 
 
 @dataclass(frozen=True)
