@@ -48,11 +48,10 @@ def chromaticity(image: np.ndarray, dark: float = 24.0) -> np.ndarray:
     uint8 ``(H, W, 3)``: unchanged when the light on a surface scales its colour (a limb
     turning away from the lamp keeps its chromaticity, not its RGB). Pixels darker than
     ``dark`` (mean of the channels) are grey (85, 85, 85): their chromaticity is noise."""
-    rgb = np.asarray(image, np.float32)
-    total = rgb.sum(axis=-1, keepdims=True)
-    chroma = 255.0 * rgb / np.maximum(total, 1.0)
-    chroma = np.where(total >= 3.0 * dark, chroma, 85.0)
-    return np.minimum(chroma + 0.5, 255.0).astype(np.uint8)
+    rgb = np.asarray(image, np.uint8).astype(np.uint16)
+    total = rgb.sum(axis=-1, keepdims=True, dtype=np.uint16)                 # <= 765
+    chroma = (rgb * 255 + total // 2) // np.maximum(total, 1)               # rounded, <= 65407
+    return np.where(total >= 3.0 * dark, chroma, 85).astype(np.uint8)
 
 
 def quantize(image: np.ndarray, bins: int = 32) -> QuantizedImage:

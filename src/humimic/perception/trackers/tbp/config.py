@@ -90,7 +90,7 @@ class TbpConfig(Section):
     """Fraction of the particles whose arm is re-drawn every frame from arm configurations
     whose hand projects onto a skin blob (automatic (re-)initialisation,
     :mod:`humimic.perception.trackers.tbp.reinit`); 0: never."""
-    reinit_table: int = Field(20000, ge=100, le=200000)
+    reinit_table: int = Field(8000, ge=100, le=200000)
     """Arm configurations in the table the re-drawn arms come from."""
     reinit_min_area_px: float = Field(10.0, gt=0.0)
     """Smallest skin blob (px) taken for a hand."""

@@ -92,6 +92,8 @@ class TbpTracker:
         self.last_view: ArmView | None = None
         self.table = None
         self.frames_without_refs = 0
+        self.found = np.zeros(2, bool)
+        """Whether the last estimate's right, left hand lay on skin."""
         self.injected = 0
         """Particles drawn from the skin blobs so far (:meth:`_from_blobs`)."""
 
@@ -124,10 +126,11 @@ class TbpTracker:
 
     def _from_blobs(self, view: ArmView, torso: np.ndarray, rng: np.random.Generator) -> None:
         """Re-draw ``reinit_fraction`` of the particles' arms from configurations whose hand
-        projects onto a skin blob (:mod:`.reinit`); blobs on the face are left out."""
+        projects onto a skin blob (:mod:`.reinit`), for the arms whose hand the last estimate
+        did not find on skin; blobs on the face are left out."""
         cfg = self.cfg
         n = int(round(cfg.reinit_fraction * cfg.n_particles))
-        if n == 0 or view.skin is None:
+        if n == 0 or view.skin is None or self.found.all():
             return
         if self.table is None:
             self.table = arm_table(self.body, cfg.reinit_table, rng)
@@ -143,7 +146,7 @@ class TbpTracker:
         radius = np.sqrt(blobs.areas[hand] / np.pi) + cfg.reinit_radius_px
         R_t, p_t = pose.segment("torso")
         uv = hand_pixels(self.table, R_t[0], p_t[0], view.intrinsics, view.T_cam_base)
-        groups = [(side, m) for side in (0, 1)
+        groups = [(side, m) for side in (0, 1) if not self.found[side]
                   for m in near_blobs(uv[side], centres, radius) if len(m)]
         if not groups:
             return
@@ -151,12 +154,11 @@ class TbpTracker:
                                       math.radians(cfg.init_sigma_deg) / 4, rng)
         self.injected += n
 
-    def _hands_found(self, q: np.ndarray, torso: np.ndarray, view: ArmView) -> bool:
-        """Both hands of the arms at ``q`` lie on skin (mean skin posterior inside each hand's
-        outline at least ``hands_found_skin``)."""
+    def _hands_found(self, q: np.ndarray, torso: np.ndarray, view: ArmView) -> np.ndarray:
+        """``(2,)`` bool: the right, left hand of the arms at ``q`` lies on skin (mean skin
+        posterior inside the hand's outline at least ``hands_found_skin``)."""
         inner = hand_interiors(self.hands, q[None], torso, view)
-        skin = sample(view.skin, inner, 0.0).mean(axis=2)[0]                  # (2,)
-        return bool(np.all(skin >= self.cfg.hands_found_skin))
+        return sample(view.skin, inner, 0.0).mean(axis=2)[0] >= self.cfg.hands_found_skin
 
     def step(self, frame, torso: np.ndarray, rng: np.random.Generator):
         """One frame: returns ``(mean (8,), cov (8, 8), ok)``."""
@@ -192,10 +194,11 @@ class TbpTracker:
             self.restarts += 1
             self._start(rng)
         mean = body.clamp(s.mean[None, :8])[0]
+        self.found = self._hands_found(mean, torso, view)
         if refs is None and cfg.patch_refs == "first_estimate" and s.ok:
             self.frames_without_refs += 1
             if (self.frames_without_refs > cfg.patch_refs_wait
-                    or self._hands_found(mean, torso, view)):
+                    or self.found.all()):
                 self._first_frame(view, torso, mean)     # references under the estimate
         cov = weighted_cov(x[:, :8], s.log_weights)
         return mean, cov, s.ok
