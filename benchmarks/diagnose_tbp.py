@@ -4,11 +4,12 @@ replay the tracker over them for several seeds and options, and print per DOF an
 the error split into the camera's depth and image plane, the shoulder placement error, and how
 often the true pose scores better than the MMSE under the tracker's own likelihood (eq. 19)
 -- with the measured torso and with the true one -- and by how much per cue (shape, skin,
-each colour patch, stabiliser, collision; median over the frames, measured torso). True better: a search failure; estimate
-better: a cue failure. The wrists' error is also taken to the image: how far (px) the
-estimated wrist projects from the true one, and which share of the 3-D wrist error (squared)
-falls in frames where it projects within ``--px`` pixels of the truth -- the error along the
-line of sight, which one eye cannot see (the monocular depth ambiguity).
+each colour patch, stabiliser, collision; median over the frames, measured torso). True
+better: a search failure; estimate better: a cue failure. The wrists' error is also taken
+to the image: how far (px) the estimated wrist projects from the true one, and which share
+of the 3-D wrist error (squared) falls in frames where it projects within ``--px`` pixels
+of the truth -- the error along the line of sight, which one eye cannot see (the monocular
+depth ambiguity).
 
 Run: ``python benchmarks/diagnose_tbp.py scenarios/fig13_tbp_clutter.yaml --seeds 0,1,2
 [--torso truth] [--set sigma_deg=1.5 --set edges=grey ...]``. CPU time per frame

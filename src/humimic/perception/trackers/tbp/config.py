@@ -64,12 +64,21 @@ class TbpConfig(Section):
     other cues (shape, skin, priors)."""
     patch_colours: Literal["rgb", "chromaticity"] = "rgb"
     """The colour space of the patches' histograms: ``rgb`` (the paper), or ``chromaticity``
-    (normalised rgb, blind to shading)."""
-    patch_refs_wait: int = Field(0, ge=0)
+    (normalised rgb, blind to shading). Measured (issue 13, fig13's room): the right arm's
+    patches at the TRUE pose against references taken at the true rest pose, an arm raised
+    from rest to a wave -- the sleeve and hand lose a third of their brightness as they turn
+    from the lamp, so in rgb the true pose pays 5.5-13 nats per patch (at lambda 1) and the
+    arm is held at rest; in chromaticity 0-0.7. Yet chromaticity made fig16 worse (joints /
+    wrist over seeds 0-2: 14.9 deg / 84 mm -> 18.2 / 110; there rgb's shading seems to help
+    the arm bent towards the camera), hence off by default."""
+    patch_refs_wait: int = Field(30, ge=0)
     """With ``first_estimate``: the references wait until the estimate's hands both lie on
-    skin (``hands_found_skin``), at most this many frames (0: the first frame's estimate, as
-    before)."""
+    skin (``hands_found_skin``), at most this many frames (0: the first frame's estimate).
+    A person already waving when tracking starts otherwise has the raised arm's patches
+    learn the background under the rest pose (measured: the true pose then pays 4.6 nats
+    in colour against the rest pose)."""
     hands_found_skin: float = Field(0.5, ge=0.0, le=1.0)
+    """Mean skin posterior inside a hand's outline from which it counts as found (on skin)."""
     sigma_c: float = Field(0.3, gt=0.0)
     """Colour-patch standard deviation (eq. 6)."""
     lambda_c: tuple[float, float] = (0.1, 1.0)
@@ -77,8 +86,12 @@ class TbpConfig(Section):
     patch_confidence: float = Field(0.5, gt=0.0, lt=1.0)
     """A patch whose reference histogram is within this Bhattacharyya distance of the uniform
     one counts as discriminant (textured)."""
-    sigma_k: float = Field(0.3, gt=0.0)
-    """Skin cue (hands) standard deviation (first stage)."""
+    sigma_k: float = Field(0.15, gt=0.0)
+    """Skin cue (hands) standard deviation (first stage, and in the second). Measured with
+    the defaults otherwise (issue 13): 0.3 let the stabiliser (2-4 nats at a raised, flexed
+    arm) outweigh a hand found on its skin blob (1.6 nats), so a wave already under way at
+    the start stayed at rest (wrist 539-601 mm, seeds 0-1); 0.15 follows it (114 mm, seed 0);
+    0.1 did worse on fig16 and fig12 (wrist 158-333 / 119 mm)."""
     lambda_st: float = Field(0.5, ge=0.0)
     """Stabiliser towards the rest pose (eq. 19 prior, per rad^2)."""
     lambda_co: float = Field(0.5, ge=0.0)
@@ -86,10 +99,12 @@ class TbpConfig(Section):
     rest_deg: tuple[float, float, float, float] = (5.0, 5.0, 0.0, 10.0)
     """Rest pose ``SFE SAA HR EB`` (deg) of each arm: the stabiliser's x_def and the start."""
     init_sigma_deg: float = Field(10.0, gt=0.0)
-    reinit_fraction: float = Field(0.0, ge=0.0, le=0.5)
-    """Fraction of the particles whose arm is re-drawn every frame from arm configurations
-    whose hand projects onto a skin blob (automatic (re-)initialisation,
-    :mod:`humimic.perception.trackers.tbp.reinit`); 0: never."""
+    reinit_fraction: float = Field(0.05, ge=0.0, le=0.5)
+    """Fraction of the particles whose arm is re-drawn, in every frame after one whose
+    estimate did not find that arm's hand on skin, from arm configurations whose hand
+    projects onto a skin blob (automatic (re-)initialisation,
+    :mod:`humimic.perception.trackers.tbp.reinit`); 0: never. Drawn every frame regardless
+    of the hands (tried first) it fed fig16's arm bent towards the camera wrong depths."""
     reinit_table: int = Field(8000, ge=100, le=200000)
     """Arm configurations in the table the re-drawn arms come from."""
     reinit_min_area_px: float = Field(10.0, gt=0.0)

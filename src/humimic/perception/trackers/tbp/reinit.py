@@ -103,4 +103,5 @@ def draw_arms(particles: np.ndarray, table: ArmTable, groups: list[tuple[int, np
     return x, idx
 
 
-__all__ = ["ArmTable", "arm_table", "draw_arms", "hand_centres", "head_circle", "hand_pixels", "near_blobs"]
+__all__ = ["ArmTable", "arm_table", "draw_arms", "hand_centres", "hand_pixels", "head_circle",
+           "near_blobs"]
