@@ -40,6 +40,7 @@ from humimic.perception.trackers.tbp.likelihood import (
 from humimic.perception.trackers.tbp.reinit import (
     arm_table,
     draw_arms,
+    hand_centres,
     hand_pixels,
     head_circle,
     near_blobs,
@@ -156,9 +157,20 @@ class TbpTracker:
 
     def _hands_found(self, q: np.ndarray, torso: np.ndarray, view: ArmView) -> np.ndarray:
         """``(2,)`` bool: the right, left hand of the arms at ``q`` lies on skin (mean skin
-        posterior inside the hand's outline at least ``hands_found_skin``)."""
+        posterior inside the hand's outline at least ``hands_found_skin``), not on the face
+        (its centre outside the head's image circle) and not on the other hand (the centres
+        at least a hand's image width apart: one arm crossed over to the other's hand would
+        otherwise count as found and never be re-drawn)."""
         inner = hand_interiors(self.hands, q[None], torso, view)
-        return sample(view.skin, inner, 0.0).mean(axis=2)[0] >= self.cfg.hands_found_skin
+        on_skin = sample(view.skin, inner, 0.0).mean(axis=2)[0] >= self.cfg.hands_found_skin
+        pose = self.body.forward(q[None], fixed=torso)
+        head_uv, head_r = head_circle(self.body, pose, view.intrinsics, view.T_cam_base)
+        p_cam = hand_centres(self.body, pose)[:, 0] @ view.T_cam_base[:3, :3].T
+        p_cam += view.T_cam_base[:3, 3]
+        uv = view.intrinsics.project(p_cam)
+        hand_px = 2.0 * view.intrinsics.fx * max(self.body.part("r_hand").shape.semi_axes)
+        apart = np.linalg.norm(uv[0] - uv[1]) > hand_px / np.min(p_cam[:, 2])
+        return on_skin & (np.linalg.norm(uv - head_uv, axis=1) > head_r) & apart
 
     def step(self, frame, torso: np.ndarray, rng: np.random.Generator):
         """One frame: returns ``(mean (8,), cov (8, 8), ok)``."""
