@@ -87,11 +87,14 @@ class TbpConfig(Section):
     """A patch whose reference histogram is within this Bhattacharyya distance of the uniform
     one counts as discriminant (textured)."""
     sigma_k: float = Field(0.15, gt=0.0)
-    """Skin cue (hands) standard deviation (first stage, and in the second). Measured with
-    the defaults otherwise (issue 13): 0.3 let the stabiliser (2-4 nats at a raised, flexed
-    arm) outweigh a hand found on its skin blob (1.6 nats), so a wave already under way at
-    the start stayed at rest (wrist 539-601 mm, seeds 0-1); 0.15 follows it (114 mm, seed 0);
-    0.1 did worse on fig16 and fig12 (wrist 158-333 / 119 mm)."""
+    """Skin cue (hands) standard deviation (first stage, and in the second). Measured (issue
+    13, replays of the recorded pipeline frames, joints deg / wrist mm, seeds 0-1 or 0-2):
+    0.3 lets the stabiliser (2-4 nats at a raised, flexed arm) outweigh a hand found on its
+    skin blob (1.6 nats), so a wave already under way at the start stays at rest (55/601,
+    48/539); 0.15 follows it on all three seeds (27/114, 39/234, 20/76) at a small cost on
+    fig16 (15/82, 18/110; at 0.3: 16/97, 14/76) and fig13 (14/76, 13/70; at 0.3: 12/71,
+    12/75); 0.2 keeps fig16 and fig13 (16/90, 13/70; 12/69) but loses the wave on 1 of 3
+    seeds (56/604, 36/223, 31/181); 0.1 costs fig16 (27/333, 24/181, 24/158)."""
     lambda_st: float = Field(0.5, ge=0.0)
     """Stabiliser towards the rest pose (eq. 19 prior, per rad^2)."""
     lambda_co: float = Field(0.5, ge=0.0)
