@@ -28,7 +28,7 @@ def hand_blobs(image: np.ndarray, lut: ColorLUT, subsample: int = 2,
     small = image[::s, ::s]                      # a view: the posterior is per pixel
     coarse = skin_blobs((lut.posterior(small) > threshold).astype(np.uint8), 1,
                         min_area_px=min_area_px / (s * s))
-    if s == 1 or len(coarse.areas) == 0:
+    if len(coarse.areas) == 0:
         return coarse
     h, w = image.shape[:2]
     centres, boxes, areas = [], [], []
@@ -36,13 +36,27 @@ def hand_blobs(image: np.ndarray, lut: ColorLUT, subsample: int = 2,
         x0, y0 = max(int(x * s) - s, 0), max(int(y * s) - s, 0)
         x1, y1 = min(int((x + bw) * s) + s, w), min(int((y + bh) * s) + s, h)
         mask = (lut.posterior(image[y0:y1, x0:x1]) > threshold).astype(np.uint8)
-        n, _, stats, cent = cv2.connectedComponentsWithStats(mask, connectivity=8)
+        n, labels, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
         if n < 2:
             continue
         k = 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
-        centres.append(cent[k] + (x0, y0))
-        st = stats[k].astype(float)
-        boxes.append([st[0] + x0, st[1] + y0, st[2], st[3]])
-        areas.append(st[4])
+        bx, by, bw, bh = (int(v) for v in stats[k, :4])
+        centre, area = hull_moments(labels[by:by + bh, bx:bx + bw] == k)
+        centres.append(centre + (x0 + bx, y0 + by))
+        boxes.append([bx + x0, by + y0, bw, bh])
+        areas.append(area)
     return Blobs(np.reshape(centres, (-1, 2)), np.reshape(boxes, (-1, 4)), np.asarray(areas,
                                                                                      float))
+
+
+def hull_moments(component: np.ndarray) -> tuple[np.ndarray, float]:
+    """Centroid ``(u, v)`` (px, the array's pixel centres at integer coordinates) and area
+    (px) of the pixels inside the convex hull of a binary ``component (h, w)``'s pixels
+    (module docstring)."""
+    comp = component.astype(np.uint8)
+    contours, _ = cv2.findContours(comp, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
+    hull = cv2.convexHull(np.concatenate(contours))
+    filled = comp.copy()
+    cv2.fillConvexPoly(filled, hull, 1)
+    m = cv2.moments(filled, binaryImage=True)
+    return np.array([m["m10"] / m["m00"], m["m01"] / m["m00"]]), float(m["m00"])
