@@ -8,6 +8,8 @@ from __future__ import annotations
 import cv2
 import numpy as np
 import pytest
+from scipy import ndimage
+from skimage.morphology import convex_hull_image
 from _synth_vision import SKIN_RGB, clutter_background, stereo_head
 
 from humimic.bodymodel.kinematics import ypr_matrix
@@ -111,8 +113,9 @@ def test_blobs_cut_by_the_border_are_dropped():
 
 
 def test_blobs_found_subsampled_are_measured_at_full_resolution():
-    """Two skin ellipses and a speck: the centroids, boxes and areas equal those of the
-    full-resolution components (``cv2.connectedComponentsWithStats`` on the whole mask)."""
+    """Two skin ellipses and a speck: the centroids and areas equal those of the convex hulls
+    of the full-resolution components (``cv2.connectedComponentsWithStats`` on the whole
+    mask, ``skimage``'s hull image of each), the boxes the components'."""
     lut = ColorLUT(load_color_model(DEFAULT_COLOR_MODEL), 6)
     img = np.full((240, 320, 3), 70, np.uint8)
     cv2.ellipse(img, (101, 80), (9, 14), 30, 0, 360, SKIN_RGB, -1)
@@ -120,12 +123,35 @@ def test_blobs_found_subsampled_are_measured_at_full_resolution():
     img[20:22, 20:22] = SKIN_RGB                                  # too small to be a blob
     got = hand_blobs(img, lut, 2)
     mask = (lut.posterior(img) > 0.5).astype(np.uint8)
-    n, _, stats, cent = cv2.connectedComponentsWithStats(mask, connectivity=8)
+    n, labels, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
     big = [k for k in range(1, n) if stats[k, cv2.CC_STAT_AREA] >= 40]
-    order = np.argsort(got.centers[:, 0])
-    np.testing.assert_allclose(got.centers[order], cent[big][np.argsort(cent[big][:, 0])],
-                               atol=1e-9)
-    np.testing.assert_allclose(np.sort(got.areas), np.sort(stats[big, cv2.CC_STAT_AREA]))
+    hulls = [convex_hull_image(labels == k, offset_coordinates=False) for k in big]
+    cent = np.array([ndimage.center_of_mass(h)[::-1] for h in hulls])
+    order, want = np.argsort(got.centers[:, 0]), np.argsort(cent[:, 0])
+    np.testing.assert_allclose(got.centers[order], cent[want], atol=0.04)
+    np.testing.assert_allclose(got.areas[order], [hulls[i].sum() for i in want], rtol=0.06)
+    np.testing.assert_allclose(got.boxes[order], stats[big][want, :4])
+
+
+def test_a_highlight_inside_the_hand_does_not_move_its_blob_centre():
+    """A skin ellipse with a bright, non-skin highlight and a hole inside, close to its rim
+    (as a lit hand's saturated pixels): the blob's centre stays within 0.15 px of the
+    ellipse's, where the skin pixels' own centroid is > 1 px off."""
+    lut = ColorLUT(load_color_model(DEFAULT_COLOR_MODEL), 6)
+    img = np.full((240, 320, 3), 70, np.uint8)
+    centre = np.array([150.0, 110.0])
+    cv2.ellipse(img, (150, 110), (14, 24), 20, 0, 360, SKIN_RGB, -1)
+    highlight = np.zeros(img.shape[:2], np.uint8)
+    cv2.ellipse(highlight, (154, 116), (6, 10), 20, 0, 360, 1, -1)      # inside the rim
+    cv2.circle(highlight, (141, 98), 4, 1, -1)                           # a hole
+    img[highlight > 0] = 255
+    skin = lut.posterior(img) > 0.5
+    assert not skin[highlight > 0].any()
+    raw = np.array(ndimage.center_of_mass(skin)[::-1])
+    got = hand_blobs(img, lut, 2)
+    assert len(got.areas) == 1
+    assert np.linalg.norm(raw - centre) > 1.0
+    assert np.linalg.norm(got.centers[0] - centre) < 0.15
 
 
 def test_triangulate_pixels_matches_opencv():
