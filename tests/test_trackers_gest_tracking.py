@@ -8,9 +8,9 @@ from __future__ import annotations
 import cv2
 import numpy as np
 import pytest
+from _synth_vision import SKIN_RGB, clutter_background, stereo_head
 from scipy import ndimage
 from skimage.morphology import convex_hull_image
-from _synth_vision import SKIN_RGB, clutter_background, stereo_head
 
 from humimic.bodymodel.kinematics import ypr_matrix
 from humimic.perception.blobs.config import DEFAULT_COLOR_MODEL
