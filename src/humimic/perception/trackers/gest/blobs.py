@@ -18,6 +18,9 @@ import numpy as np
 from humimic.perception.cues.color_models import ColorLUT
 from humimic.perception.cues.importance import Blobs, skin_blobs
 
+GROW = 0.5
+"""Margin (times the subsampled blob's larger side) of the box a blob is re-measured in."""
+
 
 def hand_blobs(image: np.ndarray, lut: ColorLUT, subsample: int = 2,
                threshold: float = 0.5, min_area_px: float = 40.0) -> Blobs:
@@ -33,17 +36,24 @@ def hand_blobs(image: np.ndarray, lut: ColorLUT, subsample: int = 2,
     h, w = image.shape[:2]
     centres, boxes, areas = [], [], []
     for x, y, bw, bh in coarse.boxes:
-        x0, y0 = max(int(x * s) - s, 0), max(int(y * s) - s, 0)
-        x1, y1 = min(int((x + bw) * s) + s, w), min(int((y + bh) * s) + s, h)
+        ix0, iy0 = max(int(x * s) - s, 0), max(int(y * s) - s, 0)
+        ix1, iy1 = min(int((x + bw) * s) + s, w), min(int((y + bh) * s) + s, h)
+        pad = int(np.ceil(GROW * max(bw, bh) * s))
+        x0, y0, x1, y1 = max(ix0 - pad, 0), max(iy0 - pad, 0), min(ix1 + pad, w), min(iy1 + pad, h)
         mask = (lut.posterior(image[y0:y1, x0:x1]) > threshold).astype(np.uint8)
         n, labels, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
-        if n < 2:
+        inner = np.bincount(labels[iy0 - y0:iy1 - y0, ix0 - x0:ix1 - x0].ravel(), minlength=n)
+        inner[0] = 0
+        k = int(np.argmax(inner))
+        if inner[k] == 0:
             continue
-        k = 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
-        bx, by, bw, bh = (int(v) for v in stats[k, :4])
-        centre, area = hull_moments(labels[by:by + bh, bx:bx + bw] == k)
+        bx, by, cw, ch = (int(v) for v in stats[k, :4])
+        box = [bx + x0, by + y0, cw, ch]
+        if box in boxes:                # one component seen as two coarse blobs
+            continue
+        centre, area = hull_moments(labels[by:by + ch, bx:bx + cw] == k)
         centres.append(centre + (x0 + bx, y0 + by))
-        boxes.append([bx + x0, by + y0, bw, bh])
+        boxes.append(box)
         areas.append(area)
     return Blobs(np.reshape(centres, (-1, 2)), np.reshape(boxes, (-1, 4)), np.asarray(areas,
                                                                                      float))
