@@ -16,7 +16,7 @@ from humimic.bodymodel.kinematics import ypr_matrix
 from humimic.perception.blobs.config import DEFAULT_COLOR_MODEL
 from humimic.perception.cues.color_models import ColorLUT, load_color_model
 from humimic.perception.cues.importance import Blobs
-from humimic.perception.trackers.gest.blobs import hand_blobs
+from humimic.perception.trackers.gest.blobs import hand_blobs, hull_moments
 from humimic.perception.trackers.gest.config import GestConfig
 from humimic.perception.trackers.gest.likelihood import hand_view, project_hands, project_views
 from humimic.perception.trackers.gest.roi import crop_frame, roi_box
@@ -125,12 +125,34 @@ def test_blobs_found_subsampled_are_measured_at_full_resolution():
     mask = (lut.posterior(img) > 0.5).astype(np.uint8)
     n, labels, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
     big = [k for k in range(1, n) if stats[k, cv2.CC_STAT_AREA] >= 40]
-    hulls = [convex_hull_image(labels == k, offset_coordinates=False) for k in big]
+    hulls = [convex_hull_image(labels == k, offset_coordinates=False) | (labels == k)
+             for k in big]
     cent = np.array([ndimage.center_of_mass(h)[::-1] for h in hulls])
     order, want = np.argsort(got.centers[:, 0]), np.argsort(cent[:, 0])
-    np.testing.assert_allclose(got.centers[order], cent[want], atol=0.04)
-    np.testing.assert_allclose(got.areas[order], [hulls[i].sum() for i in want], rtol=0.06)
+    np.testing.assert_allclose(got.centers[order], cent[want], atol=1e-9)
+    np.testing.assert_allclose(got.areas[order], [hulls[i].sum() for i in want])
     np.testing.assert_allclose(got.boxes[order], stats[big][want, :4])
+
+
+def test_hull_moments_are_those_of_skimages_hull_image():
+    """Ellipses with holes and cut-off sides: the centroid and area of the pixels in the
+    component's convex hull equal ``skimage``'s (pixel centres in the hull)."""
+    rng = np.random.default_rng(0)
+    for t in range(60):
+        m = np.zeros((70, 60), np.uint8)
+        cv2.ellipse(m, (30, 33), (int(rng.integers(3, 20)), int(rng.integers(3, 25))),
+                    float(rng.uniform(0, 180)), 0, 360, 1, -1)
+        if t % 2:
+            cv2.circle(m, (int(rng.integers(20, 40)), int(rng.integers(20, 40))),
+                       int(rng.integers(2, 8)), 0, -1)
+        if t % 3 == 0:
+            m[:, :int(rng.integers(25, 33))] = 0
+        n, labels, stats, _ = cv2.connectedComponentsWithStats(m, connectivity=8)
+        comp = labels == 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
+        want = convex_hull_image(comp, offset_coordinates=False) | comp
+        centre, area = hull_moments(comp)
+        np.testing.assert_allclose(centre, ndimage.center_of_mass(want)[::-1], atol=1e-9)
+        assert area == want.sum()
 
 
 def test_a_highlight_inside_the_hand_does_not_move_its_blob_centre():

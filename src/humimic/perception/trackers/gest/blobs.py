@@ -61,17 +61,32 @@ def hand_blobs(image: np.ndarray, lut: ColorLUT, subsample: int = 2,
 
 def hull_moments(component: np.ndarray) -> tuple[np.ndarray, float]:
     """Centroid ``(u, v)`` (px, pixel centres at integer coordinates) and area (px) of the
-    convex hull of a binary ``component (h, w)``'s pixels (module docstring): the centroid
-    of the hull polygon through the outer pixels' centres (Green's theorem; rasterising the
-    hull adds pixels on one side), the area as about the pixels it covers (Pick's theorem with
-    the perimeter for the boundary pixels, ``A + P / 2 + 1``: 3 % high on a 500-px ellipse);
-    the pixels' own if the hull is a line."""
+    pixels of a binary ``component (h, w)`` and those whose centres lie in its convex hull
+    (module docstring): a blob without holes or notches keeps its own pixels (rasterising
+    the hull with ``cv2.fillConvexPoly`` adds a rim on one side; the hull polygon's own
+    centroid follows its few corner pixels, 0.12 px RMS against the pixels' 0.08 on
+    menezes_gest_reach). The pixels in the hull are counted by Pick's theorem first (area plus
+    half the boundary's lattice points plus one): when the blob has them all, it is used as
+    it is."""
     comp = component.astype(np.uint8)
     contours, _ = cv2.findContours(comp, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
-    hull = cv2.convexHull(np.concatenate(contours))
-    m = cv2.moments(hull)
-    if m["m00"] <= 0.0:
-        m = cv2.moments(comp, binaryImage=True)
-        return np.array([m["m10"] / m["m00"], m["m01"] / m["m00"]]), float(m["m00"])
-    area = m["m00"] + 0.5 * cv2.arcLength(hull, True) + 1.0
-    return np.array([m["m10"] / m["m00"], m["m01"] / m["m00"]]), float(area)
+    hull_px = cv2.convexHull(np.concatenate(contours))[:, 0]                   # (H, 2) int
+    step = np.abs(np.roll(hull_px, -1, axis=0) - hull_px)
+    in_hull = cv2.contourArea(hull_px) + np.gcd(step[:, 0], step[:, 1]).sum() / 2 + 1  # Pick
+    m = cv2.moments(comp, binaryImage=True)
+    if m["m00"] < round(in_hull):                     # pixels to add (else: the common case)
+        a = hull_px.astype(float)
+        b = np.roll(a, -1, axis=0)  # edges a -> b
+        rows = np.arange(comp.shape[0], dtype=float)[:, None]  # (h, 1)
+        lo, hi = np.minimum(a[:, 1], b[:, 1]), np.maximum(a[:, 1], b[:, 1])
+        meets = (rows >= lo - 1e-9) & (rows <= hi + 1e-9)  # (h, H)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t = np.where(hi > lo, (rows - a[:, 1]) / (b[:, 1] - a[:, 1]), 0.0)
+        x = a[:, 0] + t * (b[:, 0] - a[:, 0])  # row meets edge
+        x_b = np.where(hi > lo, x, b[:, 0])  # flat: both ends
+        left = np.minimum(np.where(meets, x, np.inf), np.where(meets, x_b, np.inf)).min(axis=1)
+        right = np.maximum(np.where(meets, x, -np.inf), np.where(meets, x_b, -np.inf)).max(axis=1)
+        u = np.arange(comp.shape[1], dtype=float)
+        inside = (u >= left[:, None] - 1e-9) & (u <= right[:, None] + 1e-9)
+        m = cv2.moments(comp | inside.astype(np.uint8), binaryImage=True)
+    return np.array([m["m10"], m["m01"]]) / m["m00"], float(m["m00"])
