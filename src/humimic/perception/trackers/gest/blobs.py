@@ -19,7 +19,8 @@ from humimic.perception.cues.color_models import ColorLUT
 from humimic.perception.cues.importance import Blobs, skin_blobs
 
 GROW = 0.5
-"""Margin (times the subsampled blob's larger side) of the box a blob is re-measured in."""
+"""Margin (times the subsampled blob's larger side) the box a blob is re-measured in grows by
+when the blob's component reaches the box's edge."""
 
 
 def hand_blobs(image: np.ndarray, lut: ColorLUT, subsample: int = 2,
@@ -38,13 +39,22 @@ def hand_blobs(image: np.ndarray, lut: ColorLUT, subsample: int = 2,
     for x, y, bw, bh in coarse.boxes:
         ix0, iy0 = max(int(x * s) - s, 0), max(int(y * s) - s, 0)
         ix1, iy1 = min(int((x + bw) * s) + s, w), min(int((y + bh) * s) + s, h)
-        pad = int(np.ceil(GROW * max(bw, bh) * s))
-        x0, y0, x1, y1 = max(ix0 - pad, 0), max(iy0 - pad, 0), min(ix1 + pad, w), min(iy1 + pad, h)
-        mask = (lut.posterior(image[y0:y1, x0:x1]) > threshold).astype(np.uint8)
-        n, labels, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
-        inner = np.bincount(labels[iy0 - y0:iy1 - y0, ix0 - x0:ix1 - x0].ravel(), minlength=n)
-        inner[0] = 0
-        k = int(np.argmax(inner))
+        pad = 0
+        while True:                     # grow the box while the component reaches its edge
+            x0, y0 = max(ix0 - pad, 0), max(iy0 - pad, 0)
+            x1, y1 = min(ix1 + pad, w), min(iy1 + pad, h)
+            mask = (lut.posterior(image[y0:y1, x0:x1]) > threshold).astype(np.uint8)
+            n, labels, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
+            inner = np.bincount(labels[iy0 - y0:iy1 - y0, ix0 - x0:ix1 - x0].ravel(),
+                                minlength=n)
+            inner[0] = 0
+            k = int(np.argmax(inner))
+            bx, by, cw, ch = (int(v) for v in stats[k, :4])
+            cut = ((bx == 0 < x0) or (by == 0 < y0) or (bx + cw == x1 - x0 and x1 < w)
+                   or (by + ch == y1 - y0 and y1 < h))
+            if not cut or pad >= GROW * max(bw, bh) * s or inner[k] == 0:
+                break
+            pad = int(np.ceil(GROW * max(bw, bh) * s))
         if inner[k] == 0:
             continue
         bx, by, cw, ch = (int(v) for v in stats[k, :4])
