@@ -116,9 +116,10 @@ def test_far_reach_position_error(tmp_path, budget):
 
 def test_near_reach_position_error(tmp_path):
     """menezes_gest_far with the person at 0.9 m (hand 0.5-0.9 m from the eyes, 40-50 % of
-    the frames in the wide pair), seed 6: the lit hand's highlight is not skin and bites into
-    its mask; with the blobs measured by their hulls 6.5 mm RMS (seeds 0-9: 5.4-8.1), with
-    the components' own centroids 16.3 (10.2-16.3)."""
+    the frames in the wide pair), seed 6: 6.0 mm RMS (seeds 0-9: 5.8-6.2). Without the blobs'
+    hulls, the lit skin in the skin model (``skin_gains``) and the orientation-free
+    silhouette offset: 16.3 (seeds 0-9: 10.2-16.3; the lit hand's saturated pixels were no
+    skin and bit into its blobs)."""
     from humimic.paths import SCENARIOS_DIR
     from humimic.run import run_one
     from humimic.scenario import load_scenario
@@ -127,7 +128,7 @@ def test_near_reach_position_error(tmp_path):
                        ["output.plots=false", "human.distance=0.9"], seed=6)
     m = run_one(sc, tmp_path, rerun="off", progress=False)["trackers"]["gest"]
     assert m["tracked_in_view_fraction"] >= 0.9
-    assert m["position_rmse_mm"] < 11.0
+    assert m["position_rmse_mm"] < 10.0
 
 
 @pytest.mark.parametrize("bad", [{"blob_min_area_px": 0.5}, {"lost_rel": -0.1},
