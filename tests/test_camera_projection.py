@@ -149,3 +149,42 @@ def test_undistortion_inverts_projection_over_the_whole_image(k1, k2):
     xy = intr.undistort_normalized(uv.reshape(-1, 2))
     back = intr.project(np.column_stack([xy, np.ones(len(xy))]))
     assert np.abs(back - uv.reshape(-1, 2)).max() < 1e-6
+
+
+@pytest.mark.parametrize("k1, k2", [(-0.12, 0.03), (0.0, 0.0)])
+def test_one_point_projects_like_opencv(k1, k2):
+    """``Intrinsics.project`` of a single point (its scalar path) against
+    ``cv2.projectPoints``; behind the camera it is NaN like a batch's rows."""
+    import math
+
+    import cv2
+
+    from humimic.sensors.camera_model import Intrinsics, fovy_from_hfov
+
+    intr = Intrinsics.from_fovy(fovy_from_hfov(math.radians(100), 320, 240), 320, 240, k1, k2)
+    rng = np.random.default_rng(0)
+    pts = np.column_stack([rng.uniform(-0.8, 0.8, (50, 2)), rng.uniform(0.5, 3.0, 50)])
+    ref, _ = cv2.projectPoints(pts, np.zeros(3), np.zeros(3), intr.K, intr.dist)
+    one = np.array([intr.project(p) for p in pts])
+    assert np.abs(one - ref[:, 0]).max() < 1e-9
+    assert np.array_equal(one, intr.project(pts))
+    assert np.isnan(intr.project(np.array([0.1, 0.2, -1.0]))).all()
+
+
+def test_camera_with_other_intrinsics_keeps_its_pose():
+    """``CameraModel.with_intrinsics`` (GEST's crops): the pose's inverse carried over equals
+    ``numpy.linalg.inv`` of the pose, and a point projects by the crop's shift."""
+    import dataclasses
+
+    from humimic.sensors.camera_model import CameraModel, Intrinsics
+
+    c, s = np.cos(0.3), np.sin(0.3)
+    T = np.array([[c, 0, s, 0.1], [0, 1, 0, -0.2], [-s, 0, c, 1.3], [0, 0, 0, 1.0]])
+    cam = CameraModel("c", Intrinsics.from_fovy(np.radians(60), 320, 240), T)
+    _ = cam.T_cam_base                                   # computed, then carried over
+    K = cam.intrinsics
+    crop = cam.with_intrinsics(dataclasses.replace(K, width=100, height=80, cx=K.cx - 40,
+                                                   cy=K.cy - 30))
+    assert np.abs(crop.T_cam_base - np.linalg.inv(T)).max() < 1e-12
+    p = T[:3, :3] @ np.array([0.05, -0.03, 1.0]) + T[:3, 3]
+    assert np.abs(cam.project_base(p) - crop.project_base(p) - (40, 30)).max() < 1e-9

@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from humimic.perception.trackers.kpf.depth import _rotation_between, wrist_depth_move
+from humimic.maths.rotations import rotation_between
+from humimic.perception.trackers.kpf.depth import wrist_depth_move
 from humimic.perception.trackers.kpf.tracker import kpf_body
 
 
@@ -54,11 +55,11 @@ def test_wrist_moves_along_its_camera_ray_by_delta():
 def test_rotation_between_matches_scipy():
     rng = np.random.default_rng(0)
     a, b = rng.normal(size=(50, 3)), rng.normal(size=(50, 3))
-    R = _rotation_between(a, b)
+    R = rotation_between(a, b)
     for k in range(50):
         ref, _ = Rotation.align_vectors(b[k][None], a[k][None])
         np.testing.assert_allclose(R[k], ref.as_matrix(), atol=1e-9)
-    R = _rotation_between(np.array([[1.0, 0, 0], [0, 1.0, 0]]), np.array([[-2.0, 0, 0],
+    R = rotation_between(np.array([[1.0, 0, 0], [0, 1.0, 0]]), np.array([[-2.0, 0, 0],
                                                                           [0, 3.0, 0]]))
     np.testing.assert_allclose(R[0] @ [1, 0, 0], [-1, 0, 0], atol=1e-12)
     assert np.linalg.det(R[0]) == pytest.approx(1.0)

@@ -14,6 +14,7 @@ Conventions (used everywhere in humimic):
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
 from dataclasses import dataclass, field
@@ -113,6 +114,11 @@ class Intrinsics:
         Points behind the camera (z <= 0) give NaN.
         """
         p = np.asarray(p_cam, dtype=float)
+        if p.shape == (3,):     # one point: the same arithmetic on scalars (~5x less overhead)
+            x, y, z = p.tolist()
+            if not z > 0:
+                return np.array([np.nan, np.nan])
+            return np.array(self.distort(x / z, y / z))
         z = p[..., 2]
         with np.errstate(divide="ignore", invalid="ignore"):
             x = np.where(z > 0, p[..., 0] / z, np.nan)
@@ -199,6 +205,14 @@ class CameraModel:
     def P_base(self) -> np.ndarray:
         """3x4 projection matrix from homogeneous base-frame points to pixels (no distortion)."""
         return self.intrinsics.K @ self.T_cam_base[:3, :]
+
+    def with_intrinsics(self, intrinsics: Intrinsics) -> CameraModel:
+        """The same camera at the same pose with other intrinsics (a crop, a decimation),
+        keeping :attr:`T_cam_base` if it was computed."""
+        cam = dataclasses.replace(self, intrinsics=intrinsics)
+        if "T_cam_base" in self.__dict__:
+            cam.__dict__["T_cam_base"] = self.__dict__["T_cam_base"]
+        return cam
 
     @functools.cached_property
     def T_cam_base(self) -> np.ndarray:

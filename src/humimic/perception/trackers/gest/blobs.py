@@ -45,7 +45,7 @@ def hand_blobs(image: np.ndarray, lut: ColorLUT, subsample: int = 2,
     resolution (module docstring)."""
     s = int(subsample)
     small = image[::s, ::s]                      # a view: the posterior is per pixel
-    coarse = skin_blobs((lut.posterior(small) > threshold).astype(np.uint8), 1,
+    coarse = skin_blobs(lut.mask(small, threshold), 1,
                         min_area_px=min_area_px / (s * s))
     if len(coarse.areas) == 0:
         return coarse
@@ -58,7 +58,7 @@ def hand_blobs(image: np.ndarray, lut: ColorLUT, subsample: int = 2,
         while True:                     # grow the box while the component reaches its edge
             x0, y0 = max(ix0 - pad, 0), max(iy0 - pad, 0)
             x1, y1 = min(ix1 + pad, w), min(iy1 + pad, h)
-            mask = (lut.posterior(image[y0:y1, x0:x1]) > threshold).astype(np.uint8)
+            mask = lut.mask(image[y0:y1, x0:x1], threshold)
             n, labels, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
             inner = np.bincount(labels[iy0 - y0:iy1 - y0, ix0 - x0:ix1 - x0].ravel(),
                                 minlength=n)

@@ -167,6 +167,14 @@ class GestConfig(Section):
     6.7 with ``kalman``; 13.2-15.5 against 11.8-12.2 at 1.5 m)."""
     roi: bool = True
     """Compute the cue images in a box around the candidates and the last estimate only."""
+    cue_pad_px: float = Field(10.0, gt=0.0, le=30.0)
+    """Margin (px of the cue images) of that box: the distance transform is exact up to this
+    distance at every point of the unpadded box, and at least it beyond (an edge outside the
+    box is not seen), a contour point that far off every edge being a misfit of 6.7
+    ``sigma_s`` either way; was the transform's cap, 30 px (speed: the box 0.4-0.6x the
+    pixels). fig11_gest_clutter, seeds 1-5: 7.8-9.8 mm RMS (mean 9.2, medians 3.5-5.6),
+    tracked in view 0.56-0.59, against 8.2-10.9 (mean 9.3, medians 3.5-8.2) and 0.56-0.59 at
+    30 px; menezes_gest_reach and _far unchanged (< 0.01 mm)."""
     orientation_sigma_deg: float = Field(90.0, gt=0.0)
     """Spread (deg) of the start density's orientation about the last estimate (the
     orientation is unknown when the filter (re-)starts)."""

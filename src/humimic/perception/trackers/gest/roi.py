@@ -1,12 +1,13 @@
 """GEST's cue images restricted to a region of interest (speed, not in the paper).
 
 The shape, colour and skin cues of a frame are computed in a box around where the hand can be
-(every hand-sized skin blob and the last estimate, padded by the distance transform's cap), not
-over the whole image: cropping an image is a shift of the principal point (``cx, cy``), so the
-cropped frame is an ordinary :class:`~humimic.sensors.camera_model.CameraImage` and every cue
-function works on it unchanged. A contour point outside the box counts as off the image (the
-distance transform's cap), as it would at the border of a smaller image; the box is padded by
-that cap so that a point near the hand sees the same distance as in the full image.
+(every hand-sized skin blob and the last estimate, padded by ``cue_pad_px``), not over the
+whole image: cropping an image is a shift of the principal point (``cx, cy``), so the cropped
+frame is an ordinary :class:`~humimic.sensors.camera_model.CameraImage` and every cue function
+works on it unchanged. A contour point outside the box counts as off the image (the distance
+transform's cap), as it would at the border of a smaller image; the pad makes a point near the
+hand see the same distance as in the full image up to the pad (any edge that near is in the
+box), and at least the pad beyond.
 
 A hand that images large (the foveal pair) is seen in the box averaged over ``k x k`` pixel
 blocks (``cue_radius_px``): a change of the intrinsics too (``f / k``, ``(c + 0.5) / k -
@@ -60,7 +61,7 @@ def crop_frame(frame: CameraImage, box: tuple[int, int, int, int] | None, k: int
     if k > 1:
         crop = crop.decimated(k)
         image = cv2.resize(image, (crop.width, crop.height), interpolation=cv2.INTER_AREA)
-    cam = dataclasses.replace(frame.camera, intrinsics=crop)
+    cam = frame.camera.with_intrinsics(crop)
     return CameraImage(frame.t, cam, image)
 
 
@@ -68,7 +69,7 @@ def decimated_camera(camera, k: int):
     """``camera`` with its intrinsics decimated by ``k`` (as is for 1)."""
     if k == 1:
         return camera
-    return dataclasses.replace(camera, intrinsics=camera.intrinsics.decimated(k))
+    return camera.with_intrinsics(camera.intrinsics.decimated(k))
 
 
 def to_view_px(uv: np.ndarray, origin: np.ndarray, k: int = 1) -> np.ndarray:

@@ -47,7 +47,6 @@ from humimic.estimation.particles import (
     UniformBox,
 )
 from humimic.perception.cues.color_models import ColorLUT
-from humimic.perception.cues.edges import DT_CAP_PX
 from humimic.perception.cues.histograms import update_reference
 from humimic.perception.cues.importance import Blobs
 from humimic.perception.trackers.gest.blobs import hand_blobs
@@ -91,7 +90,7 @@ class GestResult:
 
 
 def skin_mask(image: np.ndarray, lut: ColorLUT) -> np.ndarray:
-    return (lut.posterior(image) > 0.5).astype(np.uint8)
+    return lut.mask(image, 0.5)
 
 
 def hand_prior(cfg: GestConfig) -> UniformBox:
@@ -325,15 +324,15 @@ class GestTracker:
     def _roi(self, frame: CameraImage, blobs, centroids, near: tuple[np.ndarray, float] | None,
              k: int = 1) -> tuple[int, int, int, int] | None:
         """The box the cues are computed in (:mod:`.roi`): the hand-sized blobs matched in
-        stereo, the blobs near the last estimate, padded by the distance transform's cap (in
-        the pixels of the cue images, decimated by ``k``)."""
+        stereo, the blobs near the last estimate, padded by ``cue_pad_px`` (in the pixels of
+        the cue images, decimated by ``k``)."""
         K = frame.camera.intrinsics
         boxes = [blobs.boxes[_matched(blobs, centroids)]]
         if near is not None:
             uv, depth = near
             r = 1.5 * K.fx * float(np.max(self.last[6:])) / max(depth, 0.05)
             boxes.append(np.array([[uv[0] - r, uv[1] - r, 2 * r, 2 * r]]))
-        box = roi_box(np.concatenate(boxes), K.width, K.height, DT_CAP_PX * k)
+        box = roi_box(np.concatenate(boxes), K.width, K.height, self.cfg.cue_pad_px * k)
         return box if box is not None else (0, 0, K.width, K.height)
 
 

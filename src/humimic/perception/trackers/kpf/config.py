@@ -99,6 +99,16 @@ class KpfConfig(Section):
     """Our extension: the share of particles per arm and frame replaced by one of their
     kinematic flips (:mod:`~humimic.perception.trackers.kpf.flips`: the arm poses with the same
     elbow and wrist images, a jump process in the dynamics); 0: off, as the paper."""
+    hand_share: float = Field(0.0, ge=0.0, le=1.0)
+    """Our extension: the share of particles per arm and frame whose arm is turned about the
+    shoulder towards the nearest skin blob (:mod:`~humimic.perception.trackers.kpf.hands`, a
+    proposal from the skin segmentation); 0: off, as the paper. Measured (Table-1 frames,
+    seeds 0-9, 0.2): no image lag on the fast rise and (150, 2) side 126 -> 74 mm, but
+    (1000, 3) side 58 -> 67 (more depth drift) and +2 ms CPU per frame at (150, 2): off."""
+    hand_radius_px: float = Field(20.0, gt=0.0, le=1000.0)
+    """How far (px) from a particle's hand a skin blob may be to draw it."""
+    hand_min_area_px: float = Field(4.0, ge=1.0, le=1e5)
+    """The smallest skin blob (px^2) taken for a hand."""
     depth_extent_m: float = Field(0.25, gt=0.0, le=1.0)
     """Half-width (m) of the uniform range change of those depth moves."""
     kde_stride: int = Field(1, ge=1, le=100)

@@ -16,31 +16,10 @@ import numpy as np
 
 from humimic import bodymodel as bm
 from humimic.bodymodel.kinematics import elbow_rotation
+from humimic.maths.rotations import rotation_between
 
 #: Arm side -> (segment prefix, offset of its four DOFs in the state).
 SIDES = {"R": ("r", 6), "L": ("l", 10)}
-
-
-def _rotation_between(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """``(N, 3, 3)`` the smallest rotations taking directions ``a (N, 3)`` to ``b (N, 3)``
-    (Rodrigues; identity where they coincide, a half turn about a perpendicular where opposite)."""
-    a = a / np.linalg.norm(a, axis=1, keepdims=True)
-    b = b / np.linalg.norm(b, axis=1, keepdims=True)
-    v = np.cross(a, b)
-    c = np.sum(a * b, axis=1)
-    s2 = np.sum(v * v, axis=1)
-    K = np.zeros((len(a), 3, 3))
-    K[:, 0, 1], K[:, 0, 2], K[:, 1, 2] = -v[:, 2], v[:, 1], -v[:, 0]
-    K[:, 1, 0], K[:, 2, 0], K[:, 2, 1] = v[:, 2], -v[:, 1], v[:, 0]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        f = np.where(s2 > 1e-24, (1.0 - c) / s2, 0.5)
-    R = np.eye(3) + K + f[:, None, None] * (K @ K)
-    opposite = (s2 <= 1e-24) & (c < 0)
-    if opposite.any():                       # a half turn about any axis perpendicular to a
-        p = np.cross(a[opposite], np.eye(3)[np.argmin(np.abs(a[opposite]), axis=1)])
-        p /= np.linalg.norm(p, axis=1, keepdims=True)
-        R[opposite] = 2.0 * p[:, :, None] * p[:, None, :] - np.eye(3)
-    return R
 
 
 def wrist_depth_move(body: bm.BodyModel, q: np.ndarray, side: str, delta: np.ndarray,
@@ -65,7 +44,7 @@ def wrist_depth_move(body: bm.BodyModel, q: np.ndarray, side: str, delta: np.nda
     # the shoulder -> wrist vector in the upper arm's frame for the new elbow flexion
     d_local = np.array([0.0, 0.0, -lu]) + (elbow_rotation(side, eb) @ np.array([0, 0, -lf]))
     R_ref_upper = pose.segment(f"{prefix}_upper_arm")[0]
-    R_new = _rotation_between((R_ref_upper @ d_local[..., None])[..., 0], d_new) @ R_ref_upper
+    R_new = rotation_between((R_ref_upper @ d_local[..., None])[..., 0], d_new) @ R_ref_upper
     R_ref_torso = pose.segment("torso")[0]
     angles = bm.shoulder_angles(np.swapaxes(R_ref_torso, -1, -2) @ R_new, side)
     out = q.copy()

@@ -9,7 +9,10 @@ z axis would count an off-axis wrist's depth error as lateral: at the wide eye's
 third of it). ``wrist_flip_free_mm``: the error to the nearest of the estimate and its
 kinematic flips (:mod:`~humimic.perception.trackers.kpf.flips`, the arm poses with the same
 joint images), the part of the error the monocular depth ambiguity does not explain.
-``lost_fraction``: frames with the wrist more than :data:`LOST_M` off.
+``lost_fraction``: frames with the wrist more than :data:`LOST_M` off. ``truth_margin_nats`` /
+``estimate_above_truth_fraction`` (:func:`truth_margin_scores`): how the tracker's own
+likelihood ranks the true pose against its estimate, telling a biased likelihood (the
+estimate scored above the truth) from a search that does not reach the truth.
 """
 
 from __future__ import annotations
@@ -37,8 +40,12 @@ class KpfRecord:
     cpu_s: list = field(default_factory=list)
     iterations: list = field(default_factory=list)
     T_cam_base: list = field(default_factory=list)
+    truth_margin: list = field(default_factory=list)
+    """Per frame ``log p(y | true pose) - log p(y | estimate)`` (nats), the tracker's own
+    likelihood (eqs. 9-10, its colour references after the frame's adaptation)."""
 
-    def add(self, t, q, ends, lost, compute_s, cpu_s, iterations, T_cam_base) -> None:
+    def add(self, t, q, ends, lost, compute_s, cpu_s, iterations, T_cam_base,
+            truth_margin: float = float("nan")) -> None:
         self.t.append(t)
         self.q.append(np.asarray(q, float))
         self.ends.append(np.stack([ends[j] for j in ENDPOINTS]))
@@ -47,6 +54,7 @@ class KpfRecord:
         self.cpu_s.append(cpu_s)
         self.iterations.append(iterations)
         self.T_cam_base.append(T_cam_base)
+        self.truth_margin.append(float(truth_margin))
 
 
 def truth(world, body: bm.BodyModel, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -115,4 +123,18 @@ def kpf_metrics(rec: KpfRecord, world, body: bm.BodyModel, camera: str) -> dict:
         "joint_rmse_deg": float(np.degrees(np.sqrt(np.mean(e["angles"] ** 2)))),
         "right_arm_rmse_deg": float(np.degrees(np.sqrt(np.mean(e["angles"][:, :4] ** 2)))),
         "iterations_mean": float(np.mean(rec.iterations)),
+        **truth_margin_scores(np.asarray(rec.truth_margin, float)),
     }
+
+
+def truth_margin_scores(margin: np.ndarray) -> dict:
+    """Scores of the per-frame ``log p(y | truth) - log p(y | estimate)`` (:class:`KpfRecord`):
+    ``truth_margin_nats`` its mean, ``estimate_above_truth_fraction`` the share of frames where
+    the likelihood scores the estimate above the true pose (a bias of the likelihood there;
+    a positive margin with a wrong estimate is a failure of the search). NaN frames (no
+    margin recorded) are left out; None without any."""
+    m = margin[np.isfinite(margin)]
+    if len(m) == 0:
+        return {"truth_margin_nats": None, "estimate_above_truth_fraction": None}
+    return {"truth_margin_nats": float(m.mean()),
+            "estimate_above_truth_fraction": float(np.mean(m < 0.0))}

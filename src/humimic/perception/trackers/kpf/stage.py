@@ -65,7 +65,10 @@ class KpfStage(Stage):
         pose = self.body.forward(res.mode[None])
         ends = {j: pose.joint(j)[0] for j in ENDPOINTS}
         state = "lost" if res.lost else "tracking"
-        self.rec.add(t, res.mode, ends, res.lost, dt, cpu, res.iterations, T_cam_base)
+        q_true = bm.truth_state(self.world, self.world.gt.index_of(t), "base")
+        ll = self.tracker.lik.evaluate(np.stack([q_true, res.mode]), maps, T_cam_base).log_lik
+        self.rec.add(t, res.mode, ends, res.lost, dt, cpu, res.iterations, T_cam_base,
+                     float(ll[0] - ll[1]))
         angles = {n: float(v) for n, v in zip(bm.DOF_NAMES, res.mode, strict=True)
                   if n not in bm.TORSO_DOFS}
         est = PoseEstimate(self.name, "kpf", res.mode, bm.DOF_NAMES, np.diag(res.spread ** 2),

@@ -22,10 +22,12 @@ from humimic.estimation.particles.densities import Gaussian
 from humimic.estimation.particles.filters import condensation_step
 from humimic.estimation.particles.kernel_groups import dominant_modes
 from humimic.estimation.particles.weights import uniform_log_weights
+from humimic.perception.cues.importance import skin_blobs
 from humimic.perception.trackers.kpf.cues import CueMaps
 from humimic.perception.trackers.kpf.depth import SIDES, wrist_depth_move
 from humimic.perception.trackers.kpf.flips import FLIPS, arm_flips
 from humimic.perception.trackers.kpf.frame_cues import FrameCues
+from humimic.perception.trackers.kpf.hands import hand_blob_moves, part_centres
 from humimic.perception.trackers.kpf.likelihood import Likelihood
 
 _BLAS = ThreadpoolController()
@@ -191,6 +193,8 @@ class KpfTracker:
         prior = pred
         if cfg.depth_share > 0.0:   # a proposal: the reweighting keeps the dynamics' KDE
             pred = self._depth_moves(pred.copy(), T_cam_base, cfg.depth_share)
+        if cfg.hand_share > 0.0:    # a proposal too
+            pred = self._hand_moves(pred.copy(), maps, T_cam_base, cfg.hand_share)
         lik = (self._group_log_lik if cfg.partitioned else self._log_lik)(maps, T_cam_base)
         parts, W, ll, iters = kpf.kpf_modes(pred, lik, self.D, cfg.iterations, cfg.tol,
                                             cfg.shrink, cfg.reweight == "kernel", groups,
@@ -231,6 +235,33 @@ class KpfTracker:
             pick = np.flatnonzero(rng.random(len(pred)) < share)
             delta = rng.uniform(-1.0, 1.0, len(pick)) * cfg.depth_extent_m
             pred[pick] = wrist_depth_move(self.body, pred[pick], side, delta, T_cam_base)
+        return pred
+
+    def _hand_moves(self, pred: np.ndarray, maps: CueMaps | FrameCues, T_cam_base: np.ndarray,
+                    share: float) -> np.ndarray:
+        """A ``share`` of the particles per arm get their hand moved onto the nearest skin
+        blob (:func:`~humimic.perception.trackers.kpf.hands.hand_blob_moves`)."""
+        cfg, rng = self.cfg, self.rng
+        picks = {s: np.flatnonzero(rng.random(len(pred)) < share) for s in SIDES}
+        both = np.concatenate(list(picks.values()))
+        if len(both) == 0:
+            return pred
+        pose = self.body.forward(pred[both])
+        T = np.asarray(T_cam_base, float)
+        hands = np.concatenate([part_centres(self.body, pose, f"{SIDES[s][0]}_hand")
+                                for s in SIDES])
+        uv = self.lik.intr.project(hands @ T[:3, :3].T + T[:3, 3])
+        uv = uv[np.all(np.isfinite(uv), axis=1)]
+        if len(uv) == 0:
+            return pred
+        r = cfg.hand_radius_px
+        if isinstance(maps, FrameCues):
+            maps = maps.covering(uv.min(axis=0) - r, uv.max(axis=0) + r)
+        blobs = skin_blobs(maps.skin, 1, cfg.hand_min_area_px, (0.0, np.inf))
+        centres = blobs.centers + np.asarray(maps.origin, float)
+        for side, pick in picks.items():
+            pred[pick] = hand_blob_moves(self.body, pred[pick], side, centres, blobs.areas,
+                                         self.lik.intr, T, r, rng)
         return pred
 
     def _flip_jumps(self, pred: np.ndarray, T_cam_base: np.ndarray, share: float
