@@ -265,7 +265,8 @@ def test_reach_scenario_position_error(tmp_path, skin):
 
 
 @pytest.mark.parametrize("bad", [{"gate_m": 0.0}, {"proposal": "inertia"},
-                                 {"reacquire_frames": -1}])
+                                 {"reacquire_frames": -1}, {"skin_gains": [0.0]},
+                                 {"skin_gains": []}])
 def test_bad_settings_are_rejected(bad):
     with pytest.raises(ValueError):
         GestConfig(**bad)

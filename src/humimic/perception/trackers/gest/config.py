@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 from typing import Literal
 
-from pydantic import Field, model_validator
+from pydantic import Field, PositiveFloat, model_validator
 
 from humimic.scenario.base import Section, Vec3
 
@@ -107,7 +107,7 @@ class GestConfig(Section):
     """Use the triangulated skin blobs in the likelihood too (an addition, ibid.)."""
     stereo_outlier: float = Field(0.05, gt=0.0, le=1.0)
     """Weight of the uniform outlier (over both images) in the stereo cue."""
-    skin_gains: tuple[float, ...] = Field((1.0, 1.15, 1.3), min_length=1, max_length=8)
+    skin_gains: tuple[PositiveFloat, ...] = Field((1.0, 1.15, 1.3), min_length=1, max_length=8)
     """The learned skin model (``perception.color_model: auto``) is fitted to the renders'
     skin pixels lit this many times as brightly too (clipped at 255,
     :func:`~humimic.perception.cues.auto_colors.brightened`): a hand nearer the lamp or
@@ -230,8 +230,6 @@ class GestConfig(Section):
             raise ValueError("workspace_high must exceed workspace_low on every axis")
         if min(self.axes) <= 0:
             raise ValueError(f"axes must be > 0 m, got {self.axes}")
-        if min(self.skin_gains) <= 0:
-            raise ValueError(f"skin_gains must be > 0, got {self.skin_gains}")
         if not 0 < self.blob_size[0] < self.blob_size[1]:
             raise ValueError(f"blob_size must be 0 < min < max, got {self.blob_size}")
         return self
