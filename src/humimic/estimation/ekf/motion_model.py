@@ -45,7 +45,8 @@ class MotionNoise:
 
     jerk: float = SIGMA_JERK
     alpha: float = SIGMA_ALPHA
-    bias: float = SIGMA_BIAS
+    bias: float | tuple[float, float, float] = SIGMA_BIAS
+    """One for every axis of W, or one per axis."""
 
     def covariance(self) -> np.ndarray:
         """``diag(σ_j^2 I, σ_α^2 I, σ_b^2 I)`` (9x9), noise order ``(j, α, b̄)``."""
@@ -53,7 +54,8 @@ class MotionNoise:
 
     def variances(self) -> np.ndarray:
         """The diagonal of :meth:`covariance` (9,)."""
-        return np.repeat([self.jerk**2, self.alpha**2, self.bias**2], 3)
+        return np.r_[np.full(3, self.jerk**2), np.full(3, self.alpha**2),
+                     np.broadcast_to(np.square(self.bias), (3,))]
 
 
 def initial_state(p=(0, 0, 0), q=(1, 0, 0, 0), v=(0, 0, 0), w=(0, 0, 0), a=(0, 0, 0),
@@ -238,11 +240,12 @@ def quat_from_matrix(R: np.ndarray) -> np.ndarray:
 
 
 @functools.lru_cache(maxsize=32)
-def inertial_model(given: tuple[bool, bool, bool], s_q: float, s_a: float, s_w: float
+def inertial_model(given: tuple[bool, bool, bool], s_q: float, s_a: float | tuple, s_w: float
                    ) -> tuple[np.ndarray, np.ndarray]:
     """``H`` on the 19 state columns and the (isotropic) noise of the inertial measurements
     ``given`` (q, a, ω) stacked in that order: eq. 6 ``h = q``, eq. 7 ``h = a + b`` and the
-    angular rate ``h = ω`` (the form of the arm's eq. 15); standard deviations ``s_*``."""
+    angular rate ``h = ω`` (the form of the arm's eq. 15); standard deviations ``s_*``
+    (``s_a`` one for all three axes, or one per axis of W)."""
     blocks = [(ORIENTATION_COLS, H_ORIENTATION, s_q), (ACCEL_COLS, H_ACCEL, s_a),
               (np.arange(10, 13), np.eye(3), s_w)]
     chosen = [b for b, g in zip(blocks, given, strict=True) if g]
@@ -251,7 +254,7 @@ def inertial_model(given: tuple[bool, bool, bool], s_q: float, s_a: float, s_w: 
     for cols, h, _ in chosen:
         H[r:r + h.shape[0], cols] = h
         r += h.shape[0]
-    var = np.concatenate([np.full(len(h), s * s) for _, h, s in chosen])
+    var = np.concatenate([np.broadcast_to(np.square(s), (len(h),)) for _, h, s in chosen])
     out = H, np.diag(var)
     for a in out:
         a.flags.writeable = False
