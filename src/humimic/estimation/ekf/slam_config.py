@@ -64,6 +64,11 @@ class SlamConfig(Section):
     predicts from frame to frame); ``inertial``: the IMU only (no map). Fig. 8 (a)-(c)."""
     use_orientation: bool = True
     """Fuse the IMU's orientation output (eq. 6)."""
+    accel_frame: Literal["I", "W"] = "I"
+    """Where the accelerometer's reading is compared with the state: ``I`` (default), in the
+    sensor's own frame, ``h = R(q)^T (a + b - g)``, so gravity ties the estimated tilt to it;
+    ``W``, the paper's eq. 7, rotated into W by the orientation sensor's reading (whose slow
+    tilt error then turns gravity into a drifting horizontal acceleration)."""
     use_gyro: bool = True
     """Also fuse the IMU's angular rate (``h = ω``, as the arm EKF's eq. 15; the paper's head
     filter uses only orientation and acceleration). The orientation sensor's error is slowly

@@ -7,6 +7,10 @@ It starts where the wearer starts (the true head pose at the first frame plus a 
 ``init_position_std``, orientation from the IMU) with the screen's four corners as known
 features, their patches cut where the start pose projects them.
 
+The filter's inertial noises default to the head IMU's own error model (``sensors.imu``;
+:mod:`~humimic.estimation.ekf.sensor_noise`): the orientation sensor's slowly varying errors
+as their white equivalent, the accelerometer's white noise and bias walk as configured.
+
 Scores (``metrics.json`` ``slam``), per head-camera frame against the ground-truth pose of the
 head camera (frame I) in the paper's W:
 
@@ -64,7 +68,9 @@ def settings_from_config(cfg, imu=None) -> EstimatorSettings:
     else:
         orient = (None if nz.orientation_std_deg is None
                   else tuple(np.radians(nz.orientation_std_deg)))
-    g = float(np.linalg.norm(GRAVITY_W))
+    # gravity turned by the orientation sensor's tilt error reaches the acceleration only
+    # when the reading is rotated into W with it
+    g = float(np.linalg.norm(GRAVITY_W)) if cfg.accel_frame == "W" else 0.0
     s_acc = (sensor_noise.accel_std_W(imu, g) if nz.sigma_accel == "sensor"
              else nz.sigma_accel)
     s_bias = (sensor_noise.accel_bias_drift_W(imu, g) if nz.accel_bias_drift == "sensor"
@@ -77,6 +83,7 @@ def settings_from_config(cfg, imu=None) -> EstimatorSettings:
     return EstimatorSettings(use_camera=cfg.mode != "inertial", use_accel=cfg.mode != "camera",
                              use_gyro=cfg.use_gyro and cfg.mode != "camera",
                              use_orientation=cfg.use_orientation and cfg.mode != "camera",
+                             accel_in_sensor_frame=cfg.accel_frame == "I",
                              target_features=cfg.target_features, max_map=cfg.max_map,
                              max_measured=cfg.max_measured, slam=slam, frontend=fe)
 
