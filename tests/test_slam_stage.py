@@ -126,8 +126,9 @@ def test_covered_head_camera_coasts_then_recovers(tmp_path, monkeypatch):
     err = np.linalg.norm(tr["p"] - tr["p_true"], axis=1)
     sd = np.sqrt(np.trace(tr["P"][:, :3, :3], axis1=1, axis2=2))
     t = tr["t"]
-    # the uncertainty grew (measured 3x) while the error stayed within it (2.3 cm)
-    assert sd[(t > 1.9) & (t < 2.0)].max() > 1.5 * sd[(t > 0.9) & (t < 1.0)].max()
+    # the uncertainty grew while coasting (measured 1.47x with the accelerometer's own noise,
+    # 0.027 m/s^2; 3x with the paper's 0.5) while the error stayed within it (2.3 cm)
+    assert sd[(t > 1.9) & (t < 2.0)].max() > 1.2 * sd[(t > 0.9) & (t < 1.0)].max()
     assert np.all(tr["measured"][t >= 2.3] > 10)  # found again
     assert err[t >= 2.5].max() < 0.06, err[t >= 2.5].max()  # measured 2.6 cm
 
