@@ -52,8 +52,17 @@ class SlamNoise(Section):
     paper's 1e-3 per quaternion component."""
     sigma_gyro: float = Field(0.01, gt=0.0, le=10.0)
     """sigma of the angular rate (rad/s) when ``use_gyro``: the arm EKF's eq. 15 value."""
-    sigma_px: float = Field(1.0, gt=0.0, le=20.0)
-    """sigma of a feature's image position (px), eq. 8: 1."""
+    sigma_px: float = Field(2.0, gt=0.0, le=20.0)
+    """sigma of a feature's image position (px), per frame, as white noise (the paper's eq. 8:
+    1). The matches' errors are small but not white: the screen corners on the Fig. 8 jump
+    (seed 7, against their true projections) are off by a constant 0.08 px (u) and 0.16 px
+    (v) each while the head stands still -- the sub-pixel peak's bias, the same from frame to
+    frame for the same view -- plus 0.2 px that varies with the motion. Fused as 1 px white
+    noise, 30 frames a second averaged that bias away in the filter's belief but not in fact
+    (the start position's error stayed while its covariance shrank: position NEES 6-8). 2 px
+    is the white equivalent of a ~0.2 px error correlated over ~2 s (``0.2 sqrt(2 * 2 * 30)``);
+    measured: NEES 3.1-3.8 and equal or better accuracy on the Fig. 8 jump and the Table II
+    walk."""
 
 
 class SlamConfig(Section):
