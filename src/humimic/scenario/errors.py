@@ -115,6 +115,9 @@ def _dotted(loc: tuple, root: type[BaseModel]) -> str:
         if tagged is not None:
             current = tagged
             continue
+        if (isinstance(part, str) and not models and len(_unwrap(current)) > 1
+                and typing.get_origin(current) is not dict):
+            continue  # a plain union's member tag ('constrained-float', "literal['x']")
         parts.append(str(part))
         if models and isinstance(part, str) and part in models[0].model_fields:
             current = models[0].model_fields[part].annotation
