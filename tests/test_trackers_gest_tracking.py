@@ -270,3 +270,33 @@ def test_reach_scenario_position_error(tmp_path, skin):
 def test_bad_settings_are_rejected(bad):
     with pytest.raises(ValueError):
         GestConfig(**bad)
+
+
+def test_whole_in_view_against_the_surface_projected_by_opencv():
+    """A hand counts as wholly in view when its ellipsoid's outline lies inside the image:
+    checked against 5000 points on the ellipsoid's surface projected by ``cv2.projectPoints``
+    for hands walked upwards across the top edge (the centre still in view while the rim is
+    cut)."""
+    from humimic.perception.trackers.gest.stage import _in_view, _whole_in_view
+
+    cam, _ = stereo_head(k1=-0.05, k2=0.0)
+    T_cam_base = invert_transform(cam.T_base_cam)
+    rng = np.random.default_rng(0)
+    d = rng.normal(size=(5000, 3))
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    verdicts = []
+    for dz in np.linspace(0.0, 0.6, 31):
+        hand = HAND + np.r_[0.0, 0.0, dz, np.zeros(6)]
+        p_base = hand[:3] + (d * hand[6:]) @ ypr_matrix(*hand[3:6]).T
+        p_cam = p_base @ T_cam_base[:3, :3].T + T_cam_base[:3, 3]
+        uv, _ = cv2.projectPoints(p_cam, np.zeros(3), np.zeros(3), cam.intrinsics.K,
+                                  cam.intrinsics.dist)
+        uv = uv[:, 0]
+        w, h = cam.intrinsics.width, cam.intrinsics.height
+        inside = bool((uv >= 0).all() and (uv[:, 0] <= w - 1).all() and (uv[:, 1] <= h - 1).all())
+        whole = _whole_in_view(cam, hand)
+        verdicts.append((whole, _in_view(cam, hand[:3])))
+        if inside != whole:        # only within a pixel of the edge (16 outline samples)
+            margin = min(uv.min(), w - 1 - uv[:, 0].max(), h - 1 - uv[:, 1].max())
+            assert abs(margin) < 1.0
+    assert any(w for w, _ in verdicts) and any(c and not w for w, c in verdicts)

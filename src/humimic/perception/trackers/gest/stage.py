@@ -6,7 +6,9 @@ Scores are over the frames in which the true hand centre projects into the left 
 ``orientation_rmse_deg`` (geodesic angle, modulo the ellipsoid's symmetries: a half turn
 about any of its axes looks the same), ``axes_rmse_mm``, ``within_30mm_fraction`` and
 ``tracked_in_view_fraction``; ``tracking_out_of_view_fraction`` counts frames it claims a hand
-that is not in view.
+that is not in view. ``tracked_whole_in_view_fraction`` is over the frames in which the whole
+hand (the true ellipsoid's outline) lies inside the left image: a hand cut by the border gives
+no whole skin blob, and GEST reports it lost by design.
 """
 
 from __future__ import annotations
@@ -136,8 +138,12 @@ class GestStage(PoseTrackerStage):
             return {}
         truth, est, in_view, tracking = self._judged()
         use = in_view & tracking
+        whole = np.array([_whole_in_view(c, x) for c, x in zip(self.left_cams, truth,
+                                                                 strict=True)])
         out = {"in_view_frames": int(in_view.sum()),
                "tracked_in_view_fraction": _frac(use, in_view),
+               "whole_in_view_frames": int(whole.sum()),
+               "tracked_whole_in_view_fraction": _frac(whole & tracking, whole),
                "tracking_out_of_view_fraction": _frac(tracking & ~in_view, ~in_view)}
         if self.foveal is not None:
             narrow = np.array([c is not None and c.name == self.foveal[0] for c in self.used])
@@ -168,3 +174,15 @@ def _in_view(camera, p_base: np.ndarray) -> bool:
         return False
     u, v = camera.intrinsics.project(p_cam[:3])
     return bool(0 <= u < camera.intrinsics.width and 0 <= v < camera.intrinsics.height)
+
+
+def _whole_in_view(camera, state_base: np.ndarray) -> bool:
+    """Whether the outline of the hand ellipsoid ``state_base (9,)`` lies inside the image."""
+    if camera is None or not _in_view(camera, state_base[:3]):
+        return False
+    outline, _ = hand_outlines(state_base[None], camera.intrinsics,
+                               invert_transform(camera.T_base_cam))
+    uv = outline.uv[0, 0]
+    w, h = camera.intrinsics.width, camera.intrinsics.height
+    return bool(np.isfinite(uv).all() and (uv >= 0).all() and (uv[:, 0] <= w - 1).all()
+                and (uv[:, 1] <= h - 1).all())
