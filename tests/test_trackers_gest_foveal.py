@@ -100,14 +100,15 @@ def test_far_reach_position_error(tmp_path, budget):
     6.3 / 6.0); the same run in the wide pair: 21 mm (this test fails it on the foveal
     fraction); the wide pair with the eyes still 22-23 mm (before the 16 px blob floor: 16-21
     mm on the 58-62 % of frames it tracked). With the cue images at a 12 px hand radius
-    (``cue_radius_px``, blocks of 2-3 here) the same 8.9 mm, tracked and foveal fractions."""
+    (``foveal_cue_radius_px``, the default, blocks of 2-3 here) the same 8.9 mm, tracked and
+    foveal fractions."""
     from humimic.paths import SCENARIOS_DIR
     from humimic.run import run_one
     from humimic.scenario import load_scenario
 
     sc = load_scenario(SCENARIOS_DIR / "menezes_gest_far.yaml",
-                       ["output.plots=false", f"trackers.gest.cue_radius_px={budget}"
-                        if budget else "trackers.gest.cue_radius_px=null"], duration=2.5)
+                       ["output.plots=false", f"trackers.gest.foveal_cue_radius_px={budget}"
+                        if budget else "trackers.gest.foveal_cue_radius_px=null"], duration=2.5)
     m = run_one(sc, tmp_path, rerun="off", progress=False)["trackers"]["gest"]
     assert m["tracked_in_view_fraction"] >= 0.95
     assert m["foveal_tracked_fraction"] >= 0.9
@@ -116,7 +117,7 @@ def test_far_reach_position_error(tmp_path, budget):
 
 @pytest.mark.parametrize("bad", [{"blob_min_area_px": 0.5}, {"lost_rel": -0.1},
                                  {"foveal_margin_px": -1.0}, {"foveal": ["L_foveal"]},
-                                 {"cue_radius_px": 0.0}])
+                                 {"cue_radius_px": 0.0}, {"foveal_cue_radius_px": -1.0}])
 def test_bad_foveal_settings_are_rejected(bad):
     with pytest.raises(ValueError):
         GestConfig(**bad)

@@ -38,8 +38,9 @@ class GestConfig(Section):
     with it, 9.4 without; at 1.75 m, seeds 3-4, 8.6-9.5 with, 8.5 without. (In the wide
     pair, the hand off-axis, it helps: menezes_gest_reach 7.1 mm with, 8.8 without.)"""
     cue_radius_px: float | None = Field(None, gt=0.0)
-    """Pixel budget of the cue images (speed, not in the paper; None, the default: always full
-    resolution -- off because of the 0.9 m runs at the end of this note):
+    """Pixel budget of the cue images in the wide pair (speed, not in the paper; None, the
+    default: always full resolution -- off because of the 0.9 m runs at the end of this note;
+    the foveal pair's is ``foveal_cue_radius_px``):
     when the last estimate's hand image (radius ``fx`` times its longest semi-axis over its
     distance) is ``k >= 2`` times this, its shape, colour and skin cues are computed on the
     region of interest averaged over ``k x k`` blocks (intrinsics scaled to match: the hand
@@ -57,6 +58,9 @@ class GestConfig(Section):
     mm RMS on them against 12.3-13.9) -- within what the wide pair gives there at full
     resolution after any small change: ``sigma_s`` 1.52 or ``n_points`` 21, seeds 3-5,
     13.5-23.3 mm on them, 10.8-18.6 mm overall."""
+    foveal_cue_radius_px: float | None = Field(12.0, gt=0.0)
+    """``cue_radius_px`` for the frames measured in the foveal pair, where the hand images
+    large (radius 25-60 px at 1.2-0.5 m); None: full resolution."""
     views: Literal[1, 2] = 1
     """Images the shape, colour and skin cues are evaluated in: 1 = the left image only (the
     paper), 2 = both (measured no better: 9.5-15 mm RMS either way on menezes_gest_reach at
