@@ -188,17 +188,26 @@ def foveal_gest(args) -> None:
         return go
 
     budget = cfg.foveal_cue_radius_px or 12.0
-    for label, c, foveal in (
-            ("gest far, wide pair", cfg, False),
-            ("gest far, foveal, full res",
-             cfg.model_copy(update={"foveal_cue_radius_px": None}), True),
-            (f"gest far, foveal, r<={budget:g}px",
-             cfg.model_copy(update={"foveal_cue_radius_px": budget}), True)):
-        used.clear()
-        report(label, time_runs(lambda r, c=c: GestTracker(c, lut), run(foveal), args.repeats),
-               GOALS_FPS["gest"])
+    configs = (("gest far, wide pair", cfg, False),
+               ("gest far, foveal, full res",
+                cfg.model_copy(update={"foveal_cue_radius_px": None}), True),
+               (f"gest far, foveal, r<={budget:g}px",
+                cfg.model_copy(update={"foveal_cue_radius_px": budget}), True))
+    secs: dict[str, list[float]] = {label: [] for label, _, _ in configs}
+    share = {}
+    for _ in range(args.repeats):       # interleaved: a change of load hits each one alike
+        for label, c, foveal in configs:
+            used.clear()
+            secs[label] += time_runs(lambda r, c=c: GestTracker(c, lut), run(foveal), 1)
+            share[label] = np.mean(used)
+    for label, _, foveal in configs:
+        report(label, secs[label], GOALS_FPS["gest"])
         if foveal:
-            print(f"{'':28s} {np.mean(used):.0%} of the frames in the foveal pair")
+            print(f"{'':28s} {share[label]:.0%} of the frames in the foveal pair")
+    ratio = np.array(secs[configs[2][0]]) / np.array(secs[configs[1][0]])
+    q = np.percentile(ratio, [25, 50, 75])
+    print(f"{'':28s} r<={budget:g}px / full res, same repeat: {q[1]:.2f} (q1-q3 "
+          f"{q[0]:.2f}-{q[2]:.2f})")
     world.eye_rig.close()
 
 
