@@ -3,11 +3,13 @@
 replay the tracker over them for several seeds and options, and print per DOF and per joint
 the error split into the camera's depth and image plane, the shoulder placement error, and how
 often the true pose scores better than the MMSE under the tracker's own likelihood (eq. 19)
--- with the measured torso and with the true one. True better: a search failure; estimate
-better: a cue failure. The wrists' error is also taken to the image: how far (px) the
-estimated wrist projects from the true one, and which share of the 3-D wrist error (squared)
-falls in frames where it projects within ``--px`` pixels of the truth -- the error along the
-line of sight, which one eye cannot see (the monocular depth ambiguity).
+-- with the measured torso and with the true one -- and by how much per cue (shape, skin,
+each colour patch, stabiliser, collision; median over the frames, measured torso). True
+better: a search failure; estimate better: a cue failure. The wrists' error is also taken
+to the image: how far (px) the estimated wrist projects from the true one, and which share
+of the 3-D wrist error (squared) falls in frames where it projects within ``--px`` pixels
+of the truth -- the error along the line of sight, which one eye cannot see (the monocular
+depth ambiguity).
 
 Run: ``python benchmarks/diagnose_tbp.py scenarios/fig13_tbp_clutter.yaml --seeds 0,1,2
 [--torso truth] [--set sigma_deg=1.5 --set edges=grey ...]``. CPU time per frame
@@ -30,7 +32,11 @@ import numpy as np
 from humimic.bodymodel.avatar import truth_state
 from humimic.bodymodel.kinematics import DOF_NAMES
 from humimic.maths.stats import rmse
-from humimic.perception.trackers.tbp.likelihood import full_log_likelihood, project_arms
+from humimic.perception.trackers.tbp.likelihood import (
+    full_log_likelihood,
+    log_likelihood_terms,
+    project_arms,
+)
 from humimic.perception.trackers.tbp.stage import JOINTS, TbpStage
 from humimic.perception.trackers.tbp.tracker import ARM_NAMES, TbpTracker
 from humimic.pipeline.build import build_stages
@@ -73,7 +79,7 @@ def replay(tbp: TbpStage, frames, seed: int, update: dict, torso_truth: bool,
     body = trk.body.with_free(DOF_NAMES)
     rng = np.random.default_rng(seed)
     err, d_cam, lls, cpu = [], {j: [] for j in JOINTS}, [], 0.0
-    wrist_px, wrist_mm = [], []
+    wrist_px, wrist_mm, terms = [], [], []
     for _, frame, torso, truth in frames:
         torso = truth[:6] if torso_truth else torso
         c0 = time.process_time()
@@ -93,6 +99,10 @@ def replay(tbp: TbpStage, frames, seed: int, update: dict, torso_truth: bool,
                                                      cfg.n_points), trk.last_view, qs,
                                         trk.body, trk.weights, trk.refs) for t in
                     (torso, truth[:6])])
+        per = log_likelihood_terms(project_arms(trk.body, qs, torso, trk.last_view,
+                                                cfg.n_points), trk.last_view, qs, trk.body,
+                                   trk.weights, trk.refs)
+        terms.append({k: float(v[0] - v[1]) for k, v in per.items()})
     err, lls = np.array(err), np.array(lls)                       # lls (T, 2 torsos, 2 poses)
     out = {"cpu_ms_per_frame": 1e3 * cpu / len(frames),
            "joint_rmse_deg": float(np.sqrt(np.mean(err ** 2))),
@@ -110,6 +120,8 @@ def replay(tbp: TbpStage, frames, seed: int, update: dict, torso_truth: bool,
                                         "true_torso": float(np.mean(gap[:, 1] > 0))}
     out["true_minus_mmse_median_nats"] = {"measured_torso": float(np.median(gap[:, 0])),
                                           "true_torso": float(np.median(gap[:, 1]))}
+    out["true_minus_mmse_median_nats_per_cue"] = {
+        k: float(np.median([t[k] for t in terms if k in t])) for k in terms[-1]}
     return out
 
 

@@ -2,12 +2,19 @@
 
 from __future__ import annotations
 
+import cv2
 import numpy as np
 import pytest
 
 from humimic.paths import SCENARIOS_DIR
 from humimic.perception.blobs.config import DEFAULT_COLOR_MODEL
-from humimic.perception.cues.auto_colors import digest_of, file_lut, learned_lut, sample_ticks
+from humimic.perception.cues.auto_colors import (
+    brightened,
+    digest_of,
+    file_lut,
+    learned_lut,
+    sample_ticks,
+)
 from humimic.perception.cues.color_models import ColorLUT, load_color_model
 from humimic.perception.cues.learn_colors import frame_pixels, material_geoms
 from humimic.rngs import Rngs
@@ -156,3 +163,13 @@ def test_very_dark_skin_model_does_not_claim_the_shoes(cache_dir):
         assert (lut.lookup(skin) > 1.0).mean() >= 0.9
     finally:
         world.close()
+
+
+def test_brightened_pixels_saturate_as_opencvs_scaling():
+    rng = np.random.default_rng(3)
+    px = rng.integers(0, 256, (500, 3), dtype=np.uint8)
+    got = brightened(px, (1.0, 1.15, 1.3))
+    want = np.concatenate([cv2.convertScaleAbs(px, alpha=g) for g in (1.0, 1.15, 1.3)])
+    assert got.dtype == np.uint8 and got.shape == (1500, 3)
+    assert np.abs(got.astype(int) - want).max() <= 1        # rounding of halves may differ
+    assert (got[1000:] == 255).mean() > 0.2                  # a bright third saturates

@@ -155,3 +155,24 @@ def test_colour_likelihood_from_counts_is_calchist_and_comparehist():
                                   ref[0, c].astype(np.float32), cv2.HISTCMP_BHATTACHARYYA) ** 2
         expect.append(-d2 / (2 * sigma ** 2))
     np.testing.assert_allclose(ours, expect, atol=2e-5)
+
+
+def test_chromaticity_closed_form_and_shading_invariance():
+    """Normalised rgb against a per-pixel loop; halving the light leaves it (to one count of
+    rounding), dark pixels are grey."""
+    from humimic.perception.cues.histograms import chromaticity
+
+    rng = np.random.default_rng(3)
+    img = rng.integers(40, 256, (6, 7, 3)).astype(np.uint8)
+    img[0, 0] = (5, 10, 3)                                   # dark: grey
+    out = chromaticity(img)
+    for i in range(6):
+        for j in range(7):
+            r, g, b = (float(c) for c in img[i, j])
+            s = r + g + b
+            want = [85, 85, 85] if s < 72 else [int(255 * c / s + 0.5) for c in (r, g, b)]
+            assert out[i, j].tolist() == want, (i, j)
+    half = (img.astype(float) * 0.5).round().astype(np.uint8)
+    bright = img.sum(axis=-1) >= 200
+    diff = np.abs(chromaticity(half).astype(int) - out.astype(int))[bright]
+    assert diff.max() <= 2, diff.max()

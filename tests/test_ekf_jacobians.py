@@ -240,3 +240,18 @@ def test_undistortion_maps_invert_the_distortion():
         np.testing.assert_allclose([map_x[v, u], map_y[v, u]], INTR.project(ray), atol=1e-3)
         back = INTR.undistort_normalized(np.array([map_x[v, u], map_y[v, u]], float))
         np.testing.assert_allclose(back, ray[:2], atol=1e-5)
+
+
+def test_specific_force_model_against_scipy_and_numerical(rng):
+    """``h = R(q)^T (a + b - g)``: the reading of an accelerometer (scipy's rotation of the
+    world-frame specific force into the sensor), with ``dh/dx`` by finite differences."""
+    g = np.array([0.0, -9.81, 0.0])
+    x = mm.initial_state(p=rng.normal(size=3), q=quat.normalize(rng.normal(size=4)),
+                         v=rng.normal(size=3), w=rng.normal(size=3), a=rng.normal(size=3),
+                         b=0.1 * rng.normal(size=3))
+    h, H = mm.h_specific_force(x, g)
+    w, xq, yq, zq = x[3:7]
+    R_WI = Rotation.from_quat([xq, yq, zq, w])  # scipy: scalar last
+    np.testing.assert_allclose(h, R_WI.inv().apply(x[13:16] + x[16:19] - g), atol=1e-12)
+    np.testing.assert_allclose(H, numjac(lambda y: mm.h_specific_force(y, g)[0], x),
+                               atol=1e-6)

@@ -46,6 +46,8 @@ def _run(tmp_path, text: str, *extra: str, capsys) -> tuple[int, str]:
     (GOOD.replace("motion: {kind: wave, hand: right, amplitude: 0.25, period: 2.0}",
                   "motion: {kind: bvh, file: no_such_clip.bvh}"),
      ["human.motion.file", "file not found", "no_such_clip.bvh"]),
+    (GOOD + "slam: {noise: {sigma_accel: -1}}\n",  # a number-or-'sensor' union
+     ["slam.noise.sigma_accel: out of range", "> 0.0"]),
     ("name: t\nhuman: [1, 2]\n", ["human"]),
     ("name: [unclosed\n", ["not valid YAML"]),
 ])

@@ -126,7 +126,24 @@ def test_covered_head_camera_coasts_then_recovers(tmp_path, monkeypatch):
     err = np.linalg.norm(tr["p"] - tr["p_true"], axis=1)
     sd = np.sqrt(np.trace(tr["P"][:, :3, :3], axis1=1, axis2=2))
     t = tr["t"]
-    # the uncertainty grew (measured 3x) while the error stayed within it (2.3 cm)
-    assert sd[(t > 1.9) & (t < 2.0)].max() > 1.5 * sd[(t > 0.9) & (t < 1.0)].max()
+    # the uncertainty grew while coasting (measured 1.47x with the accelerometer's own noise,
+    # 0.027 m/s^2; 3x with the paper's 0.5) while the error stayed within it (2.3 cm)
+    assert sd[(t > 1.9) & (t < 2.0)].max() > 1.2 * sd[(t > 0.9) & (t < 1.0)].max()
     assert np.all(tr["measured"][t >= 2.3] > 10)  # found again
     assert err[t >= 2.5].max() < 0.06, err[t >= 2.5].max()  # measured 2.6 cm
+
+
+@pytest.mark.slow
+def test_fig8_jump_is_consistent_and_true_to_scale(tmp_path):
+    """The whole Fig. 8 jump on seed 1: the position covariance covers the error (mean NEES
+    for 3 dof measured 1.4, every frame in the 95 % band -- 16.8 and 0.18 when the
+    orientation sensor's slow tilt error was fused as white noise) and the jump's height is
+    not shortened (Sim(3) scale measured 0.994; 1.032 with the paper's 0.5 m/s^2
+    accelerometer noise, which lagged the take-off and landing)."""
+    scenario = load_scenario(SCENARIOS_DIR / "sugiyama_fig8.yaml").model_copy(
+        update={"seed": 1})
+    s = run_one(scenario, tmp_path, rerun="off", progress=False)["slam"]
+    assert s["position_nees_mean"] < 6.0, s
+    assert s["position_nees_in_band_fraction"] > 0.8, s
+    assert abs(s["sim3_scale"] - 1.0) < 0.015, s
+    assert s["ate_rmse_m"] < 0.035, s

@@ -9,12 +9,14 @@ import cv2
 import numpy as np
 import pytest
 from _synth_vision import SKIN_RGB, clutter_background, stereo_head
+from scipy import ndimage
+from skimage.morphology import convex_hull_image
 
 from humimic.bodymodel.kinematics import ypr_matrix
 from humimic.perception.blobs.config import DEFAULT_COLOR_MODEL
 from humimic.perception.cues.color_models import ColorLUT, load_color_model
 from humimic.perception.cues.importance import Blobs
-from humimic.perception.trackers.gest.blobs import hand_blobs
+from humimic.perception.trackers.gest.blobs import hand_blobs, hull_moments
 from humimic.perception.trackers.gest.config import GestConfig
 from humimic.perception.trackers.gest.likelihood import hand_view, project_hands, project_views
 from humimic.perception.trackers.gest.roi import crop_frame, roi_box
@@ -111,8 +113,9 @@ def test_blobs_cut_by_the_border_are_dropped():
 
 
 def test_blobs_found_subsampled_are_measured_at_full_resolution():
-    """Two skin ellipses and a speck: the centroids, boxes and areas equal those of the
-    full-resolution components (``cv2.connectedComponentsWithStats`` on the whole mask)."""
+    """Two skin ellipses and a speck: the centroids and areas equal those of the convex hulls
+    of the full-resolution components (``cv2.connectedComponentsWithStats`` on the whole
+    mask, ``skimage``'s hull image of each), the boxes the components'."""
     lut = ColorLUT(load_color_model(DEFAULT_COLOR_MODEL), 6)
     img = np.full((240, 320, 3), 70, np.uint8)
     cv2.ellipse(img, (101, 80), (9, 14), 30, 0, 360, SKIN_RGB, -1)
@@ -120,12 +123,57 @@ def test_blobs_found_subsampled_are_measured_at_full_resolution():
     img[20:22, 20:22] = SKIN_RGB                                  # too small to be a blob
     got = hand_blobs(img, lut, 2)
     mask = (lut.posterior(img) > 0.5).astype(np.uint8)
-    n, _, stats, cent = cv2.connectedComponentsWithStats(mask, connectivity=8)
+    n, labels, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
     big = [k for k in range(1, n) if stats[k, cv2.CC_STAT_AREA] >= 40]
-    order = np.argsort(got.centers[:, 0])
-    np.testing.assert_allclose(got.centers[order], cent[big][np.argsort(cent[big][:, 0])],
-                               atol=1e-9)
-    np.testing.assert_allclose(np.sort(got.areas), np.sort(stats[big, cv2.CC_STAT_AREA]))
+    hulls = [convex_hull_image(labels == k, offset_coordinates=False) | (labels == k)
+             for k in big]
+    cent = np.array([ndimage.center_of_mass(h)[::-1] for h in hulls])
+    order, want = np.argsort(got.centers[:, 0]), np.argsort(cent[:, 0])
+    np.testing.assert_allclose(got.centers[order], cent[want], atol=1e-9)
+    np.testing.assert_allclose(got.areas[order], [hulls[i].sum() for i in want])
+    np.testing.assert_allclose(got.boxes[order], stats[big][want, :4])
+
+
+def test_hull_moments_are_those_of_skimages_hull_image():
+    """Ellipses with holes and cut-off sides: the centroid and area of the pixels in the
+    component's convex hull equal ``skimage``'s (pixel centres in the hull)."""
+    rng = np.random.default_rng(0)
+    for t in range(60):
+        m = np.zeros((70, 60), np.uint8)
+        cv2.ellipse(m, (30, 33), (int(rng.integers(3, 20)), int(rng.integers(3, 25))),
+                    float(rng.uniform(0, 180)), 0, 360, 1, -1)
+        if t % 2:
+            cv2.circle(m, (int(rng.integers(20, 40)), int(rng.integers(20, 40))),
+                       int(rng.integers(2, 8)), 0, -1)
+        if t % 3 == 0:
+            m[:, :int(rng.integers(25, 33))] = 0
+        n, labels, stats, _ = cv2.connectedComponentsWithStats(m, connectivity=8)
+        comp = labels == 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
+        want = convex_hull_image(comp, offset_coordinates=False) | comp
+        centre, area = hull_moments(comp)
+        np.testing.assert_allclose(centre, ndimage.center_of_mass(want)[::-1], atol=1e-9)
+        assert area == want.sum()
+
+
+def test_a_highlight_inside_the_hand_does_not_move_its_blob_centre():
+    """A skin ellipse with a bright, non-skin highlight and a hole inside, close to its rim
+    (as a lit hand's saturated pixels): the blob's centre stays within 0.15 px of the
+    ellipse's, where the skin pixels' own centroid is > 1 px off."""
+    lut = ColorLUT(load_color_model(DEFAULT_COLOR_MODEL), 6)
+    img = np.full((240, 320, 3), 70, np.uint8)
+    centre = np.array([150.0, 110.0])
+    cv2.ellipse(img, (150, 110), (14, 24), 20, 0, 360, SKIN_RGB, -1)
+    highlight = np.zeros(img.shape[:2], np.uint8)
+    cv2.ellipse(highlight, (154, 116), (6, 10), 20, 0, 360, 1, -1)      # inside the rim
+    cv2.circle(highlight, (141, 98), 4, 1, -1)                           # a hole
+    img[highlight > 0] = 255
+    skin = lut.posterior(img) > 0.5
+    assert not skin[highlight > 0].any()
+    raw = np.array(ndimage.center_of_mass(skin)[::-1])
+    got = hand_blobs(img, lut, 2)
+    assert len(got.areas) == 1
+    assert np.linalg.norm(raw - centre) > 1.0
+    assert np.linalg.norm(got.centers[0] - centre) < 0.15
 
 
 def test_triangulate_pixels_matches_opencv():
@@ -217,7 +265,8 @@ def test_reach_scenario_position_error(tmp_path, skin):
 
 
 @pytest.mark.parametrize("bad", [{"gate_m": 0.0}, {"proposal": "inertia"},
-                                 {"reacquire_frames": -1}])
+                                 {"reacquire_frames": -1}, {"skin_gains": [0.0]},
+                                 {"skin_gains": []}])
 def test_bad_settings_are_rejected(bad):
     with pytest.raises(ValueError):
         GestConfig(**bad)

@@ -10,6 +10,7 @@ when a close match exists, a did-you-mean. Example::
 from __future__ import annotations
 
 import difflib
+import re
 import types
 import typing
 from pathlib import Path
@@ -105,6 +106,10 @@ def model_at(root: type[BaseModel], loc: tuple) -> type[BaseModel] | None:
     return None
 
 
+#: How pydantic names the member of a plain union in an error's location.
+_UNION_TAG = re.compile(r"(constrained-)?(float|int|str|bool|none)|[a-z-]+\[.*\]")
+
+
 def _dotted(loc: tuple, root: type[BaseModel]) -> str:
     """Dotted key for a pydantic location, dropping discriminator tags (``motion.wave.x``)."""
     parts: list[str] = []
@@ -115,6 +120,9 @@ def _dotted(loc: tuple, root: type[BaseModel]) -> str:
         if tagged is not None:
             current = tagged
             continue
+        if (isinstance(part, str) and not models and len(_unwrap(current)) > 1
+                and _UNION_TAG.fullmatch(part)):
+            continue  # a plain union's member tag ('constrained-float', "literal['x']")
         parts.append(str(part))
         if models and isinstance(part, str) and part in models[0].model_fields:
             current = models[0].model_fields[part].annotation

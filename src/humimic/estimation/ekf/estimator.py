@@ -1,8 +1,10 @@
 """The movement estimator of Sugiyama & Miura sec. III as one object: EKF + front end + map
 management, fed the head IMU's samples and the head camera's frames in time order.
 
-Per IMU sample (180 Hz): predict to its time, fuse the orientation (eq. 6) and the acceleration
-rotated into W with the measured orientation (eq. 7). Per frame (30 Hz): predict, undistort,
+Per IMU sample (180 Hz): predict to its time, fuse the orientation (eq. 6), the angular rate
+and the accelerometer's reading -- in its own frame by default
+(:func:`~humimic.estimation.ekf.motion_model.h_specific_force`), or as the paper's eq. 7
+rotated into W with the measured orientation. Per frame (30 Hz): predict, undistort,
 search each predicted feature in its 3-sigma ellipse, fuse the matches in one update, convert
 well-determined inverse-depth features to XYZ, delete unreliable ones and initialise new ones
 in empty regions while fewer than ``target_features`` are in view. Without the IMU the filter
@@ -33,6 +35,9 @@ class EstimatorSettings:
     use_orientation: bool = True
     use_accel: bool = True
     use_gyro: bool = True
+    accel_in_sensor_frame: bool = True
+    """Compare the accelerometer's reading in its own frame (:func:`mm.h_specific_force`)
+    instead of rotated into W by the measured orientation (the paper's eq. 7)."""
     target_features: int = 20
     """Add new features while fewer than this many are predicted in view."""
     max_map: int = 60
@@ -104,13 +109,16 @@ class WearableSlam:
         t0, c0 = time.perf_counter(), time.thread_time()
         s = self.settings
         self.filter.predict(t)
-        q_meas = a_W = w = None
+        q_meas = a_W = w = f_I = None
         if R_W_I is not None:
             q_meas = mm.quat_from_matrix(R_W_I) if s.use_orientation else None
-            a_W = mm.world_acceleration(accel_I, R_W_I, self.g_W) if s.use_accel else None
+            if s.use_accel and not s.accel_in_sensor_frame:
+                a_W = mm.world_acceleration(accel_I, R_W_I, self.g_W)
+        if s.use_accel and s.accel_in_sensor_frame:
+            f_I = np.asarray(accel_I, float)
         if gyro_I is not None and s.use_gyro:
             w = np.asarray(gyro_I, float)
-        self.filter.update_inertial(q_meas, a_W, w)
+        self.filter.update_inertial(q_meas, a_W, w, f_I, self.g_W)
         self._pending_s += time.perf_counter() - t0
         self._pending_cpu += time.thread_time() - c0
 

@@ -45,7 +45,8 @@ class MotionNoise:
 
     jerk: float = SIGMA_JERK
     alpha: float = SIGMA_ALPHA
-    bias: float = SIGMA_BIAS
+    bias: float | tuple[float, float, float] = SIGMA_BIAS
+    """One for every axis of W, or one per axis."""
 
     def covariance(self) -> np.ndarray:
         """``diag(σ_j^2 I, σ_α^2 I, σ_b^2 I)`` (9x9), noise order ``(j, α, b̄)``."""
@@ -53,7 +54,8 @@ class MotionNoise:
 
     def variances(self) -> np.ndarray:
         """The diagonal of :meth:`covariance` (9,)."""
-        return np.repeat([self.jerk**2, self.alpha**2, self.bias**2], 3)
+        return np.r_[np.full(3, self.jerk**2), np.full(3, self.alpha**2),
+                     np.broadcast_to(np.square(self.bias), (3,))]
 
 
 def initial_state(p=(0, 0, 0), q=(1, 0, 0, 0), v=(0, 0, 0), w=(0, 0, 0), a=(0, 0, 0),
@@ -212,6 +214,36 @@ def h_accel(x: np.ndarray) -> np.ndarray:
     return x[A] + x[B]
 
 
+def h_specific_force(x: np.ndarray, g_W: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The accelerometer's reading in I, ``h = R(q)^T (a + b - g_W)``, and ``dh/dx`` (3x19).
+
+    Eq. 7 in the sensor's own frame: the paper compares ``a + b`` with the reading rotated
+    into W by the *measured* orientation, which makes the acceleration's error carry the
+    orientation sensor's (slow) tilt error and leaves gravity no say in the estimated tilt.
+    Compared in I, gravity ties the tilt to the accelerometer (``b`` stays in W).
+
+    With ``u = (qx, qy, qz)``: ``R^T v = v - 2 qw (u × v) + 2 (u (u·v) - v |u|^2)``, so
+    ``d/dqw = -2 u × v`` and ``d/du_i = -2 qw (e_i × v) + 2 (e_i (u·v) + u v_i - 2 u_i v)``
+    (scalars: it runs at the IMU rate; checked against finite differences)."""
+    qw, qx, qy, qz = x[Q].tolist()
+    vx, vy, vz = (x[A] + x[B] - g_W).tolist()
+    u, v = (qx, qy, qz), (vx, vy, vz)
+    uv = qx * vx + qy * vy + qz * vz
+    uxv = _cross(u, v)
+    e_x_v = ((0.0, -vz, vy), (vz, 0.0, -vx), (-vy, vx, 0.0))  # e_i × v
+    cols = [tuple(-2.0 * c for c in uxv)]
+    for i in range(3):
+        cols.append(tuple(-2.0 * qw * e_x_v[i][r] + 2.0 * ((uv if r == i else 0.0)
+                                                           + u[r] * v[i] - 2.0 * u[i] * v[r])
+                          for r in range(3)))
+    Rt = rotmat((qw, qx, qy, qz)).T
+    H = np.zeros((3, DIM))
+    H[:, Q] = np.array(cols).T
+    H[:, A] = Rt
+    H[:, B] = Rt
+    return Rt @ (x[A] + x[B] - g_W), H
+
+
 def world_acceleration(f_I: np.ndarray, R_WI: np.ndarray, g_W: np.ndarray) -> np.ndarray:
     """The measured acceleration in W that eq. 7 compares with: ``R_WI f_I + g_W`` for the
     accelerometer's specific force ``f_I`` (gravity included, as read), the measured
@@ -238,20 +270,23 @@ def quat_from_matrix(R: np.ndarray) -> np.ndarray:
 
 
 @functools.lru_cache(maxsize=32)
-def inertial_model(given: tuple[bool, bool, bool], s_q: float, s_a: float, s_w: float
+def inertial_model(given: tuple[bool, ...], s_q: float, s_a: float | tuple, s_w: float
                    ) -> tuple[np.ndarray, np.ndarray]:
     """``H`` on the 19 state columns and the (isotropic) noise of the inertial measurements
     ``given`` (q, a, ω) stacked in that order: eq. 6 ``h = q``, eq. 7 ``h = a + b`` and the
-    angular rate ``h = ω`` (the form of the arm's eq. 15); standard deviations ``s_*``."""
+    angular rate ``h = ω`` (the form of the arm's eq. 15); standard deviations ``s_*``
+    (``s_a`` one for all three axes, or one per axis). An optional fourth flag appends the
+    specific force in I (:func:`h_specific_force`, noise ``s_a``) with zero rows in ``H``:
+    that model is not linear, the caller fills them."""
     blocks = [(ORIENTATION_COLS, H_ORIENTATION, s_q), (ACCEL_COLS, H_ACCEL, s_a),
-              (np.arange(10, 13), np.eye(3), s_w)]
-    chosen = [b for b, g in zip(blocks, given, strict=True) if g]
+              (np.arange(10, 13), np.eye(3), s_w), (ACCEL_COLS, np.zeros((3, 6)), s_a)]
+    chosen = [b for b, g in zip(blocks, (*given, False)[:4], strict=True) if g]
     H = np.zeros((sum(len(h) for _, h, _ in chosen), DIM))
     r = 0
     for cols, h, _ in chosen:
         H[r:r + h.shape[0], cols] = h
         r += h.shape[0]
-    var = np.concatenate([np.full(len(h), s * s) for _, h, s in chosen])
+    var = np.concatenate([np.broadcast_to(np.square(s), (len(h),)) for _, h, s in chosen])
     out = H, np.diag(var)
     for a in out:
         a.flags.writeable = False

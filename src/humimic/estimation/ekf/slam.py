@@ -131,20 +131,32 @@ class SlamFilter:
     # ---- inertial updates ------------------------------------------------------------------
     def update_inertial(self, q_meas: np.ndarray | None = None,
                         a_meas: np.ndarray | None = None,
-                        w_meas: np.ndarray | None = None) -> None:
+                        w_meas: np.ndarray | None = None,
+                        f_meas: np.ndarray | None = None, g_W: np.ndarray | None = None
+                        ) -> None:
         """Fuse, in one update, an orientation ``q_WI`` (eq. 6), an acceleration in W (eq. 7)
-        and/or an angular velocity in I (``h = ω``, the form of the arm's eq. 15). They read
-        the interface only: the update is done on its 19x19 block, the map's share deferred
-        (:mod:`.compressed`)."""
-        given = (q_meas is not None, a_meas is not None, w_meas is not None)
+        and/or an angular velocity in I (``h = ω``, the form of the arm's eq. 15), or instead
+        of the acceleration in W the accelerometer's specific force ``f_meas`` in I with
+        gravity ``g_W`` (:func:`mm.h_specific_force`). They read the interface only: the
+        update is done on its 19x19 block, the map's share deferred (:mod:`.compressed`)."""
+        given = (q_meas is not None, a_meas is not None, w_meas is not None,
+                 f_meas is not None)
         if not any(given):
             return
         prm = self.params
         H, R = mm.inertial_model(given, prm.sigma_orientation, prm.sigma_accel, prm.sigma_gyro)
         xa = self._x[: mm.DIM]
         z = [align_sign(q_meas, xa[3:7])] if given[0] else []
-        z += [a for a in (a_meas, w_meas) if a is not None]
-        nu = np.concatenate(z) - H @ xa  # all three models are linear: h = H x
+        z += [a for a in (a_meas, w_meas, f_meas) if a is not None]
+        if given[3]:  # the specific force's rows (the last three) are not linear
+            h_f, H_f = mm.h_specific_force(xa, g_W)
+            H = H.copy()
+            H[-3:] = H_f
+            nu = np.concatenate(z)
+            nu[:-3] -= H[:-3] @ xa
+            nu[-3:] -= h_f
+        else:
+            nu = np.concatenate(z) - H @ xa  # the other three models are linear: h = H x
         if given[0] and prm.orientation_tilt_yaw is not None:
             R = R.copy()
             R[0:4, 0:4] = self._orientation_noise()

@@ -7,6 +7,10 @@ It starts where the wearer starts (the true head pose at the first frame plus a 
 ``init_position_std``, orientation from the IMU) with the screen's four corners as known
 features, their patches cut where the start pose projects them.
 
+The filter's inertial noises default to the head IMU's own error model (``sensors.imu``;
+:mod:`~humimic.estimation.ekf.sensor_noise`): the orientation sensor's slowly varying errors
+as their white equivalent, the accelerometer's white noise and bias walk as configured.
+
 Scores (``metrics.json`` ``slam``), per head-camera frame against the ground-truth pose of the
 head camera (frame I) in the paper's W:
 
@@ -35,6 +39,7 @@ from dataclasses import replace
 import numpy as np
 
 from humimic.estimation.ekf import motion_model as mm
+from humimic.estimation.ekf import sensor_noise
 from humimic.estimation.ekf.arm_mask import ArmMaskParams
 from humimic.estimation.ekf.estimator import EstimatorSettings, FrameReport, WearableSlam
 from humimic.estimation.ekf.frontend import FAILED, MEASURED, NOT_SELECTED, FrontendParams
@@ -45,6 +50,7 @@ from humimic.motion import quat
 from humimic.pipeline.stage import Stage
 from humimic.scenario.base import pass_through
 from humimic.sensors.camera_model import CameraImage, CameraModel, make_transform
+from humimic.sensors.config import HeadInertial
 from humimic.world.frames import GRAVITY_W, R_CV_I, SCREEN_CORNERS_W
 
 #: Fig. 7's colours: measured red, failed blue, not selected green.
@@ -52,19 +58,32 @@ STATUS_COLORS = {MEASURED: (230, 30, 30), FAILED: (40, 80, 255), NOT_SELECTED: (
 SLAM = "world/W/slam"
 
 
-def settings_from_config(cfg) -> EstimatorSettings:
-    """The estimator's settings from a scenario's ``slam`` section."""
+def settings_from_config(cfg, imu=None) -> EstimatorSettings:
+    """The estimator's settings from a scenario's ``slam`` section; ``imu`` the head IMU's
+    section (``sensors.imu``, default its defaults) for the noises set to ``sensor``."""
     nz = cfg.noise
-    orient = (None if nz.orientation_std_deg is None
-              else tuple(np.radians(nz.orientation_std_deg)))
+    imu = HeadInertial() if imu is None else imu
+    if nz.orientation_std_deg == "sensor":
+        orient = sensor_noise.orientation_tilt_yaw(imu)
+    else:
+        orient = (None if nz.orientation_std_deg is None
+                  else tuple(np.radians(nz.orientation_std_deg)))
+    # gravity turned by the orientation sensor's tilt error reaches the acceleration only
+    # when the reading is rotated into W with it
+    g = float(np.linalg.norm(GRAVITY_W)) if cfg.accel_frame == "W" else 0.0
+    s_acc = (sensor_noise.accel_std_W(imu, g) if nz.sigma_accel == "sensor"
+             else nz.sigma_accel)
+    s_bias = (sensor_noise.accel_bias_drift_W(imu, g) if nz.accel_bias_drift == "sensor"
+              else nz.accel_bias_drift)
     slam = replace(pass_through(SlamParams, nz),  # sigma_accel, sigma_gyro, sigma_px
-                   noise=mm.MotionNoise(nz.jerk, nz.angular_acc, nz.accel_bias_drift),
-                   orientation_tilt_yaw=orient,
+                   noise=mm.MotionNoise(nz.jerk, nz.angular_acc, s_bias),
+                   orientation_tilt_yaw=orient, sigma_accel=s_acc,
                    rho0=1.0 / cfg.init_depth, sigma_rho=cfg.init_inverse_depth_std)
     fe = pass_through(FrontendParams, cfg)  # patch_px, search_sigma, max_search_px, min_zncc
     return EstimatorSettings(use_camera=cfg.mode != "inertial", use_accel=cfg.mode != "camera",
                              use_gyro=cfg.use_gyro and cfg.mode != "camera",
                              use_orientation=cfg.use_orientation and cfg.mode != "camera",
+                             accel_in_sensor_frame=cfg.accel_frame == "I",
                              target_features=cfg.target_features, max_map=cfg.max_map,
                              max_measured=cfg.max_measured, slam=slam, frontend=fe)
 
@@ -75,7 +94,7 @@ class SlamStage(Stage):
     def __init__(self, cfg, world, rng: np.random.Generator, rlog=None, mask_params=None,
                  image_every: int = 1):
         self.cfg, self.world, self.rng, self.rlog = cfg, world, rng, rlog
-        self.settings = settings_from_config(cfg)
+        self.settings = settings_from_config(cfg, world.scenario.sensors.imu)
         self.mask_params = mask_params or ArmMaskParams()
         self.image_every = image_every
         self.record = SlamRecord()

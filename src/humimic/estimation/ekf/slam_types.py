@@ -56,7 +56,8 @@ class SlamParams:
     """sigma (rad) of the measured orientation's error as small rotations about W's
     horizontal axes (tilt) and its vertical (yaw): the quaternion noise is
     ``J diag(tilt^2, yaw^2, tilt^2) J^T`` with ``J = d(q(δ) ⊗ q)/dδ`` (W's y is up)."""
-    sigma_accel: float = mm.SIGMA_ACCEL
+    sigma_accel: float | tuple[float, float, float] = mm.SIGMA_ACCEL
+    """m/s^2, one for every axis of W or one per axis (eq. 7)."""
     sigma_gyro: float = 0.01
     """rad/s, when the IMU's angular rate is fused (the arm EKF's eq. 15 value)."""
     sigma_px: float = 1.0

@@ -78,8 +78,9 @@ def sample_ticks(n_ticks: int, n_frames: int = FRAMES) -> np.ndarray:
 
 
 def inputs(world, cameras: list[str], color_class: str, space: str, bits: int,
-           ticks: np.ndarray) -> tuple:
-    """Everything a learned model depends on, for :func:`humimic.cache.key`."""
+           ticks: np.ndarray, gains: tuple[float, ...] = (1.0,)) -> tuple:
+    """Everything a learned model depends on, for :func:`humimic.cache.key` (``gains`` only
+    when not the renders' own: the models learned without them keep their keys)."""
     m, d = world.scene.model, world.scene.data
     geoms = material_geoms(m, color_class)
     mats = np.unique(m.geom_matid[geoms])
@@ -104,14 +105,25 @@ def inputs(world, cameras: list[str], color_class: str, space: str, bits: int,
             # the other pixels (cut_background): every surface's look and place
             m.mat_rgba.tobytes(), m.mat_texid.tobytes(), m.geom_rgba.tobytes(),
             m.geom_matid.tobytes(), m.geom_size.tobytes(), m.geom_type.tobytes(),
-            m.geom_pos.tobytes(), m.geom_quat.tobytes(), m.tex_data.tobytes())
+            m.geom_pos.tobytes(), m.geom_quat.tobytes(), m.tex_data.tobytes(),
+            *(() if tuple(gains) == (1.0,) else ("gains", *map(float, gains))))
 
 
 def digest_of(world, cameras: list[str], color_class: str = "skin", space: str = "rgb",
-              bits: int = 6) -> str:
+              bits: int = 6, gains: tuple[float, ...] = (1.0,)) -> str:
     """The cache key of the model :func:`learned_lut` would learn."""
     ticks = sample_ticks(world.n_ticks)
-    return cache.key(*inputs(world, cameras, color_class, space, bits, ticks))
+    return cache.key(*inputs(world, cameras, color_class, space, bits, ticks, gains))
+
+
+def brightened(pixels: np.ndarray, gains: tuple[float, ...]) -> np.ndarray:
+    """uint8 ``pixels (N, 3)`` as they look lit ``gain`` times as brightly, for each of
+    ``gains`` in turn (``(len(gains) * N, 3)``), clipped at 255 as the camera saturates: the
+    colours a surface takes in a pose the renders did not show -- a hand turned to the light
+    or nearer the lamp (at 0.5-0.9 m from the eyes of menezes_gest_far, 40-60 % of its
+    pixels beyond the model learned without them, with a pale skin or a brighter light)."""
+    p = np.asarray(pixels, np.float64)
+    return np.concatenate([np.clip(np.rint(p * g), 0, 255) for g in gains]).astype(np.uint8)
 
 
 def bin_variance(bits: int) -> float:
@@ -120,7 +132,8 @@ def bin_variance(bits: int) -> float:
 
 
 def learn_model(world, cameras: list[str], color_class: str, space: str,
-                rng: np.random.Generator, ticks: np.ndarray, bits: int = 6
+                rng: np.random.Generator, ticks: np.ndarray, bits: int = 6,
+                gains: tuple[float, ...] = (1.0,)
                 ) -> tuple[ColorModel, np.ndarray, np.ndarray]:
     """A colour model of ``color_class`` learned from the world's own renders; also the
     class's pixels it was fitted to (without the darkest: with them, the face's dark features
@@ -130,12 +143,15 @@ def learn_model(world, cameras: list[str], color_class: str, space: str,
     Each component's covariance is at least one LUT bin wide (:func:`bin_variance` added to
     its diagonal): the LUT evaluates the density at bin centres, and a noiseless render gives
     components so narrow that they would fall between two centres and vanish from the table.
+    The class's pixels are taken under each of ``gains`` (:func:`brightened`).
     """
     geoms = material_geoms(world.scene.model, color_class)
     noise = max((s.noise_std for s in world.eye_rig.specs if s.name in cameras), default=0.0)
     pos, neg = frame_pixels(world, cameras, ticks, geoms, noise, rng,
                             negatives_per_frame=NEGATIVES_PER_FRAME)
     pixels = trim_dark(np.concatenate(pos)) if pos else np.zeros((0, 3), np.uint8)
+    if tuple(gains) != (1.0,) and len(pixels):
+        pixels = brightened(pixels, gains)
     if len(pixels) < MIN_PIXELS:
         raise NotInView(f"only {len(pixels)} pixels of {color_class!r} in view of "
                         f"{', '.join(cameras)} in {len(ticks)} poses of the person")
@@ -183,18 +199,20 @@ def _restore(stored: dict[str, np.ndarray] | None, bits: int) -> ColorLUT | None
 
 
 def learned_lut(world, cameras: list[str], color_class: str = "skin", space: str = "rgb",
-                bits: int = 6) -> CachedLUT:
+                bits: int = 6, gains: tuple[float, ...] = (1.0,)) -> CachedLUT:
     """The colour LUT of ``color_class`` for this world: from the cache, or learned from the
-    world's renders of ``cameras`` and stored. Raises :class:`NotInView`."""
+    world's renders of ``cameras`` (their pixels under each of ``gains``, :func:`brightened`)
+    and stored. Raises :class:`NotInView`."""
     t0 = time.perf_counter()
     ticks = sample_ticks(world.n_ticks)
-    digest = digest_of(world, cameras, color_class, space, bits)
+    digest = digest_of(world, cameras, color_class, space, bits, gains)
     kind = f"colors-{color_class}"
     lut = _restore(cache.load(kind, digest), bits)
     cached = lut is not None
     if lut is None:
         rng = np.random.default_rng(int(digest[:15], 16))
-        model, seen, other = learn_model(world, cameras, color_class, space, rng, ticks, bits)
+        model, seen, other = learn_model(world, cameras, color_class, space, rng, ticks, bits,
+                                         gains)
         lut = ColorLUT(model, bits, cut_background(ColorLUT(model, bits).table, bits, seen,
                                                    other))
         cache.save(kind, digest, _store(model, lut))

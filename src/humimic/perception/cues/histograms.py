@@ -13,6 +13,8 @@ at the largest distance (1) from any reference.
 * eq. 6 -- :func:`color_log_likelihood`: ``-sum_c sum_p lambda_pc D^2(h_pc, h_ref,pc) /
   (2 sigma_c^2)`` with :func:`bhattacharyya` ``D = sqrt(1 - sum_b sqrt(h_b h_ref,b))``
   (OpenCV's ``HISTCMP_BHATTACHARYYA`` for normalised histograms).
+* :func:`chromaticity` -- the image in normalised rgb, for histograms that a change of
+  shading (a limb turning towards or away from the light) leaves alone.
 * eq. 13 -- :func:`update_reference`: ``h_ref,k = (1 - kappa) h_ref,k-1 + kappa h_E[x_k]``.
 """
 
@@ -39,6 +41,17 @@ class QuantizedImage:
     height: int
     width: int
     bins: int
+
+
+def chromaticity(image: np.ndarray, dark: float = 24.0) -> np.ndarray:
+    """Normalised rgb chromaticity ``255 (R, G, B) / (R + G + B)`` of an RGB uint8 image, as
+    uint8 ``(H, W, 3)``: unchanged when the light on a surface scales its colour (a limb
+    turning away from the lamp keeps its chromaticity, not its RGB). Pixels darker than
+    ``dark`` (mean of the channels) are grey (85, 85, 85): their chromaticity is noise."""
+    rgb = np.asarray(image, np.uint8).astype(np.uint16)
+    total = rgb.sum(axis=-1, keepdims=True, dtype=np.uint16)                 # <= 765
+    chroma = (rgb * 255 + total // 2) // np.maximum(total, 1)               # rounded, <= 65407
+    return np.where(total >= 3.0 * dark, chroma, 85).astype(np.uint8)
 
 
 def quantize(image: np.ndarray, bins: int = 32) -> QuantizedImage:

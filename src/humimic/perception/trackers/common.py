@@ -42,16 +42,18 @@ def where(scenario) -> str:
     return f"scenario {scenario.name!r}"
 
 
-def skin_model_lut(scenario, world, cameras, key: str, bits: int = 6) -> ColorLUT:
+def skin_model_lut(scenario, world, cameras, key: str, bits: int = 6,
+                   gains: tuple[float, ...] = (1.0,)) -> ColorLUT:
     """The skin colour model as a :class:`ColorLUT`: the file ``perception.color_model`` names,
     or (``auto``, the default, and without a ``perception`` section) the model learned for
     this scenario's person as ``cameras`` see them (:func:`~humimic.perception.cues.
-    auto_colors.learned_lut`, cached on disk). ``key`` names the tracker in errors."""
+    auto_colors.learned_lut`, cached on disk; their pixels also under each of ``gains``).
+    ``key`` names the tracker in errors."""
     cfg = getattr(scenario, "perception", None)
     source = cfg.color_model if cfg is not None else "auto"
     try:
         if source == "auto":
-            return learned_lut(world, list(cameras), "skin", "rgb", bits).lut
+            return learned_lut(world, list(cameras), "skin", "rgb", bits, gains).lut
         return file_lut(Path(source), bits).lut
     except NotInView as err:
         raise ScenarioError(where(scenario), key, f"cannot learn the skin colours: {err}",

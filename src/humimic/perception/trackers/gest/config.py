@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 from typing import Literal
 
-from pydantic import Field, model_validator
+from pydantic import Field, PositiveFloat, model_validator
 
 from humimic.scenario.base import Section, Vec3
 
@@ -36,7 +36,9 @@ class GestConfig(Section):
     axes, where the offset is small and its estimate carries the orientation's error (50-80
     deg): menezes_gest_far with the person at 0.9 m (hand 0.5-0.9 m), seed 4, 19.3 mm RMS
     with it, 9.4 without; at 1.75 m, seeds 3-4, 8.6-9.5 with, 8.5 without. (In the wide
-    pair, the hand off-axis, it helps: menezes_gest_reach 7.1 mm with, 8.8 without.)"""
+    pair, the hand off-axis, it helps: menezes_gest_reach 7.1 mm with, 8.8 without.) Those
+    were with the estimate's own ellipsoid; the offset is now its orientation-free part
+    (:mod:`.silhouette`)."""
     cue_radius_px: float | None = Field(None, gt=0.0)
     """Pixel budget of the cue images in the wide pair (speed, not in the paper; None, the
     default: always full resolution -- off because of the 0.9 m runs at the end of this note;
@@ -57,7 +59,10 @@ class GestConfig(Section):
     against 10.2-11.5 at full resolution, all of it on the wide pair's frames (13.2-24.6
     mm RMS on them against 12.3-13.9) -- within what the wide pair gives there at full
     resolution after any small change: ``sigma_s`` 1.52 or ``n_points`` 21, seeds 3-5,
-    13.5-23.3 mm on them, 10.8-18.6 mm overall."""
+    13.5-23.3 mm on them, 10.8-18.6 mm overall. That fragility was the blobs' (a lit hand's
+    saturated pixels were no skin and bit into them, :mod:`.blobs`, ``skin_gains``) and the
+    silhouette offset's (:mod:`.silhouette`): since, at 0.9 m, seeds 0-9, 5.8-6.2 mm at full
+    resolution, 5.7-5.9 with ``n_points: 21``."""
     foveal_cue_radius_px: float | None = Field(12.0, gt=0.0)
     """``cue_radius_px`` for the frames measured in the foveal pair, where the hand images
     large (``fx`` 5.6x the wide eyes': radius ~40 px at 1.5 m, blocks of 3 with 12 px); None:
@@ -116,6 +121,14 @@ class GestConfig(Section):
     """Use the triangulated skin blobs in the likelihood too (an addition, ibid.)."""
     stereo_outlier: float = Field(0.05, gt=0.0, le=1.0)
     """Weight of the uniform outlier (over both images) in the stereo cue."""
+    skin_gains: tuple[PositiveFloat, ...] = Field((1.0, 1.15, 1.3), min_length=1, max_length=8)
+    """The learned skin model (``perception.color_model: auto``) is fitted to the renders'
+    skin pixels lit this many times as brightly too (clipped at 255,
+    :func:`~humimic.perception.cues.auto_colors.brightened`): a hand nearer the lamp or
+    turned to it is brighter than in any of the poses learned from, and its saturated pixels
+    were no skin. menezes_gest_far with the person at 0.9 m, seed 3: skin (0.95, 0.78, 0.68)
+    22.2 mm RMS with ``[1.0]``, 6.1 with these; ``lighting.diffuse: 0.75``, 16-19.5 against
+    6.7 (seeds 1, 3)."""
     bins: Literal[8, 16, 32, 64] = 32
     kappa: float = Field(0.1, ge=0.0, le=1.0)
     """Reference-histogram update rate (eq. 13)."""

@@ -66,13 +66,12 @@ from humimic.perception.trackers.gest.roi import (
     decimated_camera,
     decimation,
     roi_box,
-    to_full_px,
     to_view_px,
 )
+from humimic.perception.trackers.gest.silhouette import equivalent_radius, sphere_offset
 from humimic.perception.trackers.gest.stereo import (
     interior_blobs,
     stereo_candidates,
-    triangulate_pixels,
 )
 from humimic.sensors.camera_model import CameraImage
 
@@ -173,17 +172,14 @@ class GestTracker:
         return importance_function(p, cov, self.orientation, self.cfg,
                                    self.cfg.orientation_sigma_deg)
 
-    def _silhouette_offset(self, mean: np.ndarray, valid: bool, c_l: np.ndarray,
-                           c_r: np.ndarray, cams) -> np.ndarray:
+    def _silhouette_offset(self, mean: np.ndarray, cams) -> np.ndarray:
         """``x - g(c_L(x), c_R(x))``: the estimate's centre minus the triangulation of its
-        projected ellipses' centres (an ellipsoid's outline is not centred on the image of its
-        centre: 0.3-0.5 px here, centimetres of depth); ``c_l``, ``c_r`` its ellipses' centres
-        in the left and right images (full-resolution px), ``valid`` its left projection's."""
-        if not (valid and np.isfinite(c_l).all() and np.isfinite(c_r).all()
-                and np.abs(c_r).max() < 1e5):
-            return np.zeros(3)
-        off = mean[:3] - triangulate_pixels(cams[0], cams[1], c_l[None], c_r[None])[0]
-        return off if np.linalg.norm(off) < 0.05 else np.zeros(3)
+        outlines' centres in the cameras ``cams`` (an ellipsoid's outline is not centred on
+        the image of its centre: 0.3-0.5 px here, centimetres of depth), for the sphere of
+        its semi-axes' RMS (:mod:`.silhouette`: the orientation's part is not known); zero
+        where undefined or over 5 cm."""
+        off = sphere_offset(mean[:3], equivalent_radius(mean[6:9]), *cams)
+        return off if np.isfinite(off).all() and np.linalg.norm(off) < 0.05 else np.zeros(3)
 
     def _reacquire(self, p: np.ndarray) -> np.ndarray:
         """Indices of the candidates the filter may (re-)start from: the highest one (``init:
@@ -262,9 +258,7 @@ class GestTracker:
             self.orientation = mean[3:6]
             self.last, self.anchor = mean, mean[:3]
             self.lost_for = 0
-            c_lr = to_full_px(np.stack([proj.patch_state[0, :2], centres[0, 1]]), origin, k)
-            self.offset = (self._silhouette_offset(mean, bool(proj.valid[0]), c_lr[0], c_lr[1],
-                                                   (left.camera, right.camera))
+            self.offset = (self._silhouette_offset(mean, (left.camera, right.camera))
                            if silhouette_offset else np.zeros(3))
             if cfg.position == "kalman" and len(use):
                 j = use[int(np.argmin(np.linalg.norm(p[use] - mean[:3], axis=1)))]

@@ -62,6 +62,23 @@ class TbpConfig(Section):
     model at the rest pose (the person may not be there: a hand's patch then learns the
     trousers beside it and holds the arm down), or under the first frame's estimate from the
     other cues (shape, skin, priors)."""
+    patch_colours: Literal["rgb", "chromaticity"] = "rgb"
+    """The colour space of the patches' histograms: ``rgb`` (the paper), or ``chromaticity``
+    (normalised rgb, blind to shading). Measured (issue 13, fig13's room): the right arm's
+    patches at the TRUE pose against references taken at the true rest pose, an arm raised
+    from rest to a wave -- the sleeve and hand lose a third of their brightness as they turn
+    from the lamp, so in rgb the true pose pays 5.5-13 nats per patch (at lambda 1) and the
+    arm is held at rest; in chromaticity 0-0.7. Yet chromaticity made fig16 worse (joints /
+    wrist over seeds 0-2: 14.9 deg / 84 mm -> 18.2 / 110; there rgb's shading seems to help
+    the arm bent towards the camera), hence off by default."""
+    patch_refs_wait: int = Field(30, ge=0)
+    """With ``first_estimate``: the references wait until the estimate's hands both lie on
+    skin (``hands_found_skin``), at most this many frames (0: the first frame's estimate).
+    A person already waving when tracking starts otherwise has the raised arm's patches
+    learn the background under the rest pose (measured: the true pose then pays 4.6 nats
+    in colour against the rest pose)."""
+    hands_found_skin: float = Field(0.5, ge=0.0, le=1.0)
+    """Mean skin posterior inside a hand's outline from which it counts as found (on skin)."""
     sigma_c: float = Field(0.3, gt=0.0)
     """Colour-patch standard deviation (eq. 6)."""
     lambda_c: tuple[float, float] = (0.1, 1.0)
@@ -69,8 +86,15 @@ class TbpConfig(Section):
     patch_confidence: float = Field(0.5, gt=0.0, lt=1.0)
     """A patch whose reference histogram is within this Bhattacharyya distance of the uniform
     one counts as discriminant (textured)."""
-    sigma_k: float = Field(0.3, gt=0.0)
-    """Skin cue (hands) standard deviation (first stage)."""
+    sigma_k: float = Field(0.15, gt=0.0)
+    """Skin cue (hands) standard deviation (first stage, and in the second). Measured (issue
+    13, replays of the recorded pipeline frames, joints deg / wrist mm, seeds 0-1 or 0-2):
+    0.3 lets the stabiliser (2-4 nats at a raised, flexed arm) outweigh a hand found on its
+    skin blob (1.6 nats), so a wave already under way at the start stays at rest (55/601,
+    48/539); 0.15 follows it on all three seeds (27/114, 39/234, 20/76) at a small cost on
+    fig16 (15/82, 18/110; at 0.3: 16/97, 14/76) and fig13 (14/76, 13/70; at 0.3: 12/71,
+    12/75); 0.2 keeps fig16 and fig13 (16/90, 13/70; 12/69) but loses the wave on 1 of 3
+    seeds (56/604, 36/223, 31/181); 0.1 costs fig16 (27/333, 24/181, 24/158)."""
     lambda_st: float = Field(0.5, ge=0.0)
     """Stabiliser towards the rest pose (eq. 19 prior, per rad^2)."""
     lambda_co: float = Field(0.5, ge=0.0)
@@ -78,6 +102,18 @@ class TbpConfig(Section):
     rest_deg: tuple[float, float, float, float] = (5.0, 5.0, 0.0, 10.0)
     """Rest pose ``SFE SAA HR EB`` (deg) of each arm: the stabiliser's x_def and the start."""
     init_sigma_deg: float = Field(10.0, gt=0.0)
+    reinit_fraction: float = Field(0.05, ge=0.0, le=0.5)
+    """Fraction of the particles whose arm is re-drawn, in every frame after one whose
+    estimate did not find that arm's hand on skin, from arm configurations whose hand
+    projects onto a skin blob (automatic (re-)initialisation,
+    :mod:`humimic.perception.trackers.tbp.reinit`); 0: never. Drawn every frame regardless
+    of the hands (tried first) it fed fig16's arm bent towards the camera wrong depths."""
+    reinit_table: int = Field(8000, ge=100, le=200000)
+    """Arm configurations in the table the re-drawn arms come from."""
+    reinit_min_area_px: float = Field(10.0, gt=0.0)
+    """Smallest skin blob (px) taken for a hand."""
+    reinit_radius_px: float = Field(2.0, ge=0.0)
+    """A configuration's hand counts as on a blob within the blob's radius plus this."""
     limits: JointLimitsConfig = Field(default_factory=JointLimitsConfig)
     """Joint limits of the model (``R_EB_deg: [0, 150]`` ...; default the library's); samples
     beyond them are clamped."""

@@ -46,8 +46,8 @@ ArmView = FrameCues
 
 
 def arm_view(frame: CameraImage, flow: np.ndarray | None, lut: ColorLUT, bins: int,
-             colour_edges: bool = False) -> ArmView:
-    return frame_cues(frame, bins, lut, flow, colour_edges)
+             colour_edges: bool = False, colours: str = "rgb") -> ArmView:
+    return frame_cues(frame, bins, lut, flow, colour_edges, colours)
 
 
 @dataclass(frozen=True)
@@ -159,18 +159,30 @@ def stabiliser(q: np.ndarray, q_def: np.ndarray) -> np.ndarray:
     return np.sum((q - q_def) ** 2, axis=1)
 
 
+def log_likelihood_terms(proj: ArmProjection, view: ArmView, q: np.ndarray, body: BodyModel,
+                         w: dict, refs: np.ndarray | None) -> dict[str, np.ndarray]:
+    """Eq. 19's terms ``(N,)`` each, by cue: ``shape`` (shape + motion, eq. 5), ``skin``, one
+    ``colour_<part>`` per patch of :data:`ARM_PARTS` (eq. 6; none without references),
+    ``stabiliser`` (sec. 6.2.1) and ``collision`` (eq. 18); their sum is
+    :func:`full_log_likelihood`."""
+    D = shape_motion_distance(proj, view.maps, w["K"], w["cap_px"])
+    out = {"shape": shape_log_likelihood(D, w["sigma_s"], w["lambda_s"]),     # eq. 2, eq. 5
+           "skin": shape_log_likelihood(skin_distance(proj.hand_inner, view.skin),
+                                        w["sigma_k"])}
+    if refs is not None:
+        hists = patch_histograms_all(proj, view.qimage)
+        for k, part in enumerate(ARM_PARTS):
+            lam = np.full((1, 3), w["lambda_c"][k])
+            out[f"colour_{part}"] = color_log_likelihood(hists[:, k:k + 1], refs[k:k + 1],
+                                                         w["sigma_c"], lam)      # eq. 6
+    out["stabiliser"] = -w["lambda_st"] * stabiliser(q, w["q_def"])              # sec. 6.2.1
+    out["collision"] = -w["lambda_co"] * collision(proj.pose, body)              # eq. 18
+    return out
+
+
 def full_log_likelihood(proj: ArmProjection, view: ArmView, q: np.ndarray, body: BodyModel,
                         w: dict, refs: np.ndarray | None) -> np.ndarray:
     """Eq. 19: shape + motion, colour patches, skin, stabiliser and collision, with the
     weights ``w`` (``lambda_s, sigma_s, K, sigma_c, lambda_c (6,), sigma_k, lambda_st,
     lambda_co, q_def``)."""
-    D = shape_motion_distance(proj, view.maps, w["K"], w["cap_px"])
-    out = shape_log_likelihood(D, w["sigma_s"], w["lambda_s"])                # eq. 2 with eq. 5
-    out += shape_log_likelihood(skin_distance(proj.hand_inner, view.skin), w["sigma_k"])
-    if refs is not None:
-        lam = np.repeat(w["lambda_c"][:, None], 3, axis=1)
-        out += color_log_likelihood(patch_histograms_all(proj, view.qimage), refs,
-                                    w["sigma_c"], lam)                          # eq. 6
-    out -= w["lambda_st"] * stabiliser(q, w["q_def"])                           # sec. 6.2.1
-    out -= w["lambda_co"] * collision(proj.pose, body)                           # eq. 18
-    return out
+    return sum(log_likelihood_terms(proj, view, q, body, w, refs).values())

@@ -23,8 +23,9 @@ from humimic.bodymodel.model import BodyModel
 from humimic.bodymodel.projection import project
 from humimic.estimation.particles import LinearGaussian, apf_step, weighted_cov
 from humimic.estimation.particles.weights import uniform_log_weights
-from humimic.perception.cues.edges import shape_log_likelihood
+from humimic.perception.cues.edges import sample, shape_log_likelihood
 from humimic.perception.cues.histograms import bhattacharyya
+from humimic.perception.cues.importance import skin_blobs
 from humimic.perception.cues.motion import OpticalFlow
 from humimic.perception.trackers.tbp.config import TbpConfig
 from humimic.perception.trackers.tbp.likelihood import (
@@ -35,6 +36,14 @@ from humimic.perception.trackers.tbp.likelihood import (
     patch_histograms_all,
     project_arms,
     skin_distance,
+)
+from humimic.perception.trackers.tbp.reinit import (
+    arm_table,
+    draw_arms,
+    hand_centres,
+    hand_pixels,
+    head_circle,
+    near_blobs,
 )
 
 ARM_NAMES = ARM_DOFS["R"] + ARM_DOFS["L"]
@@ -82,6 +91,12 @@ class TbpTracker:
         self.weights: dict | None = None
         self.restarts = 0
         self.last_view: ArmView | None = None
+        self.table = None
+        self.frames_without_refs = 0
+        self.found = np.zeros(2, bool)
+        """Whether the last estimate's right, left hand lay on skin."""
+        self.injected = 0
+        """Particles drawn from the skin blobs so far (:meth:`_from_blobs`)."""
 
     def _start(self, rng: np.random.Generator) -> None:
         q = self.body.clamp(self.q_def + rng.normal(0, math.radians(self.cfg.init_sigma_deg),
@@ -110,19 +125,67 @@ class TbpTracker:
                         "lambda_co": cfg.lambda_co, "q_def": self.q_def,
                         "cluttered": bool(cluttered), "edge_density": density}
 
+    def _from_blobs(self, view: ArmView, torso: np.ndarray, rng: np.random.Generator) -> None:
+        """Re-draw ``reinit_fraction`` of the particles' arms from configurations whose hand
+        projects onto a skin blob (:mod:`.reinit`), for the arms whose hand the last estimate
+        did not find on skin; blobs on the face are left out."""
+        cfg = self.cfg
+        n = int(round(cfg.reinit_fraction * cfg.n_particles))
+        if n == 0 or view.skin is None or self.found.all():
+            return
+        if self.table is None:
+            self.table = arm_table(self.body, cfg.reinit_table, rng)
+        blobs = skin_blobs(view.skin > 0.5, 1, cfg.reinit_min_area_px, (0.2, 5.0))
+        if not len(blobs.areas):
+            return
+        pose = self.body.forward(self.q_def[None], fixed=torso)
+        head_uv, head_r = head_circle(self.body, pose, view.intrinsics, view.T_cam_base)
+        hand = np.linalg.norm(blobs.centers - head_uv, axis=1) > head_r
+        if not hand.any():
+            return
+        centres = blobs.centers[hand]
+        radius = np.sqrt(blobs.areas[hand] / np.pi) + cfg.reinit_radius_px
+        R_t, p_t = pose.segment("torso")
+        uv = hand_pixels(self.table, R_t[0], p_t[0], view.intrinsics, view.T_cam_base)
+        groups = [(side, m) for side in (0, 1) if not self.found[side]
+                  for m in near_blobs(uv[side], centres, radius) if len(m)]
+        if not groups:
+            return
+        self.particles, _ = draw_arms(self.particles, self.table, groups, n,
+                                      math.radians(cfg.init_sigma_deg) / 4, rng)
+        self.injected += n
+
+    def _hands_found(self, q: np.ndarray, torso: np.ndarray, view: ArmView) -> np.ndarray:
+        """``(2,)`` bool: the right, left hand of the arms at ``q`` lies on skin (mean skin
+        posterior inside the hand's outline at least ``hands_found_skin``), not on the face
+        (its centre outside the head's image circle) and not on the other hand (the centres
+        at least a hand's image width apart: one arm crossed over to the other's hand would
+        otherwise count as found and never be re-drawn)."""
+        inner = hand_interiors(self.hands, q[None], torso, view)
+        on_skin = sample(view.skin, inner, 0.0).mean(axis=2)[0] >= self.cfg.hands_found_skin
+        pose = self.body.forward(q[None], fixed=torso)
+        head_uv, head_r = head_circle(self.body, pose, view.intrinsics, view.T_cam_base)
+        p_cam = hand_centres(self.body, pose)[:, 0] @ view.T_cam_base[:3, :3].T
+        p_cam += view.T_cam_base[:3, 3]
+        uv = view.intrinsics.project(p_cam)
+        hand_px = 2.0 * view.intrinsics.fx * max(self.body.part("r_hand").shape.semi_axes)
+        apart = np.linalg.norm(uv[0] - uv[1]) > hand_px / np.min(p_cam[:, 2])
+        return on_skin & (np.linalg.norm(uv - head_uv, axis=1) > head_r) & apart
+
     def step(self, frame, torso: np.ndarray, rng: np.random.Generator):
         """One frame: returns ``(mean (8,), cov (8, 8), ok)``."""
         cfg = self.cfg
         flow = None if self.prev_image is None else self.flow(self.prev_image, frame.image)
         self.prev_image = frame.image
         view = self.last_view = arm_view(frame, flow, self.lut, cfg.bins,
-                                         cfg.edges == "colour")
+                                         cfg.edges == "colour", cfg.patch_colours)
         if self.particles is None:
             self._start(rng)
             self._first_frame(view, torso)
             if cfg.patch_refs == "first_estimate":
                 self.refs = None                     # the first step without colour patches
         body, w, refs = self.body, self.weights, self.refs
+        self._from_blobs(view, torso, rng)
 
         def first(x):                                           # skin cue of the hands
             inner = hand_interiors(self.hands, body.clamp(x[:, :8]), torso, view)
@@ -143,7 +206,11 @@ class TbpTracker:
             self.restarts += 1
             self._start(rng)
         mean = body.clamp(s.mean[None, :8])[0]
+        self.found = self._hands_found(mean, torso, view)
         if refs is None and cfg.patch_refs == "first_estimate" and s.ok:
-            self._first_frame(view, torso, mean)     # references under the first estimate
+            self.frames_without_refs += 1
+            if (self.frames_without_refs > cfg.patch_refs_wait
+                    or self.found.all()):
+                self._first_frame(view, torso, mean)     # references under the estimate
         cov = weighted_cov(x[:, :8], s.log_weights)
         return mean, cov, s.ok
