@@ -67,15 +67,14 @@ class GestConfig(Section):
     """``cue_radius_px`` for the frames measured in the foveal pair, where the hand images
     large (``fx`` 5.6x the wide eyes': radius ~40 px at 1.5 m, blocks of 3 with 12 px); None:
     full resolution. The wide pair's frames keep ``cue_radius_px``. Measured with 12 against
-    None: a foveal frame's CPU 0.85-0.92x (bench_trackers' interleaved repeats, load 4-7;
-    3.6-4.4 against 4.4-4.8 ms). menezes_gest_far, seeds 3-5, at 1.75 m and 1.5 m: the same
-    RMS to 0.03 mm (8.7-8.8; 6.3: the published centre is the full-resolution blobs'
-    posterior); at 1.2 m: 7.0 mm against 7.2-7.4, tracked 0.98-1.0 against 0.95-0.99 (a
-    foveal frame there 0.82x: 4.7 against 5.7 ms, load 3); at 0.9 m (hand 0.5-0.9 m, 39-52 %
-    of the frames foveal), seeds 3-9: 10.6-14.9 mm RMS (mean 12.6) against 10.2-13.2
-    (11.8), tracked 0.97-0.99 against 0.93-0.98, the foveal frames 6.5-6.9 mm either way;
-    the difference is on the wide pair's frames away from foveal ones, which a small change
-    anywhere moves by this much (above)."""
+    None (menezes_gest_far, thread CPU of its foveal frames, the two interleaved, 12 repeats
+    of 30 frames, load 3-6): 0.85-0.92x at 1.75 m (4.8 against 5.2 ms at load 6), 0.82-0.84x
+    at 1.2 m (the blobs, a fifth of a foveal frame, are not decimated). menezes_gest_far,
+    seeds 3-5, RMS (tracked fraction): 1.75 m 6.6-6.7 mm (0.99-1.0) either way; 1.5 m 3.4
+    (1.0) against 3.4-3.9 (0.98-1.0); 1.2 m 4.4-4.5 (0.99-1.0) against 4.4-4.9
+    (0.95-1.0); 0.9 m (39-51 % of the frames foveal), seeds 3-9, 5.7-6.0 (0.96-0.99)
+    against 5.7-5.9 (0.96-0.98). menezes_gest_reach and fig11_gest_clutter: unchanged (no
+    foveal pair)."""
     views: Literal[1, 2] = 1
     """Images the shape, colour and skin cues are evaluated in: 1 = the left image only (the
     paper), 2 = both (measured no better: 9.5-15 mm RMS either way on menezes_gest_reach at
