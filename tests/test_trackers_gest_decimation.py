@@ -8,6 +8,7 @@ import math
 
 import cv2
 import numpy as np
+import pytest
 from _synth_vision import clutter_background, stereo_head
 from test_trackers_gest_tracking import HAND, _draw
 
@@ -85,29 +86,34 @@ def test_the_stereo_cue_in_decimated_pixels_is_the_full_resolution_one_plus_a_co
         np.testing.assert_allclose(got - 4 * np.log(k), full, rtol=1e-9, atol=1e-9)
 
 
-def test_tracks_a_large_hand_image_on_decimated_cues():
+@pytest.mark.parametrize("cfg, foveal, k", [
+    ({}, False, 1),                                            # defaults: wide at full res
+    ({"cue_radius_px": 8.0, "foveal_cue_radius_px": None}, False, 2),
+    ({"foveal_cue_radius_px": 8.0}, True, 2),
+    ({"foveal_cue_radius_px": 8.0}, False, 1),                 # the foveal budget only there
+])
+def test_tracks_a_large_hand_image_on_decimated_cues(cfg, foveal, k):
     """A hand 22 px in radius (1 m from 60-degree eyes) moving 5 mm per frame, its cues at
-    blocks of 2 (``cue_radius_px`` 8) from the second frame on. Measured (seeds 0-3): tracked
+    blocks of 2 (``cue_radius_px`` 8, or ``foveal_cue_radius_px`` 8 for frames ``step`` is
+    told are the foveal pair's) from the second frame on. Measured (seeds 0-3): tracked
     throughout; the outline's mean distance to the edges 1.3-2.9 full-resolution px (at full
     resolution 0.9-2.9); the centre as at full resolution (from the full-resolution blobs),
     <= 14 mm off."""
     lut = ColorLUT(load_color_model(DEFAULT_COLOR_MODEL), 6)
     cams = stereo_head(k1=0.0, k2=0.0)
     bgs = [np.full((240, 320, 3), 70, np.uint8)] * 2
-    path = [HAND + np.r_[0.0, 0.005 * k, 0.0, np.zeros(6)] for k in range(12)]
-    frames = [_draw(bgs, cams, [hand]) for hand in path]
-    errs = {}
-    for budget in (None, 8.0):
-        trk = GestTracker(GestConfig(cue_radius_px=budget), lut)
-        rng = np.random.default_rng(0)
-        blocks, err, fit = [], [], []
-        for hand, (left, right) in zip(path, frames, strict=True):
-            blocks.append(trk._decimation(left, trk._near(left)))
-            res = trk.step(left, right, rng)
-            assert res.status == "tracking"
-            err.append(np.linalg.norm(res.mean[:3] - hand[:3]))
-            fit.append(res.shape_px * blocks[-1])             # full-resolution px
-        errs[budget] = max(err)
-        assert max(fit[1:]) < 5.0
-        assert blocks[1:] == [1 if budget is None else 2] * 11
-    assert errs[8.0] < 0.03 and errs[None] < 0.03
+    path = [HAND + np.r_[0.0, 0.005 * i, 0.0, np.zeros(6)] for i in range(12)]
+    trk = GestTracker(GestConfig(**cfg), lut)
+    blocks: list[int] = []
+    decimation = trk._decimation                    # spy on the block size step uses
+    trk._decimation = lambda *a: blocks.append(decimation(*a)) or blocks[-1]
+    rng = np.random.default_rng(0)
+    err, fit = [], []
+    for hand in path:
+        res = trk.step(*_draw(bgs, cams, [hand]), rng, foveal=foveal)
+        assert res.status == "tracking"
+        err.append(np.linalg.norm(res.mean[:3] - hand[:3]))
+        fit.append(res.shape_px * blocks[-1])                 # full-resolution px
+    assert max(fit[1:]) < 5.0
+    assert blocks == [1] + [k] * 11
+    assert max(err) < 0.03

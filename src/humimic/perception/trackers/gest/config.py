@@ -40,8 +40,9 @@ class GestConfig(Section):
     were with the estimate's own ellipsoid; the offset is now its orientation-free part
     (:mod:`.silhouette`)."""
     cue_radius_px: float | None = Field(None, gt=0.0)
-    """Pixel budget of the cue images (speed, not in the paper; None, the default: always full
-    resolution -- off because of the 0.9 m runs at the end of this note):
+    """Pixel budget of the cue images in the wide pair (speed, not in the paper; None, the
+    default: always full resolution -- off because of the 0.9 m runs at the end of this note;
+    the foveal pair's is ``foveal_cue_radius_px``):
     when the last estimate's hand image (radius ``fx`` times its longest semi-axis over its
     distance) is ``k >= 2`` times this, its shape, colour and skin cues are computed on the
     region of interest averaged over ``k x k`` blocks (intrinsics scaled to match: the hand
@@ -62,6 +63,18 @@ class GestConfig(Section):
     saturated pixels were no skin and bit into them, :mod:`.blobs`, ``skin_gains``) and the
     silhouette offset's (:mod:`.silhouette`): since, at 0.9 m, seeds 0-9, 5.8-6.2 mm at full
     resolution, 5.7-5.9 with ``n_points: 21``."""
+    foveal_cue_radius_px: float | None = Field(12.0, gt=0.0)
+    """``cue_radius_px`` for the frames measured in the foveal pair, where the hand images
+    large (``fx`` 5.6x the wide eyes': radius ~40 px at 1.5 m, blocks of 3 with 12 px); None:
+    full resolution. The wide pair's frames keep ``cue_radius_px``. Measured with 12 against
+    None (menezes_gest_far, thread CPU of its foveal frames, the two interleaved, 12 repeats
+    of 30 frames, load 3-6): 0.85-0.92x at 1.75 m (4.8 against 5.2 ms at load 6), 0.82-0.84x
+    at 1.2 m (the blobs, a fifth of a foveal frame, are not decimated). menezes_gest_far,
+    seeds 3-5, RMS (tracked fraction): 1.75 m 6.6-6.7 mm (0.99-1.0) either way; 1.5 m 3.4
+    (1.0) against 3.4-3.9 (0.98-1.0); 1.2 m 4.4-4.5 (0.99-1.0) against 4.4-4.9
+    (0.95-1.0); 0.9 m (39-51 % of the frames foveal), seeds 3-9, 5.7-6.0 (0.96-0.99)
+    against 5.7-5.9 (0.96-0.98). menezes_gest_reach and fig11_gest_clutter: unchanged (no
+    foveal pair)."""
     views: Literal[1, 2] = 1
     """Images the shape, colour and skin cues are evaluated in: 1 = the left image only (the
     paper), 2 = both (measured no better: 9.5-15 mm RMS either way on menezes_gest_reach at

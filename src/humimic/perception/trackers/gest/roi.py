@@ -10,8 +10,9 @@ hand see the same distance as in the full image up to the pad (any edge that nea
 box), and at least the pad beyond.
 
 A hand that images large (the foveal pair) is seen in the box averaged over ``k x k`` pixel
-blocks (``cue_radius_px``): a change of the intrinsics too (``f / k``, ``(c + 0.5) / k -
-0.5``), so the cues work on it unchanged, at a cost bounded by the hand's size in blocks.
+blocks (``foveal_cue_radius_px`` in the foveal pair, ``cue_radius_px`` in the wide one): a
+change of the intrinsics too (``f / k``, ``(c + 0.5) / k - 0.5``), so the cues work on it
+unchanged, at a cost bounded by the hand's size in blocks.
 """
 
 from __future__ import annotations

@@ -74,7 +74,8 @@ class GestStage(PoseTrackerStage):
             self.tracker.offset = np.zeros(3)    # the silhouette offset is the other pair's
         narrowed = narrow is not None and left is narrow[0]
         res = self.tracker.step(left, right, self.rng,
-                                silhouette_offset=self.cfg.foveal_offset or not narrowed)
+                                silhouette_offset=self.cfg.foveal_offset or not narrowed,
+                                foveal=narrowed)
         self.results.append(res)
         self.left_cams.append(wide[0].camera)
         self.used.append(left.camera)

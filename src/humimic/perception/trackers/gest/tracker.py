@@ -194,13 +194,15 @@ class GestTracker:
         return idx
 
     def step(self, left: CameraImage, right: CameraImage, rng: np.random.Generator,
-             silhouette_offset: bool = True) -> GestResult:
+             silhouette_offset: bool = True, foveal: bool = False) -> GestResult:
         """One stereo frame; ``silhouette_offset`` False: the candidates are taken as the
-        hand's centre (no :meth:`_silhouette_offset`)."""
+        hand's centre (no :meth:`_silhouette_offset`); ``foveal``: the frames are the foveal
+        pair's (the cue images' pixel budget is ``foveal_cue_radius_px``)."""
         cfg = self.cfg
         frames = (left, right)
         near = [self._near(f) for f in frames]
-        k = self._decimation(left, near[0])
+        k = self._decimation(left, near[0],
+                             cfg.foveal_cue_radius_px if foveal else cfg.cue_radius_px)
         blobs = [self._blobs(f, n) for f, n in zip(frames, near, strict=True)]
         p, cov, cen1, pairs = stereo_candidates(blobs[0], blobs[1], left.camera, right.camera,
                                                 cfg.max_epipolar_px, cfg.blob_size,
@@ -290,13 +292,15 @@ class GestTracker:
         uv = frame.camera.project_base(self.last[:3])
         return uv, float(np.linalg.norm(self.last[:3] - frame.camera.T_base_cam[:3, 3]))
 
-    def _decimation(self, frame: CameraImage, near: tuple[np.ndarray, float] | None) -> int:
-        """The block size the frame's cue images are computed at (``cue_radius_px``):
-        from the last estimate's image radius in ``frame`` (1 without an estimate)."""
-        if near is None or self.cfg.cue_radius_px is None:
+    def _decimation(self, frame: CameraImage, near: tuple[np.ndarray, float] | None,
+                    budget_px: float | None) -> int:
+        """The block size the frame's cue images are computed at (pixel budget
+        ``budget_px``): from the last estimate's image radius in ``frame`` (1 without an
+        estimate)."""
+        if near is None or budget_px is None:
             return 1
         r = frame.camera.intrinsics.fx * float(np.max(self.last[6:])) / max(near[1], 0.05)
-        return decimation(r, self.cfg.cue_radius_px)
+        return decimation(r, budget_px)
 
     def _blobs(self, frame: CameraImage, near: tuple[np.ndarray, float] | None) -> Blobs:
         """The frame's skin blobs that are not cut by the image border; while tracking, only
