@@ -7,19 +7,12 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from _kpf_synth import INTRINSICS, camera, painted_person, static_pose
 from scipy.spatial.transform import Rotation
 
 from humimic.maths.rotations import rotation_between
 from humimic.perception.trackers.kpf.depth import wrist_depth_move
 from humimic.perception.trackers.kpf.tracker import kpf_body
-
-
-def _camera() -> np.ndarray:
-    """T_cam_base of a camera 2 m in front of the body looking back at it (OpenCV axes)."""
-    R_base_cam = np.column_stack([[0, 1, 0], [0, 0, -1], [-1, 0, 0]]).astype(float)
-    T = np.eye(4)
-    T[:3, :3], T[:3, 3] = R_base_cam.T, -R_base_cam.T @ np.array([2.0, 0.0, 0.2])
-    return T
 
 
 def test_wrist_moves_along_its_camera_ray_by_delta():
@@ -32,7 +25,7 @@ def test_wrist_moves_along_its_camera_ray_by_delta():
     q[:, 10:14] = rng.uniform([-0.3, 0.1, -0.5, 0.3], [1.2, 1.2, 0.5, 1.5], (n, 4))
     q = body.free_limits.clamp(q)
     delta = rng.uniform(-0.15, 0.15, n)
-    T = _camera()
+    T = camera()
     out = wrist_depth_move(body, q, "R", delta, T)
     moved = np.any(out != q, axis=1)
     assert moved.mean() > 0.5                           # most stay in reach and limits
@@ -71,29 +64,15 @@ def test_tracker_with_depth_moves_and_rescue_holds_a_static_synthetic_person():
     hands, distinct limb colours, a static pose): with depth moves and rescue passes (forced
     every frame) on, the estimate stays on the person: right wrist within 12 cm over 4 frames
     (measured 24-46 mm, seed 0; even this perfect image pins the depth only to a few cm)."""
-    from humimic import bodymodel as bm
     from humimic.perception.blobs.config import DEFAULT_COLOR_MODEL
     from humimic.perception.cues.color_models import ColorLUT, load_color_model
     from humimic.perception.trackers.kpf.config import KpfConfig
     from humimic.perception.trackers.kpf.cues import cue_maps
     from humimic.perception.trackers.kpf.tracker import KpfTracker
-    from humimic.sensors.camera_model import Intrinsics
 
     body = kpf_body()
-    intr = Intrinsics(320, 240, 260.0, 260.0, 159.5, 119.5)
-    T = _camera()
-    q0 = np.zeros(14)
-    q0[3] = np.pi
-    q0[6:10] = [0.3, 0.9, 0.0, 0.6]                     # right arm raised to the side
-    q0[10:14] = [0.1, 0.2, 0.0, 0.3]
-    labels = bm.label_mask(bm.project(body, body.forward(q0[None]), intr, T))
-    palette = {"torso": (40, 60, 160), "head": (224, 172, 140), "r_hand": (224, 172, 140),
-               "l_hand": (224, 172, 140), "r_upper_arm": (200, 40, 40),
-               "l_upper_arm": (200, 40, 40), "r_forearm": (230, 200, 60),
-               "l_forearm": (230, 200, 60)}
-    img = np.full((240, 320, 3), 90, np.uint8)
-    for p, name in enumerate(body.part_names):
-        img[labels == p + 1] = palette.get(name, (128, 128, 128))
+    intr, T, q0 = INTRINSICS, camera(), static_pose()
+    img = painted_person(body, q0, T)
     lut = ColorLUT(load_color_model(DEFAULT_COLOR_MODEL), 6)
     cfg = KpfConfig(n_particles=150, iterations=2, partitioned=True, torso_prior_m=0.03,
                     kde_stride=4, depth_share=0.3, rescue_passes=1, rescue_drop=0.01)

@@ -6,6 +6,7 @@ minimiser, and the turned arm's hand against the rasterised body model's hand pi
 from __future__ import annotations
 
 import numpy as np
+from _kpf_synth import INTRINSICS, camera, painted_person, static_pose
 from scipy.spatial import cKDTree
 
 from humimic import bodymodel as bm
@@ -21,18 +22,10 @@ from humimic.perception.trackers.kpf.tracker import kpf_body
 from humimic.sensors.camera_model import Intrinsics
 
 
-def _camera() -> np.ndarray:
-    """T_cam_base of a camera 2 m in front of the body looking back at it (OpenCV axes)."""
-    R_base_cam = np.column_stack([[0, 1, 0], [0, 0, -1], [-1, 0, 0]]).astype(float)
-    T = np.eye(4)
-    T[:3, :3], T[:3, 3] = R_base_cam.T, -R_base_cam.T @ np.array([2.0, 0.0, 0.2])
-    return T
-
-
 def test_ray_points_reproject_to_their_pixels_at_their_ranges():
     rng = np.random.default_rng(0)
     intr = Intrinsics(320, 240, 260.0, 255.0, 161.0, 118.0, k1=-0.05)
-    T = _camera()
+    T = camera()
     uv = rng.uniform([20, 20], [300, 220], (50, 2))
     ranges = rng.uniform(0.5, 4.0, 50)
     P = ray_points(intr, T, uv, ranges)
@@ -103,7 +96,7 @@ def test_hand_blob_move_puts_the_rendered_hand_on_the_blob():
     the hand, which lies off the hand's sphere about the shoulder; jitter +-0.5 px)."""
     body = kpf_body()
     intr = Intrinsics(320, 240, 260.0, 260.0, 159.5, 119.5)
-    T = _camera()
+    T = camera()
     q = np.zeros((1, 14))
     q[0, 3] = np.pi
     q[0, 6:10] = [0.3, 0.7, 0.0, 0.6]
@@ -137,20 +130,8 @@ def test_tracker_with_hand_moves_holds_a_static_synthetic_person():
     from humimic.perception.trackers.kpf.tracker import KpfTracker
 
     body = kpf_body()
-    intr = Intrinsics(320, 240, 260.0, 260.0, 159.5, 119.5)
-    T = _camera()
-    q0 = np.zeros(14)
-    q0[3] = np.pi
-    q0[6:10] = [0.3, 0.9, 0.0, 0.6]
-    q0[10:14] = [0.1, 0.2, 0.0, 0.3]
-    labels = bm.label_mask(bm.project(body, body.forward(q0[None]), intr, T))
-    palette = {"torso": (40, 60, 160), "head": (224, 172, 140), "r_hand": (224, 172, 140),
-               "l_hand": (224, 172, 140), "r_upper_arm": (200, 40, 40),
-               "l_upper_arm": (200, 40, 40), "r_forearm": (230, 200, 60),
-               "l_forearm": (230, 200, 60)}
-    img = np.full((240, 320, 3), 90, np.uint8)
-    for p, name in enumerate(body.part_names):
-        img[labels == p + 1] = palette.get(name, (128, 128, 128))
+    intr, T, q0 = INTRINSICS, camera(), static_pose()
+    img = painted_person(body, q0, T)
     lut = ColorLUT(load_color_model(DEFAULT_COLOR_MODEL), 6)
     cfg = KpfConfig(n_particles=150, iterations=2, partitioned=True, torso_prior_m=0.03,
                     kde_stride=4, hand_share=0.5)

@@ -151,28 +151,13 @@ def test_tbp_follows_fig13s_arms_in_clutter():
     towards the camera, is held near 10: 33-38 deg). With the colour patches' references
     taken under the rest pose (``patch_refs: rest``) the right hand's patch learned the
     trousers beside it and held the arm down: R_SAA 23 deg, wrist 173-180 mm."""
-    from humimic.perception.trackers.tbp.build import tbp_stage
-    from humimic.world.world import World
-
-    sc = load_scenario(SCENARIOS_DIR / "fig13_tbp_clutter.yaml", ["trackers.tbp.torso=truth"],
-                       duration=1.6)
-    rngs = Rngs(sc.seed)
-    world = World(sc, rngs)
-    stage = tbp_stage("tbp", sc.trackers["tbp"], sc, world, rngs, None)
-    trk, rng = stage.tracker, np.random.default_rng(0)
-    body, err, wrist = trk.body, [], []
-    for k in range(45):
-        tick = world.gt.index_of(k / 30)
-        world.apply_human(tick)
-        mujoco.mj_forward(world.scene.model, world.scene.data)
-        frame = world.eye_rig.capture(k / 30)[stage.camera]
-        truth = truth_state(world, tick, "base")
-        mean, _, _ = trk.step(frame, truth[:6], rng)
+    err, wrist = [], []
+    for _, trk, _, truth, mean in _tracked_frames(["trackers.tbp.torso=truth"], 1.6, 45):
+        body = trk.body
         err.append(mean - truth[6:])
         p_est = body.forward(mean[None], fixed=truth[:6])
         p_true = body.forward(truth[None, 6:], fixed=truth[:6])
         wrist += [(p_est.joint(w) - p_true.joint(w))[0] for w in ("r_wrist", "l_wrist")]
-    world.eye_rig.close()
     per_dof = np.degrees(np.sqrt(np.mean(np.square(err), axis=0)))
     joints = np.degrees(np.sqrt(np.mean(np.square(err))))
     wrist_mm = 1e3 * np.sqrt(np.mean(np.sum(np.square(wrist), axis=1)))
@@ -234,29 +219,39 @@ def test_tbp_finds_an_arm_already_waving_when_it_starts():
     in the image, measured 1.4 px RMS (without re-drawing, ``reinit_fraction: 0``, the arm
     stays at rest: 63 px). In 3-D the wrist is still 0.35-0.43 m off on this seed: the hand
     on its blob, the arm at the wrong depth (one eye cannot tell)."""
-    from humimic.perception.trackers.tbp.build import tbp_stage
     from humimic.perception.trackers.tbp.reinit import hand_centres
-    from humimic.world.world import World
 
-    sc = load_scenario(SCENARIOS_DIR / "fig13_tbp_clutter.yaml",
-                       ["trackers.tbp.torso=truth", 'human.motion={"kind": "wave"}'],
-                       duration=1.1)
-    rngs = Rngs(sc.seed)
-    world = World(sc, rngs)
-    stage = tbp_stage("tbp", sc.trackers["tbp"], sc, world, rngs, None)
-    trk, rng, px = stage.tracker, np.random.default_rng(0), []
-    for k in range(30):
-        tick = world.gt.index_of(k / 30)
-        world.apply_human(tick)
-        mujoco.mj_forward(world.scene.model, world.scene.data)
-        frame = world.eye_rig.capture(k / 30)[stage.camera]
-        truth = truth_state(world, tick, "base")
-        mean, _, _ = trk.step(frame, truth[:6], rng)
+    px = []
+    for k, trk, frame, truth, mean in _tracked_frames(
+            ["trackers.tbp.torso=truth", 'human.motion={"kind": "wave"}'], 1.1, 30):
         if k >= 15:
             hands = [hand_centres(trk.body, trk.body.forward(q[None], fixed=truth[:6]))[0, 0]
                      for q in (mean, truth[6:])]
             uv = frame.camera.project_base(np.stack(hands))
             px.append(np.linalg.norm(uv[0] - uv[1]))
-    world.eye_rig.close()
     hand_px = float(np.sqrt(np.mean(np.square(px))))
     assert hand_px < 4.0, hand_px
+
+
+def _tracked_frames(sets: list[str], duration: float, n: int):
+    """TBP (seed 0) on fig13_tbp_clutter's first ``n`` frames at 30 Hz with ``sets``: yields
+    ``(k, tracker, frame, true state in base, estimate)`` per frame."""
+    from humimic.perception.trackers.tbp.build import tbp_stage
+    from humimic.world.world import World
+
+    sc = load_scenario(SCENARIOS_DIR / "fig13_tbp_clutter.yaml", sets, duration=duration)
+    rngs = Rngs(sc.seed)
+    world = World(sc, rngs)
+    stage = tbp_stage("tbp", sc.trackers["tbp"], sc, world, rngs, None)
+    trk, rng = stage.tracker, np.random.default_rng(0)
+    try:
+        for k in range(n):
+            tick = world.gt.index_of(k / 30)
+            world.apply_human(tick)
+            mujoco.mj_forward(world.scene.model, world.scene.data)
+            frame = world.eye_rig.capture(k / 30)[stage.camera]
+            truth = truth_state(world, tick, "base")
+            mean, _, _ = trk.step(frame, truth[:6], rng)
+            yield k, trk, frame, truth, mean
+    finally:
+        world.eye_rig.close()

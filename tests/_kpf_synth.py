@@ -1,0 +1,43 @@
+"""A synthetic scene for the kernel particle filter's tests: a camera 2 m in front of the
+body model and the model rasterised in flat colours (skin-coloured head and hands, distinct
+limb colours) at a static pose, the right arm raised to the side."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from humimic import bodymodel as bm
+from humimic.sensors.camera_model import Intrinsics
+
+INTRINSICS = Intrinsics(320, 240, 260.0, 260.0, 159.5, 119.5)
+
+PALETTE = {"torso": (40, 60, 160), "head": (224, 172, 140), "r_hand": (224, 172, 140),
+           "l_hand": (224, 172, 140), "r_upper_arm": (200, 40, 40),
+           "l_upper_arm": (200, 40, 40), "r_forearm": (230, 200, 60),
+           "l_forearm": (230, 200, 60)}
+
+
+def camera() -> np.ndarray:
+    """T_cam_base of a camera 2 m in front of the body looking back at it (OpenCV axes)."""
+    R_base_cam = np.column_stack([[0, 1, 0], [0, 0, -1], [-1, 0, 0]]).astype(float)
+    T = np.eye(4)
+    T[:3, :3], T[:3, 3] = R_base_cam.T, -R_base_cam.T @ np.array([2.0, 0.0, 0.2])
+    return T
+
+
+def static_pose() -> np.ndarray:
+    """The 14-DOF pose: facing the camera, the right arm raised to the side."""
+    q0 = np.zeros(14)
+    q0[3] = np.pi
+    q0[6:10] = [0.3, 0.9, 0.0, 0.6]
+    q0[10:14] = [0.1, 0.2, 0.0, 0.3]
+    return q0
+
+
+def painted_person(body: bm.BodyModel, q0: np.ndarray, T_cam_base: np.ndarray) -> np.ndarray:
+    """The body model at ``q0`` rasterised in ``PALETTE``'s colours on a grey wall (RGB)."""
+    labels = bm.label_mask(bm.project(body, body.forward(q0[None]), INTRINSICS, T_cam_base))
+    img = np.full((INTRINSICS.height, INTRINSICS.width, 3), 90, np.uint8)
+    for p, name in enumerate(body.part_names):
+        img[labels == p + 1] = PALETTE.get(name, (128, 128, 128))
+    return img
