@@ -231,6 +231,26 @@ def skin_distance(proj: HandProjection, view: HandView, offset_px: float = 2.0
     return rim_skin_distance(view.skin, proj.contour, proj.normal, offset_px)
 
 
+def ellipse_family(centre: np.ndarray, semi_axes: np.ndarray, angles: np.ndarray,
+                   n_points: int) -> HandProjection:
+    """Image ellipses about one ``centre (2,)`` (px), every one of ``semi_axes (P, 2)`` (px)
+    turned by every one of ``angles (A,)`` (rad, from +u towards +v): contour points
+    ``c + R(theta) (a cos psi, b sin psi)`` and outward unit normals ``R(theta) (cos psi / a,
+    sin psi / b)`` (normalised), ``(P * A, n_points, 2)``, rows ordered pair-major."""
+    cos, sin = _circle(n_points)
+    ab = np.repeat(np.asarray(semi_axes, float), len(angles), axis=0)          # (P*A, 2)
+    th = np.tile(np.asarray(angles, float), len(semi_axes))
+    ct, st = np.cos(th)[:, None], np.sin(th)[:, None]
+    x, y = ab[:, :1] * cos, ab[:, 1:] * sin
+    contour = np.stack([centre[0] + ct * x - st * y, centre[1] + st * x + ct * y], -1)
+    nx, ny = cos / ab[:, :1], sin / ab[:, 1:]
+    normal = np.stack([ct * nx - st * ny, st * nx + ct * ny], -1)
+    normal /= np.linalg.norm(normal, axis=-1, keepdims=True)
+    k = len(ab)
+    return HandProjection(contour, normal, np.tile(np.r_[centre, 1.0], (k, 1)),
+                          np.ones(k, bool))
+
+
 def blob_pair_log_likelihood(centres: np.ndarray, pairs: np.ndarray, sigma_px: float,
                              outlier_density: float) -> np.ndarray:
     """``log(outlier + sum_j prod_v N(c_v; m_jv, sigma^2 I) / M)`` for the particles' ellipse

@@ -22,9 +22,13 @@ near where the hand was last tracked (``reacquire_m``; any after ``reacquire_fra
 The estimate is ``lost`` when its centre leaves the left image, its contour is off the
 edges by more than ``lost_px`` while its rim does not separate skin from background either
 (``lost_skin``), or ``lost_frames`` frames pass without a candidate within
-``lost_m``. The cue images are computed in a box around the candidates and the last estimate
-(:mod:`.roi`). The published centre is, by default (``position: kalman``), not the particles'
-mean but the centre's Gaussian posterior given the stereo measurements under the random walk
+``lost_m``. The contour test judges the *published* estimate (the Kalman centre below, not the
+particles' mean) and whether a hand-sized ellipse in *any* pose fits there
+(:func:`.loss.any_pose_fits`): it asks whether the hand is where GEST says, not whether the
+orientation estimate is right. The cue images are computed in a box around the candidates
+and the last estimate (:mod:`.roi`). The published centre is, by default (``position:
+kalman``), not the particles' mean but the centre's Gaussian posterior given the stereo
+measurements under the random walk
 (a Kalman update per frame: every particle shares the measurement and the linear dynamics of
 the centre, so its conditional posterior is one Gaussian; the weights, collapsed by the
 orientation and size cues, would otherwise make the estimate one random draw). The published
@@ -60,6 +64,7 @@ from humimic.perception.trackers.gest.likelihood import (
     shape_distance,
     skin_distance,
 )
+from humimic.perception.trackers.gest.loss import any_pose_fits, lost_threshold_px
 from humimic.perception.trackers.gest.proposal import CandidateProposal, PoseReset
 from humimic.perception.trackers.gest.roi import (
     crop_frame,
@@ -86,7 +91,8 @@ class GestResult:
     candidates: np.ndarray
     """(M, 3) triangulated skin blobs of this frame (base frame)."""
     shape_px: float
-    """Mean contour distance of the MMSE estimate to the edges (left image, px)."""
+    """Mean contour distance of the published estimate's ellipse to the edges (left image,
+    px)."""
 
 
 def skin_mask(image: np.ndarray, lut: ColorLUT) -> np.ndarray:
@@ -244,30 +250,31 @@ class GestTracker:
         mean = s.mean.copy()
         mean[3:6] = mean_orientation(s.particles[:, 3:6], s.log_weights)
         mean[6:] = np.maximum(mean[6:], 1e-3)
-        (proj, _), centres = project_views(mean[None], views, cfg.n_points, 1)
-        d = float(shape_distance(proj, views[0])[0])
         support = len(use) > 0 and float(np.min(np.linalg.norm(p[use] - mean[:3], axis=1))
                                          ) <= cfg.lost_m
         self.unsupported = 0 if support else self.unsupported + 1
-        fits = (d <= lost_threshold_px(mean, views[0], cfg.lost_px, cfg.lost_rel)
-                or float(skin_distance(proj, views[0])[0]) <= cfg.lost_skin)
-        status = ("tracking" if (s.ok and proj.valid[0] and fits
+        offset = (self._silhouette_offset(mean, (left.camera, right.camera))
+                  if silhouette_offset else np.zeros(3))
+        centre = self._centre(mean, p, use, cen1, offset)
+        if centre is not None:                      # the published centre (module docstring)
+            mean[:3] = centre[0]
+        # the loss test judges the published estimate, not the particles' mean: with weak
+        # grey-level edges (a dark hand over dark clothes) the shape cue pulls the particles
+        # onto other edges while the stereo-measured centre stays on the hand
+        (proj, _), _ = project_views(mean[None], views, cfg.n_points, 1)
+        d = float(shape_distance(proj, views[0])[0])
+        limit_px = lost_threshold_px(mean, views[0], cfg.lost_px, cfg.lost_rel)
+        fits = proj.valid[0] and (
+            d <= limit_px or float(skin_distance(proj, views[0])[0]) <= cfg.lost_skin
+            or any_pose_fits(mean, proj, views[0], cfg.n_points, limit_px, cfg.lost_skin))
+        status = ("tracking" if (s.ok and fits
                                  and _centre_in_image(mean, left)
                                  and self.unsupported < cfg.lost_frames) else "lost")
         if status == "tracking":
             self.orientation = mean[3:6]
             self.last, self.anchor = mean, mean[:3]
             self.lost_for = 0
-            self.offset = (self._silhouette_offset(mean, (left.camera, right.camera))
-                           if silhouette_offset else np.zeros(3))
-            if cfg.position == "kalman" and len(use):
-                j = use[int(np.argmin(np.linalg.norm(p[use] - mean[:3], axis=1)))]
-                mean[:3] = self._centre_update(p[j] + self.offset,
-                                               cfg.centroid_px ** 2 * cen1[j])
-            elif cfg.position == "kalman" and self.centre is not None:
-                self.centre = (self.centre[0], self.centre[1]
-                               + cfg.sigma_position ** 2 * np.eye(3))
-                mean[:3] = self.centre[0]
+            self.offset, self.centre = offset, centre
             h = reference_histogram(proj, views[0])
             self.ref = h if self.ref is None else update_reference(self.ref, h, cfg.kappa)
         else:
@@ -276,13 +283,23 @@ class GestTracker:
             self.unsupported = 0
         return GestResult(mean, self.pf.cov, status, p, d)
 
-    def _centre_update(self, z: np.ndarray, R: np.ndarray) -> np.ndarray:
-        """The centre's posterior mean given this frame's stereo measurement ``z`` (the
-        candidate corrected by the estimate's silhouette offset, covariance ``R``) and the
-        last one under the centre's random walk (module docstring)."""
-        self.centre = ((z, R) if self.centre is None else
-                       centre_update(*self.centre, z, R, self.cfg.sigma_position))
-        return self.centre[0]
+    def _centre(self, mean: np.ndarray, p: np.ndarray, use: np.ndarray, cen1: np.ndarray,
+                offset: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+        """The centre's Gaussian posterior ``(mean, cov)`` after this frame (``position:
+        kalman``; None otherwise): the last one updated with the candidate nearest the
+        particles' mean (corrected by the silhouette ``offset``, covariance from
+        ``centroid_px``), or only predicted under the random walk without a candidate."""
+        cfg = self.cfg
+        if cfg.position != "kalman":
+            return None
+        if len(use):
+            j = use[int(np.argmin(np.linalg.norm(p[use] - mean[:3], axis=1)))]
+            z, R = p[j] + offset, cfg.centroid_px ** 2 * cen1[j]
+            return (z, R) if self.centre is None else centre_update(
+                *self.centre, z, R, cfg.sigma_position)
+        if self.centre is None:
+            return None
+        return self.centre[0], self.centre[1] + cfg.sigma_position ** 2 * np.eye(3)
 
     def _near(self, frame: CameraImage) -> tuple[np.ndarray, float] | None:
         """The last estimate's centre in ``frame`` (px) and its distance from the camera (m),
@@ -338,17 +355,6 @@ class GestTracker:
             boxes.append(np.array([[uv[0] - r, uv[1] - r, 2 * r, 2 * r]]))
         box = roi_box(np.concatenate(boxes), K.width, K.height, self.cfg.cue_pad_px * k)
         return box if box is not None else (0, 0, K.width, K.height)
-
-
-def lost_threshold_px(state: np.ndarray, camera, floor_px: float, rel: float) -> float:
-    """The largest mean contour distance (px) of a tracked hand: ``rel`` times its image
-    radius (``fx`` times the longest semi-axis over the centre's depth; the ellipsoid's misfit
-    to the hand's outline grows with its image), at least ``floor_px``."""
-    T = camera.T_cam_base
-    depth = float(T[2, :3] @ state[:3] + T[2, 3])
-    if depth <= 0.0:
-        return floor_px
-    return max(floor_px, rel * camera.intrinsics.fx * float(np.max(state[6:9])) / depth)
 
 
 def centre_update(x: np.ndarray, P: np.ndarray, z: np.ndarray, R: np.ndarray, sigma: float
