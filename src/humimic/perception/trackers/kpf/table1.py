@@ -1,9 +1,11 @@
 """Reproduce Schmidt, Fritsch & Kwolek's Table 1 (mean wrist error over runs, by particles and
 mean-shift iterations, side and angular pointing) and print it beside the paper's.
 
-``python -m humimic.perception.reproduce schmidt-table1 [--out DIR] [--jobs N] [--seeds N | S S
-...] [--duration S] [--particles N ...] [--set KEY=VALUE ...] [--no-run]`` runs
-``sweeps/schmidt_table1.yaml`` (the rows of those particle counts, default all; ``--seeds``: N
+``python -m humimic.perception.reproduce schmidt-table1 [--eye wide|foveal] [--out DIR] [--jobs N]
+[--seeds N | S S ...] [--duration S] [--particles N ...] [--set KEY=VALUE ...] [--no-run]`` runs
+``sweeps/schmidt_table1.yaml`` (``--eye foveal``: on ``scenarios/schmidt_table1_foveal.yaml``,
+the left eye's 24 deg camera with the person at 4.4 m, instead of the wide eye at 2 m; the
+rows of those particle counts, default all; ``--seeds``: N
 seeds 0..N-1, or the seeds listed; ``--set``: scenario overrides for every run, e.g. a
 sensitivity study at another distance) through the sweep tool (complete runs are skipped),
 then reads every run's ``metrics.json``. Each run holds three trackers on the same frames
@@ -35,6 +37,8 @@ CONFIGS = ((1000, 3), (500, 3), (250, 3), (150, 2))
 PAPER = {(1000, 3): (77.5, 42.1, 124.2, 46.5), (500, 3): (75.9, 46.7, 141.4, 60.8),
          (250, 3): (94.1, 55.7, 156.6, 77.1), (150, 2): (116.0, 70.6, 253.8, 216.0)}
 TRACKERS = ("kpf", "kpf_paper", "condensation")
+#: ``--eye`` -> the sweep's base scenario: one eye camera at 320 x 240 either way (issue 14).
+EYES = {"wide": "schmidt_table1.yaml", "foveal": "schmidt_table1_foveal.yaml"}
 KEYS = ("wrist_error_mm", "wrist_lateral_mm", "wrist_depth_mm", "wrist_flip_free_mm",
         "frames_per_s")
 
@@ -97,6 +101,9 @@ def main(argv: list[str] | None = None) -> int:
 
     p = argparse.ArgumentParser(prog="python -m humimic.perception.reproduce schmidt-table1",
                                 description=__doc__.split("\n")[0])
+    p.add_argument("--eye", choices=sorted(EYES), default="wide",
+                   help="wide: the 100 deg eye, the person at 2 m (default); foveal: the 24 deg "
+                   "eye, the person at 4.4 m (scenarios/schmidt_table1_foveal.yaml)")
     p.add_argument("--out", type=Path, default=None, help="sweep directory")
     p.add_argument("--jobs", type=int, default=1, help="parallel runs (default 1)")
     p.add_argument("--seeds", type=int, nargs="+", default=None,
@@ -109,6 +116,9 @@ def main(argv: list[str] | None = None) -> int:
                    help="scenario override for every run (repeatable), e.g. human.distance=3")
     args = p.parse_args(argv)
     sweep = load_sweep(SWEEP)
+    if args.eye != "wide":   # the same sweep on the other eye's scenario, in its own directory
+        sweep.config.scenario = SCENARIOS_DIR / EYES[args.eye]
+        sweep.config.name = f"{sweep.name}_{args.eye}"
     if args.particles is not None:
         sweep.config.cases = [c for c in sweep.config.cases
                               if c["trackers.kpf.n_particles"] in args.particles]
@@ -126,5 +136,10 @@ def main(argv: list[str] | None = None) -> int:
         return report_error(err)
     if not args.no_run:
         run_sweep(sweep, out, jobs=args.jobs, progress=True)
+    if planned:
+        sc = planned[0].scenario
+        print(f"one eye camera: {sc.cameras.which}, {sc.cameras.resolution[0]} x "
+              f"{sc.cameras.resolution[1]} at {sc.cameras.rate:g} Hz; the person "
+              f"{sc.human.distance:g} m away")
     print(table(collect(planned)))
     return 0
