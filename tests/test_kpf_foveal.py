@@ -47,7 +47,7 @@ def _outline_extent(path, gesture: str) -> tuple[np.ndarray, float]:
 def test_the_narrow_eye_sees_the_whole_upper_body(gesture):
     (u0, v0, u1, v1), torso = _outline_extent(FOVEAL, gesture)
     # measured: u 5.6..198 (angle 28..198), v 33..215 of 320 x 240: the side-pointing hand's
-    # outline 5.6 px from the image's left edge (nearer than ~4.2 m it leaves the image)
+    # outline 5.6 px from the image's left edge (nearer than ~4.3 m it leaves the image)
     assert u0 > 2 and v0 > 2 and u1 < 318 and v1 < 238, (u0, v0, u1, v1)
     _, torso_wide = _outline_extent(SCENARIOS_DIR / "schmidt_table1.yaml", gesture)
     # f / distance: 753 / 4.4 against 134 / 2.0 -> 2.6x (measured torso 75 against 28.5 px)
