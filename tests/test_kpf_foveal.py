@@ -68,3 +68,16 @@ def test_kpf_tracks_side_pointing_through_the_narrow_eye(tmp_path):
     assert k["wrist_lateral_mm"] < 50.0
     assert k["wrist_flip_free_mm"] < 80.0
     assert k["wrist_error_mm"] < 100.0
+
+
+@pytest.mark.parametrize("eye, says", [("wide", "wide, 320 x 240 at 7.5 Hz; the person 2 m"),
+                                       ("foveal", "foveal, 320 x 240 at 7.5 Hz; the person 4.4 m")])
+def test_table1_prints_either_eye(tmp_path, capsys, eye, says):
+    """``schmidt-table1 --eye``: the sweep on that eye's scenario, the paper's numbers beside."""
+    from humimic.perception.trackers.kpf.table1 import main as table1
+
+    code = table1(["--eye", eye, "--no-run", "--particles", "1000", "--seeds", "3",
+                   "--out", str(tmp_path / eye)])
+    out = capsys.readouterr().out
+    assert code == 0 and f"one eye camera: {says} away" in out
+    assert "(1000, 3)    77.5 ( 42.1)" in out and "(1000, 3)   124.2 ( 46.5)" in out
