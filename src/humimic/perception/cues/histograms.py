@@ -21,9 +21,12 @@ at the largest distance (1) from any reference.
 from __future__ import annotations
 
 import functools
+import math
 from dataclasses import dataclass
 
 import numpy as np
+
+from humimic.maths.jit import njit
 
 HEAD_TORSO_PATCHES = np.array([[0.0, 0.0, 0.8, 1.0],    # head (head width = 1)
                                [0.0, 1.9, 1.6, 1.2]])   # torso below it
@@ -132,7 +135,22 @@ def patch_color_log_likelihood(qimage: QuantizedImage, states: np.ndarray,
     straight from the bin counts: with ``h_b = n_b / n``, the Bhattacharyya coefficient is
     ``sum_b sqrt(n_b) sqrt(ref_b) / sqrt(n)`` -- one product with the references' square
     roots, no normalised histogram; ``D^2 = 1 - BC`` (eq. 6 squares the distance). Equal to
-    the two-step form to rounding."""
+    the two-step form to rounding; the counts in one compiled pass over the particles
+    (:func:`patch_bhattacharyya`; :func:`patch_color_log_likelihood_numpy` is the array
+    form)."""
+    fu, fv = _lattice(grid)
+    bc = patch_bhattacharyya(qimage.planes, qimage.height, qimage.width, qimage.bins,
+                             np.atleast_2d(np.asarray(states, np.float64)),
+                             np.asarray(patches, np.float64),
+                             np.sqrt(np.asarray(refs, np.float64)), fu, fv)
+    d2 = np.clip(1.0 - bc, 0.0, 1.0)
+    return -d2.sum(axis=(1, 2)) / (2.0 * sigma * sigma)                 # Menezes eq. 6
+
+
+def patch_color_log_likelihood_numpy(qimage: QuantizedImage, states: np.ndarray,
+                                     patches: np.ndarray, refs: np.ndarray, sigma: float,
+                                     grid: int = 8) -> np.ndarray:
+    """:func:`patch_color_log_likelihood` in array operations (its reference in tests)."""
     counts, total = patch_counts(qimage, states, patches, grid)
     root_ref = np.sqrt(np.asarray(refs, np.float64))                     # (P, 3, bins)
     bc = np.einsum("npcb,pcb->npc", np.sqrt(counts), root_ref)
@@ -169,3 +187,43 @@ def update_reference(ref: np.ndarray, observed: np.ndarray, kappa: float | np.nd
         kappa) else np.float64(kappa)
     seen = obs.sum(axis=-1, keepdims=True) > 0
     return np.where(seen, (1.0 - k) * ref + k * obs, ref)  # Menezes eq. 13
+
+
+@njit
+def patch_bhattacharyya(planes, height, width, bins, states, patches, root_ref, fu, fv):
+    """The Bhattacharyya coefficients ``(N, P, 3)`` of every patch of every state (``(u, v,
+    s)``, patches ``(P, 4)`` in patch units) with the references (their square roots
+    ``root_ref (P, 3, bins)``), from the bin counts on the ``fu``, ``fv`` lattice: ``sum_b
+    sqrt(n_b ref_b) / sqrt(n)``, 0 for a patch wholly off the image (the counting of
+    :func:`~humimic.perception.cues.histograms.patch_counts`: nearest pixel, samples off the
+    image dropped)."""
+    N, P, S = states.shape[0], patches.shape[0], fu.shape[0]
+    off = bins + 1
+    out = np.zeros((N, P, 3))
+    counts = np.zeros((3, off), np.int64)
+    root = np.sqrt(np.arange(S + 1).astype(np.float64))     # sqrt of every possible count
+    for i in range(N):
+        s = states[i, 2]
+        for p in range(P):
+            counts[:] = 0
+            u0, v0 = states[i, 0] + s * patches[p, 0], states[i, 1] + s * patches[p, 1]
+            su, sv = s * patches[p, 2], s * patches[p, 3]
+            total = 0
+            for k in range(S):
+                col = math.floor(u0 + su * fu[k] + 0.5)
+                row = math.floor(v0 + sv * fv[k] + 0.5)
+                if col < 0 or col >= width or row < 0 or row >= height:
+                    continue
+                total += 1
+                flat = int(row) * width + int(col)
+                for c in range(3):
+                    counts[c, planes[c, flat] - c * off] += 1
+            if total == 0:
+                continue
+            norm = 1.0 / root[total]
+            for c in range(3):
+                bc = 0.0
+                for q in range(bins):
+                    bc += root[counts[c, q]] * root_ref[p, c, q]
+                out[i, p, c] = bc * norm
+    return out

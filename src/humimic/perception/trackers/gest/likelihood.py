@@ -36,13 +36,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from humimic.bodymodel import conics
-from humimic.bodymodel.hand import hand_ellipsoids, to_camera
+from humimic.bodymodel.hand import check_hand_states, hand_ellipsoids, to_camera
 from humimic.bodymodel.projection import Z_MIN, project_ellipsoids
 from humimic.perception.cues.color_models import ColorLUT
 from humimic.perception.cues.edges import DT_CAP_PX, dt_distance, shape_log_likelihood
 from humimic.perception.cues.histograms import patch_color_log_likelihood, patch_histograms
 from humimic.perception.cues.skin import rim_skin_distance
 from humimic.perception.trackers.frame_cues import FrameCues, frame_cues
+from humimic.perception.trackers.gest.kernels import camera_arrays, project_states
 from humimic.perception.trackers.gest.proposal import logsumexp
 from humimic.sensors.camera_model import CameraImage
 
@@ -198,11 +199,28 @@ def project_hands(states: np.ndarray, view: HandView, n_points: int,
 
 
 def project_views(states: np.ndarray, views: list, n_points: int,
+                  image_views: int | None = None) -> tuple[list[HandProjection | None],
+                                                           np.ndarray]:
+    """:func:`project_hands` in the first ``image_views`` of ``views`` (all if None; None for
+    the others), and the pixel centres ``(N, V, 2)`` of the image ellipses in every view: eq.
+    15 in one compiled pass over the particles and views (:func:`.kernels.project_states`;
+    :func:`project_views_numpy` is the array form)."""
+    states = np.atleast_2d(np.asarray(states, float))
+    check_hand_states(states)
+    ni = len(views) if image_views is None else min(image_views, len(views))
+    T, K = camera_arrays(views)
+    cos, sin = _circle(n_points)
+    contour, normal, patch, valid, centres = project_states(states, T, K, cos, sin, ni)  # eq. 15
+    projs = [HandProjection(contour[i], normal[i], patch[i], valid[i]) if i < ni else None
+             for i in range(len(views))]
+    return projs, centres
+
+
+def project_views_numpy(states: np.ndarray, views: list, n_points: int,
                   image_views: int | None = None, ellipsoids: tuple | None = None
                   ) -> tuple[list[HandProjection | None], np.ndarray]:
-    """:func:`project_hands` in the first ``image_views`` of ``views`` (all if None; None for
-    the others), and the pixel centres ``(N, V, 2)`` of the image ellipses in every view, with
-    eq. 15 evaluated for all views in one batch."""
+    """:func:`project_views` in array operations (its reference in tests; ``ellipsoids``:
+    :func:`hand_ellipsoids` of ``states`` if already computed)."""
     if ellipsoids is None:
         ellipsoids = hand_ellipsoids(states)
     e, valid = views_components(ellipsoids, np.stack([v.T_cam_base for v in views]))

@@ -1,0 +1,71 @@
+"""GEST's compiled per-particle loops against the array operations they replace: the
+projection of the hand ellipsoids (Menezes eq. 15, :func:`project_views` against
+:func:`project_views_numpy`, distorted cameras, ellipsoids behind and straddling the camera)
+and the colour cue's counts (eq. 6, :func:`patch_color_log_likelihood` against
+:func:`patch_color_log_likelihood_numpy`, patches on, across and off the image's edges)."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+from _synth_vision import stereo_head
+
+from humimic.perception.cues.histograms import (
+    patch_color_log_likelihood,
+    patch_color_log_likelihood_numpy,
+    quantize,
+)
+from humimic.perception.trackers.gest.likelihood import (
+    hand_view,
+    project_views,
+    project_views_numpy,
+)
+from humimic.sensors.camera_model import CameraImage
+
+HAND = np.array([1.0, 0.05, 1.15, 0.3, 0.2, 1.2, 0.045, 0.022, 0.08])
+
+
+def _states(rng: np.random.Generator, n: int, cam) -> np.ndarray:
+    """Hands about ``HAND`` in any orientation and size, three of them in front of, across
+    and behind ``cam``'s image plane."""
+    states = HAND + np.c_[rng.normal(0, 0.15, (n, 3)), rng.uniform(-np.pi, np.pi, (n, 3)),
+                          rng.uniform(-0.02, 0.04, (n, 3))]
+    for i, depth in enumerate((0.3, 0.03, -1.0)):
+        states[i, :3] = cam.T_base_cam[:3, :3] @ [0.05, -0.02, depth] + cam.T_base_cam[:3, 3]
+    return states
+
+
+def test_compiled_projection_is_the_array_form():
+    cams = [replace(c, intrinsics=replace(c.intrinsics, fy=c.intrinsics.fy * 1.1, cy=110.0))
+            for c in stereo_head()]         # radial distortion, fx != fy, cx != cy
+    views = [hand_view(CameraImage(0.0, c, np.zeros((240, 320, 3), np.uint8)), 32)
+             for c in cams]
+    states = _states(np.random.default_rng(3), 200, cams[0])
+    for image_views in (1, 2, None):
+        projs, centres = project_views(states, views, 20, image_views)
+        expect, expect_centres = project_views_numpy(states, views, 20, image_views)
+        np.testing.assert_allclose(centres, expect_centres, rtol=1e-9, atol=1e-9)
+        for p, e in zip(projs, expect, strict=True):
+            assert (p is None) == (e is None)
+            if p is None:
+                continue
+            assert p.valid.tolist() == e.valid.tolist() and not p.valid[1:3].any()
+            assert p.valid.sum() > 150
+            for f in ("contour", "normal", "patch_state"):
+                np.testing.assert_allclose(getattr(p, f), getattr(e, f), rtol=1e-9, atol=1e-9)
+
+
+def test_compiled_colour_cue_is_the_array_form():
+    rng = np.random.default_rng(4)
+    q = quantize(rng.integers(0, 256, (90, 120, 3), dtype=np.uint8), 16)
+    patches = np.array([[0.0, 0.0, 1.0, 1.0], [0.2, 1.5, 1.6, 0.8]])
+    refs = rng.random((2, 3, 16))
+    refs /= refs.sum(-1, keepdims=True)
+    states = np.c_[rng.uniform(-30, 150, (300, 2)), rng.uniform(0.5, 40, 300)]
+    states[0] = (-500.0, -500.0, 10.0)                      # wholly off the image
+    for grid in (8, 13):
+        ours = patch_color_log_likelihood(q, states, patches, refs, 0.3, grid)
+        expect = patch_color_log_likelihood_numpy(q, states, patches, refs, 0.3, grid)
+        np.testing.assert_allclose(ours, expect, rtol=1e-9)
+        assert ours[0] == -6.0 / (2 * 0.3**2)               # D = 1 in every patch, channel
