@@ -1,8 +1,9 @@
 """GEST's compiled per-particle loops against the array operations they replace: the
 projection of the hand ellipsoids (Menezes eq. 15, :func:`project_views` against
 :func:`project_views_numpy`, distorted cameras, ellipsoids behind and straddling the camera)
-and the colour cue's counts (eq. 6, :func:`patch_color_log_likelihood` against
-:func:`patch_color_log_likelihood_numpy`, patches on, across and off the image's edges)."""
+the colour cue's counts (eq. 6, :func:`patch_color_log_likelihood` against
+:func:`patch_color_log_likelihood_numpy`, patches on, across and off the image's edges) and
+the stereo cue (:func:`blob_pair_log_likelihood`, ellipses off the image, no pair)."""
 
 from __future__ import annotations
 
@@ -17,6 +18,8 @@ from humimic.perception.cues.histograms import (
     quantize,
 )
 from humimic.perception.trackers.gest.likelihood import (
+    blob_pair_log_likelihood,
+    blob_pair_log_likelihood_numpy,
     hand_view,
     project_views,
     project_views_numpy,
@@ -69,3 +72,19 @@ def test_compiled_colour_cue_is_the_array_form():
         expect = patch_color_log_likelihood_numpy(q, states, patches, refs, 0.3, grid)
         np.testing.assert_allclose(ours, expect, rtol=1e-9)
         assert ours[0] == -6.0 / (2 * 0.3**2)               # D = 1 in every patch, channel
+
+
+def test_compiled_stereo_cue_is_the_array_form():
+    rng = np.random.default_rng(5)
+    centres = rng.normal(100.0, 3.0, (200, 2, 2))
+    centres[:3] = -1.0e6                                    # invalid: off-image sentinel
+    for m in (0, 1, 3):
+        pairs = rng.normal(100.0, 2.0, (m, 2, 2))
+        if m:
+            centres[3] = pairs[-1] + 0.01                   # one ellipse pair on a blob pair
+        for sigma, outlier in ((0.08, 1e-12), (1.5, 1e-6)):
+            ours = blob_pair_log_likelihood(centres, pairs, sigma, outlier)
+            expect = blob_pair_log_likelihood_numpy(centres, pairs, sigma, outlier)
+            np.testing.assert_allclose(ours, expect, rtol=1e-9)
+            assert (ours[:3] == np.log(outlier)).all()
+            assert m == 0 or ours[3] > np.log(outlier) + 5.0

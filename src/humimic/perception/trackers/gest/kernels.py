@@ -40,6 +40,18 @@ def _distort(K, x, y):
 
 
 @njit
+def ypr_into(R, yaw, pitch, roll):
+    """``R (3, 3) = Rz(yaw) Ry(pitch) Rx(roll)`` (:func:`~humimic.bodymodel.kinematics.
+    ypr_matrix` for one rotation, compiled)."""
+    cy, sy = math.cos(yaw), math.sin(yaw)
+    cp, sp = math.cos(pitch), math.sin(pitch)
+    cr, sr = math.cos(roll), math.sin(roll)
+    R[0, 0], R[0, 1], R[0, 2] = cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr
+    R[1, 0], R[1, 1], R[1, 2] = sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr
+    R[2, 0], R[2, 1], R[2, 2] = -sp, cp * sr, cp * cr
+
+
+@njit
 def project_states(states, T, K, cos, sin, n_image):
     """Menezes eq. 15 for hand states ``(N, 9)`` (centre, yaw pitch roll, semi-axes; base
     frame) in ``V`` cameras (``T (V, 4, 4)``, ``K (V, 6)``: :func:`camera_arrays`), and for the
@@ -63,13 +75,7 @@ def project_states(states, T, K, cos, sin, n_image):
     b = np.empty(6)
     tv = np.empty(3)
     for i in range(N):
-        # Rz(yaw) Ry(pitch) Rx(roll) (kinematics.ypr_matrix); B = R diag(axes^2) R^T
-        cy, sy = math.cos(states[i, 3]), math.sin(states[i, 3])
-        cp, sp = math.cos(states[i, 4]), math.sin(states[i, 4])
-        cr, sr = math.cos(states[i, 5]), math.sin(states[i, 5])
-        R[0, 0], R[0, 1], R[0, 2] = cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr
-        R[1, 0], R[1, 1], R[1, 2] = sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr
-        R[2, 0], R[2, 1], R[2, 2] = -sp, cp * sr, cp * cr
+        ypr_into(R, states[i, 3], states[i, 4], states[i, 5])   # B = R diag(axes^2) R^T
         a0, a1, a2 = states[i, 6] ** 2, states[i, 7] ** 2, states[i, 8] ** 2
         for r in range(3):
             for c in range(3):
@@ -127,3 +133,50 @@ def project_states(states, T, K, cos, sin, n_image):
             patch[v, i, 1] = centres[i, v, 1]
             patch[v, i, 2] = _SQRT2 * K[v, 0] * minor if ok else 1.0
     return contour, normal, patch, valid, centres
+
+
+@njit
+def _logaddexp(a, b):
+    """``numpy.logaddexp`` for two floats (its branches: equal, either larger, NaN)."""
+    if a == b:
+        return a + math.log(2.0)
+    d = a - b
+    if d > 0.0:
+        return a + math.log1p(math.exp(-d))
+    if d <= 0.0:
+        return b + math.log1p(math.exp(d))
+    return a + b
+
+
+@njit
+def blob_pair_kernel(centres, pairs, sigma_px, log_outlier, floor):
+    """:func:`.likelihood.blob_pair_log_likelihood` in one compiled pass over the particles'
+    ellipse centres ``(N, V, 2)`` and the blob pairs ``(M, V, 2)`` (px): ``log(outlier + sum_j
+    prod_v N(c_v; m_jv, sigma^2 I) / M)``, the outlier alone where that is not finite (the
+    exponents floored at ``floor`` below each row's largest, as :func:`.proposal.logsumexp`)."""
+    N, V = centres.shape[0], centres.shape[1]
+    M = pairs.shape[0]
+    out = np.full(N, log_outlier)
+    if M == 0:
+        return out
+    c0 = -V * math.log(2.0 * math.pi * sigma_px ** 2)
+    log_n = np.empty(M)
+    for i in range(N):
+        m = -np.inf
+        for j in range(M):
+            d2 = 0.0
+            for v in range(V):
+                for a in range(2):
+                    e = centres[i, v, a] - pairs[j, v, a]
+                    d2 += e * e
+            log_n[j] = -0.5 * d2 / sigma_px ** 2 + c0
+            m = max(m, log_n[j])
+        if not np.isfinite(m):
+            continue
+        s = 0.0
+        for j in range(M):
+            s += math.exp(max(log_n[j] - m, floor))
+        r = _logaddexp(log_outlier, math.log(s) + m - math.log(M))
+        if np.isfinite(r):
+            out[i] = r
+    return out

@@ -31,6 +31,7 @@ the camera or off the image cost the distance transform's cap at every point.
 from __future__ import annotations
 
 import functools
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -43,8 +44,12 @@ from humimic.perception.cues.edges import DT_CAP_PX, dt_distance, shape_log_like
 from humimic.perception.cues.histograms import patch_color_log_likelihood, patch_histograms
 from humimic.perception.cues.skin import rim_skin_distance
 from humimic.perception.trackers.frame_cues import FrameCues, frame_cues
-from humimic.perception.trackers.gest.kernels import camera_arrays, project_states
-from humimic.perception.trackers.gest.proposal import logsumexp
+from humimic.perception.trackers.gest.kernels import (
+    blob_pair_kernel,
+    camera_arrays,
+    project_states,
+)
+from humimic.perception.trackers.gest.proposal import EXP_FLOOR, logsumexp
 from humimic.sensors.camera_model import CameraImage
 
 #: One square patch centred on the ellipse, ``s`` = its side (px) (histograms' patch units).
@@ -272,7 +277,16 @@ def ellipse_family(centre: np.ndarray, semi_axes: np.ndarray, angles: np.ndarray
 def blob_pair_log_likelihood(centres: np.ndarray, pairs: np.ndarray, sigma_px: float,
                              outlier_density: float) -> np.ndarray:
     """``log(outlier + sum_j prod_v N(c_v; m_jv, sigma^2 I) / M)`` for the particles' ellipse
-    centres ``(N, V, 2)`` and the matched blob centroids ``pairs (M, V, 2)`` (px)."""
+    centres ``(N, V, 2)`` and the matched blob centroids ``pairs (M, V, 2)`` (px), compiled
+    (:func:`.kernels.blob_pair_kernel`; :func:`blob_pair_log_likelihood_numpy` is the array
+    form)."""
+    return blob_pair_kernel(np.asarray(centres, float), np.asarray(pairs, float).reshape(
+        -1, *np.shape(centres)[1:]), float(sigma_px), math.log(outlier_density), EXP_FLOOR)
+
+
+def blob_pair_log_likelihood_numpy(centres: np.ndarray, pairs: np.ndarray, sigma_px: float,
+                                   outlier_density: float) -> np.ndarray:
+    """:func:`blob_pair_log_likelihood` in array operations (its reference in tests)."""
     out = np.full(len(centres), np.log(outlier_density))
     if len(pairs):
         d2 = np.sum((centres[:, None] - pairs[None]) ** 2, axis=(2, 3))      # (N, M)

@@ -22,6 +22,7 @@ import numpy as np
 
 from humimic.estimation.particles.densities import Mixture, RandomWalk, UniformBox
 from humimic.estimation.particles.resampling import resample_indices
+from humimic.maths.jit import njit
 
 #: Centre, orientation and semi-axes in the 9-D state.
 POS, ORI, AXES = slice(0, 3), slice(3, 6), slice(6, 9)
@@ -49,7 +50,62 @@ def logsumexp(a: np.ndarray, axis: int = -1) -> np.ndarray:
     return np.where(np.isfinite(np.squeeze(m, axis)), out, np.squeeze(m, axis))
 
 
+@njit
+def walk_table(x, particles, log_weights, sigma, floor):
+    """``t_ij = log w_j - |(x_i - x_j) / sigma|^2 / 2`` for rows ``x (n, d)`` and weighted
+    ``particles (N, d)``, each row minus its maximum ``m_i`` and floored at ``floor``
+    (:data:`EXP_FLOOR`); rows whose maximum is not finite (NaN if the row holds one) are left
+    zero. Returns ``(t (n, N), m (n,))``: one compiled pass, no temporaries (the exponentials
+    are left to numpy, whose vectorised ``exp`` a compiled loop does not match: ~2x faster
+    than :func:`walk_predictive_numpy` at 100 x 100)."""
+    n, d = x.shape
+    N = particles.shape[0]
+    inv = 1.0 / sigma
+    ps = np.empty((d, N))                   # scaled, one row per dimension: loops over j
+    for j in range(N):                      # vectorise
+        for k in range(d):
+            ps[k, j] = particles[j, k] * inv[k]
+    t = np.empty((n, N))
+    m = np.empty(n)
+    for i in range(n):
+        row = t[i]
+        row[:] = 0.0
+        for k in range(d):
+            xk = x[i, k] * inv[k]
+            for j in range(N):
+                e = xk - ps[k, j]
+                row[j] += e * e
+        mi = -np.inf
+        for j in range(N):
+            row[j] = log_weights[j] - 0.5 * row[j]
+            if row[j] > mi or row[j] != row[j]:             # a NaN row stays NaN
+                mi = row[j]
+        m[i] = mi
+        if np.isfinite(mi):
+            for j in range(N):
+                row[j] = max(row[j] - mi, floor)
+        else:
+            row[:] = 0.0
+    return t, m
+
+
 def walk_predictive(x: np.ndarray, particles: np.ndarray, log_weights: np.ndarray,
+                    sigma: np.ndarray) -> np.ndarray:
+    """``log sum_j w_j N(x_i; x_j, diag(sigma^2))`` for every row of ``x (n, d)``: a random
+    walk's predictive density from weighted ``particles (N, d)`` (normalised ``log_weights``),
+    the ``(n, N)`` table from :func:`walk_table` (:func:`walk_predictive_numpy` is the array
+    form)."""
+    sigma = np.asarray(sigma, float)
+    t, m = walk_table(np.asarray(x, float), np.asarray(particles, float),
+                      np.asarray(log_weights, float), sigma, EXP_FLOOR)
+    const = float(np.sum(np.log(sigma))) + 0.5 * len(sigma) * _LOG_2PI
+    out = np.log(np.exp(t, out=t) @ np.ones(t.shape[1]))       # row sums: gemv, 3x np.sum's speed
+    out += m
+    out -= const
+    return np.where(np.isfinite(m), out, m - const)
+
+
+def walk_predictive_numpy(x: np.ndarray, particles: np.ndarray, log_weights: np.ndarray,
                     sigma: np.ndarray) -> np.ndarray:
     """``log sum_j w_j N(x_i; x_j, diag(sigma^2))`` for every row of ``x (n, d)``: a random
     walk's predictive density from weighted ``particles (N, d)`` (normalised ``log_weights``),
