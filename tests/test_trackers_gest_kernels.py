@@ -3,7 +3,9 @@ projection of the hand ellipsoids (Menezes eq. 15, :func:`project_views` against
 :func:`project_views_numpy`, distorted cameras, ellipsoids behind and straddling the camera)
 the colour cue's counts (eq. 6, :func:`patch_color_log_likelihood` against
 :func:`patch_color_log_likelihood_numpy`, patches on, across and off the image's edges) and
-the stereo cue (:func:`blob_pair_log_likelihood`, ellipses off the image, no pair)."""
+the stereo cue (:func:`blob_pair_log_likelihood`, ellipses off the image, no pair), and the
+random walk's predictive densities over nested parts of the state in one pass
+(:func:`walk_predictives`, against :func:`walk_predictive_numpy` on each part)."""
 
 from __future__ import annotations
 
@@ -23,6 +25,11 @@ from humimic.perception.trackers.gest.likelihood import (
     hand_view,
     project_views,
     project_views_numpy,
+)
+from humimic.perception.trackers.gest.proposal import (
+    walk_densities,
+    walk_predictive_numpy,
+    walk_predictives,
 )
 from humimic.sensors.camera_model import CameraImage
 
@@ -88,3 +95,23 @@ def test_compiled_stereo_cue_is_the_array_form():
             np.testing.assert_allclose(ours, expect, rtol=1e-9)
             assert (ours[:3] == np.log(outlier)).all()
             assert m == 0 or ours[3] > np.log(outlier) + 5.0
+
+
+def test_nested_walk_predictives_are_the_array_form_on_each_part():
+    rng = np.random.default_rng(6)
+    sigma = np.array([0.02, 0.02, 0.02, 0.0175, 0.0175, 0.0175, 1e-4, 1e-4, 1e-4])
+    particles = HAND + rng.normal(0.0, 1.0, (80, 9)) * sigma * [5, 5, 5, 20, 20, 20, 8, 8, 8]
+    x = particles[rng.integers(0, 80, 60)] + rng.normal(0.0, 1.0, (60, 9)) * sigma * 2
+    lw = rng.normal(0.0, 3.0, 80)
+    lw[:4] = -np.inf
+    lw -= np.log(np.sum(np.exp(lw)))
+    starts = (0, 3, 6)
+    got = walk_predictives(x, particles, lw, sigma, starts)
+    for s, row in zip(starts, got, strict=True):
+        expect = walk_predictive_numpy(x[:, s:], particles[:, s:], lw, sigma[s:])
+        np.testing.assert_allclose(row, expect, rtol=1e-9)
+    np.testing.assert_array_equal(walk_densities(x, particles, lw, sigma), got)
+    y = x.copy()
+    y[0, 7] += sigma[7]                                     # not the kept call's arguments
+    again = walk_densities(y, particles, lw, sigma)
+    assert again[2, 0] != got[2, 0] and (again[:, 1:] == got[:, 1:]).all()

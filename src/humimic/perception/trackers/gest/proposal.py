@@ -51,58 +51,100 @@ def logsumexp(a: np.ndarray, axis: int = -1) -> np.ndarray:
 
 
 @njit
-def walk_table(x, particles, log_weights, sigma, floor):
-    """``t_ij = log w_j - |(x_i - x_j) / sigma|^2 / 2`` for rows ``x (n, d)`` and weighted
-    ``particles (N, d)``, each row minus its maximum ``m_i`` and floored at ``floor``
+def walk_tables(x, particles, log_weights, sigma, starts, floor):
+    """``t_qij = log w_j - |(x_i - x_j)_{s_q:} / sigma_{s_q:}|^2 / 2`` for rows ``x (n, d)``
+    and weighted ``particles (N, d)`` over the trailing dimensions from each of ``starts``
+    (ascending), each row minus its maximum ``m_qi`` and floored at ``floor``
     (:data:`EXP_FLOOR`); rows whose maximum is not finite (NaN if the row holds one) are left
-    zero. Returns ``(t (n, N), m (n,))``: one compiled pass, no temporaries (the exponentials
-    are left to numpy, whose vectorised ``exp`` a compiled loop does not match: ~2x faster
-    than :func:`walk_predictive_numpy` at 100 x 100)."""
+    zero. Returns ``(t (Q, n, N), m (Q, n))``: one compiled pass for all ``Q`` tables (the
+    squared distances summed from the last dimension backwards), no temporaries; the
+    exponentials are left to numpy, whose vectorised ``exp`` a compiled loop does not match."""
     n, d = x.shape
-    N = particles.shape[0]
+    N, Q = particles.shape[0], len(starts)
     inv = 1.0 / sigma
     ps = np.empty((d, N))                   # scaled, one row per dimension: loops over j
     for j in range(N):                      # vectorise
         for k in range(d):
             ps[k, j] = particles[j, k] * inv[k]
-    t = np.empty((n, N))
-    m = np.empty(n)
+    t = np.empty((Q, n, N))
+    m = np.empty((Q, n))
+    acc = np.empty(N)
     for i in range(n):
-        row = t[i]
-        row[:] = 0.0
-        for k in range(d):
+        acc[:] = 0.0
+        q = Q - 1
+        for k in range(d - 1, -1, -1):
             xk = x[i, k] * inv[k]
             for j in range(N):
                 e = xk - ps[k, j]
-                row[j] += e * e
-        mi = -np.inf
-        for j in range(N):
-            row[j] = log_weights[j] - 0.5 * row[j]
-            if row[j] > mi or row[j] != row[j]:             # a NaN row stays NaN
-                mi = row[j]
-        m[i] = mi
-        if np.isfinite(mi):
+                acc[j] += e * e
+            if q < 0 or k != starts[q]:
+                continue
+            row = t[q, i]
+            mi = -np.inf
             for j in range(N):
-                row[j] = max(row[j] - mi, floor)
-        else:
-            row[:] = 0.0
+                row[j] = log_weights[j] - 0.5 * acc[j]
+                if row[j] > mi or row[j] != row[j]:         # a NaN row stays NaN
+                    mi = row[j]
+            m[q, i] = mi
+            if np.isfinite(mi):
+                for j in range(N):
+                    row[j] = max(row[j] - mi, floor)
+            else:
+                row[:] = 0.0
+            q -= 1
     return t, m
+
+
+def walk_predictives(x: np.ndarray, particles: np.ndarray, log_weights: np.ndarray,
+                     sigma: np.ndarray, starts: tuple[int, ...] = (0,)) -> np.ndarray:
+    """:func:`walk_predictive` over the trailing dimensions from each of ``starts``
+    (ascending): ``(len(starts), n)``, the tables of :func:`walk_tables`, summed by one
+    matrix product."""
+    sigma = np.asarray(sigma, float)
+    t, m = walk_tables(np.asarray(x, float), np.asarray(particles, float),
+                       np.asarray(log_weights, float), sigma, np.asarray(starts, np.int64),
+                       EXP_FLOOR)
+    log_sigma = np.log(sigma)
+    const = np.array([np.sum(log_sigma[s:]) + 0.5 * (len(sigma) - s) * _LOG_2PI
+                      for s in starts])[:, None]
+    out = np.log(np.exp(t, out=t) @ np.ones(t.shape[2]))         # row sums: gemv, 3x np.sum's
+    out += m
+    out -= const
+    return np.where(np.isfinite(m), out, m - const)
+
+
+#: One entry: the arguments and result of the last :func:`walk_densities` call.
+_LAST_WALK: tuple | None = None
+
+
+def walk_densities(x: np.ndarray, particles: np.ndarray, log_weights: np.ndarray,
+                   sigma: np.ndarray) -> np.ndarray:
+    """:func:`walk_predictives` of the 9-D hand state over the whole state, the orientation
+    and semi-axes, and the semi-axes (``f``, ``f_oa``, ``f_a``, ``(3, n)``): the dynamics'
+    predictive density (:meth:`PoseReset.predictive_log_density`) and the importance
+    function's (:meth:`CandidateProposal.log_density`) share ``f_a`` and the distances; the
+    last call is kept, and returned again for equal arguments (ICONDENSATION asks both on the
+    same particles)."""
+    global _LAST_WALK
+    last = _LAST_WALK
+    args = (x, particles, log_weights, sigma)
+    if last is not None and all(np.array_equal(a, b) for a, b in zip(args, last[0],
+                                                                     strict=True)):
+        return last[1]
+    out = walk_predictives(x, particles, log_weights, sigma, (POS.start, ORI.start,
+                                                             AXES.start))
+    out.setflags(write=False)
+    _LAST_WALK = (tuple(np.array(a, float) for a in args), out)
+    return out
 
 
 def walk_predictive(x: np.ndarray, particles: np.ndarray, log_weights: np.ndarray,
                     sigma: np.ndarray) -> np.ndarray:
     """``log sum_j w_j N(x_i; x_j, diag(sigma^2))`` for every row of ``x (n, d)``: a random
     walk's predictive density from weighted ``particles (N, d)`` (normalised ``log_weights``),
-    the ``(n, N)`` table from :func:`walk_table` (:func:`walk_predictive_numpy` is the array
-    form)."""
-    sigma = np.asarray(sigma, float)
-    t, m = walk_table(np.asarray(x, float), np.asarray(particles, float),
-                      np.asarray(log_weights, float), sigma, EXP_FLOOR)
-    const = float(np.sum(np.log(sigma))) + 0.5 * len(sigma) * _LOG_2PI
-    out = np.log(np.exp(t, out=t) @ np.ones(t.shape[1]))       # row sums: gemv, 3x np.sum's speed
-    out += m
-    out -= const
-    return np.where(np.isfinite(m), out, m - const)
+    the ``(n, N)`` table from :func:`walk_tables` (:func:`walk_predictive_numpy` is the array
+    form; ~2x faster at 100 x 100)."""
+    return walk_predictives(x, particles, log_weights, sigma)[0]
 
 
 def walk_predictive_numpy(x: np.ndarray, particles: np.ndarray, log_weights: np.ndarray,
@@ -167,10 +209,8 @@ class PoseReset:
         and ``f_a`` the random walks' predictive densities over the whole state and over the
         semi-axes (normalised weights): two ``(n, N)`` tables reduced by rows, no table-wide
         ``logaddexp``."""
-        x, particles = np.asarray(x, float), np.asarray(particles, float)
-        lw = np.asarray(log_weights, float)
-        f = walk_predictive(x, particles, lw, self.walk.sigma)
-        f_a = walk_predictive(x[:, AXES], particles[:, AXES], lw, self.walk.sigma[AXES])
+        x = np.asarray(x, float)
+        f, _, f_a = walk_densities(x, particles, log_weights, self.walk.sigma)
         return np.logaddexp(math.log1p(-self.eps) + f,
                             math.log(self.eps) + self.box.log_density(x[:, POSE]) + f_a)
 
@@ -181,7 +221,9 @@ class PoseReset:
 @dataclass(frozen=True)
 class CandidateProposal:
     """``pi(x) = pi_3d(p) [(1 - fresh) f(o, a) + fresh U(o) f(a)]`` with ``f`` the particle
-    set's predictive density (random walk ``walk`` from weighted ``particles``)."""
+    set's predictive density (random walk ``walk`` from weighted ``particles``; the
+    normalised ``log_weights`` that ICONDENSATION's dynamics see, so that
+    :func:`walk_densities` computes ``f(a)`` once for both)."""
 
     positions: Mixture
     particles: np.ndarray
@@ -205,9 +247,7 @@ class CandidateProposal:
 
     def log_density(self, x: np.ndarray) -> np.ndarray:
         x = np.asarray(x, float)
-        lw, s = self.log_weights, self.walk.sigma
-        f_oa = walk_predictive(x[:, 3:], self.particles[:, 3:], lw, s[3:])
-        f_a = walk_predictive(x[:, AXES], self.particles[:, AXES], lw, s[AXES])
+        _, f_oa, f_a = walk_densities(x, self.particles, self.log_weights, self.walk.sigma)
         with np.errstate(divide="ignore"):
             mix = np.logaddexp(math.log1p(-self.fresh) + f_oa if self.fresh < 1 else -np.inf,
                                math.log(self.fresh) + self.orientations.log_density(x[:, ORI])
