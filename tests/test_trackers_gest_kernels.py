@@ -1,11 +1,11 @@
 """GEST's compiled per-particle loops against the array operations they replace: the
 projection of the hand ellipsoids (Menezes eq. 15, :func:`project_views` against
-:func:`project_views_numpy`, distorted cameras, ellipsoids behind and straddling the camera)
-the colour cue's counts (eq. 6, :func:`patch_color_log_likelihood` against
-:func:`patch_color_log_likelihood_numpy`, patches on, across and off the image's edges) and
-the stereo cue (:func:`blob_pair_log_likelihood`, ellipses off the image, no pair), and the
-random walk's predictive densities over nested parts of the state in one pass
-(:func:`walk_predictives`, against :func:`walk_predictive_numpy` on each part)."""
+:func:`project_views_numpy`, distorted cameras, ellipsoids behind and straddling the camera),
+the stereo cue (:func:`blob_pair_log_likelihood`, ellipses off the image, no pair), the shape and
+skin cues' samples (:func:`rim_distances`: the very numbers of :func:`shape_distance` and
+:func:`skin_distance`), and the random walk's predictive densities over nested parts of the
+state in one pass (:func:`walk_predictives` against :func:`walk_predictive_numpy` on each
+part)."""
 
 from __future__ import annotations
 
@@ -14,17 +14,15 @@ from dataclasses import replace
 import numpy as np
 from _synth_vision import stereo_head
 
-from humimic.perception.cues.histograms import (
-    patch_color_log_likelihood,
-    patch_color_log_likelihood_numpy,
-    quantize,
-)
 from humimic.perception.trackers.gest.likelihood import (
     blob_pair_log_likelihood,
     blob_pair_log_likelihood_numpy,
     hand_view,
     project_views,
     project_views_numpy,
+    rim_distances,
+    shape_distance,
+    skin_distance,
 )
 from humimic.perception.trackers.gest.proposal import (
     walk_densities,
@@ -66,21 +64,6 @@ def test_compiled_projection_is_the_array_form():
                 np.testing.assert_allclose(getattr(p, f), getattr(e, f), rtol=1e-9, atol=1e-9)
 
 
-def test_compiled_colour_cue_is_the_array_form():
-    rng = np.random.default_rng(4)
-    q = quantize(rng.integers(0, 256, (90, 120, 3), dtype=np.uint8), 16)
-    patches = np.array([[0.0, 0.0, 1.0, 1.0], [0.2, 1.5, 1.6, 0.8]])
-    refs = rng.random((2, 3, 16))
-    refs /= refs.sum(-1, keepdims=True)
-    states = np.c_[rng.uniform(-30, 150, (300, 2)), rng.uniform(0.5, 40, 300)]
-    states[0] = (-500.0, -500.0, 10.0)                      # wholly off the image
-    for grid in (8, 13):
-        ours = patch_color_log_likelihood(q, states, patches, refs, 0.3, grid)
-        expect = patch_color_log_likelihood_numpy(q, states, patches, refs, 0.3, grid)
-        np.testing.assert_allclose(ours, expect, rtol=1e-9)
-        assert ours[0] == -6.0 / (2 * 0.3**2)               # D = 1 in every patch, channel
-
-
 def test_compiled_stereo_cue_is_the_array_form():
     rng = np.random.default_rng(5)
     centres = rng.normal(100.0, 3.0, (200, 2, 2))
@@ -115,3 +98,26 @@ def test_nested_walk_predictives_are_the_array_form_on_each_part():
     y[0, 7] += sigma[7]                                     # not the kept call's arguments
     again = walk_densities(y, particles, lw, sigma)
     assert again[2, 0] != got[2, 0] and (again[:, 1:] == got[:, 1:]).all()
+
+
+def test_rim_samples_are_the_shape_and_skin_cues_exactly():
+    """The contour and rim points as one float32 two-channel map: the same bilinear samples
+    as the cues' own one-channel maps, to the bit, contours across the image's edges too."""
+    cam, _ = stereo_head()
+    rng = np.random.default_rng(7)
+    image = rng.integers(0, 256, (240, 320, 3), dtype=np.uint8)
+    image[rng.random((240, 320)) < 0.9] = 0                 # few edges: a spread-out DT
+    view = hand_view(CameraImage(0.0, cam, image), 32)
+    skin = rng.random((240, 320)).astype(np.float32)
+    states = _states(rng, 150, cam)
+    states[3:60, 1] += rng.uniform(-0.6, 0.6, 57)           # some across the image's sides
+    assert view.skin is None and view.dt.max() > 3.0
+    for v in (replace(view, skin=skin), view):
+        proj = project_views(states, [v], 20)[0][0]
+        assert (proj.contour < 0).any() and (proj.contour[..., 0] > 320).any()
+        d, d_skin = rim_distances(proj, v)
+        np.testing.assert_array_equal(d, shape_distance(proj, v))
+        if v.skin is None:
+            assert d_skin is None
+        else:
+            np.testing.assert_array_equal(d_skin, skin_distance(proj, v))

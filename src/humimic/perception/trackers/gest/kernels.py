@@ -180,3 +180,21 @@ def blob_pair_kernel(centres, pairs, sigma_px, log_outlier, floor):
         if np.isfinite(r):
             out[i] = r
     return out
+
+
+@njit
+def rim_maps(contour, normal, offset_px):
+    """The points the shape and skin cues sample, as ``cv2.remap``'s two-channel float32 maps
+    ``(3, N, n, 2)``: the contour points ``(N, n, 2)``, and the points ``offset_px`` inside and
+    outside along the outward unit normals (``contour -/+ offset_px normal``, in float64 then
+    rounded, as :func:`~humimic.perception.cues.skin.rim_skin_distance` forms them)."""
+    N, n = contour.shape[0], contour.shape[1]
+    out = np.empty((3, N, n, 2), np.float32)
+    for i in range(N):
+        for j in range(n):
+            for a in range(2):
+                c, step = contour[i, j, a], offset_px * normal[i, j, a]
+                out[0, i, j, a] = c
+                out[1, i, j, a] = c - step
+                out[2, i, j, a] = c + step
+    return out

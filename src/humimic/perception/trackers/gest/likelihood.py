@@ -34,6 +34,7 @@ import functools
 import math
 from dataclasses import dataclass
 
+import cv2
 import numpy as np
 
 from humimic.bodymodel import conics
@@ -48,6 +49,7 @@ from humimic.perception.trackers.gest.kernels import (
     blob_pair_kernel,
     camera_arrays,
     project_states,
+    rim_maps,
 )
 from humimic.perception.trackers.gest.proposal import EXP_FLOOR, logsumexp
 from humimic.sensors.camera_model import CameraImage
@@ -55,6 +57,8 @@ from humimic.sensors.camera_model import CameraImage
 #: One square patch centred on the ellipse, ``s`` = its side (px) (histograms' patch units).
 INSCRIBED = np.array([[0.0, 0.0, 1.0, 1.0]])
 OFF_IMAGE = -1.0e6
+#: How far inside and outside the contour the skin cue samples (px).
+RIM_OFFSET_PX = 2.0
 
 
 HandView = FrameCues
@@ -242,12 +246,39 @@ def project_views_numpy(states: np.ndarray, views: list, n_points: int,
     return projs, centres
 
 
+def _sampled_mean(image: np.ndarray, maps: np.ndarray, outside: float) -> np.ndarray:
+    """The mean over the last point axis of ``image`` sampled bilinearly (points off it read
+    ``outside``) at the float32 points ``maps (..., n, 2)``: one ``cv2.remap`` with a
+    two-channel map, the same samples as :func:`~humimic.perception.cues.edges.sample`'s two
+    one-channel maps."""
+    src = image if image.dtype in (np.uint8, np.float32) else image.astype(np.float32)
+    n = maps.shape[-2]
+    if maps.size == 0:
+        return np.zeros(maps.shape[:-2])
+    out = cv2.remap(src, maps.reshape(-1, n, 2), None, cv2.INTER_LINEAR,
+                    borderMode=cv2.BORDER_CONSTANT, borderValue=float(outside))
+    return out.reshape(maps.shape[:-1]).astype(np.float64).mean(axis=-1)
+
+
+def rim_distances(proj: HandProjection, view: HandView, offset_px: float = RIM_OFFSET_PX
+                  ) -> tuple[np.ndarray, np.ndarray | None]:
+    """:func:`shape_distance` and :func:`skin_distance` (None without a skin map) from the
+    float32 sample points of :func:`.kernels.rim_maps`: one conversion, one gather per cue
+    image (equal to the two functions, which are their references in tests)."""
+    maps = rim_maps(proj.contour, proj.normal, float(offset_px))
+    d = _sampled_mean(view.dt, maps[0], DT_CAP_PX)                      # Menezes eq. 3
+    if view.skin is None:
+        return d, None
+    inside, outside = _sampled_mean(view.skin, maps[1:], 0.0)
+    return d, 1.0 - (inside - outside)
+
+
 def shape_distance(proj: HandProjection, view: HandView) -> np.ndarray:
     """Menezes eq. 3: mean distance-transform value at the contour points (px)."""
     return dt_distance(view.dt, proj.contour, DT_CAP_PX)              # Menezes eq. 3
 
 
-def skin_distance(proj: HandProjection, view: HandView, offset_px: float = 2.0
+def skin_distance(proj: HandProjection, view: HandView, offset_px: float = RIM_OFFSET_PX
                   ) -> np.ndarray:
     """``D_k = 1 - (mean skin inside - mean skin outside)`` in [0, 2] (module docstring),
     sampled ``offset_px`` either side of the contour along its normals."""
@@ -310,9 +341,10 @@ def hand_log_likelihood(states: np.ndarray, views: list[HandView], ref: np.ndarr
     for proj, view in zip(projs, views, strict=True):
         if proj is None:
             continue
-        out += shape_log_likelihood(shape_distance(proj, view), sigma_s)  # Menezes eq. 2
-        if view.skin is not None:
-            out += shape_log_likelihood(skin_distance(proj, view), sigma_k)
+        d, d_skin = rim_distances(proj, view)
+        out += shape_log_likelihood(d, sigma_s)                           # Menezes eq. 2
+        if d_skin is not None:
+            out += shape_log_likelihood(d_skin, sigma_k)
         if ref is not None:
             out += patch_color_log_likelihood(view.qimage, proj.patch_state, INSCRIBED,
                                               ref[None], sigma_c)       # Menezes eq. 6
