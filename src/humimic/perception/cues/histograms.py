@@ -105,8 +105,8 @@ def patch_counts(qimage: QuantizedImage, states: np.ndarray, patches: np.ndarray
     x = np.asarray(states, dtype=np.float64)
     fu, fv = _lattice(grid)
     counts, total = patch_counts_kernel(qimage.planes, qimage.height, qimage.width,
-                                        qimage.bins, x[None] if x.ndim == 1 else x,
-                                        np.asarray(patches, np.float64), fu, fv)
+                                        qimage.bins, np.ascontiguousarray(np.atleast_2d(x)),
+                                        np.ascontiguousarray(patches, np.float64), fu, fv)
     return counts[..., :qimage.bins], total
 
 
@@ -151,9 +151,9 @@ def patch_color_log_likelihood(qimage: QuantizedImage, states: np.ndarray,
     form)."""
     fu, fv = _lattice(grid)
     bc = patch_bhattacharyya(qimage.planes, qimage.height, qimage.width, qimage.bins,
-                             np.atleast_2d(np.asarray(states, np.float64)),
-                             np.asarray(patches, np.float64),
-                             np.sqrt(np.asarray(refs, np.float64)), fu, fv)
+                             np.ascontiguousarray(np.atleast_2d(states), np.float64),
+                             np.ascontiguousarray(patches, np.float64),
+                             np.sqrt(np.ascontiguousarray(refs, np.float64)), fu, fv)
     d2 = np.clip(1.0 - bc, 0.0, 1.0)
     return -d2.sum(axis=(1, 2)) / (2.0 * sigma * sigma)                 # Menezes eq. 6
 

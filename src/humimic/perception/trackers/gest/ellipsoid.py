@@ -61,7 +61,7 @@ def mean_orientation(ypr: np.ndarray, log_weights: np.ndarray) -> np.ndarray:
     orientations ``ypr (N, 3)``: the chordal L2 mean of the rotations, each first turned by
     the symmetry of :data:`FLIPS` that brings it nearest the heaviest particle's."""
     w = np.exp(normalize(np.asarray(log_weights, float)).log_weights)
-    return _nearest_rotation_ypr(flipped_rotation_sum(np.asarray(ypr, float), w))
+    return _nearest_rotation_ypr(flipped_rotation_sum(np.ascontiguousarray(ypr, float), w))
 
 
 def _nearest_rotation_ypr(M: np.ndarray) -> np.ndarray:

@@ -214,7 +214,7 @@ def project_views(states: np.ndarray, views: list, n_points: int,
     the others), and the pixel centres ``(N, V, 2)`` of the image ellipses in every view: eq.
     15 in one compiled pass over the particles and views (:func:`.kernels.project_states`;
     :func:`project_views_numpy` is the array form)."""
-    states = np.atleast_2d(np.asarray(states, float))
+    states = np.ascontiguousarray(np.atleast_2d(states), float)
     check_hand_states(states)
     ni = len(views) if image_views is None else min(image_views, len(views))
     T, K = camera_arrays(views)
@@ -311,8 +311,9 @@ def blob_pair_log_likelihood(centres: np.ndarray, pairs: np.ndarray, sigma_px: f
     centres ``(N, V, 2)`` and the matched blob centroids ``pairs (M, V, 2)`` (px), compiled
     (:func:`.kernels.blob_pair_kernel`; :func:`blob_pair_log_likelihood_numpy` is the array
     form)."""
-    return blob_pair_kernel(np.asarray(centres, float), np.asarray(pairs, float).reshape(
-        -1, *np.shape(centres)[1:]), float(sigma_px), math.log(outlier_density), EXP_FLOOR)
+    return blob_pair_kernel(np.ascontiguousarray(centres, float), np.ascontiguousarray(
+        pairs, float).reshape(-1, *np.shape(centres)[1:]), float(sigma_px),
+        math.log(outlier_density), EXP_FLOOR)
 
 
 def blob_pair_log_likelihood_numpy(centres: np.ndarray, pairs: np.ndarray, sigma_px: float,

@@ -100,10 +100,10 @@ def walk_predictives(x: np.ndarray, particles: np.ndarray, log_weights: np.ndarr
     """:func:`walk_predictive` over the trailing dimensions from each of ``starts``
     (ascending): ``(len(starts), n)``, the tables of :func:`walk_tables`, summed by one
     matrix product."""
-    sigma = np.asarray(sigma, float)
-    t, m = walk_tables(np.asarray(x, float), np.asarray(particles, float),
-                       np.asarray(log_weights, float), sigma, np.asarray(starts, np.int64),
-                       EXP_FLOOR)
+    sigma = np.ascontiguousarray(sigma, float)
+    t, m = walk_tables(np.ascontiguousarray(x, float), np.ascontiguousarray(particles, float),
+                       np.ascontiguousarray(log_weights, float), sigma,
+                       np.asarray(starts, np.int64), EXP_FLOOR)
     log_sigma = np.log(sigma)
     const = np.array([np.sum(log_sigma[s:]) + 0.5 * (len(sigma) - s) * _LOG_2PI
                       for s in starts])[:, None]
