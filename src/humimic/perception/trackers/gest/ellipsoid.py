@@ -18,42 +18,10 @@ import numpy as np
 from humimic.bodymodel.avatar import ypr_from_matrix
 from humimic.bodymodel.kinematics import ypr_matrix
 from humimic.estimation.particles import normalize
-from humimic.maths.jit import njit
-from humimic.perception.trackers.gest.kernels import ypr_into
+from humimic.perception.trackers.gest.kernels import FLIP_SIGNS, flipped_rotation_sum
 
 #: The ellipsoid's proper symmetries (half turns about its axes).
-FLIPS = np.array([np.diag(d) for d in ((1, 1, 1), (1, -1, -1), (-1, 1, -1), (-1, -1, 1))],
-                 float)
-_SIGNS = np.ascontiguousarray(np.diagonal(FLIPS, axis1=1, axis2=2))      # (4, 3)
-
-
-@njit
-def flipped_rotation_sum(ypr, w):
-    """``M = sum_n w_n R_n F_n``: the rotations ``Rz Ry Rx`` of ``ypr (N, 3)``, each turned by
-    the half turn ``F_n`` of :data:`FLIPS` that brings it nearest the heaviest one's
-    (``argmax w``; ``F = diag(d)`` flips the signs of ``R``'s columns, ``trace(R0^T R F) =
-    sum_j d_j c_j`` with ``c_j`` the dot product of the two matrices' ``j``-th columns), in
-    one compiled pass (:func:`mean_orientation_numpy` is the array form)."""
-    n = ypr.shape[0]
-    R = np.empty((n, 3, 3))
-    for i in range(n):
-        ypr_into(R[i], ypr[i, 0], ypr[i, 1], ypr[i, 2])
-    i0 = np.argmax(w)
-    M = np.zeros((3, 3))
-    c = np.empty(3)
-    for i in range(n):
-        for j in range(3):
-            c[j] = R[i0, 0, j] * R[i, 0, j] + R[i0, 1, j] * R[i, 1, j] + R[i0, 2, j] * R[i, 2, j]
-        best, f = -np.inf, 0
-        for k in range(4):
-            score = _SIGNS[k, 0] * c[0] + _SIGNS[k, 1] * c[1] + _SIGNS[k, 2] * c[2]
-            if score > best:
-                best, f = score, k
-        for j in range(3):
-            wd = w[i] * _SIGNS[f, j]
-            for r in range(3):
-                M[r, j] += R[i, r, j] * wd
-    return M
+FLIPS = np.array([np.diag(d) for d in FLIP_SIGNS], float)
 
 
 def mean_orientation(ypr: np.ndarray, log_weights: np.ndarray) -> np.ndarray:

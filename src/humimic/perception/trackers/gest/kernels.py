@@ -1,9 +1,14 @@
 """GEST's per-particle loops, compiled (:mod:`humimic.maths.jit`): the projection of the hand
-ellipsoids into the cameras (Menezes eq. 15) with their contour points and colour patches. It
-does in one pass over the particles what :func:`.likelihood.views_components` and
-:func:`.likelihood.components_projection` do in a few dozen array operations, whose temporaries
-and call overhead are most of their cost at 100 particles (~0.35 ms of a frame); those numpy
-functions stay as the reference the tests compare it with.
+ellipsoids into the cameras (Menezes eq. 15) with their contour points and colour patches, the
+points the shape and skin cues sample, the stereo cue, and the flipped sum of the particles'
+rotations behind the published orientation. Each does in one pass over the particles what a
+few dozen numpy array operations do (their temporaries and call overhead are most of the cost
+at 100 particles); those numpy functions (:func:`.likelihood.project_views_numpy`,
+:func:`.likelihood.blob_pair_log_likelihood_numpy`, :func:`.ellipsoid.mean_orientation_numpy`,
+the cues' own samplers) stay as the references the tests compare them with.
+
+Kernels that call one another are kept in one file: numba's on-disk cache is keyed on the
+calling kernel's file alone and would not see an edit to a callee in another.
 """
 
 from __future__ import annotations
@@ -198,3 +203,37 @@ def rim_maps(contour, normal, offset_px):
                 out[1, i, j, a] = c - step
                 out[2, i, j, a] = c + step
     return out
+
+
+#: The sign patterns ``d`` of the ellipsoid's proper symmetries, the half turns ``diag(d)``
+#: about its axes (:data:`.ellipsoid.FLIPS`).
+FLIP_SIGNS = np.array([[1.0, 1.0, 1.0], [1.0, -1.0, -1.0], [-1.0, 1.0, -1.0], [-1.0, -1.0, 1.0]])
+
+
+@njit
+def flipped_rotation_sum(ypr, w):
+    """``M = sum_n w_n R_n F_n``: the rotations ``Rz Ry Rx`` of ``ypr (N, 3)``, each turned by
+    the half turn ``F_n`` of :data:`.ellipsoid.FLIPS` that brings it nearest the heaviest one's
+    (``argmax w``; ``F = diag(d)`` flips the signs of ``R``'s columns, ``trace(R0^T R F) =
+    sum_j d_j c_j`` with ``c_j`` the dot product of the two matrices' ``j``-th columns), in
+    one compiled pass (:func:`.ellipsoid.mean_orientation_numpy` is the array form)."""
+    n = ypr.shape[0]
+    R = np.empty((n, 3, 3))
+    for i in range(n):
+        ypr_into(R[i], ypr[i, 0], ypr[i, 1], ypr[i, 2])
+    i0 = np.argmax(w)
+    M = np.zeros((3, 3))
+    c = np.empty(3)
+    for i in range(n):
+        for j in range(3):
+            c[j] = R[i0, 0, j] * R[i, 0, j] + R[i0, 1, j] * R[i, 1, j] + R[i0, 2, j] * R[i, 2, j]
+        best, f = -np.inf, 0
+        for k in range(4):
+            score = FLIP_SIGNS[k, 0] * c[0] + FLIP_SIGNS[k, 1] * c[1] + FLIP_SIGNS[k, 2] * c[2]
+            if score > best:
+                best, f = score, k
+        for j in range(3):
+            wd = w[i] * FLIP_SIGNS[f, j]
+            for r in range(3):
+                M[r, j] += R[i, r, j] * wd
+    return M
