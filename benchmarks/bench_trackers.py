@@ -109,7 +109,8 @@ def main() -> None:
         sections[name](args)
     import cv2
 
-    print(f"({args.clock} time; quartiles over {args.repeats} runs of {args.frames} frames each; "
+    print(f"({args.clock} time; quartiles over {args.repeats} runs of {args.frames} frames each, "
+          f"after an untimed warm-up run (compiled kernels loaded); "
           f"OpenCV threads {cv2.getNumThreads()}; load average {os.getloadavg()[0]:.1f})")
 
 
