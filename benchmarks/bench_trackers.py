@@ -10,8 +10,7 @@ interquartile range over repeats of the whole sequence, each from a fresh tracke
 per-frame image preparation alone. ``--clock cpu`` (default) is ``time.process_time``, every
 thread of this process: on a shared machine the wall clock mostly measures the other sessions,
 but on a quiet one OpenCV's idle workers make CPU time exceed the wall; ``--clock wall`` is
-what a user of a quiet machine sees. Every timed sequence follows one untimed run of it (the
-warm-up: numba's kernels compile, or load from their on-disk cache, on their first call).
+what a user of a quiet machine sees.
 """
 
 # ruff: noqa: I001  -- humimic must be imported before mujoco (headless GL)
@@ -61,9 +60,7 @@ CLOCK = {"cpu": time.process_time, "wall": time.perf_counter}
 clock = CLOCK["cpu"]
 
 
-def time_runs(make, run, repeats: int, warm_up: bool = True) -> list[float]:
-    if warm_up:                 # untimed: first calls compile or load the compiled kernels
-        run(make(-1))
+def time_runs(make, run, repeats: int) -> list[float]:
     out = []
     for r in range(repeats):
         tracker = make(r)
@@ -109,8 +106,7 @@ def main() -> None:
         sections[name](args)
     import cv2
 
-    print(f"({args.clock} time; quartiles over {args.repeats} runs of {args.frames} frames each, "
-          f"after an untimed warm-up run (compiled kernels loaded); "
+    print(f"({args.clock} time; quartiles over {args.repeats} runs of {args.frames} frames each; "
           f"OpenCV threads {cv2.getNumThreads()}; load average {os.getloadavg()[0]:.1f})")
 
 
@@ -199,11 +195,10 @@ def foveal_gest(args) -> None:
                 cfg.model_copy(update={"foveal_cue_radius_px": budget}), True))
     secs: dict[str, list[float]] = {label: [] for label, _, _ in configs}
     share = {}
-    for k in range(args.repeats):       # interleaved: a change of load hits each one alike
+    for _ in range(args.repeats):       # interleaved: a change of load hits each one alike
         for label, c, foveal in configs:
             used.clear()
-            secs[label] += time_runs(lambda r, c=c: GestTracker(c, lut), run(foveal), 1,
-                                     warm_up=k == 0)
+            secs[label] += time_runs(lambda r, c=c: GestTracker(c, lut), run(foveal), 1)
             share[label] = np.mean(used)
     for label, _, foveal in configs:
         report(label, secs[label], GOALS_FPS["gest"])

@@ -246,18 +246,18 @@ def test_tracks_loses_at_the_border_and_reacquires_near_the_exit():
                if s == "tracking") < 0.05                          # measured <= 23 mm
 
 
-def test_warm_up_loads_the_kernels_a_tracking_step_calls():
-    """:func:`.warmup.warm_up` calls every compiled kernel with the array types a tracking
+def test_load_kernels_loads_those_a_tracking_step_calls():
+    """:func:`.warmup.load_kernels` calls every compiled kernel with the array types a tracking
     step (one and two image views) calls it with: each has one compiled specialisation, so
     the first frame compiles nothing."""
     from humimic.perception.cues import histograms
     from humimic.perception.trackers.gest import ellipsoid, kernels, proposal
-    from humimic.perception.trackers.gest.warmup import warm_up
+    from humimic.perception.trackers.gest.warmup import load_kernels
 
     kernels_ = (kernels.project_states, kernels.rim_maps, kernels.blob_pair_kernel,
                 proposal.walk_tables, ellipsoid.flipped_rotation_sum,
                 histograms.patch_bhattacharyya, histograms.patch_counts_kernel)
-    warm_up()
+    load_kernels()
     assert all(len(k.signatures) == 1 for k in kernels_)
     lut = ColorLUT(load_color_model(DEFAULT_COLOR_MODEL), 6)
     cams = stereo_head(k1=0.0, k2=0.0)

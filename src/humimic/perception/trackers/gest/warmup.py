@@ -1,8 +1,8 @@
-"""Load GEST's compiled kernels before its first frame.
+"""Load the compiled kernels of GEST's particle filter before its first frame.
 
 numba compiles a kernel on its first call, or loads it from the on-disk cache (~0.4 s of CPU
 for all of GEST's with a warm cache, ~7 s without one): left to the first frame, that time
-lands in the tracker's per-frame timing and stalls the perception loop once. :func:`warm_up`
+lands in the tracker's per-frame timing and stalls the perception loop once. :func:`load_kernels`
 calls every kernel, through the functions the tracker calls, on a tiny synthetic input of
 the same array types (so the first real frame finds every specialisation loaded); once per
 process.
@@ -42,7 +42,7 @@ class _View:
     qimage: object
 
 
-def warm_up() -> None:
+def load_kernels() -> None:
     """Call every compiled kernel of GEST's step once (module docstring); later calls return
     at once."""
     global _warm
