@@ -1,11 +1,11 @@
 """Load the compiled kernels of GEST's particle filter before its first frame.
 
-numba compiles a kernel on its first call, or loads it from the on-disk cache (~0.4 s of CPU
-for all of GEST's with a warm cache, ~7 s without one): left to the first frame, that time
-lands in the tracker's per-frame timing and stalls the perception loop once. :func:`load_kernels`
-calls every kernel, through the functions the tracker calls, on a tiny synthetic input of
-the same array types (so the first real frame finds every specialisation loaded); once per
-process.
+numba compiles a kernel on its first call, or loads it from the on-disk cache (measured for
+all of these: ~0.2 s of CPU with a warm cache, ~5.5 s without one): left to the first frame,
+that time lands in the tracker's per-frame timing and stalls the perception loop once.
+:func:`load_kernels` calls every kernel, through the functions the tracker calls, on a tiny
+synthetic input of the same array types (so the first real frame finds every specialisation
+loaded); once per process.
 """
 
 from __future__ import annotations
