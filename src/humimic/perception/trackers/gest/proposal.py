@@ -69,6 +69,7 @@ def walk_tables(x, particles, log_weights, sigma, starts, floor):
     t = np.empty((Q, n, N))
     m = np.empty((Q, n))
     acc = np.empty(N)
+    clean = not (np.isnan(x).any() or np.isnan(particles).any() or np.isnan(log_weights).any())
     for i in range(n):
         acc[:] = 0.0
         q = Q - 1
@@ -80,15 +81,21 @@ def walk_tables(x, particles, log_weights, sigma, starts, floor):
             if q < 0 or k != starts[q]:
                 continue
             row = t[q, i]
-            mi = -np.inf
             for j in range(N):
                 row[j] = log_weights[j] - 0.5 * acc[j]
-                if row[j] > mi or row[j] != row[j]:         # a NaN row stays NaN
-                    mi = row[j]
+            mi = -np.inf
+            if clean:                       # a select: vectorised, ~2x the speed
+                for j in range(N):
+                    mi = row[j] if row[j] > mi else mi
+            else:
+                for j in range(N):
+                    if row[j] > mi or row[j] != row[j]:     # a NaN row stays NaN
+                        mi = row[j]
             m[q, i] = mi
             if np.isfinite(mi):
                 for j in range(N):
-                    row[j] = max(row[j] - mi, floor)
+                    v = row[j] - mi
+                    row[j] = v if v > floor else floor
             else:
                 row[:] = 0.0
             q -= 1
