@@ -176,3 +176,35 @@ def test_chromaticity_closed_form_and_shading_invariance():
     bright = img.sum(axis=-1) >= 200
     diff = np.abs(chromaticity(half).astype(int) - out.astype(int))[bright]
     assert diff.max() <= 2, diff.max()
+
+
+def test_compiled_counts_and_colour_cue_are_the_array_form():
+    """The compiled bin counts are the array form's to the count, and eq. 6 from them to
+    rounding, for patches on, across and off the image's edges (and a state that is NaN)."""
+    from humimic.perception.cues.histograms import (
+        patch_color_log_likelihood,
+        patch_color_log_likelihood_numpy,
+        patch_counts,
+        patch_counts_numpy,
+    )
+
+    rng = np.random.default_rng(4)
+    q = quantize(rng.integers(0, 256, (90, 120, 3), dtype=np.uint8), 16)
+    patches = np.array([[0.0, 0.0, 1.0, 1.0], [0.2, 1.5, 1.6, 0.8]])
+    refs = rng.random((2, 3, 16))
+    refs /= refs.sum(-1, keepdims=True)
+    states = np.c_[rng.uniform(-30, 150, (300, 2)), rng.uniform(0.5, 40, 300)]
+    states[0] = (-500.0, -500.0, 10.0)                      # wholly off the image
+    states[1, 0] = np.nan
+    for grid in (8, 13):
+        counts, total = patch_counts(q, states, patches, grid)
+        ours = patch_color_log_likelihood(q, states, patches, refs, 0.3, grid)
+        with np.errstate(invalid="ignore"):                 # the NaN state's cast
+            expect_counts, expect_total = patch_counts_numpy(q, states, patches, grid)
+            expect = patch_color_log_likelihood_numpy(q, states, patches, refs, 0.3, grid)
+        np.testing.assert_array_equal(counts, expect_counts)
+        np.testing.assert_array_equal(total, expect_total)
+        assert (total[:2] == 0).all() and total.max() == grid**2
+        assert ((total > 0) & (total < grid**2)).sum() > 20            # across the edges
+        np.testing.assert_allclose(ours, expect, rtol=1e-9)
+        assert (ours[:2] == -6.0 / (2 * 0.3**2)).all()      # D = 1 in every patch, channel

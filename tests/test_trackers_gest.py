@@ -26,6 +26,7 @@ from humimic.perception.trackers.gest.proposal import (
     PoseReset,
     logsumexp,
     walk_predictive,
+    walk_predictive_numpy,
 )
 from humimic.perception.trackers.gest.stereo import stereo_candidates
 from humimic.perception.trackers.gest.tracker import skin_mask
@@ -141,9 +142,13 @@ def test_walk_predictive_is_scipys_mixture_of_gaussians():
     lw -= scipy_logsumexp(lw)
     table = np.stack([multivariate_normal.logpdf(x, p, np.diag(sigma ** 2)) for p in particles],
                      1)
-    # |x - p|^2 as |x|^2 + |p|^2 - 2 x.p (as RandomWalk's table has it) cancels: ~eps |x/sigma|^2
-    np.testing.assert_allclose(walk_predictive(x, particles, lw, sigma),
-                               scipy_logsumexp(table + lw, axis=1), rtol=0, atol=1e-9)
+    # |x - p|^2 as |x|^2 + |p|^2 - 2 x.p (the array form) cancels: ~eps |x/sigma|^2
+    for f in (walk_predictive, walk_predictive_numpy):
+        np.testing.assert_allclose(f(x, particles, lw, sigma),
+                                   scipy_logsumexp(table + lw, axis=1), rtol=0, atol=1e-9)
+    x[3, 1] = np.nan                                    # NaN in, NaN out (both forms)
+    assert np.isnan(walk_predictive(x, particles, lw, sigma)[3])
+    assert np.isfinite(np.delete(walk_predictive(x, particles, lw, sigma), 3)).all()
 
 
 @pytest.fixture(scope="module")
@@ -194,7 +199,11 @@ def test_mean_orientation_is_scipys_chordal_mean_modulo_the_ellipsoids_symmetrie
     written without (an independent computation), and not the mean of the angles."""
     from scipy.spatial.transform import Rotation
 
-    from humimic.perception.trackers.gest.ellipsoid import FLIPS, mean_orientation
+    from humimic.perception.trackers.gest.ellipsoid import (
+        FLIPS,
+        mean_orientation,
+        mean_orientation_numpy,
+    )
     from humimic.perception.trackers.gest.stage import orientation_error_deg
 
     rng = np.random.default_rng(3)
@@ -207,7 +216,8 @@ def test_mean_orientation_is_scipys_chordal_mean_modulo_the_ellipsoids_symmetrie
     lw[0] = 2.0                                                         # the heaviest is near
     w = np.exp(lw - lw.max())
     expected = near.mean(weights=w / w.sum()).as_euler("ZYX")
-    got = mean_orientation(ypr, lw)
-    assert orientation_error_deg(got[None], expected[None])[0] < 1e-6
+    for f in (mean_orientation, mean_orientation_numpy):        # compiled and array forms
+        got = f(ypr, lw)
+        assert orientation_error_deg(got[None], expected[None])[0] < 1e-6
     naive = np.average(ypr, axis=0, weights=w)
     assert orientation_error_deg(naive[None], expected[None])[0] > 20.0

@@ -246,6 +246,31 @@ def test_tracks_loses_at_the_border_and_reacquires_near_the_exit():
                if s == "tracking") < 0.05                          # measured <= 23 mm
 
 
+def test_load_kernels_loads_those_a_tracking_step_calls():
+    """:func:`.warmup.load_kernels` calls every compiled kernel with the array types a tracking
+    step (one and two image views) calls it with: each has one compiled specialisation, so
+    the first frame compiles nothing."""
+    from humimic.perception.cues import histograms
+    from humimic.perception.trackers.gest import ellipsoid, kernels, proposal
+    from humimic.perception.trackers.gest.warmup import load_kernels
+
+    kernels_ = (kernels.project_states, kernels.rim_maps, kernels.blob_pair_kernel,
+                proposal.walk_tables, ellipsoid.flipped_rotation_sum,
+                histograms.patch_bhattacharyya, histograms.patch_counts_kernel)
+    load_kernels()
+    assert all(len(k.signatures) == 1 for k in kernels_)
+    lut = ColorLUT(load_color_model(DEFAULT_COLOR_MODEL), 6)
+    cams = stereo_head(k1=0.0, k2=0.0)
+    bgs = [np.full((240, 320, 3), 70, np.uint8)] * 2
+    for views in (1, 2):
+        trk = GestTracker(GestConfig(views=views), lut)
+        for k in range(3):
+            res = trk.step(*_draw(bgs, cams, [HAND + np.r_[0.0, 0.005 * k, np.zeros(7)]]),
+                           np.random.default_rng(k))
+        assert res.status == "tracking"
+    assert [len(k.signatures) for k in kernels_] == [1] * len(kernels_)
+
+
 @pytest.mark.parametrize("skin", [None, "[0.45,0.30,0.22]"], ids=["default", "dark"])
 def test_reach_scenario_position_error(tmp_path, skin):
     """menezes_gest_reach's first 1.5 s (the hand 0.75-1.0 m away): measured 6.1-7.1 mm RMS

@@ -20,15 +20,20 @@ from humimic.bodymodel.kinematics import ypr_matrix
 HAND_STATE = ("x", "y", "z", "yaw", "pitch", "roll", "sigma_x", "sigma_y", "sigma_z")
 
 
-def hand_ellipsoids(state: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``R_ref_hand (N, 3, 3)``, centres ``(N, 3)`` and semi-axes ``(N, 3)`` of 9-D hand states
-    ``(N, 9)``. Semi-axes must be positive (a tracker keeps them so, e.g. by clamping)."""
-    state = np.atleast_2d(np.asarray(state, float))
+def check_hand_states(state: np.ndarray) -> None:
+    """Raise ValueError unless ``state (N, 9)`` are hand states with positive semi-axes."""
     if state.shape[-1] != len(HAND_STATE):
         raise ValueError(f"hand state must have {len(HAND_STATE)} values "
                          f"({', '.join(HAND_STATE)}), got {state.shape[-1]}")
     if len(state) and state[:, 6:].min() <= 0.0:         # (np.any's dispatch: 3x the cost)
         raise ValueError("hand state: semi-axes sigma_x, sigma_y, sigma_z must be > 0 m")
+
+
+def hand_ellipsoids(state: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``R_ref_hand (N, 3, 3)``, centres ``(N, 3)`` and semi-axes ``(N, 3)`` of 9-D hand states
+    ``(N, 9)``. Semi-axes must be positive (a tracker keeps them so, e.g. by clamping)."""
+    state = np.atleast_2d(np.asarray(state, float))
+    check_hand_states(state)
     return ypr_matrix(state[:, 3], state[:, 4], state[:, 5]), state[:, :3], state[:, 6:]
 
 

@@ -25,6 +25,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from humimic.maths.jit import njit
+
 HEAD_TORSO_PATCHES = np.array([[0.0, 0.0, 0.8, 1.0],    # head (head width = 1)
                                [0.0, 1.9, 1.6, 1.2]])   # torso below it
 """The ICU tracker's two patches (Menezes Fig. 8), in head widths from the head centre."""
@@ -98,7 +100,19 @@ def patch_grid(states: np.ndarray, patches: np.ndarray, grid: int) -> np.ndarray
 def patch_counts(qimage: QuantizedImage, states: np.ndarray, patches: np.ndarray,
                  grid: int = 8) -> tuple[np.ndarray, np.ndarray]:
     """Bin counts ``(N, P, 3, bins)`` of every patch of every state and the number of samples
-    on the image ``(N, P)`` (:func:`patch_histograms` before normalising)."""
+    on the image ``(N, P)`` (:func:`patch_histograms` before normalising), in one compiled
+    pass (:func:`patch_counts_kernel`; :func:`patch_counts_numpy` is the array form)."""
+    x = np.asarray(states, dtype=np.float64)
+    fu, fv = _lattice(grid)
+    counts, total = patch_counts_kernel(qimage.planes, qimage.height, qimage.width,
+                                        qimage.bins, np.ascontiguousarray(np.atleast_2d(x)),
+                                        np.ascontiguousarray(patches, np.float64), fu, fv)
+    return counts[..., :qimage.bins], total
+
+
+def patch_counts_numpy(qimage: QuantizedImage, states: np.ndarray, patches: np.ndarray,
+                       grid: int = 8) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`patch_counts` in array operations (its reference in tests)."""
     u, v = _grid_uv(states, patches, grid)  # (N, P, S)
     n, p = u.shape[:2]
     h, w, bins = qimage.height, qimage.width, qimage.bins
@@ -132,8 +146,23 @@ def patch_color_log_likelihood(qimage: QuantizedImage, states: np.ndarray,
     straight from the bin counts: with ``h_b = n_b / n``, the Bhattacharyya coefficient is
     ``sum_b sqrt(n_b) sqrt(ref_b) / sqrt(n)`` -- one product with the references' square
     roots, no normalised histogram; ``D^2 = 1 - BC`` (eq. 6 squares the distance). Equal to
-    the two-step form to rounding."""
-    counts, total = patch_counts(qimage, states, patches, grid)
+    the two-step form to rounding; the counts in one compiled pass over the particles
+    (:func:`patch_bhattacharyya`; :func:`patch_color_log_likelihood_numpy` is the array
+    form)."""
+    fu, fv = _lattice(grid)
+    bc = patch_bhattacharyya(qimage.planes, qimage.height, qimage.width, qimage.bins,
+                             np.ascontiguousarray(np.atleast_2d(states), np.float64),
+                             np.ascontiguousarray(patches, np.float64),
+                             np.sqrt(np.ascontiguousarray(refs, np.float64)), fu, fv)
+    d2 = np.clip(1.0 - bc, 0.0, 1.0)
+    return -d2.sum(axis=(1, 2)) / (2.0 * sigma * sigma)                 # Menezes eq. 6
+
+
+def patch_color_log_likelihood_numpy(qimage: QuantizedImage, states: np.ndarray,
+                                     patches: np.ndarray, refs: np.ndarray, sigma: float,
+                                     grid: int = 8) -> np.ndarray:
+    """:func:`patch_color_log_likelihood` in array operations (its reference in tests)."""
+    counts, total = patch_counts_numpy(qimage, states, patches, grid)
     root_ref = np.sqrt(np.asarray(refs, np.float64))                     # (P, 3, bins)
     bc = np.einsum("npcb,pcb->npc", np.sqrt(counts), root_ref)
     with np.errstate(divide="ignore"):
@@ -169,3 +198,68 @@ def update_reference(ref: np.ndarray, observed: np.ndarray, kappa: float | np.nd
         kappa) else np.float64(kappa)
     seen = obs.sum(axis=-1, keepdims=True) > 0
     return np.where(seen, (1.0 - k) * ref + k * obs, ref)  # Menezes eq. 13
+
+
+@njit
+def _count_patch(planes, height, width, off, u0, v0, su, sv, fu, fv, counts):
+    """Bin counts ``counts (3, bins + 1)`` (overwritten) of the samples ``(u0 + su fu, v0 + sv
+    fv)`` on the image (nearest pixel; samples off it, or not finite, dropped); returns their
+    number."""
+    counts[:] = 0
+    total = 0
+    for k in range(fu.shape[0]):
+        col = np.floor(u0 + su * fu[k] + 0.5)
+        row = np.floor(v0 + sv * fv[k] + 0.5)
+        if not (0.0 <= col < width and 0.0 <= row < height):
+            continue
+        total += 1
+        flat = int(row) * width + int(col)
+        for c in range(3):
+            counts[c, planes[c, flat] - c * off] += 1
+    return total
+
+
+@njit
+def patch_counts_kernel(planes, height, width, bins, states, patches, fu, fv):
+    """:func:`patch_counts` compiled: counts ``(N, P, 3, bins + 1)`` (the last bin unused)
+    and samples on the image ``(N, P)``."""
+    N, P = states.shape[0], patches.shape[0]
+    counts = np.zeros((N, P, 3, bins + 1), np.int64)
+    total = np.zeros((N, P), np.int64)
+    for i in range(N):
+        s = states[i, 2]
+        for p in range(P):
+            total[i, p] = _count_patch(planes, height, width, bins + 1,
+                                       states[i, 0] + s * patches[p, 0],
+                                       states[i, 1] + s * patches[p, 1], s * patches[p, 2],
+                                       s * patches[p, 3], fu, fv, counts[i, p])
+    return counts, total
+
+
+@njit
+def patch_bhattacharyya(planes, height, width, bins, states, patches, root_ref, fu, fv):
+    """The Bhattacharyya coefficients ``(N, P, 3)`` of every patch of every state (``(u, v,
+    s)``, patches ``(P, 4)`` in patch units) with the references (their square roots
+    ``root_ref (P, 3, bins)``), from the bin counts on the ``fu``, ``fv`` lattice: ``sum_b
+    sqrt(n_b ref_b) / sqrt(n)``, 0 for a patch wholly off the image (the counting of
+    :func:`patch_counts`: nearest pixel, samples off the image dropped)."""
+    N, P, S = states.shape[0], patches.shape[0], fu.shape[0]
+    out = np.zeros((N, P, 3))
+    counts = np.zeros((3, bins + 1), np.int64)
+    root = np.sqrt(np.arange(S + 1).astype(np.float64))     # sqrt of every possible count
+    for i in range(N):
+        s = states[i, 2]
+        for p in range(P):
+            total = _count_patch(planes, height, width, bins + 1,
+                                 states[i, 0] + s * patches[p, 0],
+                                 states[i, 1] + s * patches[p, 1], s * patches[p, 2],
+                                 s * patches[p, 3], fu, fv, counts)
+            if total == 0:
+                continue
+            norm = 1.0 / root[total]
+            for c in range(3):
+                bc = 0.0
+                for q in range(bins):
+                    bc += root[counts[c, q]] * root_ref[p, c, q]
+                out[i, p, c] = bc * norm
+    return out

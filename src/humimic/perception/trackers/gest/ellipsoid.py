@@ -18,16 +18,33 @@ import numpy as np
 from humimic.bodymodel.avatar import ypr_from_matrix
 from humimic.bodymodel.kinematics import ypr_matrix
 from humimic.estimation.particles import normalize
+from humimic.perception.trackers.gest.kernels import FLIP_SIGNS, flipped_rotation_sum
 
 #: The ellipsoid's proper symmetries (half turns about its axes).
-FLIPS = np.array([np.diag(d) for d in ((1, 1, 1), (1, -1, -1), (-1, 1, -1), (-1, -1, 1))],
-                 float)
+FLIPS = np.array([np.diag(d) for d in FLIP_SIGNS], float)
 
 
 def mean_orientation(ypr: np.ndarray, log_weights: np.ndarray) -> np.ndarray:
     """Yaw, pitch, roll (rad, in scipy's ``ZYX`` ranges) of the weighted ellipsoids with
     orientations ``ypr (N, 3)``: the chordal L2 mean of the rotations, each first turned by
     the symmetry of :data:`FLIPS` that brings it nearest the heaviest particle's."""
+    w = np.exp(normalize(np.asarray(log_weights, float)).log_weights)
+    return _nearest_rotation_ypr(flipped_rotation_sum(np.ascontiguousarray(ypr, float), w))
+
+
+def _nearest_rotation_ypr(M: np.ndarray) -> np.ndarray:
+    """Yaw, pitch, roll of the rotation nearest ``M`` (Frobenius): ``U Vt`` of its SVD, with
+    the last singular direction turned where that is a reflection."""
+    U, _, Vt = np.linalg.svd(M)
+    R_mean = U @ Vt
+    (a, b, c), (d_, e, f), (g, h, i) = R_mean.tolist()
+    if a * (e * i - f * h) - b * (d_ * i - f * g) + c * (d_ * h - e * g) < 0.0:  # reflection
+        R_mean = U @ (Vt * np.array([1.0, 1.0, -1.0])[:, None])   # U diag(1, 1, -1) Vt
+    return ypr_from_matrix(R_mean)
+
+
+def mean_orientation_numpy(ypr: np.ndarray, log_weights: np.ndarray) -> np.ndarray:
+    """:func:`mean_orientation` in array operations (its reference in tests)."""
     w = np.exp(normalize(np.asarray(log_weights, float)).log_weights)
     R = ypr_matrix(*np.asarray(ypr, float).T)                              # (N, 3, 3)
     R0 = R[int(np.argmax(w))]
@@ -36,10 +53,4 @@ def mean_orientation(ypr: np.ndarray, log_weights: np.ndarray) -> np.ndarray:
     signs = np.diagonal(FLIPS, axis1=1, axis2=2)                           # (4, 3)
     c = np.einsum("ij,nij->nj", R0, R)                                     # (N, 3)
     d = signs[np.argmax(c @ signs.T, axis=1)]                              # (N, 3)
-    M = np.einsum("nij,nj->ij", R, w[:, None] * d)
-    U, _, Vt = np.linalg.svd(M)
-    R_mean = U @ Vt
-    (a, b, c), (d_, e, f), (g, h, i) = R_mean.tolist()
-    if a * (e * i - f * h) - b * (d_ * i - f * g) + c * (d_ * h - e * g) < 0.0:  # reflection
-        R_mean = U @ (Vt * np.array([1.0, 1.0, -1.0])[:, None])   # U diag(1, 1, -1) Vt
-    return ypr_from_matrix(R_mean)
+    return _nearest_rotation_ypr(np.einsum("nij,nj->ij", R, w[:, None] * d))

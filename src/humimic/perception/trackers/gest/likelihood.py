@@ -31,24 +31,34 @@ the camera or off the image cost the distance transform's cap at every point.
 from __future__ import annotations
 
 import functools
+import math
 from dataclasses import dataclass
 
+import cv2
 import numpy as np
 
 from humimic.bodymodel import conics
-from humimic.bodymodel.hand import hand_ellipsoids, to_camera
+from humimic.bodymodel.hand import check_hand_states, hand_ellipsoids, to_camera
 from humimic.bodymodel.projection import Z_MIN, project_ellipsoids
 from humimic.perception.cues.color_models import ColorLUT
 from humimic.perception.cues.edges import DT_CAP_PX, dt_distance, shape_log_likelihood
 from humimic.perception.cues.histograms import patch_color_log_likelihood, patch_histograms
 from humimic.perception.cues.skin import rim_skin_distance
 from humimic.perception.trackers.frame_cues import FrameCues, frame_cues
-from humimic.perception.trackers.gest.proposal import logsumexp
+from humimic.perception.trackers.gest.kernels import (
+    blob_pair_kernel,
+    camera_arrays,
+    project_states,
+    rim_maps,
+)
+from humimic.perception.trackers.gest.proposal import EXP_FLOOR, logsumexp
 from humimic.sensors.camera_model import CameraImage
 
 #: One square patch centred on the ellipse, ``s`` = its side (px) (histograms' patch units).
 INSCRIBED = np.array([[0.0, 0.0, 1.0, 1.0]])
 OFF_IMAGE = -1.0e6
+#: How far inside and outside the contour the skin cue samples (px).
+RIM_OFFSET_PX = 2.0
 
 
 HandView = FrameCues
@@ -198,11 +208,28 @@ def project_hands(states: np.ndarray, view: HandView, n_points: int,
 
 
 def project_views(states: np.ndarray, views: list, n_points: int,
+                  image_views: int | None = None) -> tuple[list[HandProjection | None],
+                                                           np.ndarray]:
+    """:func:`project_hands` in the first ``image_views`` of ``views`` (all if None; None for
+    the others), and the pixel centres ``(N, V, 2)`` of the image ellipses in every view: eq.
+    15 in one compiled pass over the particles and views (:func:`.kernels.project_states`;
+    :func:`project_views_numpy` is the array form)."""
+    states = np.ascontiguousarray(np.atleast_2d(states), float)
+    check_hand_states(states)
+    ni = len(views) if image_views is None else min(image_views, len(views))
+    T, K = camera_arrays(views)
+    cos, sin = _circle(n_points)
+    contour, normal, patch, valid, centres = project_states(states, T, K, cos, sin, ni)  # eq. 15
+    projs = [HandProjection(contour[i], normal[i], patch[i], valid[i]) if i < ni else None
+             for i in range(len(views))]
+    return projs, centres
+
+
+def project_views_numpy(states: np.ndarray, views: list, n_points: int,
                   image_views: int | None = None, ellipsoids: tuple | None = None
                   ) -> tuple[list[HandProjection | None], np.ndarray]:
-    """:func:`project_hands` in the first ``image_views`` of ``views`` (all if None; None for
-    the others), and the pixel centres ``(N, V, 2)`` of the image ellipses in every view, with
-    eq. 15 evaluated for all views in one batch."""
+    """:func:`project_views` in array operations (its reference in tests; ``ellipsoids``:
+    :func:`hand_ellipsoids` of ``states`` if already computed)."""
     if ellipsoids is None:
         ellipsoids = hand_ellipsoids(states)
     e, valid = views_components(ellipsoids, np.stack([v.T_cam_base for v in views]))
@@ -219,12 +246,39 @@ def project_views(states: np.ndarray, views: list, n_points: int,
     return projs, centres
 
 
+def _sampled_mean(image: np.ndarray, maps: np.ndarray, outside: float) -> np.ndarray:
+    """The mean over the last point axis of ``image`` sampled bilinearly (points off it read
+    ``outside``) at the float32 points ``maps (..., n, 2)``: one ``cv2.remap`` with a
+    two-channel map, the same samples as :func:`~humimic.perception.cues.edges.sample`'s two
+    one-channel maps."""
+    src = image if image.dtype in (np.uint8, np.float32) else image.astype(np.float32)
+    n = maps.shape[-2]
+    if maps.size == 0:
+        return np.zeros(maps.shape[:-2])
+    out = cv2.remap(src, maps.reshape(-1, n, 2), None, cv2.INTER_LINEAR,
+                    borderMode=cv2.BORDER_CONSTANT, borderValue=float(outside))
+    return out.reshape(maps.shape[:-1]).astype(np.float64).mean(axis=-1)
+
+
+def rim_distances(proj: HandProjection, view: HandView, offset_px: float = RIM_OFFSET_PX
+                  ) -> tuple[np.ndarray, np.ndarray | None]:
+    """:func:`shape_distance` and :func:`skin_distance` (None without a skin map) from the
+    float32 sample points of :func:`.kernels.rim_maps`: one conversion, one gather per cue
+    image (equal to the two functions, which are their references in tests)."""
+    maps = rim_maps(proj.contour, proj.normal, float(offset_px))
+    d = _sampled_mean(view.dt, maps[0], DT_CAP_PX)                      # Menezes eq. 3
+    if view.skin is None:
+        return d, None
+    inside, outside = _sampled_mean(view.skin, maps[1:], 0.0)
+    return d, 1.0 - (inside - outside)
+
+
 def shape_distance(proj: HandProjection, view: HandView) -> np.ndarray:
     """Menezes eq. 3: mean distance-transform value at the contour points (px)."""
     return dt_distance(view.dt, proj.contour, DT_CAP_PX)              # Menezes eq. 3
 
 
-def skin_distance(proj: HandProjection, view: HandView, offset_px: float = 2.0
+def skin_distance(proj: HandProjection, view: HandView, offset_px: float = RIM_OFFSET_PX
                   ) -> np.ndarray:
     """``D_k = 1 - (mean skin inside - mean skin outside)`` in [0, 2] (module docstring),
     sampled ``offset_px`` either side of the contour along its normals."""
@@ -254,7 +308,17 @@ def ellipse_family(centre: np.ndarray, semi_axes: np.ndarray, angles: np.ndarray
 def blob_pair_log_likelihood(centres: np.ndarray, pairs: np.ndarray, sigma_px: float,
                              outlier_density: float) -> np.ndarray:
     """``log(outlier + sum_j prod_v N(c_v; m_jv, sigma^2 I) / M)`` for the particles' ellipse
-    centres ``(N, V, 2)`` and the matched blob centroids ``pairs (M, V, 2)`` (px)."""
+    centres ``(N, V, 2)`` and the matched blob centroids ``pairs (M, V, 2)`` (px), compiled
+    (:func:`.kernels.blob_pair_kernel`; :func:`blob_pair_log_likelihood_numpy` is the array
+    form)."""
+    return blob_pair_kernel(np.ascontiguousarray(centres, float), np.ascontiguousarray(
+        pairs, float).reshape(-1, *np.shape(centres)[1:]), float(sigma_px),
+        math.log(outlier_density), EXP_FLOOR)
+
+
+def blob_pair_log_likelihood_numpy(centres: np.ndarray, pairs: np.ndarray, sigma_px: float,
+                                   outlier_density: float) -> np.ndarray:
+    """:func:`blob_pair_log_likelihood` in array operations (its reference in tests)."""
     out = np.full(len(centres), np.log(outlier_density))
     if len(pairs):
         d2 = np.sum((centres[:, None] - pairs[None]) ** 2, axis=(2, 3))      # (N, M)
@@ -278,9 +342,10 @@ def hand_log_likelihood(states: np.ndarray, views: list[HandView], ref: np.ndarr
     for proj, view in zip(projs, views, strict=True):
         if proj is None:
             continue
-        out += shape_log_likelihood(shape_distance(proj, view), sigma_s)  # Menezes eq. 2
-        if view.skin is not None:
-            out += shape_log_likelihood(skin_distance(proj, view), sigma_k)
+        d, d_skin = rim_distances(proj, view)
+        out += shape_log_likelihood(d, sigma_s)                           # Menezes eq. 2
+        if d_skin is not None:
+            out += shape_log_likelihood(d_skin, sigma_k)
         if ref is not None:
             out += patch_color_log_likelihood(view.qimage, proj.patch_state, INSCRIBED,
                                               ref[None], sigma_c)       # Menezes eq. 6

@@ -22,6 +22,7 @@ import numpy as np
 
 from humimic.estimation.particles.densities import Mixture, RandomWalk, UniformBox
 from humimic.estimation.particles.resampling import resample_indices
+from humimic.maths.jit import njit
 
 #: Centre, orientation and semi-axes in the 9-D state.
 POS, ORI, AXES = slice(0, 3), slice(3, 6), slice(6, 9)
@@ -49,7 +50,111 @@ def logsumexp(a: np.ndarray, axis: int = -1) -> np.ndarray:
     return np.where(np.isfinite(np.squeeze(m, axis)), out, np.squeeze(m, axis))
 
 
+@njit
+def walk_tables(x, particles, log_weights, sigma, starts, floor):
+    """``t_qij = log w_j - |(x_i - x_j)_{s_q:} / sigma_{s_q:}|^2 / 2`` for rows ``x (n, d)``
+    and weighted ``particles (N, d)`` over the trailing dimensions from each of ``starts``
+    (ascending), each row minus its maximum ``m_qi`` and floored at ``floor``
+    (:data:`EXP_FLOOR`); rows whose maximum is not finite (NaN if the row holds one) are left
+    zero. Returns ``(t (Q, n, N), m (Q, n))``: one compiled pass for all ``Q`` tables (the
+    squared distances summed from the last dimension backwards), no temporaries; the
+    exponentials are left to numpy, whose vectorised ``exp`` a compiled loop does not match."""
+    n, d = x.shape
+    N, Q = particles.shape[0], len(starts)
+    inv = 1.0 / sigma
+    ps = np.empty((d, N))                   # scaled, one row per dimension: loops over j
+    for j in range(N):                      # vectorise
+        for k in range(d):
+            ps[k, j] = particles[j, k] * inv[k]
+    t = np.empty((Q, n, N))
+    m = np.empty((Q, n))
+    acc = np.empty(N)
+    clean = not (np.isnan(x).any() or np.isnan(particles).any() or np.isnan(log_weights).any())
+    for i in range(n):
+        acc[:] = 0.0
+        q = Q - 1
+        for k in range(d - 1, -1, -1):
+            xk = x[i, k] * inv[k]
+            for j in range(N):
+                e = xk - ps[k, j]
+                acc[j] += e * e
+            if q < 0 or k != starts[q]:
+                continue
+            row = t[q, i]
+            for j in range(N):
+                row[j] = log_weights[j] - 0.5 * acc[j]
+            mi = -np.inf
+            if clean:                       # a select: vectorised, ~2x the speed
+                for j in range(N):
+                    mi = row[j] if row[j] > mi else mi
+            else:
+                for j in range(N):
+                    if row[j] > mi or row[j] != row[j]:     # a NaN row stays NaN
+                        mi = row[j]
+            m[q, i] = mi
+            if np.isfinite(mi):
+                for j in range(N):
+                    v = row[j] - mi
+                    row[j] = v if v > floor else floor
+            else:
+                row[:] = 0.0
+            q -= 1
+    return t, m
+
+
+def walk_predictives(x: np.ndarray, particles: np.ndarray, log_weights: np.ndarray,
+                     sigma: np.ndarray, starts: tuple[int, ...] = (0,)) -> np.ndarray:
+    """:func:`walk_predictive` over the trailing dimensions from each of ``starts``
+    (ascending): ``(len(starts), n)``, the tables of :func:`walk_tables`, summed by one
+    matrix product."""
+    sigma = np.ascontiguousarray(sigma, float)
+    t, m = walk_tables(np.ascontiguousarray(x, float), np.ascontiguousarray(particles, float),
+                       np.ascontiguousarray(log_weights, float), sigma,
+                       np.asarray(starts, np.int64), EXP_FLOOR)
+    log_sigma = np.log(sigma)
+    const = np.array([np.sum(log_sigma[s:]) + 0.5 * (len(sigma) - s) * _LOG_2PI
+                      for s in starts])[:, None]
+    out = np.log(np.exp(t, out=t) @ np.ones(t.shape[2]))         # row sums: gemv, 3x np.sum's
+    out += m
+    out -= const
+    return np.where(np.isfinite(m), out, m - const)
+
+
+#: One entry: the arguments and result of the last :func:`walk_densities` call.
+_LAST_WALK: tuple | None = None
+
+
+def walk_densities(x: np.ndarray, particles: np.ndarray, log_weights: np.ndarray,
+                   sigma: np.ndarray) -> np.ndarray:
+    """:func:`walk_predictives` of the 9-D hand state over the whole state, the orientation
+    and semi-axes, and the semi-axes (``f``, ``f_oa``, ``f_a``, ``(3, n)``): the dynamics'
+    predictive density (:meth:`PoseReset.predictive_log_density`) and the importance
+    function's (:meth:`CandidateProposal.log_density`) share ``f_a`` and the distances; the
+    last call is kept, and returned again for equal arguments (ICONDENSATION asks both on the
+    same particles)."""
+    global _LAST_WALK
+    last = _LAST_WALK
+    args = (x, particles, log_weights, sigma)
+    if last is not None and all(np.array_equal(a, b) for a, b in zip(args, last[0],
+                                                                     strict=True)):
+        return last[1]
+    out = walk_predictives(x, particles, log_weights, sigma, (POS.start, ORI.start,
+                                                             AXES.start))
+    out.setflags(write=False)
+    _LAST_WALK = (tuple(np.array(a, float) for a in args), out)
+    return out
+
+
 def walk_predictive(x: np.ndarray, particles: np.ndarray, log_weights: np.ndarray,
+                    sigma: np.ndarray) -> np.ndarray:
+    """``log sum_j w_j N(x_i; x_j, diag(sigma^2))`` for every row of ``x (n, d)``: a random
+    walk's predictive density from weighted ``particles (N, d)`` (normalised ``log_weights``),
+    the ``(n, N)`` table from :func:`walk_tables` (:func:`walk_predictive_numpy` is the array
+    form; ~2x faster at 100 x 100)."""
+    return walk_predictives(x, particles, log_weights, sigma)[0]
+
+
+def walk_predictive_numpy(x: np.ndarray, particles: np.ndarray, log_weights: np.ndarray,
                     sigma: np.ndarray) -> np.ndarray:
     """``log sum_j w_j N(x_i; x_j, diag(sigma^2))`` for every row of ``x (n, d)``: a random
     walk's predictive density from weighted ``particles (N, d)`` (normalised ``log_weights``),
@@ -111,10 +216,8 @@ class PoseReset:
         and ``f_a`` the random walks' predictive densities over the whole state and over the
         semi-axes (normalised weights): two ``(n, N)`` tables reduced by rows, no table-wide
         ``logaddexp``."""
-        x, particles = np.asarray(x, float), np.asarray(particles, float)
-        lw = np.asarray(log_weights, float)
-        f = walk_predictive(x, particles, lw, self.walk.sigma)
-        f_a = walk_predictive(x[:, AXES], particles[:, AXES], lw, self.walk.sigma[AXES])
+        x = np.asarray(x, float)
+        f, _, f_a = walk_densities(x, particles, log_weights, self.walk.sigma)
         return np.logaddexp(math.log1p(-self.eps) + f,
                             math.log(self.eps) + self.box.log_density(x[:, POSE]) + f_a)
 
@@ -125,7 +228,9 @@ class PoseReset:
 @dataclass(frozen=True)
 class CandidateProposal:
     """``pi(x) = pi_3d(p) [(1 - fresh) f(o, a) + fresh U(o) f(a)]`` with ``f`` the particle
-    set's predictive density (random walk ``walk`` from weighted ``particles``)."""
+    set's predictive density (random walk ``walk`` from weighted ``particles``; the
+    normalised ``log_weights`` that ICONDENSATION's dynamics see, so that
+    :func:`walk_densities` computes ``f(a)`` once for both)."""
 
     positions: Mixture
     particles: np.ndarray
@@ -149,9 +254,7 @@ class CandidateProposal:
 
     def log_density(self, x: np.ndarray) -> np.ndarray:
         x = np.asarray(x, float)
-        lw, s = self.log_weights, self.walk.sigma
-        f_oa = walk_predictive(x[:, 3:], self.particles[:, 3:], lw, s[3:])
-        f_a = walk_predictive(x[:, AXES], self.particles[:, AXES], lw, s[AXES])
+        _, f_oa, f_a = walk_densities(x, self.particles, self.log_weights, self.walk.sigma)
         with np.errstate(divide="ignore"):
             mix = np.logaddexp(math.log1p(-self.fresh) + f_oa if self.fresh < 1 else -np.inf,
                                math.log(self.fresh) + self.orientations.log_density(x[:, ORI])

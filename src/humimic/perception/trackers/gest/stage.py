@@ -25,6 +25,7 @@ from humimic.perception.trackers.gest.ellipsoid import FLIPS
 from humimic.perception.trackers.gest.foveal import choose_pair
 from humimic.perception.trackers.gest.likelihood import hand_outlines
 from humimic.perception.trackers.gest.tracker import GestResult, GestTracker
+from humimic.perception.trackers.gest.warmup import load_kernels
 from humimic.sensors.camera_model import invert_transform
 from humimic.viz.rerun_log import ESTIMATES, PIXEL_CENTRE_SHIFT, image_entity
 
@@ -48,6 +49,7 @@ class GestStage(PoseTrackerStage):
     def __init__(self, name: str, cfg, cameras: tuple[str, str], lut, world, rng, rlog=None,
                  foveal: tuple[str, str] | None = None):
         super().__init__(name, cfg.latency)
+        load_kernels()          # the particle filter's, at setup rather than in the first frame
         self.cfg, self.cameras, self.world, self.rng, self.rlog = cfg, cameras, world, rng, rlog
         self.foveal = foveal
         self.tracker = GestTracker(cfg, lut)

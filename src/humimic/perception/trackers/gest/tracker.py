@@ -49,6 +49,7 @@ from humimic.estimation.particles import (
     ParticleFilter,
     RandomWalk,
     UniformBox,
+    normalize,
 )
 from humimic.perception.cues.color_models import ColorLUT
 from humimic.perception.cues.histograms import update_reference
@@ -243,8 +244,8 @@ class GestTracker:
         if len(use):
             importance = CandidateProposal(
                 Mixture(tuple(Gaussian(p[j] + delta, pos_cov[j]) for j in use)),
-                self.pf.particles, self.pf.log_weights, self.walk, self.orientations,
-                cfg.fresh_orientation)
+                self.pf.particles, normalize(self.pf.log_weights).log_weights, self.walk,
+                self.orientations, cfg.fresh_orientation)  # as the filter normalises them
         s = self.pf.step(self._ll(views, to_view_px(pairs, origin[None], k),
                                   left.camera.intrinsics, k), rng, importance=importance)
         mean = s.mean.copy()
