@@ -20,9 +20,12 @@ import numpy as np
 from humimic import bodymodel as bm
 from humimic.maths.arrays import stack
 from humimic.perception.trackers.kpf import cues as C
+from humimic.perception.trackers.kpf import limb_cues as K
 from humimic.perception.trackers.kpf.frame_cues import FrameCues, sample_box
 
 CUE_NAMES = ("edge", "ridge", "colour", "skin")
+#: The colour polygons are pulled towards the limb's axis by this fraction of its half-width.
+BAND_SHRINK = 0.2
 
 
 def limb_type(part: str) -> str:
@@ -84,6 +87,9 @@ class Likelihood:
                 js, names = self.colour_sets.setdefault(self.bands[p], ([], []))
                 js.append(j)
                 names.append(p)
+        self.cue_limbs = {c: np.array([j for j, p in enumerate(self.limbs) if c in self.use[p]],
+                                      np.intp) for c in ("edge", "ridge")}
+        """Cue -> positions (among the limbs) of the limbs it is configured on."""
         ell = [self.parts[i] for i in lay.ellipsoid_idx]
         self.skin_js = np.array([j for j, p in enumerate(ell) if "skin" in self.use[p]], int)
         """Positions (among the ellipsoids) of the parts with the skin cue."""
@@ -102,24 +108,17 @@ class Likelihood:
         planes = np.full((len(CUE_NAMES), n, len(self.parts)), np.nan)
         cost = dict(zip(CUE_NAMES, planes, strict=True))
         col = self.limb_cols
-        if "edge" in self.need:
-            e = bm.limb_edges(view, cfg.edge_points, normals=False)
-            cost["edge"][:, col] = 1.0 - np.where(e.ok, C.edge_response(maps, e.uv, e.angle), 0.0)
-        if "ridge" in self.need:
-            r = bm.limb_ridges(view, cfg.ridge_points)
-            width = np.add.reduce(r.width, -1) / r.width.shape[-1]      # mean (no wrapper)
-            f = C.ridge_response(maps, r.uv, width, r.angle)
-            cost["ridge"][:, col] = 1.0 - np.where(r.ok, f, 0.0)
+        ok = view.valid[:, view.cone_idx] & view.generators
+        for c, fn, m in (("edge", K.edge_responses, cfg.edge_points),
+                         ("ridge", K.ridge_responses, cfg.ridge_points)):
+            js = self.cue_limbs[c]
+            if len(js):
+                f = fn(maps, view.sides_uv, view.axis_uv, js, m)
+                cost[c][:, col[js]] = 1.0 - np.where(ok[:, js], f, 0.0)
         colours = {}
         if self.colour_sets:
-            ok = view.valid[:, view.cone_idx] & view.generators
-            quads = [bm.limb_bands(view, b, 0.2, js).reshape(n, len(js) * b, 4, 2)
-                     for b, (js, _) in self.colour_sets.items()]
-            bands = C.band_colours(maps, np.concatenate(quads, axis=1))   # every set at once
-            start = 0
             for b, (js, names) in self.colour_sets.items():
-                got = bands[:, start:start + len(js) * b].reshape(n, len(js), b, 3)
-                start += len(js) * b
+                got = K.band_colours(maps, view.sides_uv, js, b, BAND_SHRINK)   # (N, J, B, 3)
                 for k, p in enumerate(names):
                     colours[p] = got[:, k]
                 if all(p in self.references for p in names):
@@ -134,7 +133,7 @@ class Likelihood:
         if len(self.skin_js):
             centre, axes, angle = ellipses
             j = self.skin_js
-            f = C.skin_response(maps, centre[:, j], axes[:, j], angle[:, j])
+            f = K.skin_fractions(maps, centre[:, j], axes[:, j], angle[:, j])
             ok = view.valid[:, view.ellipsoid_idx[j]]
             cost["skin"][:, self.skin_cols] = 1.0 - np.where(ok, f, 0.0)
         for c in CUE_NAMES:   # cues not configured on a part do not count
