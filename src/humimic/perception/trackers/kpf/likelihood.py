@@ -18,6 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from humimic import bodymodel as bm
+from humimic.bodymodel.limb_view import limb_view
 from humimic.maths.arrays import stack
 from humimic.perception.trackers.kpf import cues as C
 from humimic.perception.trackers.kpf import limb_cues as K
@@ -101,8 +102,8 @@ class Likelihood:
         or a :class:`FrameCues` that computes them where these particles' points fall."""
         cfg = self.cfg
         n = len(q)
-        view = bm.project(self.body, self.body.forward(q), self.intr, T_cam_base)
-        ellipses = view.ellipses_px() if len(self.skin_js) else None
+        view = limb_view(self.body, self.body.forward(q), self.intr, T_cam_base)
+        ellipses = view.ellipses
         if isinstance(maps, FrameCues):
             maps = maps.covering(*sample_box(view, ellipses))
         planes = np.full((len(CUE_NAMES), n, len(self.parts)), np.nan)
