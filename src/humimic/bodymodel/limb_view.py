@@ -90,22 +90,26 @@ def _view_kernel(R_seg, p_seg, segment, p_sp, R_sp, aligned, T, ci, shape, ei, s
 
 @njit
 def _cone(s, j, R, t, shape, z_min, valid, i, exists, sides, axis):
-    """``cones.generator_angles``, ``in_front``, ``rim_points`` at the generators' ends."""
+    """``cones.generator_angles``, ``in_front``, ``rim_points`` at the generators' ends (the
+    ends' cosines and sines by the angle-sum formulas: ``phi_c = atan2(B, A)``,
+    ``delta = acos(C / r)``)."""
     a, b, L, k = shape[0], shape[1], shape[2], shape[3]
-    c = np.empty(3)
-    for m in range(3):
-        c[m] = -(t[0] * R[0, m] + t[1] * R[1, m] + t[2] * R[2, m])
-    A, B, C = L * b * c[0], L * a * c[1], a * b * (L + (k - 1.0) * c[2])
-    ratio = C / np.hypot(A, B)
+    c0 = -(t[0] * R[0, 0] + t[1] * R[1, 0] + t[2] * R[2, 0])     # camera centre, local
+    c1 = -(t[0] * R[0, 1] + t[1] * R[1, 1] + t[2] * R[2, 1])
+    c2 = -(t[0] * R[0, 2] + t[1] * R[1, 2] + t[2] * R[2, 2])
+    A, B, C = L * b * c0, L * a * c1, a * b * (L + (k - 1.0) * c2)
+    r = np.hypot(A, B)
+    ratio = C / r
     exists[s, j] = abs(ratio) < 1.0
-    delta = np.arccos(1.0 if np.isnan(ratio) else min(max(ratio, -1.0), 1.0))
-    phi_c = np.arctan2(B, A)
+    cp, sp = (A / r, B / r) if r > 0.0 else (1.0, 0.0)
+    cd = 1.0 if np.isnan(ratio) else min(max(ratio, -1.0), 1.0)
+    sd = np.sqrt((1.0 - cd) * (1.0 + cd))
     reach0 = np.hypot(a * R[2, 0], b * R[2, 1])
     ok = (t[2] - reach0 > z_min) and (t[2] + L * R[2, 2] - k * reach0 > z_min)
     valid[i] = ok
     for side in range(2):
-        phi = phi_c + delta if side == 0 else phi_c - delta
-        cs, sn = np.cos(phi), np.sin(phi)
+        sg = 1.0 if side == 0 else -1.0              # phi_c + delta, phi_c - delta
+        cs, sn = cp * cd - sg * sp * sd, sp * cd + sg * cp * sd
         for rim in range(2):
             scale = 1.0 + (k - 1.0) * rim
             lx, ly, lz = a * scale * cs, b * scale * sn, L * rim
@@ -125,40 +129,36 @@ def _cone(s, j, R, t, shape, z_min, valid, i, exists, sides, axis):
 def _ellipsoid(s, j, R, t, semi, z_min, valid, i, K, ell):
     """``conics.ellipsoid_quadric``, ``quadric_to_conic``, ``conic_to_ellipse``, then
     ``BodyView.ellipses_px`` (``K``'s affine part) and ``conics.ellipse_axes``."""
-    A = np.empty((3, 3))
     i0, i1, i2 = 1.0 / semi[0] ** 2, 1.0 / semi[1] ** 2, 1.0 / semi[2] ** 2
-    for r in range(3):
-        for m in range(3):
-            A[r, m] = R[r, 0] * i0 * R[m, 0] + R[r, 1] * i1 * R[m, 1] + R[r, 2] * i2 * R[m, 2]
-    At = np.empty(3)
-    for r in range(3):
-        At[r] = A[r, 0] * t[0] + A[r, 1] * t[1] + A[r, 2] * t[2]
-    c = t[0] * At[0] + t[1] * At[1] + t[2] * At[2] - 1.0
-    C = np.empty((3, 3))                          # c A - b b^T with b = -A t
-    for r in range(3):
-        for m in range(3):
-            C[r, m] = c * A[r, m] - At[r] * At[m]
-    a, b, e, d = C[0, 0], C[0, 1], C[1, 0], C[1, 1]
-    ux, uy, c33 = C[0, 2], C[1, 2], C[2, 2]
-    det = a * d - b * e
-    cx, cy = (b * uy - d * ux) / det, (e * ux - a * uy) / det
-    kk = (cx * (a * cx + b * cy) + cy * (e * cx + d * cy) - c33) / det
-    m00, m01, m10, m11 = kk * d, -kk * b, -kk * e, kk * a
-    finite = np.isfinite(m00) and np.isfinite(m01) and np.isfinite(m10) and np.isfinite(m11)
+
+    def a_(r, m):                                # A = R S^-2 R^T
+        return R[r, 0] * i0 * R[m, 0] + R[r, 1] * i1 * R[m, 1] + R[r, 2] * i2 * R[m, 2]
+
+    a00, a01, a02, a11, a12, a22 = a_(0, 0), a_(0, 1), a_(0, 2), a_(1, 1), a_(1, 2), a_(2, 2)
+    b0 = a00 * t[0] + a01 * t[1] + a02 * t[2]    # A t (the quadric's b = -A t)
+    b1 = a01 * t[0] + a11 * t[1] + a12 * t[2]
+    b2 = a02 * t[0] + a12 * t[1] + a22 * t[2]
+    c = t[0] * b0 + t[1] * b1 + t[2] * b2 - 1.0
+    # the conic c A - b b^T, then its ellipse (conic_to_ellipse)
+    a, b, d = c * a00 - b0 * b0, c * a01 - b0 * b1, c * a11 - b1 * b1
+    ux, uy, c33 = c * a02 - b0 * b2, c * a12 - b1 * b2, c * a22 - b2 * b2
+    det = a * d - b * b
+    cx, cy = (b * uy - d * ux) / det, (b * ux - a * uy) / det
+    kk = (cx * (a * cx + b * cy) + cy * (b * cx + d * cy) - c33) / det
+    m00, m01, m11 = kk * d, -kk * b, kk * a
+    finite = np.isfinite(m00) and np.isfinite(m01) and np.isfinite(m11)
     reach_z = np.sqrt((R[2, 0] * semi[0]) ** 2 + (R[2, 1] * semi[1]) ** 2
                       + (R[2, 2] * semi[2]) ** 2)
     valid[i] = det > 0 and m00 > 0 and finite and c > 0.0 and t[2] - reach_z > z_min
     # pixels: centre A c + (c_u, c_v), shape A M A^T with A = K[:2, :2]
     ell[s, j, 0] = K[0, 0] * cx + K[0, 1] * cy + K[0, 2]
     ell[s, j, 1] = K[1, 0] * cx + K[1, 1] * cy + K[1, 2]
-    AM = np.empty((2, 2))
-    for r in range(2):
-        AM[r, 0] = K[r, 0] * m00 + K[r, 1] * m10
-        AM[r, 1] = K[r, 0] * m01 + K[r, 1] * m11
-    p = AM[0, 0] * K[0, 0] + AM[0, 1] * K[0, 1]
-    q = AM[0, 0] * K[1, 0] + AM[0, 1] * K[1, 1]
-    w = AM[1, 0] * K[1, 0] + AM[1, 1] * K[1, 1]
-    half_tr, half_diff = (p + w) / 2.0, (p - w) / 2.0
+    am00, am01 = K[0, 0] * m00 + K[0, 1] * m01, K[0, 0] * m01 + K[0, 1] * m11
+    am10, am11 = K[1, 0] * m00 + K[1, 1] * m01, K[1, 0] * m01 + K[1, 1] * m11
+    p = am00 * K[0, 0] + am01 * K[0, 1]
+    q = am00 * K[1, 0] + am01 * K[1, 1]
+    w = am10 * K[1, 0] + am11 * K[1, 1]
+    half_tr, half_diff = (p + w) / 2.0, (p - w) / 2.0    # ellipse_axes
     r_ = np.hypot(half_diff, q)
     ell[s, j, 2] = np.sqrt(max(half_tr + r_, 0.0))
     ell[s, j, 3] = np.sqrt(max(half_tr - r_, 0.0))
