@@ -20,6 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from humimic.bodymodel.kinematics import ARM_AXES, SIDES
 from humimic.bodymodel.model import BodyModel, Pose
 from humimic.bodymodel.projection import Z_MIN
 from humimic.maths.arrays import stack
@@ -163,6 +164,77 @@ def _ellipsoid(s, j, R, t, semi, z_min, valid, i, K, ell):
     ell[s, j, 2] = np.sqrt(max(half_tr + r_, 0.0))
     ell[s, j, 3] = np.sqrt(max(half_tr - r_, 0.0))
     ell[s, j, 4] = 0.5 * np.arctan2(2.0 * q, p - w)
+
+
+@njit
+def _rotation(axis, angle, out):
+    """``kinematics.axis_rotation`` of one angle, into ``out (3, 3)``."""
+    c, s = np.cos(angle), np.sin(angle)
+    out[:] = 0.0
+    i, j = (axis + 1) % 3, (axis + 2) % 3
+    out[axis, axis], out[i, i], out[j, j], out[j, i], out[i, j] = 1.0, c, c, s, -s
+
+
+@njit
+def _mul(A, B, out):
+    for r in range(3):
+        for m in range(3):
+            out[r, m] = A[r, 0] * B[0, m] + A[r, 1] * B[1, m] + A[r, 2] * B[2, m]
+
+
+@njit
+def _forward_kernel(q, axes, signs, shoulders, neck, upper, fore):
+    """``kinematics.forward_kinematics`` (segments in ``SEGMENTS`` order: torso, head, then
+    upper arm, forearm, hand per side; the arm rotations composed from the signed
+    :data:`~humimic.bodymodel.kinematics.ARM_AXES`, not their closed form)."""
+    n = q.shape[0]
+    R = np.empty((n, 8, 3, 3))
+    p = np.empty((n, 8, 3))
+    Rt, A, B = np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3))
+    C, Ru = np.empty((3, 3)), np.empty((3, 3))
+    for s in range(n):
+        cy, sy = np.cos(q[s, 3]), np.sin(q[s, 3])      # ypr_matrix
+        cp, sp = np.cos(q[s, 4]), np.sin(q[s, 4])
+        cr, sr = np.cos(q[s, 5]), np.sin(q[s, 5])
+        Rt[0, 0], Rt[0, 1], Rt[0, 2] = cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr
+        Rt[1, 0], Rt[1, 1], Rt[1, 2] = sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr
+        Rt[2, 0], Rt[2, 1], Rt[2, 2] = -sp, cp * sr, cp * cr
+        for g in range(2):                               # torso, head
+            R[s, g] = Rt
+        for r in range(3):
+            p[s, 0, r] = q[s, r]
+            p[s, 1, r] = q[s, r] + (Rt[r, 0] * neck[0] + Rt[r, 1] * neck[1]
+                                    + Rt[r, 2] * neck[2])
+        for k in range(2):                               # arms R, L
+            b, g = 6 + 4 * k, 2 + 3 * k
+            _rotation(axes[k, 0], signs[k, 0] * q[s, b], A)
+            _rotation(axes[k, 1], signs[k, 1] * q[s, b + 1], B)
+            _mul(A, B, C)
+            _rotation(axes[k, 2], signs[k, 2] * q[s, b + 2], A)
+            _mul(C, A, B)
+            _mul(Rt, B, Ru)
+            _rotation(axes[k, 3], signs[k, 3] * q[s, b + 3], A)
+            R[s, g] = Ru
+            _mul(Ru, A, R[s, g + 1])
+            R[s, g + 2] = R[s, g + 1]
+            for r in range(3):
+                p[s, g, r] = q[s, r] + (Rt[r, 0] * shoulders[k, 0] + Rt[r, 1] * shoulders[k, 1]
+                                        + Rt[r, 2] * shoulders[k, 2])
+                p[s, g + 1, r] = p[s, g, r] - upper * Ru[r, 2]
+                p[s, g + 2, r] = p[s, g + 1, r] - fore * R[s, g + 1, r, 2]
+    return R, p
+
+
+def forward(body: BodyModel, q: np.ndarray) -> Pose:
+    """``body.forward(q)`` compiled (free states ``q (N, len(free))``; the fixed DOFs 0)."""
+    full = body.expand(q)
+    sk = body.skeleton
+    axes = np.array([[a for a, _ in ARM_AXES[side]] for side in SIDES], np.intp)
+    signs = np.array([[s for _, s in ARM_AXES[side]] for side in SIDES], float)
+    R, p = _forward_kernel(full, axes, signs,
+                           np.array([sk.shoulder[side] for side in SIDES], float),
+                           np.asarray(sk.neck, float), float(sk.upper_arm), float(sk.forearm))
+    return Pose(full, R, p)
 
 
 def limb_view(body: BodyModel, pose: Pose, intr: Intrinsics, T_cam_ref: np.ndarray
