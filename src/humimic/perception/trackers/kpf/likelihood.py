@@ -70,7 +70,6 @@ class Likelihood:
                       for p in self.parts}
         self.used = {c: np.array([c in self.use[p] for p in self.parts]) for c in CUE_NAMES}
         """Cue -> (parts,) bool: the cue is configured on the part."""
-        self.unused = {c: np.flatnonzero(~u) for c, u in self.used.items()}
         self.any_used = {c: bool(u.any()) for c, u in self.used.items()}
         n_l = np.array([max(len(self.use[p]), 1) for p in self.parts], float)
         self.balance = {c: self.used[c] / n_l for c in CUE_NAMES}
@@ -89,9 +88,15 @@ class Likelihood:
                 js, names = self.colour_sets.setdefault(self.bands[p], ([], []))
                 js.append(j)
                 names.append(p)
+        self.colour_sets = {b: (np.array(js, np.intp), names)
+                            for b, (js, names) in self.colour_sets.items()}
         self.cue_limbs = {c: np.array([j for j, p in enumerate(self.limbs) if c in self.use[p]],
                                       np.intp) for c in ("edge", "ridge")}
         """Cue -> positions (among the limbs) of the limbs it is configured on."""
+        self.cue_cols = {c: self.limb_cols[js] for c, js in self.cue_limbs.items()}
+        self.colour_cols = {b: self.limb_cols[js] for b, (js, _) in self.colour_sets.items()}
+        self.stacked: dict[int, np.ndarray] = {}
+        """Band count -> (J, B, 3) the references of its limbs, once all are adapted."""
         ell = [self.parts[i] for i in lay.ellipsoid_idx]
         self.skin_js = np.array([j for j, p in enumerate(ell) if "skin" in self.use[p]], int)
         """Positions (among the ellipsoids) of the parts with the skin cue."""
@@ -109,37 +114,33 @@ class Likelihood:
             maps = maps.covering(*sample_box(view, ellipses))
         planes = np.full((len(CUE_NAMES), n, len(self.parts)), np.nan)
         cost = dict(zip(CUE_NAMES, planes, strict=True))
-        col = self.limb_cols
         ok = view.valid[:, view.cone_idx] & view.generators
         for c, fn, m in (("edge", K.edge_responses, cfg.edge_points),
                          ("ridge", K.ridge_responses, cfg.ridge_points)):
             js = self.cue_limbs[c]
             if len(js):
                 f = fn(maps, view.sides_uv, view.axis_uv, js, m)
-                cost[c][:, col[js]] = 1.0 - np.where(ok[:, js], f, 0.0)
+                cost[c][:, self.cue_cols[c]] = 1.0 - np.where(ok[:, js], f, 0.0)
         colours = {}
         if self.colour_sets:
             for b, (js, names) in self.colour_sets.items():
                 got = K.band_colours(maps, view.sides_uv, js, b, BAND_SHRINK)   # (N, J, B, 3)
                 for k, p in enumerate(names):
                     colours[p] = got[:, k]
-                if all(p in self.references for p in names):
-                    ref = stack([self.references[p] for p in names])
-                    f = C.colour_response(got, ref)                          # (N, J)
+                if b in self.stacked:
+                    f = C.colour_response(got, self.stacked[b])              # (N, J)
                 else:   # a limb before its first adaptation: no colour term
                     f = np.column_stack([
                         C.colour_response(got[:, k:k + 1], self.references[p][None])[:, 0]
                         if p in self.references else np.zeros(n)
                         for k, p in enumerate(names)])
-                cost["colour"][:, col[js]] = np.where(ok[:, js], f, 1.0)
+                cost["colour"][:, self.colour_cols[b]] = np.where(ok[:, js], f, 1.0)
         if len(self.skin_js):
             centre, axes, angle = ellipses
             j = self.skin_js
             f = K.skin_fractions(maps, centre[:, j], axes[:, j], angle[:, j])
             ok = view.valid[:, view.ellipsoid_idx[j]]
             cost["skin"][:, self.skin_cols] = 1.0 - np.where(ok, f, 0.0)
-        for c in CUE_NAMES:   # cues not configured on a part do not count
-            cost[c][:, self.unused[c]] = np.nan
         return Evaluation(cost, self.combine(cost), colours)
 
     def sigmas(self, cost: dict[str, np.ndarray]) -> dict[str, float]:
@@ -173,3 +174,6 @@ class Likelihood:
         for p, c in colours.items():
             ref = self.references.get(p)
             self.references[p] = c.copy() if ref is None else a * c + (1 - a) * ref
+        self.stacked = {b: stack([self.references[p] for p in names])
+                        for b, (_, names) in self.colour_sets.items()
+                        if all(p in self.references for p in names)}
