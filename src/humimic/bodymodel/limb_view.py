@@ -79,7 +79,8 @@ def _view_kernel(R_seg, p_seg, segment, p_sp, R_sp, aligned, T, ci, shape, ei, s
                 tc[r] = T[r, 0] * t[0] + T[r, 1] * t[1] + T[r, 2] * t[2] + T[r, 3]
                 for m in range(3):
                     R[r, m] = T[r, 0] * Rr[0, m] + T[r, 1] * Rr[1, m] + T[r, 2] * Rr[2, m]
-            t[:] = tc
+            for r in range(3):
+                t[r] = tc[r]
             for j in range(nc):
                 if ci[j] == i:
                     _cone(s, j, R, t, shape[j], z_min, valid[s], i, exists, sides, axis)
@@ -131,11 +132,13 @@ def _ellipsoid(s, j, R, t, semi, z_min, valid, i, K, ell):
     """``conics.ellipsoid_quadric``, ``quadric_to_conic``, ``conic_to_ellipse``, then
     ``BodyView.ellipses_px`` (``K``'s affine part) and ``conics.ellipse_axes``."""
     i0, i1, i2 = 1.0 / semi[0] ** 2, 1.0 / semi[1] ** 2, 1.0 / semi[2] ** 2
-
-    def a_(r, m):                                # A = R S^-2 R^T
-        return R[r, 0] * i0 * R[m, 0] + R[r, 1] * i1 * R[m, 1] + R[r, 2] * i2 * R[m, 2]
-
-    a00, a01, a02, a11, a12, a22 = a_(0, 0), a_(0, 1), a_(0, 2), a_(1, 1), a_(1, 2), a_(2, 2)
+    # A = R S^-2 R^T (symmetric)
+    a00 = R[0, 0] * i0 * R[0, 0] + R[0, 1] * i1 * R[0, 1] + R[0, 2] * i2 * R[0, 2]
+    a01 = R[0, 0] * i0 * R[1, 0] + R[0, 1] * i1 * R[1, 1] + R[0, 2] * i2 * R[1, 2]
+    a02 = R[0, 0] * i0 * R[2, 0] + R[0, 1] * i1 * R[2, 1] + R[0, 2] * i2 * R[2, 2]
+    a11 = R[1, 0] * i0 * R[1, 0] + R[1, 1] * i1 * R[1, 1] + R[1, 2] * i2 * R[1, 2]
+    a12 = R[1, 0] * i0 * R[2, 0] + R[1, 1] * i1 * R[2, 1] + R[1, 2] * i2 * R[2, 2]
+    a22 = R[2, 0] * i0 * R[2, 0] + R[2, 1] * i1 * R[2, 1] + R[2, 2] * i2 * R[2, 2]
     b0 = a00 * t[0] + a01 * t[1] + a02 * t[2]    # A t (the quadric's b = -A t)
     b1 = a01 * t[0] + a11 * t[1] + a12 * t[2]
     b2 = a02 * t[0] + a12 * t[1] + a22 * t[2]
@@ -170,9 +173,15 @@ def _ellipsoid(s, j, R, t, semi, z_min, valid, i, K, ell):
 def _rotation(axis, angle, out):
     """``kinematics.axis_rotation`` of one angle, into ``out (3, 3)``."""
     c, s = np.cos(angle), np.sin(angle)
-    out[:] = 0.0
     i, j = (axis + 1) % 3, (axis + 2) % 3
-    out[axis, axis], out[i, i], out[j, j], out[j, i], out[i, j] = 1.0, c, c, s, -s
+    for r in range(3):
+        for m in range(3):
+            out[r, m] = 0.0
+    out[axis, axis] = 1.0
+    out[i, i] = c
+    out[j, j] = c
+    out[j, i] = s
+    out[i, j] = -s
 
 
 @njit
@@ -191,16 +200,20 @@ def _forward_kernel(q, axes, signs, shoulders, neck, upper, fore):
     R = np.empty((n, 8, 3, 3))
     p = np.empty((n, 8, 3))
     Rt, A, B = np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3))
-    C, Ru = np.empty((3, 3)), np.empty((3, 3))
+    C, Ru, Rf = np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3))
     for s in range(n):
         cy, sy = np.cos(q[s, 3]), np.sin(q[s, 3])      # ypr_matrix
         cp, sp = np.cos(q[s, 4]), np.sin(q[s, 4])
         cr, sr = np.cos(q[s, 5]), np.sin(q[s, 5])
-        Rt[0, 0], Rt[0, 1], Rt[0, 2] = cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr
-        Rt[1, 0], Rt[1, 1], Rt[1, 2] = sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr
-        Rt[2, 0], Rt[2, 1], Rt[2, 2] = -sp, cp * sr, cp * cr
-        for g in range(2):                               # torso, head
-            R[s, g] = Rt
+        Rt[0, 0] = cy * cp
+        Rt[0, 1] = cy * sp * sr - sy * cr
+        Rt[0, 2] = cy * sp * cr + sy * sr
+        Rt[1, 0] = sy * cp
+        Rt[1, 1] = sy * sp * sr + cy * cr
+        Rt[1, 2] = sy * sp * cr - cy * sr
+        Rt[2, 0] = -sp
+        Rt[2, 1] = cp * sr
+        Rt[2, 2] = cp * cr
         for r in range(3):
             p[s, 0, r] = q[s, r]
             p[s, 1, r] = q[s, r] + (Rt[r, 0] * neck[0] + Rt[r, 1] * neck[1]
@@ -214,14 +227,18 @@ def _forward_kernel(q, axes, signs, shoulders, neck, upper, fore):
             _mul(C, A, B)
             _mul(Rt, B, Ru)
             _rotation(axes[k, 3], signs[k, 3] * q[s, b + 3], A)
-            R[s, g] = Ru
-            _mul(Ru, A, R[s, g + 1])
-            R[s, g + 2] = R[s, g + 1]
+            _mul(Ru, A, Rf)
             for r in range(3):
+                for m in range(3):
+                    R[s, 0, r, m] = Rt[r, m]             # torso and head
+                    R[s, 1, r, m] = Rt[r, m]
+                    R[s, g, r, m] = Ru[r, m]
+                    R[s, g + 1, r, m] = Rf[r, m]
+                    R[s, g + 2, r, m] = Rf[r, m]
                 p[s, g, r] = q[s, r] + (Rt[r, 0] * shoulders[k, 0] + Rt[r, 1] * shoulders[k, 1]
                                         + Rt[r, 2] * shoulders[k, 2])
                 p[s, g + 1, r] = p[s, g, r] - upper * Ru[r, 2]
-                p[s, g + 2, r] = p[s, g + 1, r] - fore * R[s, g + 1, r, 2]
+                p[s, g + 2, r] = p[s, g + 1, r] - fore * Rf[r, 2]
     return R, p
 
 
