@@ -1,8 +1,10 @@
 """The pose likelihood of Schmidt, Fritsch & Kwolek (eqs. 9-10) for N particles at once.
 
-Every particle's body model is projected (:mod:`humimic.bodymodel`), the feature points of all
+Every particle's body model is projected (:func:`humimic.bodymodel.limb_view.limb_view`, the
+compiled subset of :func:`~humimic.bodymodel.project` the cues need), the feature points of all
 limbs are sampled from the frame's :class:`~humimic.perception.trackers.kpf.cues.CueMaps` in one
-pass per cue, each limb's response becomes a cost ``e``, and
+compiled pass per cue (:mod:`~humimic.perception.trackers.kpf.limb_cues`), each limb's response
+becomes a cost ``e``, and
 
     log p(y | x) = sum_l 1/N_l sum_{c in cues(l)} -e_{c,l}^2 / (2 sigma_c^2)        (eqs. 9-10)
 
