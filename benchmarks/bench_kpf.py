@@ -8,7 +8,9 @@ mean-shift iterations) = (150, 2) and (1000, 3), on rendered frames of the side-
 rates depend on what else runs on the machine; the rate per second of this thread's CPU time
 (BLAS on one thread; OpenCV's own worker threads, in the cue maps and the cue sampling's
 ``cv2.remap``, not counted) is what one free core would give; ``--opencv-threads 1`` keeps
-OpenCV on this thread too, so every operation of the tracker is counted.
+OpenCV on this thread too, so every operation of the tracker is counted. Each configuration
+first tracks two frames untimed (warm-up: the compiled kernels' loading -- or compiling, with an
+empty numba cache -- and the caches are not counted).
 
     PYTHONPATH=src MUJOCO_GL=egl python benchmarks/bench_kpf.py [--frames N] [--repeats R]
         [--opencv-threads N] [--same-seed]
@@ -71,6 +73,11 @@ def main() -> None:
         for name, base in variants.items():
             cfg = base.model_copy(update={"n_particles": n, "iterations": it})
             rates, cpu_rates, per_frame = [], [], []
+            warm = KpfTracker(body, intr, cfg, np.random.default_rng(0))
+            warm.start(q0, FrameCues(frames[0][0], lut, colour_gradients=cfg.colour_gradients),
+                       frames[0][1])
+            warm.step(FrameCues(frames[1][0], lut, colour_gradients=cfg.colour_gradients),
+                      frames[1][1])
             for r in range(args.repeats):
                 tr = KpfTracker(body, intr, cfg, np.random.default_rng(0 if args.same_seed else r))
                 kw = {"colour_gradients": cfg.colour_gradients}

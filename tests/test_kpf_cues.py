@@ -193,3 +193,21 @@ def test_colour_gradients_find_an_edge_grey_levels_miss(lut):
     ref = C.cue_maps(bar_image(a, width), lut)
     assert np.allclose(g.gradient, ref.gradient, atol=1e-4)
     assert np.allclose(g.ridge, ref.ridge, atol=1e-4)
+
+
+def test_strongest_channel_is_the_argmax_of_the_squared_sums():
+    """The compiled selection against numpy's argmax (the first channel on ties), float32
+    squared sums: the values of the chosen channel, copied exactly."""
+    rng = np.random.default_rng(5)
+    planes = [rng.normal(size=(23, 31, 3)).astype(np.float32) for _ in range(3)]
+    for p in planes:
+        p[:4, :, 1] = p[:4, :, 0]                  # ties between channels 0 and 1
+        p[4:6, :, 2] = p[4:6, :, 0]                # ... and 0 and 2
+    for k in (2, 3):
+        mag = sum(p.astype(np.float32) ** 2 for p in planes[:k])
+        best = np.argmax(mag, axis=-1)[..., None]
+        want = [np.take_along_axis(p, best, -1)[..., 0] for p in planes[:k]]
+        got = C.strongest_channel(*planes[:k])
+        assert all(np.array_equal(g, w) for g, w in zip(got, want, strict=True))
+    grey = rng.normal(size=(5, 7)).astype(np.float32)
+    assert C.strongest_channel(grey, grey)[0] is grey

@@ -22,6 +22,9 @@ pixels. Usage, for the trackers::
     bands = bm.limb_bands(view, 3, 0.2)      # (N, limbs, 3, 4, 2) colour polygons
     limbs = view.limb_names                  # ("torso", "r_upper_arm", ...)
     skin = view.outline.uv[:, view.index("r_hand")]   # (N, V, 2) polygon of a hand
+    # the same limb fields and image ellipses compiled (the kpf likelihood's hot path)
+    from humimic.bodymodel.limb_view import forward, limb_view
+    lv = limb_view(body, forward(body, q), camera.intrinsics, T_cam_base)
 
     # Menezes (tbp): 8 DOF, torso pose from the face tracker, hidden-part removal
     arms = bm.avatar_body().with_free(bm.ARM_DOFS["R"] + bm.ARM_DOFS["L"])

@@ -1,5 +1,7 @@
 """Schmidt, Fritsch & Kwolek's image cues (sec. 4), computed once per frame as maps and sampled
-at every particle's feature points in one numpy pass.
+at every particle's feature points in one numpy pass. (The likelihood reads the same responses
+through :mod:`~humimic.perception.trackers.kpf.limb_cues`, compiled loops over the projected
+limbs; the functions here state the maths and are the reference those are tested against.)
 
 * edge (eqs. 1-2): first derivatives with a non-linear normalisation
   (``g / |g| tanh(|g| / k)``: weak texture edges smoothed away, strong edges saturated at 1);
@@ -28,6 +30,7 @@ import cv2
 import numpy as np
 
 from humimic.maths.arrays import stack
+from humimic.maths.jit import njit
 from humimic.perception.cues.color_models import ColorLUT
 
 #: Width (px) of a bright/dark bar that the 3x3 second derivative of the pyramid responds to best.
@@ -113,16 +116,26 @@ def strongest_channel(*planes: np.ndarray) -> list[np.ndarray]:
     brightness has none in grey. ``(H, W)`` planes are returned as they are."""
     if planes[0].ndim == 2:
         return list(planes)
-    mag = planes[0] * planes[0]
-    for p in planes[1:]:
-        mag += p * p
-    first = mag[..., 1] > mag[..., 0]
-    third = mag[..., 2] > np.where(first, mag[..., 1], mag[..., 0])
-    out = []
-    for p in planes:
-        o = np.where(first, p[..., 1], p[..., 0])
-        np.copyto(o, p[..., 2], where=third)
-        out.append(o)
+    return list(_strongest(tuple(np.ascontiguousarray(p, np.float32) for p in planes)))
+
+
+@njit
+def _strongest(planes):
+    """:func:`strongest_channel`'s loop: the squared sums in float32 in the planes' order (as
+    numpy's ``p0 * p0 + p1 * p1 + ...``), the first channel on ties, values copied."""
+    h, w, nc = planes[0].shape
+    out = np.empty((len(planes), h, w), np.float32)
+    for y in range(h):
+        for x in range(w):
+            best, top = 0, np.float32(-1.0)
+            for c in range(nc):
+                m = planes[0][y, x, c] * planes[0][y, x, c]
+                for k in range(1, len(planes)):
+                    m += planes[k][y, x, c] * planes[k][y, x, c]
+                if m > top:
+                    best, top = c, m
+            for k in range(len(planes)):
+                out[k, y, x] = planes[k][y, x, best]
     return out
 
 

@@ -1,8 +1,10 @@
 """The pose likelihood of Schmidt, Fritsch & Kwolek (eqs. 9-10) for N particles at once.
 
-Every particle's body model is projected (:mod:`humimic.bodymodel`), the feature points of all
+Every particle's body model is projected (:func:`humimic.bodymodel.limb_view.limb_view`, the
+compiled subset of :func:`~humimic.bodymodel.project` the cues need), the feature points of all
 limbs are sampled from the frame's :class:`~humimic.perception.trackers.kpf.cues.CueMaps` in one
-pass per cue, each limb's response becomes a cost ``e``, and
+compiled pass per cue (:mod:`~humimic.perception.trackers.kpf.limb_cues`), each limb's response
+becomes a cost ``e``, and
 
     log p(y | x) = sum_l 1/N_l sum_{c in cues(l)} -e_{c,l}^2 / (2 sigma_c^2)        (eqs. 9-10)
 
@@ -18,11 +20,16 @@ from dataclasses import dataclass
 import numpy as np
 
 from humimic import bodymodel as bm
+from humimic.bodymodel.limb_view import forward as compiled_forward
+from humimic.bodymodel.limb_view import limb_view
 from humimic.maths.arrays import stack
 from humimic.perception.trackers.kpf import cues as C
+from humimic.perception.trackers.kpf import limb_cues as K
 from humimic.perception.trackers.kpf.frame_cues import FrameCues, sample_box
 
 CUE_NAMES = ("edge", "ridge", "colour", "skin")
+#: The colour polygons are pulled towards the limb's axis by this fraction of its half-width.
+BAND_SHRINK = 0.2
 
 
 def limb_type(part: str) -> str:
@@ -65,7 +72,6 @@ class Likelihood:
                       for p in self.parts}
         self.used = {c: np.array([c in self.use[p] for p in self.parts]) for c in CUE_NAMES}
         """Cue -> (parts,) bool: the cue is configured on the part."""
-        self.unused = {c: np.flatnonzero(~u) for c, u in self.used.items()}
         self.any_used = {c: bool(u.any()) for c, u in self.used.items()}
         n_l = np.array([max(len(self.use[p]), 1) for p in self.parts], float)
         self.balance = {c: self.used[c] / n_l for c in CUE_NAMES}
@@ -84,6 +90,15 @@ class Likelihood:
                 js, names = self.colour_sets.setdefault(self.bands[p], ([], []))
                 js.append(j)
                 names.append(p)
+        self.colour_sets = {b: (np.array(js, np.intp), names)
+                            for b, (js, names) in self.colour_sets.items()}
+        self.cue_limbs = {c: np.array([j for j, p in enumerate(self.limbs) if c in self.use[p]],
+                                      np.intp) for c in ("edge", "ridge")}
+        """Cue -> positions (among the limbs) of the limbs it is configured on."""
+        self.cue_cols = {c: self.limb_cols[js] for c, js in self.cue_limbs.items()}
+        self.colour_cols = {b: self.limb_cols[js] for b, (js, _) in self.colour_sets.items()}
+        self.stacked: dict[int, np.ndarray] = {}
+        """Band count -> (J, B, 3) the references of its limbs, once all are adapted."""
         ell = [self.parts[i] for i in lay.ellipsoid_idx]
         self.skin_js = np.array([j for j, p in enumerate(ell) if "skin" in self.use[p]], int)
         """Positions (among the ellipsoids) of the parts with the skin cue."""
@@ -95,50 +110,39 @@ class Likelihood:
         or a :class:`FrameCues` that computes them where these particles' points fall."""
         cfg = self.cfg
         n = len(q)
-        view = bm.project(self.body, self.body.forward(q), self.intr, T_cam_base)
-        ellipses = view.ellipses_px() if len(self.skin_js) else None
+        view = limb_view(self.body, compiled_forward(self.body, q), self.intr, T_cam_base)
+        ellipses = view.ellipses
         if isinstance(maps, FrameCues):
             maps = maps.covering(*sample_box(view, ellipses))
         planes = np.full((len(CUE_NAMES), n, len(self.parts)), np.nan)
         cost = dict(zip(CUE_NAMES, planes, strict=True))
-        col = self.limb_cols
-        if "edge" in self.need:
-            e = bm.limb_edges(view, cfg.edge_points, normals=False)
-            cost["edge"][:, col] = 1.0 - np.where(e.ok, C.edge_response(maps, e.uv, e.angle), 0.0)
-        if "ridge" in self.need:
-            r = bm.limb_ridges(view, cfg.ridge_points)
-            width = np.add.reduce(r.width, -1) / r.width.shape[-1]      # mean (no wrapper)
-            f = C.ridge_response(maps, r.uv, width, r.angle)
-            cost["ridge"][:, col] = 1.0 - np.where(r.ok, f, 0.0)
+        ok = view.valid[:, view.cone_idx] & view.generators
+        for c, fn, m in (("edge", K.edge_responses, cfg.edge_points),
+                         ("ridge", K.ridge_responses, cfg.ridge_points)):
+            js = self.cue_limbs[c]
+            if len(js):
+                f = fn(maps, view.sides_uv, view.axis_uv, js, m)
+                cost[c][:, self.cue_cols[c]] = 1.0 - np.where(ok[:, js], f, 0.0)
         colours = {}
         if self.colour_sets:
-            ok = view.valid[:, view.cone_idx] & view.generators
-            quads = [bm.limb_bands(view, b, 0.2, js).reshape(n, len(js) * b, 4, 2)
-                     for b, (js, _) in self.colour_sets.items()]
-            bands = C.band_colours(maps, np.concatenate(quads, axis=1))   # every set at once
-            start = 0
             for b, (js, names) in self.colour_sets.items():
-                got = bands[:, start:start + len(js) * b].reshape(n, len(js), b, 3)
-                start += len(js) * b
+                got = K.band_colours(maps, view.sides_uv, js, b, BAND_SHRINK)   # (N, J, B, 3)
                 for k, p in enumerate(names):
                     colours[p] = got[:, k]
-                if all(p in self.references for p in names):
-                    ref = stack([self.references[p] for p in names])
-                    f = C.colour_response(got, ref)                          # (N, J)
+                if b in self.stacked:
+                    f = C.colour_response(got, self.stacked[b])              # (N, J)
                 else:   # a limb before its first adaptation: no colour term
                     f = np.column_stack([
                         C.colour_response(got[:, k:k + 1], self.references[p][None])[:, 0]
                         if p in self.references else np.zeros(n)
                         for k, p in enumerate(names)])
-                cost["colour"][:, col[js]] = np.where(ok[:, js], f, 1.0)
+                cost["colour"][:, self.colour_cols[b]] = np.where(ok[:, js], f, 1.0)
         if len(self.skin_js):
             centre, axes, angle = ellipses
             j = self.skin_js
-            f = C.skin_response(maps, centre[:, j], axes[:, j], angle[:, j])
+            f = K.skin_fractions(maps, centre[:, j], axes[:, j], angle[:, j])
             ok = view.valid[:, view.ellipsoid_idx[j]]
             cost["skin"][:, self.skin_cols] = 1.0 - np.where(ok, f, 0.0)
-        for c in CUE_NAMES:   # cues not configured on a part do not count
-            cost[c][:, self.unused[c]] = np.nan
         return Evaluation(cost, self.combine(cost), colours)
 
     def sigmas(self, cost: dict[str, np.ndarray]) -> dict[str, float]:
@@ -172,3 +176,6 @@ class Likelihood:
         for p, c in colours.items():
             ref = self.references.get(p)
             self.references[p] = c.copy() if ref is None else a * c + (1 - a) * ref
+        self.stacked = {b: stack([self.references[p] for p in names])
+                        for b, (_, names) in self.colour_sets.items()
+                        if all(p in self.references for p in names)}

@@ -1,0 +1,273 @@
+"""What Schmidt et al.'s cues read of a projected body model, compiled: the kernel particle
+filter's per-evaluation projection.
+
+:func:`limb_view` gives the fields of :func:`~humimic.bodymodel.projection.project`'s
+:class:`~humimic.bodymodel.projection.BodyView` that the limb features and the skin ellipses
+use -- validity, the cones' contour generators and image axes, the ellipsoids' image ellipses
+in pixels (``BodyView.ellipses_px``) -- from one compiled loop over particles and parts (the
+part frames, the cones' generator angles and ends, the ellipsoids' quadrics, conics and
+ellipses, in closed form as :mod:`~humimic.bodymodel.cones` and
+:mod:`~humimic.bodymodel.conics` state them and as ``project`` computes them, which is the
+reference it is tested against). numpy's per-call overhead on ``(N, parts)`` arrays dominated
+``project`` at the paper's 150 particles. Pixels come from
+:meth:`~humimic.sensors.camera_model.Intrinsics.distort` (the one projection implementation),
+applied to the kernel's normalised coordinates.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from humimic.bodymodel.kinematics import ARM_AXES, SIDES
+from humimic.bodymodel.model import BodyModel, Pose
+from humimic.bodymodel.projection import Z_MIN
+from humimic.maths.arrays import stack
+from humimic.maths.jit import njit
+from humimic.sensors.camera_model import Intrinsics
+
+
+@dataclass(frozen=True, eq=False)
+class LimbView:
+    """The limb-feature and ellipse fields of a :class:`~humimic.bodymodel.BodyView`."""
+
+    valid: np.ndarray
+    """(N, P) bool: the part lies wholly in front of the camera."""
+    cone_idx: np.ndarray
+    ellipsoid_idx: np.ndarray
+    generators: np.ndarray
+    """(N, Pc) bool: the cone's contour generators exist."""
+    sides_uv: np.ndarray
+    """(N, Pc, 2 sides, 2 ends, 2) the contour generators in pixels (NaN where invalid)."""
+    axis_uv: np.ndarray
+    """(N, Pc, 2, 2) the cones' axis ends in pixels."""
+    ellipses: tuple[np.ndarray, np.ndarray, np.ndarray]
+    """The ellipsoids' image ellipses in pixels: centres ``(N, Pe, 2)``, semi-axes
+    ``(N, Pe, 2)`` (major, minor), the major axis' angle ``(N, Pe)``."""
+
+    def ellipses_px(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        return self.ellipses
+
+
+@njit
+def _view_kernel(R_seg, p_seg, segment, p_sp, R_sp, aligned, T, ci, shape, ei, semi, K,
+                 z_min):
+    n, P, nc, ne = R_seg.shape[0], len(segment), len(ci), len(ei)
+    valid = np.zeros((n, P), np.bool_)
+    exists = np.zeros((n, nc), np.bool_)
+    sides = np.empty((n, nc, 2, 2, 2))          # normalised x, y
+    axis = np.empty((n, nc, 2, 2))
+    ell = np.empty((n, ne, 5))                   # centre u, v (px), major, minor, angle
+    R, Rr, t, tc = np.empty((3, 3)), np.empty((3, 3)), np.empty(3), np.empty(3)
+    for s in range(n):
+        for i in range(P):
+            g = segment[i]
+            for r in range(3):                   # the part's frame in the camera
+                t[r] = p_seg[s, g, r] + (R_seg[s, g, r, 0] * p_sp[i, 0]
+                                         + R_seg[s, g, r, 1] * p_sp[i, 1]
+                                         + R_seg[s, g, r, 2] * p_sp[i, 2])
+            for r in range(3):
+                for m in range(3):
+                    if aligned:
+                        Rr[r, m] = R_seg[s, g, r, m]
+                    else:
+                        Rr[r, m] = (R_seg[s, g, r, 0] * R_sp[i, 0, m]
+                                    + R_seg[s, g, r, 1] * R_sp[i, 1, m]
+                                    + R_seg[s, g, r, 2] * R_sp[i, 2, m])
+            for r in range(3):
+                tc[r] = T[r, 0] * t[0] + T[r, 1] * t[1] + T[r, 2] * t[2] + T[r, 3]
+                for m in range(3):
+                    R[r, m] = T[r, 0] * Rr[0, m] + T[r, 1] * Rr[1, m] + T[r, 2] * Rr[2, m]
+            for r in range(3):
+                t[r] = tc[r]
+            for j in range(nc):
+                if ci[j] == i:
+                    _cone(s, j, R, t, shape[j], z_min, valid[s], i, exists, sides, axis)
+            for j in range(ne):
+                if ei[j] == i:
+                    _ellipsoid(s, j, R, t, semi[j], z_min, valid[s], i, K, ell)
+    return valid, exists, sides, axis, ell
+
+
+@njit
+def _cone(s, j, R, t, shape, z_min, valid, i, exists, sides, axis):
+    """``cones.generator_angles``, ``in_front``, ``rim_points`` at the generators' ends (the
+    ends' cosines and sines by the angle-sum formulas: ``phi_c = atan2(B, A)``,
+    ``delta = acos(C / r)``)."""
+    a, b, L, k = shape[0], shape[1], shape[2], shape[3]
+    c0 = -(t[0] * R[0, 0] + t[1] * R[1, 0] + t[2] * R[2, 0])     # camera centre, local
+    c1 = -(t[0] * R[0, 1] + t[1] * R[1, 1] + t[2] * R[2, 1])
+    c2 = -(t[0] * R[0, 2] + t[1] * R[1, 2] + t[2] * R[2, 2])
+    A, B, C = L * b * c0, L * a * c1, a * b * (L + (k - 1.0) * c2)
+    r = np.hypot(A, B)
+    ratio = C / r
+    exists[s, j] = abs(ratio) < 1.0
+    cp, sp = (A / r, B / r) if r > 0.0 else (1.0, 0.0)
+    cd = 1.0 if np.isnan(ratio) else min(max(ratio, -1.0), 1.0)
+    sd = np.sqrt((1.0 - cd) * (1.0 + cd))
+    reach0 = np.hypot(a * R[2, 0], b * R[2, 1])
+    ok = (t[2] - reach0 > z_min) and (t[2] + L * R[2, 2] - k * reach0 > z_min)
+    valid[i] = ok
+    for side in range(2):
+        sg = 1.0 if side == 0 else -1.0              # phi_c + delta, phi_c - delta
+        cs, sn = cp * cd - sg * sp * sd, sp * cd + sg * cp * sd
+        for rim in range(2):
+            scale = 1.0 + (k - 1.0) * rim
+            lx, ly, lz = a * scale * cs, b * scale * sn, L * rim
+            X = t[0] + R[0, 0] * lx + R[0, 1] * ly + R[0, 2] * lz
+            Y = t[1] + R[1, 0] * lx + R[1, 1] * ly + R[1, 2] * lz
+            Z = t[2] + R[2, 0] * lx + R[2, 1] * ly + R[2, 2] * lz
+            inv_z = 1.0 / Z if ok else np.nan
+            sides[s, j, side, rim, 0] = X * inv_z
+            sides[s, j, side, rim, 1] = Y * inv_z
+    for end in range(2):                         # axis: base and top rim centres
+        X, Y, Z = t[0] + R[0, 2] * L * end, t[1] + R[1, 2] * L * end, t[2] + R[2, 2] * L * end
+        axis[s, j, end, 0] = X / Z
+        axis[s, j, end, 1] = Y / Z
+
+
+@njit
+def _ellipsoid(s, j, R, t, semi, z_min, valid, i, K, ell):
+    """``conics.ellipsoid_quadric``, ``quadric_to_conic``, ``conic_to_ellipse``, then
+    ``BodyView.ellipses_px`` (``K``'s affine part) and ``conics.ellipse_axes``."""
+    i0, i1, i2 = 1.0 / semi[0] ** 2, 1.0 / semi[1] ** 2, 1.0 / semi[2] ** 2
+    # A = R S^-2 R^T (symmetric)
+    a00 = R[0, 0] * i0 * R[0, 0] + R[0, 1] * i1 * R[0, 1] + R[0, 2] * i2 * R[0, 2]
+    a01 = R[0, 0] * i0 * R[1, 0] + R[0, 1] * i1 * R[1, 1] + R[0, 2] * i2 * R[1, 2]
+    a02 = R[0, 0] * i0 * R[2, 0] + R[0, 1] * i1 * R[2, 1] + R[0, 2] * i2 * R[2, 2]
+    a11 = R[1, 0] * i0 * R[1, 0] + R[1, 1] * i1 * R[1, 1] + R[1, 2] * i2 * R[1, 2]
+    a12 = R[1, 0] * i0 * R[2, 0] + R[1, 1] * i1 * R[2, 1] + R[1, 2] * i2 * R[2, 2]
+    a22 = R[2, 0] * i0 * R[2, 0] + R[2, 1] * i1 * R[2, 1] + R[2, 2] * i2 * R[2, 2]
+    b0 = a00 * t[0] + a01 * t[1] + a02 * t[2]    # A t (the quadric's b = -A t)
+    b1 = a01 * t[0] + a11 * t[1] + a12 * t[2]
+    b2 = a02 * t[0] + a12 * t[1] + a22 * t[2]
+    c = t[0] * b0 + t[1] * b1 + t[2] * b2 - 1.0
+    # the conic c A - b b^T, then its ellipse (conic_to_ellipse)
+    a, b, d = c * a00 - b0 * b0, c * a01 - b0 * b1, c * a11 - b1 * b1
+    ux, uy, c33 = c * a02 - b0 * b2, c * a12 - b1 * b2, c * a22 - b2 * b2
+    det = a * d - b * b
+    cx, cy = (b * uy - d * ux) / det, (b * ux - a * uy) / det
+    kk = (cx * (a * cx + b * cy) + cy * (b * cx + d * cy) - c33) / det
+    m00, m01, m11 = kk * d, -kk * b, kk * a
+    finite = np.isfinite(m00) and np.isfinite(m01) and np.isfinite(m11)
+    reach_z = np.sqrt((R[2, 0] * semi[0]) ** 2 + (R[2, 1] * semi[1]) ** 2
+                      + (R[2, 2] * semi[2]) ** 2)
+    valid[i] = det > 0 and m00 > 0 and finite and c > 0.0 and t[2] - reach_z > z_min
+    # pixels: centre A c + (c_u, c_v), shape A M A^T with A = K[:2, :2]
+    ell[s, j, 0] = K[0, 0] * cx + K[0, 1] * cy + K[0, 2]
+    ell[s, j, 1] = K[1, 0] * cx + K[1, 1] * cy + K[1, 2]
+    am00, am01 = K[0, 0] * m00 + K[0, 1] * m01, K[0, 0] * m01 + K[0, 1] * m11
+    am10, am11 = K[1, 0] * m00 + K[1, 1] * m01, K[1, 0] * m01 + K[1, 1] * m11
+    p = am00 * K[0, 0] + am01 * K[0, 1]
+    q = am00 * K[1, 0] + am01 * K[1, 1]
+    w = am10 * K[1, 0] + am11 * K[1, 1]
+    half_tr, half_diff = (p + w) / 2.0, (p - w) / 2.0    # ellipse_axes
+    r_ = np.hypot(half_diff, q)
+    ell[s, j, 2] = np.sqrt(max(half_tr + r_, 0.0))
+    ell[s, j, 3] = np.sqrt(max(half_tr - r_, 0.0))
+    ell[s, j, 4] = 0.5 * np.arctan2(2.0 * q, p - w)
+
+
+@njit
+def _rotation(axis, angle, out):
+    """``kinematics.axis_rotation`` of one angle, into ``out (3, 3)``."""
+    c, s = np.cos(angle), np.sin(angle)
+    i, j = (axis + 1) % 3, (axis + 2) % 3
+    for r in range(3):
+        for m in range(3):
+            out[r, m] = 0.0
+    out[axis, axis] = 1.0
+    out[i, i] = c
+    out[j, j] = c
+    out[j, i] = s
+    out[i, j] = -s
+
+
+@njit
+def _mul(A, B, out):
+    for r in range(3):
+        for m in range(3):
+            out[r, m] = A[r, 0] * B[0, m] + A[r, 1] * B[1, m] + A[r, 2] * B[2, m]
+
+
+@njit
+def _forward_kernel(q, axes, signs, shoulders, neck, upper, fore):
+    """``kinematics.forward_kinematics`` (segments in ``SEGMENTS`` order: torso, head, then
+    upper arm, forearm, hand per side; the arm rotations composed from the signed
+    :data:`~humimic.bodymodel.kinematics.ARM_AXES`, not their closed form)."""
+    n = q.shape[0]
+    R = np.empty((n, 8, 3, 3))
+    p = np.empty((n, 8, 3))
+    Rt, A, B = np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3))
+    C, Ru, Rf = np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3))
+    for s in range(n):
+        cy, sy = np.cos(q[s, 3]), np.sin(q[s, 3])      # ypr_matrix
+        cp, sp = np.cos(q[s, 4]), np.sin(q[s, 4])
+        cr, sr = np.cos(q[s, 5]), np.sin(q[s, 5])
+        Rt[0, 0] = cy * cp
+        Rt[0, 1] = cy * sp * sr - sy * cr
+        Rt[0, 2] = cy * sp * cr + sy * sr
+        Rt[1, 0] = sy * cp
+        Rt[1, 1] = sy * sp * sr + cy * cr
+        Rt[1, 2] = sy * sp * cr - cy * sr
+        Rt[2, 0] = -sp
+        Rt[2, 1] = cp * sr
+        Rt[2, 2] = cp * cr
+        for r in range(3):
+            p[s, 0, r] = q[s, r]
+            p[s, 1, r] = q[s, r] + (Rt[r, 0] * neck[0] + Rt[r, 1] * neck[1]
+                                    + Rt[r, 2] * neck[2])
+        for k in range(2):                               # arms R, L
+            b, g = 6 + 4 * k, 2 + 3 * k
+            _rotation(axes[k, 0], signs[k, 0] * q[s, b], A)
+            _rotation(axes[k, 1], signs[k, 1] * q[s, b + 1], B)
+            _mul(A, B, C)
+            _rotation(axes[k, 2], signs[k, 2] * q[s, b + 2], A)
+            _mul(C, A, B)
+            _mul(Rt, B, Ru)
+            _rotation(axes[k, 3], signs[k, 3] * q[s, b + 3], A)
+            _mul(Ru, A, Rf)
+            for r in range(3):
+                for m in range(3):
+                    R[s, 0, r, m] = Rt[r, m]             # torso and head
+                    R[s, 1, r, m] = Rt[r, m]
+                    R[s, g, r, m] = Ru[r, m]
+                    R[s, g + 1, r, m] = Rf[r, m]
+                    R[s, g + 2, r, m] = Rf[r, m]
+                p[s, g, r] = q[s, r] + (Rt[r, 0] * shoulders[k, 0] + Rt[r, 1] * shoulders[k, 1]
+                                        + Rt[r, 2] * shoulders[k, 2])
+                p[s, g + 1, r] = p[s, g, r] - upper * Ru[r, 2]
+                p[s, g + 2, r] = p[s, g + 1, r] - fore * Rf[r, 2]
+    return R, p
+
+
+def forward(body: BodyModel, q: np.ndarray) -> Pose:
+    """``body.forward(q)`` compiled (free states ``q (N, len(free))``; the fixed DOFs 0)."""
+    full = body.expand(q)
+    sk = body.skeleton
+    axes = np.array([[a for a, _ in ARM_AXES[side]] for side in SIDES], np.intp)
+    signs = np.array([[s for _, s in ARM_AXES[side]] for side in SIDES], float)
+    R, p = _forward_kernel(full, axes, signs,
+                           np.array([sk.shoulder[side] for side in SIDES], float),
+                           np.asarray(sk.neck, float), float(sk.upper_arm), float(sk.forearm))
+    return Pose(full, R, p)
+
+
+def limb_view(body: BodyModel, pose: Pose, intr: Intrinsics, T_cam_ref: np.ndarray
+              ) -> LimbView:
+    """The limb-feature and ellipse fields of ``project(body, pose, intr, T_cam_ref)``."""
+    lay = body.layout
+    K = np.asarray(intr.K, float)
+    valid, exists, sides, axis, ell = _view_kernel(
+        np.ascontiguousarray(pose.R, float), np.ascontiguousarray(pose.p, float),
+        np.ascontiguousarray(lay.segment, np.intp), np.ascontiguousarray(lay.p_seg_part, float),
+        np.ascontiguousarray(lay.R_seg_part, float), bool(lay.aligned),
+        np.ascontiguousarray(T_cam_ref, float), np.ascontiguousarray(lay.cone_idx, np.intp),
+        np.ascontiguousarray(lay.cone_shape, float),
+        np.ascontiguousarray(lay.ellipsoid_idx, np.intp),
+        np.ascontiguousarray(lay.semi_axes, float), K, float(Z_MIN))
+    sides_uv = stack(intr.distort(sides[..., 0], sides[..., 1]), axis=-1)
+    axis_uv = stack(intr.distort(axis[..., 0], axis[..., 1]), axis=-1)
+    return LimbView(valid, lay.cone_idx, lay.ellipsoid_idx, exists, sides_uv, axis_uv,
+                    (ell[..., :2], ell[..., 2:4], ell[..., 4]))
