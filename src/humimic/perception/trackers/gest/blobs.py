@@ -30,63 +30,30 @@ from __future__ import annotations
 import numpy as np
 
 from humimic.perception.cues.color_models import ColorLUT
-from humimic.perception.cues.importance import Blobs, blobs_from_stats
-from humimic.perception.trackers.gest.components import (
-    count_in_box,
-    hull_sums,
-    skin_components,
-)
+from humimic.perception.cues.importance import Blobs
+from humimic.perception.trackers.gest.components import hull_sums, measure_blobs
 
 GROW = 0.5
 """Margin (times the subsampled blob's larger side) the box a blob is re-measured in grows by
 when the blob's component reaches the box's edge."""
+
+ASPECT = (0.25, 4.0)
+"""The subsampled blobs' box height/width range
+(:func:`~humimic.perception.cues.importance.skin_blobs`' default)."""
 
 
 def hand_blobs(image: np.ndarray, lut: ColorLUT, subsample: int = 2,
                threshold: float = 0.5, min_area_px: float = 40.0) -> Blobs:
     """Skin blobs of an RGB ``image`` (``lut``'s posterior above ``threshold``) of at least
     ``min_area_px`` (full-resolution px), found at ``subsample`` and measured at full
-    resolution (module docstring). The mask and its components come from
-    :func:`.components.skin_components` (``lut.mask`` and ``cv2.connectedComponentsWithStats``
-    in one compiled pass, the same labels)."""
+    resolution (module docstring; compiled: :func:`.components.measure_blobs`)."""
     s = int(subsample)
-    h, w = image.shape[:2]
-    table, bits = lut.mask_table(threshold), lut.bits
-    _, st = skin_components(image, 0, h, 0, w, s, table, bits)
-    coarse = blobs_from_stats(st[1:, :5], st[1:, 5:] / st[1:, 4:5], 1,
-                              min_area_px=min_area_px / (s * s))
-    if len(coarse.areas) == 0:
-        return coarse
-    centres, boxes, areas = [], [], []
-    for x, y, bw, bh in coarse.boxes:
-        ix0, iy0 = max(int(x * s) - s, 0), max(int(y * s) - s, 0)
-        ix1, iy1 = min(int((x + bw) * s) + s, w), min(int((y + bh) * s) + s, h)
-        pad = 0
-        while True:                     # grow the box while the component reaches its edge
-            x0, y0 = max(ix0 - pad, 0), max(iy0 - pad, 0)
-            x1, y1 = min(ix1 + pad, w), min(iy1 + pad, h)
-            labels, stats = skin_components(image, y0, y1, x0, x1, 1, table, bits)
-            inner = count_in_box(labels, len(stats) - 1, iy0 - y0, iy1 - y0, ix0 - x0,
-                                 ix1 - x0)
-            inner[0] = 0
-            k = int(np.argmax(inner))
-            bx, by, cw, ch = (int(v) for v in stats[k, :4])
-            cut = ((bx == 0 < x0) or (by == 0 < y0) or (bx + cw == x1 - x0 and x1 < w)
-                   or (by + ch == y1 - y0 and y1 < h))
-            if not cut or pad >= GROW * max(bw, bh) * s or inner[k] == 0:
-                break
-            pad = int(np.ceil(GROW * max(bw, bh) * s))
-        if inner[k] == 0:
-            continue
-        box = [bx + x0, by + y0, cw, ch]
-        if box in boxes:                # one component seen as two coarse blobs
-            continue
-        m00, m10, m01 = hull_sums(labels, k, by, by + ch, bx, bx + cw)
-        centres.append(np.array([m10, m01]) / m00 + (x0 + bx, y0 + by))
-        boxes.append(box)
-        areas.append(float(m00))
-    return Blobs(np.reshape(centres, (-1, 2)), np.reshape(boxes, (-1, 4)), np.asarray(areas,
-                                                                                     float))
+    centres, boxes, areas, coarse = measure_blobs(
+        image, lut.mask_table(threshold), lut.bits, s, min_area_px / (s * s), ASPECT[0],
+        ASPECT[1], GROW)
+    if len(areas) == 0:
+        return Blobs(np.zeros((0, 2)), np.zeros((0, 4)), np.zeros(0))
+    return Blobs(centres, boxes, areas)
 
 
 def hull_moments(component: np.ndarray) -> tuple[np.ndarray, float]:

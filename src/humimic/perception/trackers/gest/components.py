@@ -39,57 +39,64 @@ def skin_components(image: np.ndarray, y0: int, y1: int, x0: int, x1: int, step:
     ``(n + 1, 7)`` int64 (:data:`STATS`, row 0 unused)."""
     h = (y1 - y0 + step - 1) // step
     w = (x1 - x0 + step - 1) // step
-    shift = 8 - bits
+    shift, b1, b2 = np.uint32(8 - bits), np.uint32(bits), np.uint32(2 * bits)
     labels = np.zeros((h, w), np.int32)
     parent = np.empty(h * ((w + 1) // 2) + 2, np.int32)
+    parent[0] = 0
     nprov = 0
+    ylo, yhi, xlo, xhi = h, -1, w, -1       # the skin pixels' box: the later passes' extent
     for y in range(h):                      # first pass: mask, provisional labels, unions
         row = image[y0 + y * step]
         for x in range(w):
             px = row[x0 + x * step]
-            idx = (((np.int32(px[0]) >> shift) << (2 * bits))
-                   | ((np.int32(px[1]) >> shift) << bits) | (np.int32(px[2]) >> shift))
+            idx = (((np.uint32(px[0]) >> shift) << b2) | ((np.uint32(px[1]) >> shift) << b1)
+                   | (np.uint32(px[2]) >> shift))
             if mask_table[idx] == 0:
                 continue
-            lab = 0
-            if x > 0 and labels[y, x - 1] > 0:
-                lab = labels[y, x - 1]
-            if y > 0:
-                for dx in (-1, 0, 1):
-                    if 0 <= x + dx < w:
-                        other = labels[y - 1, x + dx]
-                        if other > 0:
-                            if lab == 0:
-                                lab = other
-                            else:
-                                a, b = _root(parent, lab), _root(parent, other)
-                                if a < b:
-                                    parent[b] = a
-                                elif b < a:
-                                    parent[a] = b
-            if lab == 0:
+            ylo, yhi, xlo, xhi = min(ylo, y), max(yhi, y), min(xlo, x), max(xhi, x)
+            # 8-neighbours seen so far: W, NW, N, NE; N touches the other three, and W NW
+            north = labels[y - 1, x] if y > 0 else 0
+            if north > 0:
+                labels[y, x] = north
+                continue
+            west = labels[y, x - 1] if x > 0 else 0
+            if west == 0 and x > 0 and y > 0:
+                west = labels[y - 1, x - 1]
+            east = labels[y - 1, x + 1] if y > 0 and x + 1 < w else 0
+            if west > 0 and east > 0:
+                a, b = _root(parent, west), _root(parent, east)
+                if a < b:
+                    parent[b] = a
+                elif b < a:
+                    parent[a] = b
+                labels[y, x] = west
+            elif west > 0 or east > 0:
+                labels[y, x] = max(west, east)
+            else:
                 nprov += 1
                 parent[nprov] = nprov
-                lab = nprov
-            labels[y, x] = lab
+                labels[y, x] = nprov
+    for i in range(1, nprov + 1):           # every label to its root (the smallest label)
+        parent[i] = parent[parent[i]]
     final = np.zeros(nprov + 1, np.int32)
     n = 0
-    for by in range(0, h, 2):               # numbered in OpenCV's 2 x 2 block scan order
-        for bx in range(0, w, 2):
+    for by in range(ylo - ylo % 2, yhi + 1, 2):   # numbered in OpenCV's 2 x 2 block scan order
+        for bx in range(xlo - xlo % 2, xhi + 1, 2):
             for y in range(by, min(by + 2, h)):
                 for x in range(bx, min(bx + 2, w)):
-                    if labels[y, x] > 0:
-                        r = _root(parent, labels[y, x])
-                        if final[r] == 0:
-                            n += 1
-                            final[r] = n
+                    r = parent[labels[y, x]]
+                    if r > 0 and final[r] == 0:
+                        n += 1
+                        final[r] = n
+    for i in range(1, nprov + 1):
+        final[i] = final[parent[i]]
     stats = np.zeros((n + 1, 7), np.int64)
     lo = np.full((n + 1, 2), 1 << 30, np.int64)
     hi = np.full((n + 1, 2), -1, np.int64)
-    for y in range(h):
-        for x in range(w):
+    for y in range(ylo, yhi + 1):
+        for x in range(xlo, xhi + 1):
             if labels[y, x] > 0:
-                k = final[_root(parent, labels[y, x])]
+                k = final[labels[y, x]]
                 labels[y, x] = k
                 lo[k, 0] = min(lo[k, 0], x)
                 lo[k, 1] = min(lo[k, 1], y)
@@ -210,3 +217,61 @@ def hull_sums(labels: np.ndarray, k: int, y0: int, y1: int, x0: int, x1: int
                 m10 += x
                 m01 += y
     return m00, m10, m01
+
+
+@njit
+def measure_blobs(image: np.ndarray, mask_table: np.ndarray, bits: int, s: int,
+                  min_area_px: float, aspect_lo: float, aspect_hi: float, grow: float
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+    """:func:`.blobs.hand_blobs` (its docstring, and the module's): the components of the
+    skin mask subsampled by ``s`` of at least ``min_area_px`` (subsampled px) with a box's
+    height/width within ``aspect_lo, aspect_hi`` (:func:`~humimic.perception.cues.importance.
+    skin_blobs`), each re-measured at full resolution in its box grown by ``s`` (and by
+    ``grow`` times its larger side while the component reaches the box's edge). Returns the
+    hull centroids ``(K, 2)``, boxes ``(K, 4)`` and hull areas ``(K,)`` and the number of
+    subsampled blobs."""
+    h, w = image.shape[0], image.shape[1]
+    _, coarse = skin_components(image, 0, h, 0, w, s, mask_table, bits)
+    centres = np.empty((len(coarse), 2))
+    boxes = np.empty((len(coarse), 4), np.int64)
+    areas = np.empty(len(coarse))
+    nk, ncoarse = 0, 0
+    for c in range(1, len(coarse)):
+        x, y = float(coarse[c, 0]), float(coarse[c, 1])
+        bw, bh = float(coarse[c, 2]), float(coarse[c, 3])
+        ratio = bh / max(bw, 1.0)
+        if not (float(coarse[c, 4]) >= min_area_px and aspect_lo <= ratio <= aspect_hi):
+            continue
+        ncoarse += 1
+        ix0, iy0 = max(int(x * s) - s, 0), max(int(y * s) - s, 0)
+        ix1, iy1 = min(int((x + bw) * s) + s, w), min(int((y + bh) * s) + s, h)
+        pad = 0
+        while True:                     # grow the box while the component reaches its edge
+            x0, y0 = max(ix0 - pad, 0), max(iy0 - pad, 0)
+            x1, y1 = min(ix1 + pad, w), min(iy1 + pad, h)
+            labels, stats = skin_components(image, y0, y1, x0, x1, 1, mask_table, bits)
+            inner = count_in_box(labels, len(stats) - 1, iy0 - y0, iy1 - y0, ix0 - x0,
+                                 ix1 - x0)
+            inner[0] = 0
+            k = int(np.argmax(inner))
+            bx, by, cw, ch = stats[k, 0], stats[k, 1], stats[k, 2], stats[k, 3]
+            cut = ((bx == 0 and 0 < x0) or (by == 0 and 0 < y0)
+                   or (bx + cw == x1 - x0 and x1 < w) or (by + ch == y1 - y0 and y1 < h))
+            if not cut or pad >= grow * max(bw, bh) * s or inner[k] == 0:
+                break
+            pad = int(np.ceil(grow * max(bw, bh) * s))
+        if inner[k] == 0:
+            continue
+        seen = False                    # one component seen as two subsampled blobs
+        for j in range(nk):
+            seen = seen or (boxes[j, 0] == bx + x0 and boxes[j, 1] == by + y0
+                            and boxes[j, 2] == cw and boxes[j, 3] == ch)
+        if seen:
+            continue
+        m00, m10, m01 = hull_sums(labels, k, by, by + ch, bx, bx + cw)
+        centres[nk, 0] = m10 / m00 + (x0 + bx)
+        centres[nk, 1] = m01 / m00 + (y0 + by)
+        boxes[nk, 0], boxes[nk, 1], boxes[nk, 2], boxes[nk, 3] = bx + x0, by + y0, cw, ch
+        areas[nk] = m00
+        nk += 1
+    return centres[:nk], boxes[:nk], areas[:nk], ncoarse
