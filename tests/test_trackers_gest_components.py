@@ -13,6 +13,7 @@ from scipy import ndimage
 
 from humimic.perception.blobs.config import DEFAULT_COLOR_MODEL
 from humimic.perception.cues.color_models import ColorLUT, load_color_model
+from humimic.perception.trackers.gest.blobs import hand_blobs
 from humimic.perception.trackers.gest.components import count_in_box, skin_components
 
 LUT = ColorLUT(load_color_model(DEFAULT_COLOR_MODEL), 6)
@@ -49,14 +50,13 @@ def test_skin_components_equal_opencvs_labels_and_stats():
     assert parts > 300                      # 672: speckled masks, merges of every kind
 
 
-def test_skin_components_of_an_image_without_skin_and_of_a_view():
+def test_skin_components_of_an_image_without_skin_and_in_a_box():
     img = np.full((30, 40, 3), 70, np.uint8)
     labels, stats = skin_components(img, 0, 30, 0, 40, 1, LUT.mask_table(), LUT.bits)
     assert not labels.any() and stats.shape == (1, 7)
     img[10:20, 5:9] = SKIN_RGB
-    view = img[5:, 2:]                                       # not contiguous
-    labels, stats = skin_components(view, 0, 25, 0, 38, 1, LUT.mask_table(), LUT.bits)
-    np.testing.assert_array_equal(stats[1, :5], [3, 5, 4, 10, 40])
+    labels, stats = skin_components(img, 5, 30, 2, 40, 1, LUT.mask_table(), LUT.bits)
+    np.testing.assert_array_equal(stats[1, :5], [3, 5, 4, 10, 40])       # in the box's pixels
 
 
 def test_count_in_box_is_bincount():
@@ -65,3 +65,16 @@ def test_count_in_box_is_bincount():
     for y0, y1, x0, x1 in ((0, 40, 0, 50), (5, 17, 30, 49), (-3, 10, 45, 60)):
         want = np.bincount(labels[max(y0, 0):y1, max(x0, 0):x1].ravel(), minlength=6)
         np.testing.assert_array_equal(count_in_box(labels, 5, y0, y1, x0, x1), want)
+
+
+def test_hand_blobs_in_a_box_are_those_of_the_cropped_image():
+    rng = np.random.default_rng(3)
+    img = _image(rng, 120, 160, 0.3, 3.0)
+    for box in ((0, 0, 160, 120), (13, 7, 150, 101), (40, 30, 90, 80)):
+        x0, y0, x1, y1 = box
+        want = hand_blobs(np.ascontiguousarray(img[y0:y1, x0:x1]), LUT, 2)
+        got = hand_blobs(img, LUT, 2, box=box)
+        assert len(want.areas) > 0
+        for a, b in zip((got.centers, got.boxes, got.areas),
+                        (want.centers, want.boxes, want.areas), strict=True):
+            np.testing.assert_array_equal(a, b)

@@ -43,14 +43,18 @@ ASPECT = (0.25, 4.0)
 
 
 def hand_blobs(image: np.ndarray, lut: ColorLUT, subsample: int = 2,
-               threshold: float = 0.5, min_area_px: float = 40.0) -> Blobs:
+               threshold: float = 0.5, min_area_px: float = 40.0,
+               box: tuple[int, int, int, int] | None = None) -> Blobs:
     """Skin blobs of an RGB ``image`` (``lut``'s posterior above ``threshold``) of at least
     ``min_area_px`` (full-resolution px), found at ``subsample`` and measured at full
-    resolution (module docstring; compiled: :func:`.components.measure_blobs`)."""
+    resolution (module docstring; compiled: :func:`.components.measure_blobs`); with ``box``
+    ``(x0, y0, x1, y1)`` those of ``image[y0:y1, x0:x1]``, in its pixels (the kernel reads
+    the whole image: one compiled version for all boxes)."""
     s = int(subsample)
+    x0, y0, x1, y1 = (0, 0, image.shape[1], image.shape[0]) if box is None else box
     centres, boxes, areas, coarse = measure_blobs(
-        image, lut.mask_table(threshold), lut.bits, s, min_area_px / (s * s), ASPECT[0],
-        ASPECT[1], GROW)
+        image, y0, x0, y1 - y0, x1 - x0, lut.mask_table(threshold), lut.bits, s,
+        min_area_px / (s * s), ASPECT[0], ASPECT[1], GROW)
     if len(areas) == 0:
         return Blobs(np.zeros((0, 2)), np.zeros((0, 4)), np.zeros(0))
     return Blobs(centres, boxes, areas)

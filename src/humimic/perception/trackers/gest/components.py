@@ -220,18 +220,18 @@ def hull_sums(labels: np.ndarray, k: int, y0: int, y1: int, x0: int, x1: int
 
 
 @njit
-def measure_blobs(image: np.ndarray, mask_table: np.ndarray, bits: int, s: int,
-                  min_area_px: float, aspect_lo: float, aspect_hi: float, grow: float
-                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+def measure_blobs(image: np.ndarray, oy: int, ox: int, h: int, w: int, mask_table: np.ndarray,
+                  bits: int, s: int, min_area_px: float, aspect_lo: float, aspect_hi: float,
+                  grow: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
     """:func:`.blobs.hand_blobs` (its docstring, and the module's): the components of the
     skin mask subsampled by ``s`` of at least ``min_area_px`` (subsampled px) with a box's
     height/width within ``aspect_lo, aspect_hi`` (:func:`~humimic.perception.cues.importance.
     skin_blobs`), each re-measured at full resolution in its box grown by ``s`` (and by
     ``grow`` times its larger side while the component reaches the box's edge). Returns the
-    hull centroids ``(K, 2)``, boxes ``(K, 4)`` and hull areas ``(K,)`` and the number of
-    subsampled blobs."""
-    h, w = image.shape[0], image.shape[1]
-    _, coarse = skin_components(image, 0, h, 0, w, s, mask_table, bits)
+    hull centroids ``(K, 2)``, boxes ``(K, 4)`` and hull areas ``(K,)`` (pixels of the box
+    ``image[oy:oy + h, ox:ox + w]`` the blobs are looked for in) and the number of subsampled
+    blobs."""
+    _, coarse = skin_components(image, oy, oy + h, ox, ox + w, s, mask_table, bits)
     centres = np.empty((len(coarse), 2))
     boxes = np.empty((len(coarse), 4), np.int64)
     areas = np.empty(len(coarse))
@@ -249,7 +249,8 @@ def measure_blobs(image: np.ndarray, mask_table: np.ndarray, bits: int, s: int,
         while True:                     # grow the box while the component reaches its edge
             x0, y0 = max(ix0 - pad, 0), max(iy0 - pad, 0)
             x1, y1 = min(ix1 + pad, w), min(iy1 + pad, h)
-            labels, stats = skin_components(image, y0, y1, x0, x1, 1, mask_table, bits)
+            labels, stats = skin_components(image, oy + y0, oy + y1, ox + x0, ox + x1, 1,
+                                            mask_table, bits)
             inner = count_in_box(labels, len(stats) - 1, iy0 - y0, iy1 - y0, ix0 - x0,
                                  ix1 - x0)
             inner[0] = 0
