@@ -1,8 +1,9 @@
 """GEST's compiled blob kernels (:mod:`humimic.perception.trackers.gest.components`) against
 OpenCV: the skin mask's 8-connected components (labels, numbering and stats) equal
 ``cv2.connectedComponentsWithStats`` on ``ColorLUT.mask`` of the same (sub-sampled) box, and
-the per-label counts ``np.bincount``. The hull moments are checked against skimage in
-test_trackers_gest_tracking.py (:func:`hull_moments` calls the kernel)."""
+the per-label counts ``np.bincount``; the fused skin posterior and colour bins of the cue
+images equal ``ColorLUT.posterior`` and ``quantize``. The hull moments are checked against
+skimage in test_trackers_gest_tracking.py (:func:`hull_moments` calls the kernel)."""
 
 from __future__ import annotations
 
@@ -13,6 +14,8 @@ from scipy import ndimage
 
 from humimic.perception.blobs.config import DEFAULT_COLOR_MODEL
 from humimic.perception.cues.color_models import ColorLUT, load_color_model
+from humimic.perception.cues.histograms import quantize
+from humimic.perception.trackers.frame_cues import skin_and_bins
 from humimic.perception.trackers.gest.blobs import hand_blobs
 from humimic.perception.trackers.gest.components import count_in_box, skin_components
 
@@ -78,3 +81,13 @@ def test_hand_blobs_in_a_box_are_those_of_the_cropped_image():
         for a, b in zip((got.centers, got.boxes, got.areas),
                         (want.centers, want.boxes, want.areas), strict=True):
             np.testing.assert_array_equal(a, b)
+
+
+def test_skin_and_bins_are_the_luts_posterior_and_quantize():
+    rng = np.random.default_rng(4)
+    for h, w in ((1, 1), (17, 30), (48, 64)):
+        img = _image(rng, h, w, 0.4, 1.0) if h > 1 else rng.integers(0, 256, (1, 1, 3), np.uint8)
+        for bins in (8, 32):
+            skin, planes = skin_and_bins(img, LUT.post_table, LUT.bits, bins)
+            np.testing.assert_array_equal(skin, LUT.posterior(img))
+            np.testing.assert_array_equal(planes, quantize(img, bins).planes)
