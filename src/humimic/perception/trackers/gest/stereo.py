@@ -83,6 +83,8 @@ def interior_blobs(blobs: Blobs, width: int, height: int, margin_px: float = 1.0
     x, y, w, h = blobs.boxes.T
     keep = ((x >= margin_px) & (y >= margin_px) & (x + w <= width - margin_px)
             & (y + h <= height - margin_px))
+    if keep.all():                          # the usual case (and no blobs): as they are
+        return blobs
     return Blobs(blobs.centers[keep], blobs.boxes[keep], blobs.areas[keep])
 
 
