@@ -10,7 +10,7 @@ import numpy as np
 
 from humimic.maths.jit import njit
 from humimic.perception.cues.color_models import ColorLUT
-from humimic.perception.cues.edges import edge_maps
+from humimic.perception.cues.edges import edge_maps, strongest_channel_sobel
 from humimic.perception.cues.histograms import QuantizedImage, chromaticity, quantize
 from humimic.perception.cues.motion import MotionEdgeMaps, motion_edge_maps
 from humimic.sensors.camera_model import CameraImage, Intrinsics
@@ -80,3 +80,12 @@ def skin_and_bins(image: np.ndarray, post_table: np.ndarray, bits: int, bins: in
     for c in range(3):
         planes[c, h * w] = bins + c * (bins + 1)
     return skin, planes
+
+
+def warm_up(lut: ColorLUT | None, bins: int) -> None:
+    """Compile the cue kernels (or load them from numba's disk cache: 0.1-0.5 s) now, on a
+    tiny frame, so that a stage's first timed frame does not pay for it."""
+    img = np.zeros((2, 2, 3), np.uint8)
+    strongest_channel_sobel(img)
+    if lut is not None and not 256 % bins:
+        skin_and_bins(img, lut.post_table, lut.bits, bins)
