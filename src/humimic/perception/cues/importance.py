@@ -74,15 +74,7 @@ def skin_blobs(mask: np.ndarray, subsample: int = 2, min_area_px: float = 40.0,
     if subsample > 1:
         m = m[::subsample, ::subsample]
     n, _, stats, cent = cv2.connectedComponentsWithStats(m, connectivity=8)
-    return blobs_from_stats(stats[1:], cent[1:], subsample, min_area_px, aspect)
-
-
-def blobs_from_stats(stats: np.ndarray, cent: np.ndarray, subsample: int = 2,
-                     min_area_px: float = 40.0, aspect: tuple[float, float] = (0.25, 4.0)
-                     ) -> Blobs:
-    """:func:`skin_blobs` from the components' stats ``(K, 5)`` (``cv2.CC_STAT_*``, in the
-    subsampled mask) and centroids ``(K, 2)``."""
-    stats = np.asarray(stats).astype(np.float64)
+    stats, cent = stats[1:].astype(np.float64), cent[1:]
     s = float(subsample)
     area = stats[:, cv2.CC_STAT_AREA] * s * s
     w, h = stats[:, cv2.CC_STAT_WIDTH], stats[:, cv2.CC_STAT_HEIGHT]
