@@ -5,7 +5,8 @@ Run: ``python benchmarks/bench_trackers.py [--frames 30] [--repeats 3] [--only g
 Renders the frames of ``menezes_gest_reach`` (stereo), ``menezes_gest_far`` (both eyes' wide
 and foveal cameras, the eyes on the hand) and ``fig12_tbp_pointing`` (left eye) once, then
 times the trackers' ``step`` over them (GEST on the far frames in the foveal pair with its cue
-images at full resolution and within ``foveal_cue_radius_px``, and in the wide pair; median and
+images at full resolution and within ``foveal_cue_radius_px``, and in the wide pair; GEST
+after an untimed warm-up run, which compiles or loads its numba kernels; median and
 interquartile range over repeats of the whole sequence, each from a fresh tracker), and the
 per-frame image preparation alone. ``--clock cpu`` (default) is ``time.process_time``, every
 thread of this process: on a shared machine the wall clock mostly measures the other sessions,
@@ -60,7 +61,12 @@ CLOCK = {"cpu": time.process_time, "wall": time.perf_counter}
 clock = CLOCK["cpu"]
 
 
-def time_runs(make, run, repeats: int) -> list[float]:
+def time_runs(make, run, repeats: int, warmup: bool = False) -> list[float]:
+    """Seconds per frame of ``repeats`` runs, each on a fresh ``make(r)``; ``warmup``: one
+    untimed run first (numba's kernels compile, or load from their disk cache, on first
+    use)."""
+    if warmup:
+        run(make(-1))
     out = []
     for r in range(repeats):
         tracker = make(r)
@@ -127,7 +133,7 @@ def wide_gest(args) -> None:
     from humimic.perception.trackers.gest.tracker import GestTracker
 
     report(f"gest N={cfg.n_particles}", time_runs(lambda r: GestTracker(cfg, stage.tracker.lut),
-                                        gest_run, args.repeats), GOALS_FPS["gest"])
+                                        gest_run, args.repeats, warmup=True), GOALS_FPS["gest"])
     report("  gest skin blobs, whole frames", time_runs(
         lambda r: None, lambda _: [skin_blobs((stage.tracker.lut.posterior(f.image) > 0.5)
                                               .astype(np.uint8), subsample=cfg.blob_subsample)
@@ -195,6 +201,8 @@ def foveal_gest(args) -> None:
                 cfg.model_copy(update={"foveal_cue_radius_px": budget}), True))
     secs: dict[str, list[float]] = {label: [] for label, _, _ in configs}
     share = {}
+    for _, c, foveal in configs:        # warm-up, untimed (compiled kernels' first use)
+        run(foveal)(GestTracker(c, lut))
     for _ in range(args.repeats):       # interleaved: a change of load hits each one alike
         for label, c, foveal in configs:
             used.clear()

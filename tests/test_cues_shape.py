@@ -16,6 +16,7 @@ from humimic.perception.cues.edges import (
     nearest_along_normal,
     normal_edge_distance,
     shape_log_likelihood,
+    strongest_channel_sobel,
 )
 from humimic.perception.cues.motion import (
     OpticalFlow,
@@ -69,6 +70,22 @@ def test_colour_canny_sees_an_equal_brightness_boundary_grey_canny_misses():
     gy = np.ascontiguousarray(np.take_along_axis(dy, k, 2)[..., 0])
     np.testing.assert_array_equal(colour_canny(rgb),
                                   cv2.Canny(gx, gy, 50.0, 150.0, L2gradient=True))
+
+
+def test_strongest_channel_sobel_is_opencvs_sobel_at_the_integer_argmax():
+    """The compiled gradient equals ``cv2.Sobel`` (3 x 3, replicated border) of the channel
+    with the largest squared magnitude (first on ties), on random images of any size."""
+    rng = np.random.default_rng(2)
+    for h, w in ((1, 1), (2, 7), (13, 1), (31, 44), (60, 59)):
+        img = rng.integers(0, 256, (h, w, 3), np.uint8)
+        img[: h // 2] = img[: h // 2, :, :1]                   # equal channels: ties
+        dx = cv2.Sobel(img, cv2.CV_16S, 1, 0, ksize=3, borderType=cv2.BORDER_REPLICATE)
+        dy = cv2.Sobel(img, cv2.CV_16S, 0, 1, ksize=3, borderType=cv2.BORDER_REPLICATE)
+        dx, dy = dx.reshape(h, w, 3), dy.reshape(h, w, 3)
+        k = np.argmax(dx.astype(np.int64) ** 2 + dy.astype(np.int64) ** 2, axis=2)[..., None]
+        gx, gy = strongest_channel_sobel(img)
+        np.testing.assert_array_equal(gx, np.take_along_axis(dx, k, 2)[..., 0])
+        np.testing.assert_array_equal(gy, np.take_along_axis(dy, k, 2)[..., 0])
 
 
 def test_distance_transform_is_the_brute_force_nearest_edge_distance():

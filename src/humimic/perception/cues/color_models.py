@@ -280,7 +280,11 @@ class ColorLUT:
     def mask(self, rgb_u8: np.ndarray, threshold: float = 0.5) -> np.ndarray:
         """``(posterior(rgb_u8) > threshold)`` as uint8 0/1, from a uint8 table (one gather,
         no float image)."""
+        return np.take(self.mask_table(threshold), self.index(rgb_u8))
+
+    def mask_table(self, threshold: float = 0.5) -> np.ndarray:
+        """:meth:`mask`'s uint8 table (0/1 per bin, indexed as :meth:`index`)."""
         table = self._masks.get(threshold)
         if table is None:
             table = self._masks[threshold] = (self.post_table > threshold).astype(np.uint8)
-        return np.take(table, self.index(rgb_u8))
+        return table

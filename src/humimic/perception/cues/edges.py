@@ -23,6 +23,8 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from humimic.maths.jit import njit
+
 DT_CAP_PX = 30.0
 """Distance given to points off the image and the largest distance-transform value used."""
 
@@ -68,26 +70,42 @@ def colour_canny(image: np.ndarray, low: float = 50.0, high: float = 150.0,
     Sobel gradient of the channel where it is strongest (Di Zenzo's maximum-channel
     approximation), fed to OpenCV's hysteresis. Finds boundaries between colours of equal
     brightness (skin against a grey wall) that :func:`canny` on the grey image misses; on a
-    grey image (equal channels) it is :func:`canny`."""
+    grey image (equal channels) it is :func:`canny`. The gradient of the strongest channel:
+    :func:`strongest_channel_sobel`."""
     if image.ndim == 2:
         return canny(image, low, high, blur_sigma)
     img = cv2.GaussianBlur(image, (0, 0), blur_sigma) if blur_sigma > 0 else image
-    dx = cv2.Sobel(img, cv2.CV_16S, 1, 0, ksize=3, borderType=cv2.BORDER_REPLICATE)
-    dy = cv2.Sobel(img, cv2.CV_16S, 0, 1, ksize=3, borderType=cv2.BORDER_REPLICATE)
-    mag = cv2.magnitude(dx.astype(np.float32).ravel(), dy.astype(np.float32).ravel()
-                        ).reshape(dx.shape)                 # 1.6x faster than int32 squares
-    m0, m1, m2 = cv2.split(mag)
-    second = cv2.compare(m1, m0, cv2.CMP_GT)              # argmax's first maximum
-    third = cv2.compare(m2, cv2.max(m0, m1), cv2.CMP_GT)
-    # the gradient of the strongest channel: channel 0, overwritten where 1, then 2 is stronger
-    # (OpenCV's masked copies on contiguous planes: half the time of nested np.where)
-    gx, x1, x2 = cv2.split(dx)
-    gy, y1, y2 = cv2.split(dy)
-    cv2.copyTo(x1, second, gx)
-    cv2.copyTo(x2, third, gx)
-    cv2.copyTo(y1, second, gy)
-    cv2.copyTo(y2, third, gy)
+    gx, gy = strongest_channel_sobel(img)
     return cv2.Canny(gx, gy, low, high, L2gradient=True)
+
+
+@njit
+def strongest_channel_sobel(image: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per pixel of a ``(h, w, C)`` uint8 image, the 3 x 3 Sobel gradient ``(gx, gy)`` (int16,
+    ``cv2.Sobel`` with ``BORDER_REPLICATE``) of the channel where its squared magnitude is
+    largest (the first such channel): one compiled pass instead of a dozen OpenCV calls on
+    the small cue boxes."""
+    h, w, nc = image.shape
+    gx = np.empty((h, w), np.int16)
+    gy = np.empty((h, w), np.int16)
+    for y in range(h):
+        ya, yb = max(y - 1, 0), min(y + 1, h - 1)
+        for x in range(w):
+            xa, xb = max(x - 1, 0), min(x + 1, w - 1)
+            best, bx, by = np.int32(-1), np.int32(0), np.int32(0)
+            for c in range(nc):
+                a, b, d = np.int32(image[ya, xa, c]), np.int32(image[y, xa, c]), np.int32(
+                    image[yb, xa, c])
+                e, f, g = np.int32(image[ya, xb, c]), np.int32(image[y, xb, c]), np.int32(
+                    image[yb, xb, c])
+                dx = (e + 2 * f + g) - (a + 2 * b + d)
+                dy = (d + 2 * np.int32(image[yb, x, c]) + g) - (a + 2 * np.int32(
+                    image[ya, x, c]) + e)
+                m = dx * dx + dy * dy
+                if m > best:
+                    best, bx, by = m, dx, dy
+            gx[y, x], gy[y, x] = bx, by
+    return gx, gy
 
 
 def edge_maps(image: np.ndarray, low: float = 50.0, high: float = 150.0,

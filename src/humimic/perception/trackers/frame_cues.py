@@ -8,8 +8,9 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from humimic.maths.jit import njit
 from humimic.perception.cues.color_models import ColorLUT
-from humimic.perception.cues.edges import edge_maps
+from humimic.perception.cues.edges import edge_maps, strongest_channel_sobel
 from humimic.perception.cues.histograms import QuantizedImage, chromaticity, quantize
 from humimic.perception.cues.motion import MotionEdgeMaps, motion_edge_maps
 from humimic.sensors.camera_model import CameraImage, Intrinsics
@@ -39,11 +40,52 @@ def frame_cues(frame: CameraImage, bins: int, lut: ColorLUT | None = None,
                colours: str = "rgb") -> FrameCues:
     """The cue images of ``frame``: edges (on the colour gradient with ``colour_edges``; and
     moving edges with ``flow``), skin posterior, quantised colours (``colours``: ``rgb``, or
-    ``chromaticity``: normalised rgb, :func:`humimic.perception.cues.histograms.chromaticity`)."""
+    ``chromaticity``: normalised rgb, :func:`humimic.perception.cues.histograms.chromaticity`);
+    the skin posterior and the rgb bins in one pass (:func:`skin_and_bins`)."""
     maps = edge_maps(frame.image, colour=colour_edges)
+    if lut is not None and colours == "rgb" and frame.image.ndim == 3 and not 256 % bins:
+        h, w = frame.image.shape[:2]
+        skin, planes = skin_and_bins(frame.image, lut.post_table, lut.bits, bins)
+        qimage = QuantizedImage(planes, h, w, bins)
+    else:
+        skin = None if lut is None else lut.posterior(frame.image)
+        qimage = quantize(chromaticity(frame.image) if colours == "chromaticity"
+                          else frame.image, bins)
     return FrameCues(frame.camera.intrinsics, frame.camera.T_cam_base,
-                     motion_edge_maps(maps, flow), None if lut is None else
-                     lut.posterior(frame.image), quantize(
-                         chromaticity(frame.image) if colours == "chromaticity" else frame.image,
-                         bins),
+                     motion_edge_maps(maps, flow), skin, qimage,
                      cv2.countNonZero(maps.edges) / maps.edges.size)
+
+
+@njit
+def skin_and_bins(image: np.ndarray, post_table: np.ndarray, bits: int, bins: int
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """:meth:`ColorLUT.posterior` (its ``post_table`` at ``bits`` per channel) and
+    :func:`~humimic.perception.cues.histograms.quantize`'s planes (``bins`` dividing 256) of
+    an RGB uint8 image in one compiled pass (two numpy passes with their temporaries cost
+    several times more on the small cue boxes)."""
+    h, w = image.shape[0], image.shape[1]
+    shift, b1, b2 = np.uint32(8 - bits), np.uint32(bits), np.uint32(2 * bits)
+    step = 256 // bins
+    skin = np.empty((h, w), np.float32)
+    planes = np.empty((3, h * w + 1), np.int32)
+    for y in range(h):
+        for x in range(w):
+            r, g, b = np.uint32(image[y, x, 0]), np.uint32(image[y, x, 1]), np.uint32(
+                image[y, x, 2])
+            skin[y, x] = post_table[((r >> shift) << b2) | ((g >> shift) << b1) | (b >> shift)]
+            i = y * w + x
+            planes[0, i] = r // step
+            planes[1, i] = g // step + (bins + 1)
+            planes[2, i] = b // step + 2 * (bins + 1)
+    for c in range(3):
+        planes[c, h * w] = bins + c * (bins + 1)
+    return skin, planes
+
+
+def warm_up(lut: ColorLUT | None, bins: int) -> None:
+    """Compile the cue kernels (or load them from numba's disk cache: 0.1-0.5 s) now, on a
+    tiny frame, so that a stage's first timed frame does not pay for it."""
+    img = np.zeros((2, 2, 3), np.uint8)
+    strongest_channel_sobel(img)
+    if lut is not None and not 256 % bins:
+        skin_and_bins(img, lut.post_table, lut.bits, bins)

@@ -27,61 +27,38 @@ ellipse centres per eye where the components' are 0.06-0.15 (wide) and 0.29-0.71
 
 from __future__ import annotations
 
-import cv2
 import numpy as np
 
 from humimic.perception.cues.color_models import ColorLUT
-from humimic.perception.cues.importance import Blobs, skin_blobs
+from humimic.perception.cues.importance import Blobs
+from humimic.perception.trackers.frame_cues import warm_up as warm_up_cues
+from humimic.perception.trackers.gest.components import hull_sums, measure_blobs
 
 GROW = 0.5
 """Margin (times the subsampled blob's larger side) the box a blob is re-measured in grows by
 when the blob's component reaches the box's edge."""
 
+ASPECT = (0.25, 4.0)
+"""The subsampled blobs' box height/width range
+(:func:`~humimic.perception.cues.importance.skin_blobs`' default)."""
+
 
 def hand_blobs(image: np.ndarray, lut: ColorLUT, subsample: int = 2,
-               threshold: float = 0.5, min_area_px: float = 40.0) -> Blobs:
+               threshold: float = 0.5, min_area_px: float = 40.0,
+               box: tuple[int, int, int, int] | None = None) -> Blobs:
     """Skin blobs of an RGB ``image`` (``lut``'s posterior above ``threshold``) of at least
     ``min_area_px`` (full-resolution px), found at ``subsample`` and measured at full
-    resolution (module docstring)."""
+    resolution (module docstring; compiled: :func:`.components.measure_blobs`); with ``box``
+    ``(x0, y0, x1, y1)`` those of ``image[y0:y1, x0:x1]``, in its pixels (the kernel reads
+    the whole image: one compiled version for all boxes)."""
     s = int(subsample)
-    small = image[::s, ::s]                      # a view: the posterior is per pixel
-    coarse = skin_blobs(lut.mask(small, threshold), 1,
-                        min_area_px=min_area_px / (s * s))
-    if len(coarse.areas) == 0:
-        return coarse
-    h, w = image.shape[:2]
-    centres, boxes, areas = [], [], []
-    for x, y, bw, bh in coarse.boxes:
-        ix0, iy0 = max(int(x * s) - s, 0), max(int(y * s) - s, 0)
-        ix1, iy1 = min(int((x + bw) * s) + s, w), min(int((y + bh) * s) + s, h)
-        pad = 0
-        while True:                     # grow the box while the component reaches its edge
-            x0, y0 = max(ix0 - pad, 0), max(iy0 - pad, 0)
-            x1, y1 = min(ix1 + pad, w), min(iy1 + pad, h)
-            mask = lut.mask(image[y0:y1, x0:x1], threshold)
-            n, labels, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
-            inner = np.bincount(labels[iy0 - y0:iy1 - y0, ix0 - x0:ix1 - x0].ravel(),
-                                minlength=n)
-            inner[0] = 0
-            k = int(np.argmax(inner))
-            bx, by, cw, ch = (int(v) for v in stats[k, :4])
-            cut = ((bx == 0 < x0) or (by == 0 < y0) or (bx + cw == x1 - x0 and x1 < w)
-                   or (by + ch == y1 - y0 and y1 < h))
-            if not cut or pad >= GROW * max(bw, bh) * s or inner[k] == 0:
-                break
-            pad = int(np.ceil(GROW * max(bw, bh) * s))
-        if inner[k] == 0:
-            continue
-        bx, by, cw, ch = (int(v) for v in stats[k, :4])
-        box = [bx + x0, by + y0, cw, ch]
-        if box in boxes:                # one component seen as two coarse blobs
-            continue
-        centre, area = hull_moments(labels[by:by + ch, bx:bx + cw] == k)
-        centres.append(centre + (x0 + bx, y0 + by))
-        boxes.append(box)
-        areas.append(area)
-    return Blobs(np.reshape(centres, (-1, 2)), np.reshape(boxes, (-1, 4)), np.asarray(areas,
-                                                                                     float))
+    x0, y0, x1, y1 = (0, 0, image.shape[1], image.shape[0]) if box is None else box
+    centres, boxes, areas, coarse = measure_blobs(
+        image, y0, x0, y1 - y0, x1 - x0, lut.mask_table(threshold), lut.bits, s,
+        min_area_px / (s * s), ASPECT[0], ASPECT[1], GROW)
+    if len(areas) == 0:
+        return Blobs(np.zeros((0, 2)), np.zeros((0, 4)), np.zeros(0))
+    return Blobs(centres, boxes, areas)
 
 
 def hull_moments(component: np.ndarray) -> tuple[np.ndarray, float]:
@@ -92,26 +69,15 @@ def hull_moments(component: np.ndarray) -> tuple[np.ndarray, float]:
     centroid follows its few corner pixels, 0.12 px RMS against the pixels' 0.08 on
     menezes_gest_reach). The pixels in the hull are counted by Pick's theorem first (area plus
     half the boundary's lattice points plus one): when the blob has them all, it is used as
-    it is."""
-    comp = component.astype(np.uint8)
-    contours, _ = cv2.findContours(comp, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
-    hull_px = cv2.convexHull(np.concatenate(contours))[:, 0]                   # (H, 2) int
-    step = np.abs(np.roll(hull_px, -1, axis=0) - hull_px)
-    in_hull = cv2.contourArea(hull_px) + np.gcd(step[:, 0], step[:, 1]).sum() / 2 + 1  # Pick
-    m = cv2.moments(comp, binaryImage=True)
-    if m["m00"] < round(in_hull):                     # pixels to add (else: the common case)
-        a = hull_px.astype(float)
-        b = np.roll(a, -1, axis=0)  # edges a -> b
-        rows = np.arange(comp.shape[0], dtype=float)[:, None]  # (h, 1)
-        lo, hi = np.minimum(a[:, 1], b[:, 1]), np.maximum(a[:, 1], b[:, 1])
-        meets = (rows >= lo - 1e-9) & (rows <= hi + 1e-9)  # (h, H)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            t = np.where(hi > lo, (rows - a[:, 1]) / (b[:, 1] - a[:, 1]), 0.0)
-        x = a[:, 0] + t * (b[:, 0] - a[:, 0])  # row meets edge
-        x_b = np.where(hi > lo, x, b[:, 0])  # flat: both ends
-        left = np.minimum(np.where(meets, x, np.inf), np.where(meets, x_b, np.inf)).min(axis=1)
-        right = np.maximum(np.where(meets, x, -np.inf), np.where(meets, x_b, -np.inf)).max(axis=1)
-        u = np.arange(comp.shape[1], dtype=float)
-        inside = (u >= left[:, None] - 1e-9) & (u <= right[:, None] + 1e-9)
-        m = cv2.moments(comp | inside.astype(np.uint8), binaryImage=True)
-    return np.array([m["m10"], m["m01"]]) / m["m00"], float(m["m00"])
+    it is. Compiled: :func:`.components.hull_sums`."""
+    labels = np.ascontiguousarray(component, dtype=np.int32)
+    m00, m10, m01 = hull_sums(labels, 1, 0, labels.shape[0], 0, labels.shape[1])
+    return np.array([m10, m01]) / m00, float(m00)
+
+
+def warm_up(lut: ColorLUT, bins: int) -> None:
+    """Compile (or load from numba's disk cache) GEST's kernels now: the blob kernels on a
+    tiny image, and the cue images' (:func:`~humimic.perception.trackers.frame_cues.
+    warm_up`), so that the first timed frame does not pay for them."""
+    hand_blobs(np.zeros((4, 4, 3), np.uint8), lut)
+    warm_up_cues(lut, bins)

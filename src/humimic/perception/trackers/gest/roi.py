@@ -30,14 +30,13 @@ def roi_box(boxes: np.ndarray, width: int, height: int, pad_px: float
             ) -> tuple[int, int, int, int] | None:
     """``(x0, y0, x1, y1)`` (integer pixels, exclusive end) of the union of ``boxes (K, 4)``
     (x, y, w, h) padded by ``pad_px`` and clipped to the image; None when there is no box."""
-    b = np.asarray(boxes, float).reshape(-1, 4)
-    finite = np.isfinite(b).all(axis=1)
-    if not finite.all():
-        b = b[finite]
+    # Python floats, not numpy: the union of a few boxes costs a tenth of numpy's calls
+    b = [r for r in np.asarray(boxes, float).reshape(-1, 4).tolist()
+         if all(math.isfinite(v) for v in r)]
     if len(b) == 0:
         return None
-    lo = (b[:, :2].min(axis=0) - pad_px).tolist()              # scalars: np.clip costs more
-    hi = (b[:, :2] + b[:, 2:]).max(axis=0).tolist()
+    lo = (min(r[0] for r in b) - pad_px, min(r[1] for r in b) - pad_px)
+    hi = (max(r[0] + r[2] for r in b), max(r[1] + r[3] for r in b))
     size = (width, height)
     x0, y0 = (int(min(max(math.floor(v), 0), m)) for v, m in zip(lo, size, strict=True))
     x1, y1 = (int(min(max(math.ceil(v + pad_px), 0), m)) for v, m in zip(hi, size, strict=True))

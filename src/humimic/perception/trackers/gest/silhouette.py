@@ -28,12 +28,13 @@ def sphere_offset(centre: np.ndarray, radius: float, cam_l, cam_r) -> np.ndarray
     ``centre (3,)``: its centre minus the triangulation of its outlines' centres in the
     cameras ``cam_l``, ``cam_r`` (full-resolution pixels; eq. 15 for the outlines). NaN when
     the sphere is not wholly in front of both cameras."""
-    state = np.r_[np.asarray(centre, float), 0.0, 0.0, 0.0, radius, radius, radius]
-    e = hand_ellipsoids(state[None])
+    x, y, z = np.asarray(centre, float).tolist()       # (np.r_ costs more than the maths)
+    r = float(radius)
+    e = hand_ellipsoids(np.array([[x, y, z, 0.0, 0.0, 0.0, r, r, r]]))
     c_l, c_r = ellipse_centres(e, cam_l), ellipse_centres(e, cam_r)
-    if np.abs(np.r_[c_l.ravel(), c_r.ravel()]).max() >= 1e5:       # off-image sentinel
+    if max(np.abs(c_l).max(), np.abs(c_r).max()) >= 1e5:          # off-image sentinel
         return np.full(3, np.nan)
-    return state[:3] - triangulate_pixels(cam_l, cam_r, c_l, c_r)[0]
+    return np.array([x, y, z]) - triangulate_pixels(cam_l, cam_r, c_l, c_r)[0]
 
 
 def equivalent_radius(axes: np.ndarray) -> float:

@@ -41,11 +41,11 @@ def stereo_candidates(left: Blobs, right: Blobs, cam_l: CameraModel, cam_r: Came
     kl, kr = len(left.areas), len(right.areas)
     if kl == 0 or kr == 0:
         return _NONE
-    il, ir = np.repeat(np.arange(kl), kr), np.tile(np.arange(kr), kl)
+    il, ir = np.divmod(np.arange(kl * kr), kr)          # every pair, left-major
     P1 = cam_l.T_cam_base[:3]
     P2 = cam_r.T_cam_base[:3]
-    x1 = cam_l.intrinsics.undistort_normalized(left.centers[il])
-    x2 = cam_r.intrinsics.undistort_normalized(right.centers[ir])
+    x1 = cam_l.intrinsics.undistort_normalized(left.centers)[il]       # per point: per blob
+    x2 = cam_r.intrinsics.undistort_normalized(right.centers)[ir]
     X_h, svd = triangulate_dlt(P1, P2, x1, x2)
     with np.errstate(divide="ignore", invalid="ignore"):
         p = X_h[:, :3] / X_h[:, 3:]
@@ -58,7 +58,9 @@ def stereo_candidates(left: Blobs, right: Blobs, cam_l: CameraModel, cam_r: Came
             & (size >= size_range[0]) & (size <= size_range[1]))
     if not keep.any():
         return _NONE
-    G = dlt_jacobian(P1, P2, X_h[keep], tuple(a[keep] for a in svd))   # (M, 3, 4) normalised
+    if not keep.all():
+        X_h, svd = X_h[keep], tuple(a[keep] for a in svd)
+    G = dlt_jacobian(P1, P2, X_h, svd)                                 # (M, 3, 4) normalised
     # pixel -> normalised scaling N = diag(1/fx, 1/fy): N S N = S * n n^T
     n_l = np.array([1.0 / cam_l.intrinsics.fx, 1.0 / cam_l.intrinsics.fy])
     n_r = np.array([1.0 / cam_r.intrinsics.fx, 1.0 / cam_r.intrinsics.fy])
@@ -81,6 +83,8 @@ def interior_blobs(blobs: Blobs, width: int, height: int, margin_px: float = 1.0
     x, y, w, h = blobs.boxes.T
     keep = ((x >= margin_px) & (y >= margin_px) & (x + w <= width - margin_px)
             & (y + h <= height - margin_px))
+    if keep.all():                          # the usual case (and no blobs): as they are
+        return blobs
     return Blobs(blobs.centers[keep], blobs.boxes[keep], blobs.areas[keep])
 
 
@@ -99,6 +103,8 @@ _NONE = (np.zeros((0, 3)), np.zeros((0, 3, 3)), np.zeros((0, 3, 3)), np.zeros((0
 
 def _one_per_left_blob(p, cov, cen, uv, il, residual) -> tuple[np.ndarray, ...]:
     """Of the matches of one left blob keep the one with the smallest reprojection residual."""
+    if len(il) == 1:
+        return p, cov, cen, uv
     order = np.lexsort((residual, il))
     first = np.ones(len(order), bool)
     first[1:] = il[order][1:] != il[order][:-1]

@@ -333,11 +333,11 @@ class GestTracker:
             if np.isfinite(uv).all():
                 box = roi_box(np.array([[uv[0] - r, uv[1] - r, 2 * r, 2 * r]]), K.width,
                               K.height, 0.0)
-        image = frame.image if box is None else frame.image[box[1]:box[3], box[0]:box[2]]
-        h, w = image.shape[:2]
-        b = interior_blobs(hand_blobs(image, self.lut, cfg.blob_subsample,
-                                            min_area_px=cfg.blob_min_area_px), w, h,
-                           cfg.border_px)
+        h, w = frame.image.shape[:2]
+        x0, y0, x1, y1 = (0, 0, w, h) if box is None else box
+        b = interior_blobs(hand_blobs(frame.image, self.lut, cfg.blob_subsample,
+                                      min_area_px=cfg.blob_min_area_px, box=box),
+                           x1 - x0, y1 - y0, cfg.border_px)
         if box is None:
             return b
         shift = np.array(box[:2], float)
