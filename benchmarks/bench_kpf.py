@@ -9,7 +9,7 @@ rates depend on what else runs on the machine; the rate per second of this threa
 (BLAS on one thread; OpenCV's own worker threads, in the cue maps and the cue sampling's
 ``cv2.remap``, not counted) is what one free core would give; ``--opencv-threads 1`` keeps
 OpenCV on this thread too, so every operation of the tracker is counted. Each configuration
-first tracks two frames untimed (warm-up: the compiled kernels' loading -- or compiling, with an
+first tracks a frame untimed (warm-up: the compiled kernels' loading -- or compiling, with an
 empty numba cache -- and the caches are not counted).
 
     PYTHONPATH=src MUJOCO_GL=egl python benchmarks/bench_kpf.py [--frames N] [--repeats R]
@@ -31,6 +31,7 @@ from humimic.paths import SCENARIOS_DIR
 from humimic.perception.trackers.common import skin_model_lut
 from humimic.perception.trackers.kpf.frame_cues import FrameCues
 from humimic.perception.trackers.kpf.tracker import KpfTracker, kpf_body
+from humimic.perception.trackers.kpf.warmup import load_kernels
 from humimic.rngs import Rngs
 from humimic.scenario import load_scenario
 from humimic.sensors.camera_model import invert_transform
@@ -73,11 +74,7 @@ def main() -> None:
         for name, base in variants.items():
             cfg = base.model_copy(update={"n_particles": n, "iterations": it})
             rates, cpu_rates, per_frame = [], [], []
-            warm = KpfTracker(body, intr, cfg, np.random.default_rng(0))
-            warm.start(q0, FrameCues(frames[0][0], lut, colour_gradients=cfg.colour_gradients),
-                       frames[0][1])
-            warm.step(FrameCues(frames[1][0], lut, colour_gradients=cfg.colour_gradients),
-                      frames[1][1])
+            load_kernels(body, intr, cfg, frames[0][0], lut, frames[0][1], q0)
             for r in range(args.repeats):
                 tr = KpfTracker(body, intr, cfg, np.random.default_rng(0 if args.same_seed else r))
                 kw = {"colour_gradients": cfg.colour_gradients}

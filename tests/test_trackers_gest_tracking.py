@@ -250,16 +250,19 @@ def test_load_kernels_loads_those_a_tracking_step_calls():
     """:func:`.warmup.load_kernels` calls every compiled kernel with the array types a tracking
     step (one and two image views) calls it with: each has one compiled specialisation, so
     the first frame compiles nothing."""
-    from humimic.perception.cues import histograms
-    from humimic.perception.trackers.gest import ellipsoid, kernels, proposal
+    from humimic.perception.cues import edges, histograms
+    from humimic.perception.trackers import frame_cues
+    from humimic.perception.trackers.gest import components, ellipsoid, kernels, proposal
     from humimic.perception.trackers.gest.warmup import load_kernels
 
     kernels_ = (kernels.project_states, kernels.rim_maps, kernels.blob_pair_kernel,
                 proposal.walk_tables, ellipsoid.flipped_rotation_sum,
-                histograms.patch_bhattacharyya, histograms.patch_counts_kernel)
-    load_kernels()
-    assert all(len(k.signatures) == 1 for k in kernels_)
+                histograms.patch_bhattacharyya, histograms.patch_counts_kernel,
+                components.measure_blobs, frame_cues.skin_and_bins,
+                edges.strongest_channel_sobel)
     lut = ColorLUT(load_color_model(DEFAULT_COLOR_MODEL), 6)
+    load_kernels(lut, GestConfig().bins)
+    assert all(len(k.signatures) == 1 for k in kernels_)
     cams = stereo_head(k1=0.0, k2=0.0)
     bgs = [np.full((240, 320, 3), 70, np.uint8)] * 2
     for views in (1, 2):

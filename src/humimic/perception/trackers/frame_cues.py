@@ -82,7 +82,7 @@ def skin_and_bins(image: np.ndarray, post_table: np.ndarray, bits: int, bins: in
     return skin, planes
 
 
-def warm_up(lut: ColorLUT | None, bins: int) -> None:
+def load_kernels(lut: ColorLUT | None, bins: int) -> None:
     """Compile the cue kernels (or load them from numba's disk cache: 0.1-0.5 s) now, on a
     tiny frame, so that a stage's first timed frame does not pay for it."""
     img = np.zeros((2, 2, 3), np.uint8)

@@ -31,7 +31,6 @@ import numpy as np
 
 from humimic.perception.cues.color_models import ColorLUT
 from humimic.perception.cues.importance import Blobs
-from humimic.perception.trackers.frame_cues import warm_up as warm_up_cues
 from humimic.perception.trackers.gest.components import hull_sums, measure_blobs
 
 GROW = 0.5
@@ -73,11 +72,3 @@ def hull_moments(component: np.ndarray) -> tuple[np.ndarray, float]:
     labels = np.ascontiguousarray(component, dtype=np.int32)
     m00, m10, m01 = hull_sums(labels, 1, 0, labels.shape[0], 0, labels.shape[1])
     return np.array([m10, m01]) / m00, float(m00)
-
-
-def warm_up(lut: ColorLUT, bins: int) -> None:
-    """Compile (or load from numba's disk cache) GEST's kernels now: the blob kernels on a
-    tiny image, and the cue images' (:func:`~humimic.perception.trackers.frame_cues.
-    warm_up`), so that the first timed frame does not pay for them."""
-    hand_blobs(np.zeros((4, 4, 3), np.uint8), lut)
-    warm_up_cues(lut, bins)

@@ -21,7 +21,6 @@ from humimic.bodymodel.kinematics import ypr_matrix
 from humimic.maths.stats import rmse
 from humimic.messages import PoseEstimate
 from humimic.perception.trackers.common import BAD, GOOD, PoseTrackerStage
-from humimic.perception.trackers.gest.blobs import warm_up
 from humimic.perception.trackers.gest.ellipsoid import FLIPS
 from humimic.perception.trackers.gest.foveal import choose_pair
 from humimic.perception.trackers.gest.likelihood import hand_outlines
@@ -50,11 +49,10 @@ class GestStage(PoseTrackerStage):
     def __init__(self, name: str, cfg, cameras: tuple[str, str], lut, world, rng, rlog=None,
                  foveal: tuple[str, str] | None = None):
         super().__init__(name, cfg.latency)
-        load_kernels()          # the particle filter's, at setup rather than in the first frame
         self.cfg, self.cameras, self.world, self.rng, self.rlog = cfg, cameras, world, rng, rlog
         self.foveal = foveal
         self.tracker = GestTracker(cfg, lut)
-        warm_up(lut, cfg.bins)          # numba's kernels, before the first timed frame
+        load_kernels(lut, cfg.bins)     # numba's kernels, before the first timed frame
         self.side = "R" if cfg.hand == "right" else "L"
         self.results: list[GestResult | None] = []
         self.left_cams: list = []

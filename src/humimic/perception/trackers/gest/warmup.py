@@ -1,4 +1,4 @@
-"""Load the compiled kernels of GEST's particle filter before its first frame.
+"""Load GEST's compiled kernels (particle filter, skin blobs, cue images) before its first frame.
 
 numba compiles a kernel on its first call, or loads it from the on-disk cache (measured for
 all of these: ~0.2 s of CPU with a warm cache, ~5.5 s without one): left to the first frame,
@@ -15,6 +15,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from humimic.perception.cues.histograms import quantize
+from humimic.perception.trackers import frame_cues
+from humimic.perception.trackers.gest.blobs import hand_blobs
 from humimic.perception.trackers.gest.ellipsoid import mean_orientation
 from humimic.perception.trackers.gest.likelihood import (
     INSCRIBED,
@@ -42,9 +44,9 @@ class _View:
     qimage: object
 
 
-def load_kernels() -> None:
-    """Call every compiled kernel of GEST's step once (module docstring); later calls return
-    at once."""
+def load_kernels(lut, bins: int) -> None:
+    """Call every compiled kernel of GEST's step once (module docstring), the blob and cue
+    kernels with the skin model ``lut`` and ``bins`` colour bins; later calls return at once."""
     global _warm
     if _warm:
         return
@@ -60,4 +62,6 @@ def load_kernels() -> None:
     lw = np.log(np.full(2, 0.5))
     walk_densities(states, states, lw, np.full(9, 0.01))
     mean_orientation(states[:, 3:6], lw)
+    hand_blobs(np.zeros((4, 4, 3), np.uint8), lut)
+    frame_cues.load_kernels(lut, bins)
     _warm = True

@@ -23,6 +23,7 @@ from humimic.perception.trackers.kpf.frame_cues import FrameCues
 from humimic.perception.trackers.kpf.scores import ENDPOINTS, KpfRecord, errors, kpf_metrics
 from humimic.perception.trackers.kpf.tracker import KpfTracker, kpf_body
 from humimic.perception.trackers.kpf.viz import log_frame, log_run
+from humimic.perception.trackers.kpf.warmup import load_kernels
 from humimic.pipeline.stage import Stage
 from humimic.sensors.camera_model import invert_transform
 from humimic.stamped import Stamped
@@ -51,6 +52,11 @@ class KpfStage(Stage):
             return
         t = msg.t
         T_cam_base = invert_transform(frame.camera.T_base_cam)
+        if self.tracker is None:                      # numba's kernels, outside the timing
+            load_kernels(self.body, frame.camera.intrinsics, self.cfg, frame.image,
+                         self.skin_lut, T_cam_base,
+                         bm.truth_state(self.world, self.world.gt.index_of(t), "base"),
+                         self.frame_rate)
         t0, c0 = time.perf_counter(), time.thread_time()
         maps = FrameCues(frame.image, self.skin_lut,     # computed where the particles look
                          colour_gradients=self.cfg.colour_gradients)

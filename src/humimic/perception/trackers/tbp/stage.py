@@ -22,7 +22,7 @@ from humimic.bodymodel.kinematics import DOF_NAMES, JOINT_SEGMENT, ypr_matrix
 from humimic.maths.stats import rmse
 from humimic.messages import PoseEstimate
 from humimic.perception.trackers.common import GOOD, PoseTrackerStage
-from humimic.perception.trackers.frame_cues import warm_up
+from humimic.perception.trackers.frame_cues import load_kernels
 from humimic.perception.trackers.tbp.tracker import ARM_NAMES, TbpTracker
 from humimic.viz.rerun_log import ESTIMATES, PIXEL_CENTRE_SHIFT, image_entity
 
@@ -45,7 +45,7 @@ class TbpStage(PoseTrackerStage):
         super().__init__(name, cfg.latency)
         self.cfg, self.camera, self.world, self.rng = cfg, camera, world, rng
         self.tracker = TbpTracker(cfg, body, lut)
-        warm_up(lut, cfg.bins)          # the cue images' numba kernels, before frame one
+        load_kernels(lut, cfg.bins)          # the cue images' numba kernels, before frame one
         head = body.part("head")
         self.head_offset = body.skeleton.neck + head.p_seg_part
         self.head: np.ndarray | None = None
