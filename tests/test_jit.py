@@ -19,3 +19,26 @@ def test_njit_divides_like_numpy():
     with np.errstate(divide="ignore", invalid="ignore"):
         expected = a / b
     np.testing.assert_array_equal(_ratio(a, b), expected)
+
+
+def test_cache_digest_follows_kernel_files_and_their_imports(tmp_path):
+    """The numba cache's directory changes with a kernel module's source and with a humimic
+    module it imports (numba's own cache sees neither a callee's nor a constant's edit in
+    another file), not with an unrelated module."""
+    from humimic.maths.jit import kernel_sources_digest
+
+    pkg = tmp_path / "humimic"
+    (pkg / "geo").mkdir(parents=True)
+    (pkg / "geo" / "__init__.py").write_text("")
+    (pkg / "geo" / "consts.py").write_text("Z_MIN = 0.05\n")
+    (pkg / "kern.py").write_text("from humimic.maths.jit import njit\n"
+                                 "from humimic.geo.consts import Z_MIN\n")
+    (pkg / "other.py").write_text("X = 1\n")
+    d0 = kernel_sources_digest(pkg)
+    (pkg / "other.py").write_text("X = 2\n")
+    assert kernel_sources_digest(pkg) == d0
+    (pkg / "geo" / "consts.py").write_text("Z_MIN = 0.06\n")
+    d1 = kernel_sources_digest(pkg)
+    assert d1 != d0
+    (pkg / "kern.py").write_text((pkg / "kern.py").read_text() + "# edit\n")
+    assert kernel_sources_digest(pkg) not in (d0, d1)
