@@ -5,10 +5,10 @@ filter's per-evaluation projection.
 :class:`~humimic.bodymodel.projection.BodyView` that the limb features and the skin ellipses
 use -- validity, the cones' contour generators and image axes, the ellipsoids' image ellipses
 in pixels (``BodyView.ellipses_px``) -- from one compiled loop over particles and parts (the
-part frames, the cones' generator angles and ends, the ellipsoids' quadrics, conics and
-ellipses, in closed form as :mod:`~humimic.bodymodel.cones` and
-:mod:`~humimic.bodymodel.conics` state them and as ``project`` computes them, which is the
-reference it is tested against). numpy's per-call overhead on ``(N, parts)`` arrays dominated
+part frames, the cones' generator angles and ends in closed form as
+:mod:`~humimic.bodymodel.cones` states them, the ellipsoids' image ellipses and the rotations
+from the shared scalar kernels of :mod:`~humimic.bodymodel.geometry_kernels`; ``project`` is
+the reference it is tested against). numpy's per-call overhead on ``(N, parts)`` arrays dominated
 ``project`` at the paper's 150 particles. Pixels come from
 :meth:`~humimic.sensors.camera_model.Intrinsics.distort` (the one projection implementation),
 applied to the kernel's normalised coordinates.
@@ -20,6 +20,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from humimic.bodymodel.geometry_kernels import (
+    axis_rotation_into,
+    ellipse_axes,
+    ellipsoid_ellipse,
+    mat3_mul,
+    ypr_into,
+)
 from humimic.bodymodel.kinematics import ARM_AXES, SIDES
 from humimic.bodymodel.model import BodyModel, Pose
 from humimic.bodymodel.projection import Z_MIN
@@ -129,31 +136,10 @@ def _cone(s, j, R, t, shape, z_min, valid, i, exists, sides, axis):
 
 @njit
 def _ellipsoid(s, j, R, t, semi, z_min, valid, i, K, ell):
-    """``conics.ellipsoid_quadric``, ``quadric_to_conic``, ``conic_to_ellipse``, then
+    """:func:`~humimic.bodymodel.geometry_kernels.ellipsoid_ellipse`, then
     ``BodyView.ellipses_px`` (``K``'s affine part) and ``conics.ellipse_axes``."""
-    i0, i1, i2 = 1.0 / semi[0] ** 2, 1.0 / semi[1] ** 2, 1.0 / semi[2] ** 2
-    # A = R S^-2 R^T (symmetric)
-    a00 = R[0, 0] * i0 * R[0, 0] + R[0, 1] * i1 * R[0, 1] + R[0, 2] * i2 * R[0, 2]
-    a01 = R[0, 0] * i0 * R[1, 0] + R[0, 1] * i1 * R[1, 1] + R[0, 2] * i2 * R[1, 2]
-    a02 = R[0, 0] * i0 * R[2, 0] + R[0, 1] * i1 * R[2, 1] + R[0, 2] * i2 * R[2, 2]
-    a11 = R[1, 0] * i0 * R[1, 0] + R[1, 1] * i1 * R[1, 1] + R[1, 2] * i2 * R[1, 2]
-    a12 = R[1, 0] * i0 * R[2, 0] + R[1, 1] * i1 * R[2, 1] + R[1, 2] * i2 * R[2, 2]
-    a22 = R[2, 0] * i0 * R[2, 0] + R[2, 1] * i1 * R[2, 1] + R[2, 2] * i2 * R[2, 2]
-    b0 = a00 * t[0] + a01 * t[1] + a02 * t[2]    # A t (the quadric's b = -A t)
-    b1 = a01 * t[0] + a11 * t[1] + a12 * t[2]
-    b2 = a02 * t[0] + a12 * t[1] + a22 * t[2]
-    c = t[0] * b0 + t[1] * b1 + t[2] * b2 - 1.0
-    # the conic c A - b b^T, then its ellipse (conic_to_ellipse)
-    a, b, d = c * a00 - b0 * b0, c * a01 - b0 * b1, c * a11 - b1 * b1
-    ux, uy, c33 = c * a02 - b0 * b2, c * a12 - b1 * b2, c * a22 - b2 * b2
-    det = a * d - b * b
-    cx, cy = (b * uy - d * ux) / det, (b * ux - a * uy) / det
-    kk = (cx * (a * cx + b * cy) + cy * (b * cx + d * cy) - c33) / det
-    m00, m01, m11 = kk * d, -kk * b, kk * a
-    finite = np.isfinite(m00) and np.isfinite(m01) and np.isfinite(m11)
-    reach_z = np.sqrt((R[2, 0] * semi[0]) ** 2 + (R[2, 1] * semi[1]) ** 2
-                      + (R[2, 2] * semi[2]) ** 2)
-    valid[i] = det > 0 and m00 > 0 and finite and c > 0.0 and t[2] - reach_z > z_min
+    cx, cy, m00, m01, m11, ok = ellipsoid_ellipse(R, t, semi, z_min)
+    valid[i] = ok
     # pixels: centre A c + (c_u, c_v), shape A M A^T with A = K[:2, :2]
     ell[s, j, 0] = K[0, 0] * cx + K[0, 1] * cy + K[0, 2]
     ell[s, j, 1] = K[1, 0] * cx + K[1, 1] * cy + K[1, 2]
@@ -162,33 +148,7 @@ def _ellipsoid(s, j, R, t, semi, z_min, valid, i, K, ell):
     p = am00 * K[0, 0] + am01 * K[0, 1]
     q = am00 * K[1, 0] + am01 * K[1, 1]
     w = am10 * K[1, 0] + am11 * K[1, 1]
-    half_tr, half_diff = (p + w) / 2.0, (p - w) / 2.0    # ellipse_axes
-    r_ = np.hypot(half_diff, q)
-    ell[s, j, 2] = np.sqrt(max(half_tr + r_, 0.0))
-    ell[s, j, 3] = np.sqrt(max(half_tr - r_, 0.0))
-    ell[s, j, 4] = 0.5 * np.arctan2(2.0 * q, p - w)
-
-
-@njit
-def _rotation(axis, angle, out):
-    """``kinematics.axis_rotation`` of one angle, into ``out (3, 3)``."""
-    c, s = np.cos(angle), np.sin(angle)
-    i, j = (axis + 1) % 3, (axis + 2) % 3
-    for r in range(3):
-        for m in range(3):
-            out[r, m] = 0.0
-    out[axis, axis] = 1.0
-    out[i, i] = c
-    out[j, j] = c
-    out[j, i] = s
-    out[i, j] = -s
-
-
-@njit
-def _mul(A, B, out):
-    for r in range(3):
-        for m in range(3):
-            out[r, m] = A[r, 0] * B[0, m] + A[r, 1] * B[1, m] + A[r, 2] * B[2, m]
+    ell[s, j, 2], ell[s, j, 3], ell[s, j, 4] = ellipse_axes(p, q, w)
 
 
 @njit
@@ -202,32 +162,21 @@ def _forward_kernel(q, axes, signs, shoulders, neck, upper, fore):
     Rt, A, B = np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3))
     C, Ru, Rf = np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3))
     for s in range(n):
-        cy, sy = np.cos(q[s, 3]), np.sin(q[s, 3])      # ypr_matrix
-        cp, sp = np.cos(q[s, 4]), np.sin(q[s, 4])
-        cr, sr = np.cos(q[s, 5]), np.sin(q[s, 5])
-        Rt[0, 0] = cy * cp
-        Rt[0, 1] = cy * sp * sr - sy * cr
-        Rt[0, 2] = cy * sp * cr + sy * sr
-        Rt[1, 0] = sy * cp
-        Rt[1, 1] = sy * sp * sr + cy * cr
-        Rt[1, 2] = sy * sp * cr - cy * sr
-        Rt[2, 0] = -sp
-        Rt[2, 1] = cp * sr
-        Rt[2, 2] = cp * cr
+        ypr_into(Rt, q[s, 3], q[s, 4], q[s, 5])
         for r in range(3):
             p[s, 0, r] = q[s, r]
             p[s, 1, r] = q[s, r] + (Rt[r, 0] * neck[0] + Rt[r, 1] * neck[1]
                                     + Rt[r, 2] * neck[2])
         for k in range(2):                               # arms R, L
             b, g = 6 + 4 * k, 2 + 3 * k
-            _rotation(axes[k, 0], signs[k, 0] * q[s, b], A)
-            _rotation(axes[k, 1], signs[k, 1] * q[s, b + 1], B)
-            _mul(A, B, C)
-            _rotation(axes[k, 2], signs[k, 2] * q[s, b + 2], A)
-            _mul(C, A, B)
-            _mul(Rt, B, Ru)
-            _rotation(axes[k, 3], signs[k, 3] * q[s, b + 3], A)
-            _mul(Ru, A, Rf)
+            axis_rotation_into(A, axes[k, 0], signs[k, 0] * q[s, b])
+            axis_rotation_into(B, axes[k, 1], signs[k, 1] * q[s, b + 1])
+            mat3_mul(A, B, C)
+            axis_rotation_into(A, axes[k, 2], signs[k, 2] * q[s, b + 2])
+            mat3_mul(C, A, B)
+            mat3_mul(Rt, B, Ru)
+            axis_rotation_into(A, axes[k, 3], signs[k, 3] * q[s, b + 3])
+            mat3_mul(Ru, A, Rf)
             for r in range(3):
                 for m in range(3):
                     R[s, 0, r, m] = Rt[r, m]             # torso and head

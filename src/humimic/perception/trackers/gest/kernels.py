@@ -7,8 +7,10 @@ at 100 particles); those numpy functions (:func:`.likelihood.project_views_numpy
 :func:`.likelihood.blob_pair_log_likelihood_numpy`, :func:`.ellipsoid.mean_orientation_numpy`,
 the cues' own samplers) stay as the references the tests compare them with.
 
-Kernels that call one another are kept in one file: numba's on-disk cache is keyed on the
-calling kernel's file alone and would not see an edit to a callee in another.
+The geometry is not restated here: the ellipsoid's image ellipse, the rotations and the lens
+model are the shared scalar kernels of :mod:`humimic.bodymodel.geometry_kernels` and
+:mod:`humimic.sensors.camera_kernels` (:mod:`humimic.maths.jit` keys the on-disk cache on
+every kernel module, so an edit to a callee in another file recompiles its callers).
 """
 
 from __future__ import annotations
@@ -17,8 +19,10 @@ import math
 
 import numpy as np
 
+from humimic.bodymodel.geometry_kernels import ellipse_axes, ellipsoid_ellipse, mat3_mul, ypr_into
 from humimic.bodymodel.projection import Z_MIN
 from humimic.maths.jit import njit
+from humimic.sensors.camera_kernels import distort_point
 
 #: The off-image sentinel of :mod:`.likelihood` (contour points and centres of invalid parts).
 OFF_IMAGE = -1.0e6
@@ -33,27 +37,6 @@ def camera_arrays(views) -> tuple[np.ndarray, np.ndarray]:
     K = np.array([[v.intrinsics.fx, v.intrinsics.fy, v.intrinsics.cx, v.intrinsics.cy,
                    v.intrinsics.k1, v.intrinsics.k2] for v in views], float)
     return T, K
-
-
-@njit
-def _distort(K, x, y):
-    """:meth:`~humimic.sensors.camera_model.Intrinsics.distort` (``K`` one row of
-    :func:`camera_arrays`)."""
-    r2 = x * x + y * y
-    s = 1.0 + r2 * (K[4] + K[5] * r2)
-    return K[0] * x * s + K[2], K[1] * y * s + K[3]
-
-
-@njit
-def ypr_into(R, yaw, pitch, roll):
-    """``R (3, 3) = Rz(yaw) Ry(pitch) Rx(roll)`` (:func:`~humimic.bodymodel.kinematics.
-    ypr_matrix` for one rotation, compiled)."""
-    cy, sy = math.cos(yaw), math.sin(yaw)
-    cp, sp = math.cos(pitch), math.sin(pitch)
-    cr, sr = math.cos(roll), math.sin(roll)
-    R[0, 0], R[0, 1], R[0, 2] = cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr
-    R[1, 0], R[1, 1], R[1, 2] = sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr
-    R[2, 0], R[2, 1], R[2, 2] = -sp, cp * sr, cp * cr
 
 
 @njit
@@ -75,45 +58,23 @@ def project_states(states, T, K, cos, sin, n_image):
     patch = np.empty((n_image, N, 3))
     valid = np.empty((V, N), np.bool_)
     centres = np.empty((N, V, 2))
-    B = np.empty((3, 3))
     R = np.empty((3, 3))
-    b = np.empty(6)
+    Rc = np.empty((3, 3))
     tv = np.empty(3)
     for i in range(N):
-        ypr_into(R, states[i, 3], states[i, 4], states[i, 5])   # B = R diag(axes^2) R^T
-        a0, a1, a2 = states[i, 6] ** 2, states[i, 7] ** 2, states[i, 8] ** 2
-        for r in range(3):
-            for c in range(3):
-                B[r, c] = R[r, 0] * a0 * R[c, 0] + R[r, 1] * a1 * R[c, 1] + R[r, 2] * a2 * R[c, 2]
+        ypr_into(R, states[i, 3], states[i, 4], states[i, 5])
+        semi = states[i, 6:9]
         for v in range(V):
-            # the dual quadric into the camera: Bc = Rc B Rc^T, t = Rc centre + t_cam
+            # the ellipsoid's pose in the camera: Rc = T_R R, t = T_R centre + T_t
+            mat3_mul(T[v], R, Rc)
             for r in range(3):
                 tv[r] = (T[v, r, 0] * states[i, 0] + T[v, r, 1] * states[i, 1]
                          + T[v, r, 2] * states[i, 2] + T[v, r, 3])
-            k = 0
-            for r in range(3):
-                for c in range(r, 3):
-                    s = 0.0
-                    for p in range(3):
-                        for q in range(3):
-                            s += T[v, r, p] * T[v, c, q] * B[p, q]
-                    b[k] = s
-                    k += 1
-            b00, b01, b02, b11, b12, b22 = b[0], b[1], b[2], b[3], b[4], b[5]
-            tx, ty, tz = tv[0], tv[1], tv[2]
-            # conics.dual_ellipse: centre and shape matrix of the image ellipse  # Menezes eq. 15
-            inv = 1.0 / (tz * tz - b22)
-            ex = (tx * tz - b02) * inv
-            ey = (ty * tz - b12) * inv
-            m00 = (b00 - tx * tx) * inv + ex * ex
-            m01 = (b01 - tx * ty) * inv + ex * ey
-            m11 = (b11 - ty * ty) * inv + ey * ey
-            ok = (tz - math.sqrt(max(b22, 0.0)) > Z_MIN and np.isfinite(ex) and np.isfinite(ey)
-                  and np.isfinite(m00) and np.isfinite(m01) and np.isfinite(m11))
+            ex, ey, m00, m01, m11, ok = ellipsoid_ellipse(Rc, tv, semi, Z_MIN)  # Menezes eq. 15
             if not ok:
                 ex, ey, m00, m01, m11 = 0.0, 0.0, 1.0, 0.0, 1.0
             valid[v, i] = ok
-            u0, v0 = _distort(K[v], ex, ey)
+            u0, v0 = distort_point(K[v, 0], K[v, 1], K[v, 2], K[v, 3], K[v, 4], K[v, 5], ex, ey)
             centres[i, v, 0] = u0 if ok else OFF_IMAGE
             centres[i, v, 1] = v0 if ok else OFF_IMAGE
             if v >= n_image:
@@ -124,7 +85,8 @@ def project_states(states, T, K, cos, sin, n_image):
             i00, i11, i10 = 1.0 / l00, 1.0 / l11, l10 / (l00 * l11)
             for j in range(n):
                 if ok:
-                    uu, vv = _distort(K[v], ex + l00 * cos[j], ey + l10 * cos[j] + l11 * sin[j])
+                    uu, vv = distort_point(K[v, 0], K[v, 1], K[v, 2], K[v, 3], K[v, 4], K[v, 5],
+                                           ex + l00 * cos[j], ey + l10 * cos[j] + l11 * sin[j])
                 else:
                     uu, vv = OFF_IMAGE, OFF_IMAGE
                 contour[v, i, j, 0], contour[v, i, j, 1] = uu, vv
@@ -132,8 +94,7 @@ def project_states(states, T, K, cos, sin, n_image):
                 ny = sin[j] * i11
                 h = 1.0 / math.sqrt(nx * nx + ny * ny)
                 normal[v, i, j, 0], normal[v, i, j, 1] = nx * h, ny * h
-            minor = math.sqrt(max(0.5 * (m00 + m11) - math.hypot(0.5 * (m00 - m11), m01),
-                                  0.0))
+            minor = ellipse_axes(m00, m01, m11)[1]
             patch[v, i, 0] = centres[i, v, 0]
             patch[v, i, 1] = centres[i, v, 1]
             patch[v, i, 2] = _SQRT2 * K[v, 0] * minor if ok else 1.0
