@@ -42,3 +42,24 @@ def test_cache_digest_follows_kernel_files_and_their_imports(tmp_path):
     assert d1 != d0
     (pkg / "kern.py").write_text((pkg / "kern.py").read_text() + "# edit\n")
     assert kernel_sources_digest(pkg) not in (d0, d1)
+
+
+def test_cache_location_never_falls_back_beside_the_sources(tmp_path, monkeypatch):
+    """The user's NUMBA_CACHE_DIR is kept; one a humimic parent exported is replaced by this
+    digest's; an unwritable humimic cache falls back to the temporary directory, and with
+    nothing writable there is no cache (numba's own fallback, the source tree, goes stale)."""
+    import tempfile
+
+    from humimic.maths.jit import cache_location
+
+    monkeypatch.setenv("HUMIMIC_CACHE_DIR", str(tmp_path / "cache"))
+    assert cache_location({"NUMBA_CACHE_DIR": "/mine"}, "d1") == "/mine"
+    parent = {"NUMBA_CACHE_DIR": "/old/d0", "HUMIMIC_NUMBA_CACHE_DIR": "/old/d0"}
+    assert cache_location(parent, "d1") == str(tmp_path / "cache" / "numba" / "d1")
+    blocker = tmp_path / "file"
+    blocker.write_text("")
+    monkeypatch.setenv("HUMIMIC_CACHE_DIR", str(blocker / "cache"))    # under a file: no dir
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path / "tmp"))
+    assert cache_location({}, "d1").startswith(str(tmp_path / "tmp" / "humimic-numba-"))
+    monkeypatch.setattr(tempfile, "tempdir", str(blocker / "tmp"))
+    assert cache_location({}, "d1") is None

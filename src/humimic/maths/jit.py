@@ -8,10 +8,11 @@ uses both.
 
 Where the cache lives. numba keys a cached kernel on the timestamp of the file that defines it
 alone: an edit to a kernel it calls in another file, or to a module constant it reads (frozen
-into the compiled code), would leave a stale kernel in use. So unless ``NUMBA_CACHE_DIR`` is
-set, the cache goes to ``<humimic cache>/numba/<digest>`` (:func:`humimic.cache.cache_dir`),
-the digest a SHA-256 of the source of every humimic module that compiles kernels and of the
-humimic modules those import: any such edit starts a fresh cache.
+into the compiled code), would leave a stale kernel in use. So unless the user set
+``NUMBA_CACHE_DIR``, the cache goes to ``<humimic cache>/numba/<digest>``
+(:func:`humimic.cache.cache_dir`; the temporary directory if that cannot be written, no cache
+if neither can), the digest a SHA-256 of the source of every humimic module that compiles
+kernels and of the humimic modules those import: any such edit starts a fresh cache (:func:`cache_location`).
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ import functools
 import hashlib
 import os
 import re
+import tempfile
 from pathlib import Path
 
 import numba
@@ -52,10 +54,38 @@ def kernel_sources_digest(package: Path = _PACKAGE) -> str:
     return h.hexdigest()[:16]
 
 
-if not os.environ.get("NUMBA_CACHE_DIR"):
+def _writable(path: Path) -> bool:
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=path):
+            return True
+    except OSError:
+        return False
+
+
+def cache_location(environ, digest: str) -> str | None:
+    """Where numba caches compiled kernels: the user's ``NUMBA_CACHE_DIR`` if they set one
+    (not one a humimic parent process chose and exported with an older digest), else
+    ``<humimic cache>/numba/<digest>``, else the temporary directory's
+    ``humimic-numba-<uid>/<digest>``; ``None`` (compile in every process) when neither can
+    be written -- never numba's own fallback beside the sources, which would go stale."""
+    user = environ.get("NUMBA_CACHE_DIR")
+    if user and user != environ.get(_CHOSEN):
+        return user
     from humimic.cache import cache_dir
 
-    os.environ["NUMBA_CACHE_DIR"] = str(cache_dir() / "numba" / kernel_sources_digest())
-    numba.config.CACHE_DIR = os.environ["NUMBA_CACHE_DIR"]     # read when a kernel is defined
+    uid = getattr(os, "getuid", lambda: "user")()
+    for base in (cache_dir() / "numba", Path(tempfile.gettempdir()) / f"humimic-numba-{uid}"):
+        if _writable(base / digest):
+            return str(base / digest)
+    return None
 
-njit = functools.partial(numba.njit, cache=True, nogil=True, error_model="numpy")
+
+_CHOSEN = "HUMIMIC_NUMBA_CACHE_DIR"
+_location = cache_location(os.environ, kernel_sources_digest())
+if _location is not None:
+    os.environ["NUMBA_CACHE_DIR"] = os.environ[_CHOSEN] = _location    # child processes too
+    numba.config.CACHE_DIR = _location                 # read when a kernel is defined
+
+njit = functools.partial(numba.njit, cache=_location is not None, nogil=True,
+                         error_model="numpy")
