@@ -12,7 +12,8 @@ into the compiled code), would leave a stale kernel in use. So unless the user s
 ``NUMBA_CACHE_DIR``, the cache goes to ``<humimic cache>/numba/<digest>``
 (:func:`humimic.cache.cache_dir`; the temporary directory if that cannot be written, no cache
 if neither can), the digest a SHA-256 of the source of every humimic module that compiles
-kernels and of the humimic modules those import: any such edit starts a fresh cache (:func:`cache_location`).
+kernels and of the humimic modules those import: any such edit starts a fresh cache
+(:func:`cache_location`).
 """
 
 from __future__ import annotations
