@@ -208,3 +208,12 @@ def test_compiled_counts_and_colour_cue_are_the_array_form():
         assert ((total > 0) & (total < grid**2)).sum() > 20            # across the edges
         np.testing.assert_allclose(ours, expect, rtol=1e-9)
         assert (ours[:2] == -6.0 / (2 * 0.3**2)).all()      # D = 1 in every patch, channel
+
+
+def test_colour_cue_rejects_references_of_another_bin_count():
+    """The compiled cue reads the references unchecked: a mismatch is refused up front."""
+    from humimic.perception.cues.histograms import patch_color_log_likelihood, quantize
+
+    q = quantize(np.zeros((8, 8, 3), np.uint8), 16)
+    with pytest.raises(ValueError, match="refs has shape"):
+        patch_color_log_likelihood(q, np.zeros((2, 3)), np.ones((1, 4)), np.ones((1, 3, 8)), 0.1)

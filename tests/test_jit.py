@@ -63,3 +63,20 @@ def test_cache_location_never_falls_back_beside_the_sources(tmp_path, monkeypatc
     assert cache_location({}, "d1").startswith(str(tmp_path / "tmp" / "humimic-numba-"))
     monkeypatch.setattr(tempfile, "tempdir", str(blocker / "tmp"))
     assert cache_location({}, "d1") is None
+
+
+def test_frame_cue_kernels_loaded_for_every_tracker_that_counts_colours():
+    """After :func:`frame_cues.load_kernels`, the patch colour counts as TBP (a strided slice of
+    its projected patches), ICU and hand2d (float32 or float64 states) call them compile
+    nothing new."""
+    from humimic.perception.cues import histograms
+    from humimic.perception.trackers.frame_cues import load_kernels
+
+    load_kernels(None, 16)
+    loaded = len(histograms.patch_counts_kernel.signatures)
+    assert loaded >= 1
+    q = histograms.quantize(np.zeros((20, 30, 3), np.uint8), 16)
+    tbp_like = np.zeros((5, 6, 3))[:, 2]
+    for states in (tbp_like, np.zeros((4, 3), np.float32), np.zeros(3)):
+        histograms.patch_histograms(q, states, np.ones((2, 4)), 6)
+    assert len(histograms.patch_counts_kernel.signatures) == loaded

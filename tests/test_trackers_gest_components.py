@@ -73,8 +73,9 @@ def test_count_in_box_is_bincount():
 def test_hand_blobs_in_a_box_are_those_of_the_cropped_image():
     rng = np.random.default_rng(3)
     img = _image(rng, 120, 160, 0.3, 3.0)
-    for box in ((0, 0, 160, 120), (13, 7, 150, 101), (40, 30, 90, 80)):
-        x0, y0, x1, y1 = box
+    for box in ((0, 0, 160, 120), (13, 7, 150, 101), (40, 30, 90, 80), (100, 70, 230, 200),
+                (-20, -9, 60, 50)):                          # the last two: clipped to the image
+        x0, y0, x1, y1 = np.clip(box, 0, [160, 120, 160, 120])
         want = hand_blobs(np.ascontiguousarray(img[y0:y1, x0:x1]), LUT, 2)
         got = hand_blobs(img, LUT, 2, box=box)
         assert len(want.areas) > 0

@@ -248,7 +248,7 @@ def test_tracks_loses_at_the_border_and_reacquires_near_the_exit():
 
 def test_load_kernels_loads_those_a_tracking_step_calls():
     """:func:`.warmup.load_kernels` calls every compiled kernel with the array types a tracking
-    step (one and two image views) calls it with: each has one compiled specialisation, so
+    step (one and two image views) calls it with: the steps add no compiled specialisation, so
     the first frame compiles nothing."""
     from humimic.perception.cues import edges, histograms
     from humimic.perception.trackers import frame_cues
@@ -262,7 +262,8 @@ def test_load_kernels_loads_those_a_tracking_step_calls():
                 edges.strongest_channel_sobel)
     lut = ColorLUT(load_color_model(DEFAULT_COLOR_MODEL), 6)
     load_kernels(lut, GestConfig().bins)
-    assert all(len(k.signatures) == 1 for k in kernels_)
+    loaded = [len(k.signatures) for k in kernels_]
+    assert min(loaded) >= 1
     cams = stereo_head(k1=0.0, k2=0.0)
     bgs = [np.full((240, 320, 3), 70, np.uint8)] * 2
     for views in (1, 2):
@@ -271,7 +272,7 @@ def test_load_kernels_loads_those_a_tracking_step_calls():
             res = trk.step(*_draw(bgs, cams, [HAND + np.r_[0.0, 0.005 * k, np.zeros(7)]]),
                            np.random.default_rng(k))
         assert res.status == "tracking"
-    assert [len(k.signatures) for k in kernels_] == [1] * len(kernels_)
+    assert [len(k.signatures) for k in kernels_] == loaded
 
 
 @pytest.mark.parametrize("skin", [None, "[0.45,0.30,0.22]"], ids=["default", "dark"])

@@ -149,6 +149,10 @@ def patch_color_log_likelihood(qimage: QuantizedImage, states: np.ndarray,
     the two-step form to rounding; the counts in one compiled pass over the particles
     (:func:`patch_bhattacharyya`; :func:`patch_color_log_likelihood_numpy` is the array
     form)."""
+    patches, refs = np.asarray(patches, np.float64), np.asarray(refs, np.float64)
+    if refs.shape != (len(patches), 3, qimage.bins):
+        raise ValueError(f"refs has shape {refs.shape}; the patches and image need "
+                         f"{(len(patches), 3, qimage.bins)}")
     fu, fv = _lattice(grid)
     bc = patch_bhattacharyya(qimage.planes, qimage.height, qimage.width, qimage.bins,
                              np.ascontiguousarray(np.atleast_2d(states), np.float64),

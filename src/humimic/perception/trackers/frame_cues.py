@@ -11,7 +11,12 @@ import numpy as np
 from humimic.maths.jit import njit
 from humimic.perception.cues.color_models import ColorLUT
 from humimic.perception.cues.edges import edge_maps, strongest_channel_sobel
-from humimic.perception.cues.histograms import QuantizedImage, chromaticity, quantize
+from humimic.perception.cues.histograms import (
+    QuantizedImage,
+    chromaticity,
+    patch_histograms,
+    quantize,
+)
 from humimic.perception.cues.motion import MotionEdgeMaps, motion_edge_maps
 from humimic.sensors.camera_model import CameraImage, Intrinsics
 
@@ -83,9 +88,13 @@ def skin_and_bins(image: np.ndarray, post_table: np.ndarray, bits: int, bins: in
 
 
 def load_kernels(lut: ColorLUT | None, bins: int) -> None:
-    """Compile the cue kernels (or load them from numba's disk cache: 0.1-0.5 s) now, on a
-    tiny frame, so that a stage's first timed frame does not pay for it."""
+    """Compile the cue kernels -- the strongest channel's gradient, the patches' colour
+    counts, with ``lut`` the skin posterior and colour bins -- (or load them from numba's disk
+    cache: 0.1-0.5 s) now, on a tiny frame, so that a stage's first timed frame does not pay
+    for it (every argument is converted to the one specialisation they are compiled for)."""
     img = np.zeros((2, 2, 3), np.uint8)
     strongest_channel_sobel(img)
-    if lut is not None and not 256 % bins:
-        skin_and_bins(img, lut.post_table, lut.bits, bins)
+    if not 256 % bins:
+        patch_histograms(quantize(img, bins), np.zeros((1, 3)), np.zeros((1, 4)), 2)
+        if lut is not None:
+            skin_and_bins(img, lut.post_table, lut.bits, bins)

@@ -48,10 +48,15 @@ def hand_blobs(image: np.ndarray, lut: ColorLUT, subsample: int = 2,
     """Skin blobs of an RGB ``image`` (``lut``'s posterior above ``threshold``) of at least
     ``min_area_px`` (full-resolution px), found at ``subsample`` and measured at full
     resolution (module docstring; compiled: :func:`.components.measure_blobs`); with ``box``
-    ``(x0, y0, x1, y1)`` those of ``image[y0:y1, x0:x1]``, in its pixels (the kernel reads
-    the whole image: one compiled version for all boxes)."""
+    ``(x0, y0, x1, y1)`` those of ``image[y0:y1, x0:x1]`` (the box clipped to the
+    image), in its pixels (the kernel reads the whole image: one compiled version for
+    all boxes)."""
     s = int(subsample)
-    x0, y0, x1, y1 = (0, 0, image.shape[1], image.shape[0]) if box is None else box
+    h, w = image.shape[:2]
+    x0, y0, x1, y1 = (0, 0, w, h) if box is None else box
+    x0, x1 = min(max(int(x0), 0), w), min(max(int(x1), 0), w)      # the kernel reads unchecked
+    y0, y1 = min(max(int(y0), 0), h), min(max(int(y1), 0), h)
+    x1, y1 = max(x1, x0), max(y1, y0)
     centres, boxes, areas, coarse = measure_blobs(
         image, y0, x0, y1 - y0, x1 - x0, lut.mask_table(threshold), lut.bits, s,
         min_area_px / (s * s), ASPECT[0], ASPECT[1], GROW)

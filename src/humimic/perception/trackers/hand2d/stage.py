@@ -7,6 +7,7 @@ import numpy as np
 
 from humimic.messages import Track2D, Tracks2D
 from humimic.perception.trackers.common import HEAD_WIDTH_M, ImageTrackerStage, Overlay
+from humimic.perception.trackers.frame_cues import load_kernels
 from humimic.perception.trackers.hand2d.tracker import Hand2DTracker
 
 HAND_WIDTH_M = 0.09
@@ -19,6 +20,7 @@ class Hand2DStage(ImageTrackerStage):
         super().__init__(name, camera, cfg.target, HAND_WIDTH_M, gt, rlog, cfg.latency,
                          people, visibility)
         self.cfg, self.tracker = cfg, tracker
+        load_kernels(None, cfg.bins)     # numba's colour-count kernel, before frame one
 
     def metrics(self) -> dict:
         """The common scores plus ``others_near_frames``: frames where another person's face

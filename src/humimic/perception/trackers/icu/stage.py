@@ -8,6 +8,7 @@ import numpy as np
 
 from humimic.messages import Track2D, Tracks2D
 from humimic.perception.trackers.common import HEAD_WIDTH_M, ImageTrackerStage, Overlay
+from humimic.perception.trackers.frame_cues import load_kernels
 from humimic.perception.trackers.icu.modules import (
     MODULES,
     GatedStage,
@@ -24,6 +25,7 @@ class IcuStage(ImageTrackerStage):
         super().__init__(name, camera, "head", HEAD_WIDTH_M, gt, rlog, cfg.latency, people,
                          visibility)
         self.tracker, self.identity = tracker, identity
+        load_kernels(None, cfg.bins)     # numba's colour-count kernel, before frame one
         self.near, self.fx_px = cfg.near, fx_px
         self.module = "init"
         self.last_good, self.distance = -np.inf, np.inf
