@@ -217,3 +217,15 @@ def test_colour_cue_rejects_references_of_another_bin_count():
     q = quantize(np.zeros((8, 8, 3), np.uint8), 16)
     with pytest.raises(ValueError, match="refs has shape"):
         patch_color_log_likelihood(q, np.zeros((2, 3)), np.ones((1, 4)), np.ones((1, 3, 8)), 0.1)
+
+
+def test_compiled_lut_index_is_the_lut_s_index():
+    from humimic.perception.blobs.config import DEFAULT_COLOR_MODEL
+    from humimic.perception.cues.color_models import ColorLUT, load_color_model, lut_index
+
+    px = np.random.default_rng(5).integers(0, 256, (500, 3), dtype=np.uint8)
+    px[:3] = [[0, 0, 0], [255, 255, 255], [255, 0, 128]]
+    for bits in (5, 6, 8):
+        lut = ColorLUT(load_color_model(DEFAULT_COLOR_MODEL), bits)
+        got = [lut_index(r, g, b, bits) for r, g, b in px]
+        np.testing.assert_array_equal(got, lut.index(px))

@@ -9,7 +9,7 @@ import cv2
 import numpy as np
 
 from humimic.maths.jit import njit
-from humimic.perception.cues.color_models import ColorLUT
+from humimic.perception.cues.color_models import ColorLUT, lut_index
 from humimic.perception.cues.edges import edge_maps, strongest_channel_sobel
 from humimic.perception.cues.histograms import (
     QuantizedImage,
@@ -69,15 +69,13 @@ def skin_and_bins(image: np.ndarray, post_table: np.ndarray, bits: int, bins: in
     an RGB uint8 image in one compiled pass (two numpy passes with their temporaries cost
     several times more on the small cue boxes)."""
     h, w = image.shape[0], image.shape[1]
-    shift, b1, b2 = np.uint32(8 - bits), np.uint32(bits), np.uint32(2 * bits)
     step = 256 // bins
     skin = np.empty((h, w), np.float32)
     planes = np.empty((3, h * w + 1), np.int32)
     for y in range(h):
         for x in range(w):
-            r, g, b = np.uint32(image[y, x, 0]), np.uint32(image[y, x, 1]), np.uint32(
-                image[y, x, 2])
-            skin[y, x] = post_table[((r >> shift) << b2) | ((g >> shift) << b1) | (b >> shift)]
+            r, g, b = image[y, x, 0], image[y, x, 1], image[y, x, 2]
+            skin[y, x] = post_table[lut_index(r, g, b, bits)]
             i = y * w + x
             planes[0, i] = r // step
             planes[1, i] = g // step + (bins + 1)

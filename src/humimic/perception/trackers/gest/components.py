@@ -17,6 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from humimic.maths.jit import njit
+from humimic.perception.cues.color_models import lut_index
 
 STATS = ("x", "y", "w", "h", "area", "sum_x", "sum_y")
 """The columns of :func:`skin_components`' stats (px, in the labelled grid)."""
@@ -39,7 +40,6 @@ def skin_components(image: np.ndarray, y0: int, y1: int, x0: int, x1: int, step:
     ``(n + 1, 7)`` int64 (:data:`STATS`, row 0 unused)."""
     h = (y1 - y0 + step - 1) // step
     w = (x1 - x0 + step - 1) // step
-    shift, b1, b2 = np.uint32(8 - bits), np.uint32(bits), np.uint32(2 * bits)
     labels = np.zeros((h, w), np.int32)
     parent = np.empty(h * ((w + 1) // 2) + 2, np.int32)
     parent[0] = 0
@@ -49,9 +49,7 @@ def skin_components(image: np.ndarray, y0: int, y1: int, x0: int, x1: int, step:
         row = image[y0 + y * step]
         for x in range(w):
             px = row[x0 + x * step]
-            idx = (((np.uint32(px[0]) >> shift) << b2) | ((np.uint32(px[1]) >> shift) << b1)
-                   | (np.uint32(px[2]) >> shift))
-            if mask_table[idx] == 0:
+            if mask_table[lut_index(px[0], px[1], px[2], bits)] == 0:
                 continue
             ylo, yhi, xlo, xhi = min(ylo, y), max(yhi, y), min(xlo, x), max(xhi, x)
             # 8-neighbours seen so far: W, NW, N, NE; N touches the other three, and W NW
