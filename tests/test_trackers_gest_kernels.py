@@ -1,7 +1,8 @@
 """GEST's compiled per-particle loops against the array operations they replace: the
 projection of the hand ellipsoids (Menezes eq. 15, :func:`project_views` against
 :func:`project_views_numpy`, distorted cameras, ellipsoids behind and straddling the camera),
-the stereo cue (:func:`blob_pair_log_likelihood`, ellipses off the image, no pair), the shape and
+the ellipse centres and outlines the silhouette offset and the stage use, the stereo cue
+(:func:`blob_pair_log_likelihood`, ellipses off the image, no pair), the shape and
 skin cues' samples (:func:`rim_distances`: the very numbers of :func:`shape_distance` and
 :func:`skin_distance`), and the random walk's predictive densities over nested parts of the
 state in one pass (:func:`walk_predictives` against :func:`walk_predictive_numpy` on each
@@ -14,9 +15,13 @@ from dataclasses import replace
 import numpy as np
 from _synth_vision import stereo_head
 
+from humimic.bodymodel.hand import hand_ellipsoids, to_camera
+from humimic.bodymodel.projection import project_ellipsoids
 from humimic.perception.trackers.gest.likelihood import (
     blob_pair_log_likelihood,
     blob_pair_log_likelihood_numpy,
+    ellipse_centres,
+    hand_outlines,
     hand_view,
     project_views,
     project_views_numpy,
@@ -29,7 +34,7 @@ from humimic.perception.trackers.gest.proposal import (
     walk_predictive_numpy,
     walk_predictives,
 )
-from humimic.sensors.camera_model import CameraImage
+from humimic.sensors.camera_model import CameraImage, invert_transform
 
 HAND = np.array([1.0, 0.05, 1.15, 0.3, 0.2, 1.2, 0.045, 0.022, 0.08])
 
@@ -62,6 +67,27 @@ def test_compiled_projection_is_the_array_form():
             assert p.valid.sum() > 150
             for f in ("contour", "normal", "patch_state"):
                 np.testing.assert_allclose(getattr(p, f), getattr(e, f), rtol=1e-9, atol=1e-9)
+
+
+def test_centres_and_outlines_are_the_compiled_projection_and_the_body_models():
+    """:func:`ellipse_centres` (the silhouette offset's) against the array form's centres;
+    :func:`hand_outlines` (the stage's) against the body model's own ellipsoid outlines
+    (:func:`~humimic.bodymodel.projection.project_ellipsoids`, the point-conic form), NaN
+    where the ellipsoid is not wholly in front of the camera."""
+    cams = stereo_head()                                    # radial distortion
+    states = _states(np.random.default_rng(4), 60, cams[0])
+    views = [hand_view(CameraImage(0.0, c, np.zeros((240, 320, 3), np.uint8)), 32)
+             for c in cams]
+    np.testing.assert_allclose(ellipse_centres(states, views),
+                               project_views_numpy(states, views, 8, 0)[1], rtol=1e-9, atol=1e-9)
+    T = invert_transform(cams[0].T_base_cam)
+    got = hand_outlines(states, cams[0].intrinsics, T, 16)
+    R, c, axes = hand_ellipsoids(states)
+    R, c = to_camera(T, R, c)
+    want = project_ellipsoids(R[:, None], c[:, None], axes[:, None], cams[0].intrinsics, 16)[0]
+    assert want.valid[:, 0].sum() > 40 and not want.valid[1:3, 0].any()
+    assert (np.isfinite(got).all(axis=(1, 2)) == want.valid[:, 0]).all()
+    np.testing.assert_allclose(got[want.valid[:, 0]], want.uv[want.valid[:, 0], 0], atol=1e-9)
 
 
 def test_compiled_stereo_cue_is_the_array_form():

@@ -18,7 +18,12 @@ from humimic.perception.cues.color_models import ColorLUT, load_color_model
 from humimic.perception.cues.importance import Blobs
 from humimic.perception.trackers.gest.blobs import hand_blobs, hull_moments
 from humimic.perception.trackers.gest.config import GestConfig
-from humimic.perception.trackers.gest.likelihood import hand_view, project_hands, project_views
+from humimic.perception.trackers.gest.likelihood import (
+    hand_view,
+    project_hands,
+    project_views,
+    project_views_numpy,
+)
 from humimic.perception.trackers.gest.roi import crop_frame, roi_box
 from humimic.perception.trackers.gest.stereo import interior_blobs, triangulate_pixels
 from humimic.perception.trackers.gest.tracker import GestTracker, centre_update
@@ -72,7 +77,8 @@ def test_both_views_in_one_batch_match_the_dual_quadric_projection():
         for s, c in zip(states, centres[:, k], strict=True):
             C = _pixel_conic(s, cam)
             np.testing.assert_allclose(c, np.linalg.solve(C[:2, :2], -C[:2, 2]), atol=1e-6)
-    np.testing.assert_allclose(projs[0].contour, project_hands(states, views[0], 20).contour,
+    np.testing.assert_allclose(projs[0].contour,
+                               project_views_numpy(states, views, 20, 1)[0][0].contour,
                                atol=1e-9)
 
 

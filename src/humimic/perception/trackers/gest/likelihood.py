@@ -1,11 +1,12 @@
 """GEST's measurement function (Menezes sec. 6.1.2): ``p(z^S, z^C | x) = p(z^S|x) p(z^C|x)``
 for hand-ellipsoid states, vectorised over particles.
 
-The ellipsoids are projected with eq. 15 (its dual form, :func:`views_components`);
-``n_points`` contour points (at equal steps of the ellipse's parameter, normals in closed
-form; checked against the dual-quadric projection in tests) sample the frame's distance
-transform (shape cue,
-eq. 3: ``-D^2 / (2 sigma_s^2)``); the colour cue compares the histogram of the square
+The ellipsoids are projected with eq. 15 in one compiled pass (:func:`project_views`, on
+:func:`.kernels.project_states`: every projection here goes through it; the dual form
+:func:`views_components` is its reference in tests); ``n_points`` contour points (at equal
+steps of the ellipse's parameter, normals in closed form; checked against the dual-quadric
+projection in tests) sample the frame's distance transform (shape cue, eq. 3: ``-D^2 /
+(2 sigma_s^2)``); the colour cue compares the histogram of the square
 inscribed in the projected ellipse (side ``sqrt(2)`` times its semi-minor axis) with the
 reference (eq. 6, one patch). A third cue, not in the paper, gives the colour cue the
 "inside/outside information" the paper credits its patches with: the skin posterior
@@ -38,8 +39,8 @@ import cv2
 import numpy as np
 
 from humimic.bodymodel import conics
-from humimic.bodymodel.hand import check_hand_states, hand_ellipsoids, to_camera
-from humimic.bodymodel.projection import Z_MIN, project_ellipsoids
+from humimic.bodymodel.hand import check_hand_states, hand_ellipsoids
+from humimic.bodymodel.projection import Z_MIN
 from humimic.perception.cues.color_models import ColorLUT
 from humimic.perception.cues.edges import DT_CAP_PX, dt_distance, shape_log_likelihood
 from humimic.perception.cues.histograms import patch_color_log_likelihood, patch_histograms
@@ -81,13 +82,21 @@ class HandProjection:
     """(N,) bool."""
 
 
-def hand_outlines(states: np.ndarray, intrinsics, T_cam_base: np.ndarray, n: int = 16):
-    """Eq. 15 for hand states ``(N, 9)``: the outlines (one part each) and image conics."""
-    R, c, axes = hand_ellipsoids(states)
-    R, c = to_camera(T_cam_base, R, c)
-    outline, _, conic = project_ellipsoids(R[:, None], c[:, None], axes[:, None],
-                                           intrinsics, n)              # Menezes eq. 15
-    return outline, conic
+@dataclass(frozen=True)
+class CameraGeometry:
+    """A camera as :func:`project_views` reads it."""
+
+    intrinsics: object
+    T_cam_base: np.ndarray
+
+
+def hand_outlines(states: np.ndarray, intrinsics, T_cam_base: np.ndarray, n: int = 16
+                  ) -> np.ndarray:
+    """Eq. 15 for hand states ``(N, 9)`` (:func:`project_views`): their outlines ``(N, n, 2)``
+    (px; ``n`` points at equal steps of the image ellipse's parameter) in the camera
+    ``intrinsics``, ``T_cam_base``; NaN where the ellipsoid is not wholly in front of it."""
+    proj = project_views(states, [CameraGeometry(intrinsics, T_cam_base)], n)[0][0]
+    return np.where(proj.valid[:, None, None], proj.contour, np.nan)      # Menezes eq. 15
 
 
 #: ``(cx, cy, m00, m01, m11)`` of an invalid part: a unit circle at the origin (masked later).
@@ -95,7 +104,9 @@ _INVALID = np.array([0.0, 0.0, 1.0, 0.0, 1.0])
 
 
 def views_components(ellipsoids: tuple, T_cam_base: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Eq. 15 (in its dual form, :func:`~humimic.bodymodel.conics.dual_ellipse`) for
+    """The tests' reference for :func:`project_views` (production projects through that
+    compiled path only): eq. 15 (in its dual form, :func:`~humimic.bodymodel.conics.
+    dual_ellipse`) for
     ellipsoids ``(R, centre, semi-axes)`` (base frame, as
     :func:`~humimic.bodymodel.hand.hand_ellipsoids` gives them, ``N`` of them) in ``V``
     cameras at once (``T_cam_base (V, 4, 4)``): the image ellipses ``(5, V, N)`` as ``cx, cy,
@@ -118,23 +129,6 @@ def views_components(ellipsoids: tuple, T_cam_base: np.ndarray) -> tuple[np.ndar
     return np.where(valid, e, _INVALID[:, None, None]), valid
 
 
-def views_ellipses(ellipsoids: tuple, T_cam_base: np.ndarray
-                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """:func:`views_components` as the image ellipses' centres ``(V, N, 2)`` and shape
-    matrices ``(V, N, 2, 2)`` (normalised coordinates) and whether each ellipsoid lies wholly
-    in front of each camera ``(V, N)``."""
-    (cx, cy, m00, m01, m11), valid = views_components(ellipsoids, T_cam_base)
-    M = np.stack([np.stack([m00, m01], -1), np.stack([m01, m11], -1)], -2)
-    return np.stack([cx, cy], -1), M, valid
-
-
-def image_ellipses(ellipsoids: tuple, view) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """:func:`views_ellipses` in ``view``'s camera alone: centres ``(N, 2)``, shape matrices
-    ``(N, 2, 2)``, in front ``(N,)``."""
-    centre, M, valid = views_ellipses(ellipsoids, np.asarray(view.T_cam_base)[None])
-    return centre[0], M[0], valid[0]
-
-
 def pixel_centres(centre: np.ndarray, valid: np.ndarray, intrinsics) -> np.ndarray:
     """Pixel centres ``(N, 2)`` of image ellipses (normalised ``centre (N, 2)``), off-image
     sentinel where not ``valid``."""
@@ -142,11 +136,10 @@ def pixel_centres(centre: np.ndarray, valid: np.ndarray, intrinsics) -> np.ndarr
     return np.where(valid[:, None], np.stack([cu, cv], -1), OFF_IMAGE)
 
 
-def ellipse_centres(ellipsoids: tuple, view) -> np.ndarray:
-    """Pixel centres ``(N, 2)`` of the ellipsoids' image ellipses (off-image sentinel where
-    invalid): all the stereo cue needs of the right camera."""
-    centre, _, valid = image_ellipses(ellipsoids, view)
-    return pixel_centres(centre, valid, view.intrinsics)
+def ellipse_centres(states: np.ndarray, views: list) -> np.ndarray:
+    """Pixel centres ``(N, V, 2)`` of hand states' ``(N, 9)`` image ellipses in ``views``
+    (off-image sentinel where invalid): :func:`project_views` without contours."""
+    return project_views(states, views, 0, 0)[1]
 
 
 @functools.lru_cache(maxsize=16)
@@ -161,7 +154,8 @@ def _circle(n_points: int) -> tuple[np.ndarray, np.ndarray]:
 
 def components_projection(e: np.ndarray, valid: np.ndarray, intrinsics, n_points: int
                           ) -> HandProjection:
-    """Contour points, normals and colour patch (:func:`project_hands`) of image ellipses
+    """Contour points, normals and colour patch (:func:`project_hands`'s, in array operations:
+    the tests' reference) of image ellipses
     given as ``e (5, N)`` = ``cx, cy, m00, m01, m11`` (:func:`views_components`) and ``valid
     (N,)``: ``centre + L (cos psi, sin psi)`` with ``L`` the Cholesky factor of ``M``, normals
     ``L^-T (cos psi, sin psi)``."""
@@ -192,19 +186,15 @@ def components_projection(e: np.ndarray, valid: np.ndarray, intrinsics, n_points
     return HandProjection(uv, normal, patch, valid)
 
 
-def project_hands(states: np.ndarray, view: HandView, n_points: int,
-                  ellipsoids: tuple | None = None) -> HandProjection:
-    """Eq. 15 for every particle's ellipsoid, and its contour points and colour patch
-    (``ellipsoids``: :func:`hand_ellipsoids` of ``states`` if already computed).
+def project_hands(states: np.ndarray, view: HandView, n_points: int) -> HandProjection:
+    """Eq. 15 for every particle's ellipsoid, and its contour points and colour patch, in one
+    view (:func:`project_views`).
 
     The ``n_points`` contour points are ``centre + L (cos psi, sin psi)`` at equal steps of
     ``psi`` (``L L^T`` the image ellipse's shape matrix), with their normals in closed form
     (``L^-T (cos psi, sin psi)``); not resampled by arc length as the body model's outlines
     are (that resampling was most of the likelihood's cost)."""
-    if ellipsoids is None:
-        ellipsoids = hand_ellipsoids(states)
-    e, valid = views_components(ellipsoids, np.asarray(view.T_cam_base)[None])
-    return components_projection(e[:, 0], valid[0], view.intrinsics, n_points)
+    return project_views(states, [view], n_points)[0][0]
 
 
 def project_views(states: np.ndarray, views: list, n_points: int,

@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from humimic.bodymodel.hand import hand_ellipsoids
 from humimic.perception.trackers.gest.likelihood import ellipse_centres
 from humimic.perception.trackers.gest.stereo import triangulate_pixels
 
@@ -30,11 +29,10 @@ def sphere_offset(centre: np.ndarray, radius: float, cam_l, cam_r) -> np.ndarray
     the sphere is not wholly in front of both cameras."""
     x, y, z = np.asarray(centre, float).tolist()       # (np.r_ costs more than the maths)
     r = float(radius)
-    e = hand_ellipsoids(np.array([[x, y, z, 0.0, 0.0, 0.0, r, r, r]]))
-    c_l, c_r = ellipse_centres(e, cam_l), ellipse_centres(e, cam_r)
-    if max(np.abs(c_l).max(), np.abs(c_r).max()) >= 1e5:          # off-image sentinel
+    c = ellipse_centres(np.array([[x, y, z, 0.0, 0.0, 0.0, r, r, r]]), [cam_l, cam_r])[0]
+    if np.abs(c).max() >= 1e5:                                     # off-image sentinel
         return np.full(3, np.nan)
-    return np.array([x, y, z]) - triangulate_pixels(cam_l, cam_r, c_l, c_r)[0]
+    return np.array([x, y, z]) - triangulate_pixels(cam_l, cam_r, c[:1], c[1:])[0]
 
 
 def equivalent_radius(axes: np.ndarray) -> float:

@@ -103,8 +103,8 @@ class GestStage(PoseTrackerStage):
             base = f"{image_entity(cam.name)}/{self.tracker_name}"
             states = np.vstack([res.mean[None], sample])
             states[:, 6:] = np.maximum(states[:, 6:], 1e-3)
-            outline, _ = hand_outlines(states, cam.intrinsics, invert_transform(cam.T_base_cam))
-            strips = [np.vstack([o, o[:1]]) + PIXEL_CENTRE_SHIFT for o in outline.uv[:, 0]
+            outline = hand_outlines(states, cam.intrinsics, invert_transform(cam.T_base_cam))
+            strips = [np.vstack([o, o[:1]]) + PIXEL_CENTRE_SHIFT for o in outline
                       if np.isfinite(o).all()]
             if not strips:
                 continue
@@ -183,9 +183,8 @@ def _whole_in_view(camera, state_base: np.ndarray) -> bool:
     """Whether the outline of the hand ellipsoid ``state_base (9,)`` lies inside the image."""
     if camera is None or not _in_view(camera, state_base[:3]):
         return False
-    outline, _ = hand_outlines(state_base[None], camera.intrinsics,
-                               invert_transform(camera.T_base_cam))
-    uv = outline.uv[0, 0]
+    uv = hand_outlines(state_base[None], camera.intrinsics,
+                       invert_transform(camera.T_base_cam))[0]
     w, h = camera.intrinsics.width, camera.intrinsics.height
     return bool(np.isfinite(uv).all() and (uv >= 0).all() and (uv[:, 0] <= w - 1).all()
                 and (uv[:, 1] <= h - 1).all())
