@@ -147,3 +147,19 @@ def test_rim_samples_are_the_shape_and_skin_cues_exactly():
             assert d_skin is None
         else:
             np.testing.assert_array_equal(d_skin, skin_distance(proj, v))
+
+
+def test_rim_sampling_takes_more_rows_than_one_remap_call():
+    """``cv2.remap`` refuses maps of 32767 rows or more; the rim cue samples 2 rows a particle
+    (up to 20 000 particles): chunked, equal to one call on each half."""
+    import numpy as np
+
+    from humimic.perception.trackers.gest import likelihood
+
+    rng = np.random.default_rng(0)
+    img = rng.random((40, 50), dtype=np.float32)
+    maps = rng.uniform(-5, 55, (2, 17000, 8, 2)).astype(np.float32)
+    got = likelihood._sampled_mean(img, maps, 3.0)
+    want = np.concatenate([likelihood._sampled_mean(img, maps[:, :8000], 3.0),
+                           likelihood._sampled_mean(img, maps[:, 8000:], 3.0)], axis=1)
+    np.testing.assert_array_equal(got, want)

@@ -236,6 +236,10 @@ def project_views_numpy(states: np.ndarray, views: list, n_points: int,
     return projs, centres
 
 
+REMAP_ROWS = 16384
+"""Rows per ``cv2.remap`` call (OpenCV takes fewer than 32767: 2 rows a particle)."""
+
+
 def _sampled_mean(image: np.ndarray, maps: np.ndarray, outside: float) -> np.ndarray:
     """The mean over the last point axis of ``image`` sampled bilinearly (points off it read
     ``outside``) at the float32 points ``maps (..., n, 2)``: one ``cv2.remap`` with a
@@ -245,8 +249,10 @@ def _sampled_mean(image: np.ndarray, maps: np.ndarray, outside: float) -> np.nda
     n = maps.shape[-2]
     if maps.size == 0:
         return np.zeros(maps.shape[:-2])
-    out = cv2.remap(src, maps.reshape(-1, n, 2), None, cv2.INTER_LINEAR,
-                    borderMode=cv2.BORDER_CONSTANT, borderValue=float(outside))
+    rows = maps.reshape(-1, n, 2)
+    out = np.concatenate([cv2.remap(src, rows[i:i + REMAP_ROWS], None, cv2.INTER_LINEAR,
+                                    borderMode=cv2.BORDER_CONSTANT, borderValue=float(outside))
+                          for i in range(0, len(rows), REMAP_ROWS)])
     return out.reshape(maps.shape[:-1]).astype(np.float64).mean(axis=-1)
 
 
