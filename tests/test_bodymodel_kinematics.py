@@ -13,6 +13,7 @@ from scipy.spatial.transform import Rotation
 
 from humimic.bodymodel import avatar as truth
 from humimic.bodymodel.dimensions import avatar_body, db_skeleton
+from humimic.bodymodel.forward_kernel import segment_frames
 from humimic.bodymodel.hand import hand_ellipsoids
 from humimic.bodymodel.kinematics import (
     ARM_AXES,
@@ -63,8 +64,10 @@ def _torso_state(R, p):
     return np.concatenate([p, truth.ypr_from_matrix(R)])
 
 
-def test_fk_matches_dbs_arms_in_mujoco():
-    """DB's arm joints and our FK with DB's skeleton put elbows and wrists at the same places."""
+@pytest.mark.parametrize("fk", [forward_kinematics, segment_frames], ids=["numpy", "compiled"])
+def test_fk_matches_dbs_arms_in_mujoco(fk):
+    """DB's arm joints and our FK with DB's skeleton put elbows and wrists at the same places:
+    the production (compiled) FK and the numpy reference."""
     m = _db()
     d = mujoco.MjData(m)
     rng = np.random.default_rng(1)
@@ -81,7 +84,7 @@ def test_fk_matches_dbs_arms_in_mujoco():
         q[:6] = _torso_state(d.xmat[torso].reshape(3, 3), d.xpos[torso])
         for k, s in enumerate("RL"):
             q[6 + 4 * k:10 + 4 * k] = [d.qpos[m.joint(f"{s}_{j}").qposadr[0]] for j in ARM_JOINTS]
-        R, p = forward_kinematics(q[None], sk)
+        R, p = fk(q[None], sk)
         for k, s in enumerate("RL"):
             elbow, wrist = p[0, 3 + 3 * k], p[0, 4 + 3 * k]
             worst = max(worst, np.abs(elbow - d.site(f"{s}_elbow").xpos).max(),

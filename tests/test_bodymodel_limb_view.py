@@ -11,7 +11,7 @@ import pytest
 
 from humimic import bodymodel as bm
 from humimic.bodymodel.kinematics import Skeleton
-from humimic.bodymodel.limb_view import forward, limb_view
+from humimic.bodymodel.limb_view import limb_view
 from humimic.bodymodel.model import BodyModel, Cone, Ellipsoid, Part
 from humimic.sensors.camera_model import Intrinsics
 
@@ -58,18 +58,3 @@ def test_limb_view_equals_the_projection(body_kind, k1):
         assert np.array_equal(np.isnan(a), np.isnan(b))
         fin = np.isfinite(b)
         assert np.allclose(a[fin], b[fin], rtol=1e-9, atol=1e-9)
-
-
-@pytest.mark.parametrize("free", ["all", "arms"])
-def test_compiled_forward_kinematics_equals_numpy(free):
-    """:func:`~humimic.bodymodel.limb_view.forward` (arm rotations composed from the signed
-    axes) against ``BodyModel.forward`` (closed-form y-x-z), any angles, a model with the torso
-    fixed (TBP's)."""
-    body = bm.avatar_body()
-    if free == "arms":
-        body = body.with_free(bm.ARM_DOFS["R"] + bm.ARM_DOFS["L"])
-    q = np.random.default_rng(6).uniform(-4.0, 4.0, (100, len(body.free)))
-    want, got = body.forward(q), forward(body, q)
-    assert np.array_equal(got.q, want.q)
-    assert np.allclose(got.R, want.R, rtol=0, atol=1e-14)
-    assert np.allclose(got.p, want.p, rtol=0, atol=1e-14)

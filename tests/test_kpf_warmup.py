@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 from _kpf_synth import INTRINSICS, camera, painted_person, static_pose
 
-from humimic.bodymodel import limb_view
+from humimic.bodymodel import forward_kernel, limb_view
 from humimic.perception.blobs.config import DEFAULT_COLOR_MODEL
 from humimic.perception.cues.color_models import ColorLUT, load_color_model
 from humimic.perception.trackers.kpf import cues, limb_cues
@@ -18,7 +18,7 @@ from humimic.perception.trackers.kpf.warmup import load_kernels
 
 
 def test_load_kernels_loads_those_a_tracking_step_calls():
-    kernels = (limb_view._view_kernel, limb_view._forward_kernel, limb_cues._edge_kernel,
+    kernels = (limb_view._view_kernel, forward_kernel._forward_kernel, limb_cues._edge_kernel,
                limb_cues._ridge_kernel, limb_cues._band_kernel, limb_cues._skin_kernel,
                cues._strongest)
     body, T, q0 = kpf_body(), camera(), static_pose()

@@ -23,8 +23,8 @@ pixels. Usage, for the trackers::
     limbs = view.limb_names                  # ("torso", "r_upper_arm", ...)
     skin = view.outline.uv[:, view.index("r_hand")]   # (N, V, 2) polygon of a hand
     # the same limb fields and image ellipses compiled (the kpf likelihood's hot path)
-    from humimic.bodymodel.limb_view import forward, limb_view
-    lv = limb_view(body, forward(body, q), camera.intrinsics, T_cam_base)
+    from humimic.bodymodel.limb_view import limb_view
+    lv = limb_view(body, pose, camera.intrinsics, T_cam_base)
 
     # Menezes (tbp): 8 DOF, torso pose from the face tracker, hidden-part removal
     arms = bm.avatar_body().with_free(bm.ARM_DOFS["R"] + bm.ARM_DOFS["L"])

@@ -1,4 +1,7 @@
-"""Forward kinematics of the upper body, vectorised over particles.
+"""Forward kinematics of the upper body, vectorised over particles: the conventions, the
+rotations, and :func:`forward_kinematics` in numpy -- the tests' reference for the compiled
+:func:`humimic.bodymodel.forward_kernel.segment_frames`, which production calls
+(``BodyModel.forward``).
 
 State (:data:`DOF_NAMES`, 14 values, Schmidt et al. sec. 4: torso 3 translations + 3 rotations,
 4 per arm)::
@@ -156,6 +159,9 @@ def _elbow_rotations(eb: np.ndarray) -> np.ndarray:
 
 def forward_kinematics(q: np.ndarray, skeleton: Skeleton) -> tuple[np.ndarray, np.ndarray]:
     """Segment frames for full states ``q`` ``(N, 14)`` (:data:`DOF_NAMES`).
+
+    Test reference only (closed-form y-x-z shoulders, numpy): production calls the compiled
+    :func:`humimic.bodymodel.forward_kernel.segment_frames` (``BodyModel.forward``).
 
     Returns ``R_ref_seg (N, S, 3, 3)`` and ``p_ref_seg (N, S, 3)`` for :data:`SEGMENTS`
     (the reference frame is the one the torso pose is given in).

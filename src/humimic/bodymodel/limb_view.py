@@ -20,14 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from humimic.bodymodel.geometry_kernels import (
-    axis_rotation_into,
-    ellipse_axes,
-    ellipsoid_ellipse,
-    mat3_mul,
-    ypr_into,
-)
-from humimic.bodymodel.kinematics import ARM_AXES, SIDES
+from humimic.bodymodel.geometry_kernels import ellipse_axes, ellipsoid_ellipse
 from humimic.bodymodel.model import BodyModel, Pose
 from humimic.bodymodel.projection import Z_MIN
 from humimic.maths.arrays import stack
@@ -149,58 +142,6 @@ def _ellipsoid(s, j, R, t, semi, z_min, valid, i, K, ell):
     q = am00 * K[1, 0] + am01 * K[1, 1]
     w = am10 * K[1, 0] + am11 * K[1, 1]
     ell[s, j, 2], ell[s, j, 3], ell[s, j, 4] = ellipse_axes(p, q, w)
-
-
-@njit
-def _forward_kernel(q, axes, signs, shoulders, neck, upper, fore):
-    """``kinematics.forward_kinematics`` (segments in ``SEGMENTS`` order: torso, head, then
-    upper arm, forearm, hand per side; the arm rotations composed from the signed
-    :data:`~humimic.bodymodel.kinematics.ARM_AXES`, not their closed form)."""
-    n = q.shape[0]
-    R = np.empty((n, 8, 3, 3))
-    p = np.empty((n, 8, 3))
-    Rt, A, B = np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3))
-    C, Ru, Rf = np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3))
-    for s in range(n):
-        ypr_into(Rt, q[s, 3], q[s, 4], q[s, 5])
-        for r in range(3):
-            p[s, 0, r] = q[s, r]
-            p[s, 1, r] = q[s, r] + (Rt[r, 0] * neck[0] + Rt[r, 1] * neck[1]
-                                    + Rt[r, 2] * neck[2])
-        for k in range(2):                               # arms R, L
-            b, g = 6 + 4 * k, 2 + 3 * k
-            axis_rotation_into(A, axes[k, 0], signs[k, 0] * q[s, b])
-            axis_rotation_into(B, axes[k, 1], signs[k, 1] * q[s, b + 1])
-            mat3_mul(A, B, C)
-            axis_rotation_into(A, axes[k, 2], signs[k, 2] * q[s, b + 2])
-            mat3_mul(C, A, B)
-            mat3_mul(Rt, B, Ru)
-            axis_rotation_into(A, axes[k, 3], signs[k, 3] * q[s, b + 3])
-            mat3_mul(Ru, A, Rf)
-            for r in range(3):
-                for m in range(3):
-                    R[s, 0, r, m] = Rt[r, m]             # torso and head
-                    R[s, 1, r, m] = Rt[r, m]
-                    R[s, g, r, m] = Ru[r, m]
-                    R[s, g + 1, r, m] = Rf[r, m]
-                    R[s, g + 2, r, m] = Rf[r, m]
-                p[s, g, r] = q[s, r] + (Rt[r, 0] * shoulders[k, 0] + Rt[r, 1] * shoulders[k, 1]
-                                        + Rt[r, 2] * shoulders[k, 2])
-                p[s, g + 1, r] = p[s, g, r] - upper * Ru[r, 2]
-                p[s, g + 2, r] = p[s, g + 1, r] - fore * Rf[r, 2]
-    return R, p
-
-
-def forward(body: BodyModel, q: np.ndarray) -> Pose:
-    """``body.forward(q)`` compiled (free states ``q (N, len(free))``; the fixed DOFs 0)."""
-    full = body.expand(q)
-    sk = body.skeleton
-    axes = np.array([[a for a, _ in ARM_AXES[side]] for side in SIDES], np.intp)
-    signs = np.array([[s for _, s in ARM_AXES[side]] for side in SIDES], float)
-    R, p = _forward_kernel(full, axes, signs,
-                           np.array([sk.shoulder[side] for side in SIDES], float),
-                           np.asarray(sk.neck, float), float(sk.upper_arm), float(sk.forearm))
-    return Pose(full, R, p)
 
 
 def limb_view(body: BodyModel, pose: Pose, intr: Intrinsics, T_cam_ref: np.ndarray

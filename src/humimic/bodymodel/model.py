@@ -18,12 +18,12 @@ from functools import cached_property
 
 import numpy as np
 
+from humimic.bodymodel.forward_kernel import segment_frames, skeleton_args
 from humimic.bodymodel.kinematics import (
     DOF_NAMES,
     JOINT_SEGMENT,
     SEGMENTS,
     Skeleton,
-    forward_kinematics,
 )
 from humimic.bodymodel.limits import JointLimits
 
@@ -190,10 +190,15 @@ class BodyModel:
         return self.free_limits.clamp(q)
 
     def forward(self, q: np.ndarray, fixed: np.ndarray | None = None) -> Pose:
-        """Forward kinematics of free states ``q (N, len(free))``."""
+        """Forward kinematics of free states ``q (N, len(free))`` (compiled:
+        :func:`~humimic.bodymodel.forward_kernel.segment_frames`)."""
         full = self.expand(q, fixed)
-        R, p = forward_kinematics(full, self.skeleton)
+        R, p = segment_frames(full, self._skeleton_args)
         return Pose(full, R, p)
+
+    @cached_property
+    def _skeleton_args(self) -> tuple:
+        return skeleton_args(self.skeleton)
 
     # ---- parts ------------------------------------------------------------------------------
     @property

@@ -20,7 +20,8 @@ import numpy as np
 
 from humimic.bodymodel.avatar import truth_angles
 from humimic.bodymodel.dimensions import db_skeleton
-from humimic.bodymodel.kinematics import ARM_DOFS, DOF_NAMES, forward_kinematics
+from humimic.bodymodel.forward_kernel import segment_frames
+from humimic.bodymodel.kinematics import ARM_DOFS, DOF_NAMES
 from humimic.control.decimate import Decimator
 from humimic.control.servo import Servo
 from humimic.maths.stats import rmse
@@ -43,7 +44,7 @@ def arm_points(angles: np.ndarray, skeleton) -> np.ndarray:
     ``(T, 8)`` on ``skeleton``."""
     q = np.zeros((len(angles), len(DOF_NAMES)))
     q[:, 6:] = angles
-    _, p = forward_kinematics(q, skeleton)
+    _, p = segment_frames(q, skeleton)
     return p[:, [3, 4, 6, 7]]
 
 

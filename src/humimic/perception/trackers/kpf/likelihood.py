@@ -20,7 +20,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from humimic import bodymodel as bm
-from humimic.bodymodel.limb_view import forward as compiled_forward
 from humimic.bodymodel.limb_view import limb_view
 from humimic.maths.arrays import stack
 from humimic.perception.trackers.kpf import cues as C
@@ -110,7 +109,7 @@ class Likelihood:
         or a :class:`FrameCues` that computes them where these particles' points fall."""
         cfg = self.cfg
         n = len(q)
-        view = limb_view(self.body, compiled_forward(self.body, q), self.intr, T_cam_base)
+        view = limb_view(self.body, self.body.forward(q), self.intr, T_cam_base)
         ellipses = view.ellipses
         if isinstance(maps, FrameCues):
             maps = maps.covering(*sample_box(view, ellipses))

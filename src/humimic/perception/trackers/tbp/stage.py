@@ -46,6 +46,7 @@ class TbpStage(PoseTrackerStage):
         self.cfg, self.camera, self.world, self.rng = cfg, camera, world, rng
         self.tracker = TbpTracker(cfg, body, lut)
         load_kernels(lut, cfg.bins)          # the cue images' numba kernels, before frame one
+        body.forward(np.zeros((1, len(body.free))))     # and the compiled forward kinematics
         head = body.part("head")
         self.head_offset = body.skeleton.neck + head.p_seg_part
         self.head: np.ndarray | None = None
