@@ -68,6 +68,14 @@ class KpfConfig(Section):
     """Dominant-mode window, as a fraction of D."""
     motion_noise: float = Field(0.25, gt=0.0, le=1.0)
     """The motion model's noise extent, as a fraction of D."""
+    torso_velocity: bool = True
+    """The linear motion model's velocity (the last two best modes' difference) on the torso's
+    DOFs too, as the paper; False (our extension): on the arms only, the torso's motion-model
+    particles predicted in place. A standing person's torso hardly moves, so its velocity from
+    two modes is the estimate's frame-to-frame jitter, and feeding it forward integrates that
+    jitter into a drift the weakly observed torso depth does not stop (schmidt_side, 18 s,
+    the paper's config, seeds 1-4: the torso 50-340 mm off by the third gesture, 7-35 mm
+    without)."""
     min_random: float = Field(0.2, ge=0.0, le=1.0)
     """Smallest share of randomly propagated particles."""
     tol: float = Field(0.01, ge=0.0)
