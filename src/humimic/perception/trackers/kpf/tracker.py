@@ -75,6 +75,15 @@ class FrameResult:
     """(M, 14) distinct mean-shift modes (the particles' converged positions, deduplicated)."""
 
 
+def motion_velocity(mode: np.ndarray, mode_prev: np.ndarray, torso: bool = True) -> np.ndarray:
+    """Schmidt sec. 5.2's linear motion model's velocity, the last two best modes' difference
+    ``(14,)``; ``torso=False`` (``KpfConfig.torso_velocity``): zero on the torso's DOFs."""
+    v = np.asarray(mode, float) - np.asarray(mode_prev, float)
+    if not torso:
+        v[GROUPS[0]] = 0.0
+    return v
+
+
 def distinct(fn):
     """``fn`` over particles, evaluated once per distinct particle: mean shift moves whole
     windows of particles onto the same point (20-80 % duplicates after the first shift), so
@@ -184,7 +193,7 @@ class KpfTracker:
         cfg, rng = self.cfg, self.rng
         groups = GROUPS if cfg.partitioned else [np.arange(len(self.D))]
         resampled = kpf.partitioned_resample(self.particles, self.W, groups, rng)
-        velocity = self.mode - self.mode_prev
+        velocity = motion_velocity(self.mode, self.mode_prev, cfg.torso_velocity)
         pred, moved = kpf.mixed_propagate(resampled, velocity, self.share, self.D,
                                           rng, self.limits.inside, cfg.motion_noise)
         pred = self.limits.clamp(pred)
