@@ -16,7 +16,7 @@ pi(p))`` -- a ratio of 3-D densities -- instead of a ratio of 9-D ones, which wi
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -120,29 +120,36 @@ def walk_predictives(x: np.ndarray, particles: np.ndarray, log_weights: np.ndarr
     return np.where(np.isfinite(m), out, m - const)
 
 
-#: One entry: the arguments and result of the last :func:`walk_densities` call.
-_LAST_WALK: tuple | None = None
-
-
 def walk_densities(x: np.ndarray, particles: np.ndarray, log_weights: np.ndarray,
                    sigma: np.ndarray) -> np.ndarray:
     """:func:`walk_predictives` of the 9-D hand state over the whole state, the orientation
     and semi-axes, and the semi-axes (``f``, ``f_oa``, ``f_a``, ``(3, n)``): the dynamics'
     predictive density (:meth:`PoseReset.predictive_log_density`) and the importance
-    function's (:meth:`CandidateProposal.log_density`) share ``f_a`` and the distances; the
-    last call is kept, and returned again for equal arguments (ICONDENSATION asks both on the
-    same particles)."""
-    global _LAST_WALK
-    last = _LAST_WALK
-    args = (x, particles, log_weights, sigma)
-    if last is not None and all(np.array_equal(a, b) for a, b in zip(args, last[0],
-                                                                     strict=True)):
-        return last[1]
-    out = walk_predictives(x, particles, log_weights, sigma, (POS.start, ORI.start,
-                                                             AXES.start))
-    out.setflags(write=False)
-    _LAST_WALK = (tuple(np.array(a, float) for a in args), out)
-    return out
+    function's (:meth:`CandidateProposal.log_density`) share ``f_a`` and the distances."""
+    return walk_predictives(x, particles, log_weights, sigma, (POS.start, ORI.start,
+                                                              AXES.start))
+
+
+class WalkDensities:
+    """:func:`walk_densities` keeping its last call: ICONDENSATION asks the dynamics and the
+    importance function for their densities at the same particles, so a tracker gives both
+    one of these and the tables are built once a frame (equal arguments, compared by value,
+    return the kept result)."""
+
+    def __init__(self):
+        self._last: tuple | None = None
+
+    def __call__(self, x: np.ndarray, particles: np.ndarray, log_weights: np.ndarray,
+                 sigma: np.ndarray) -> np.ndarray:
+        args = (x, particles, log_weights, sigma)
+        last = self._last
+        if last is not None and all(np.array_equal(a, b)
+                                    for a, b in zip(args, last[0], strict=True)):
+            return last[1]
+        out = walk_densities(*args)
+        out.setflags(write=False)
+        self._last = (tuple(np.array(a, float) for a in args), out)
+        return out
 
 
 def walk_predictive(x: np.ndarray, particles: np.ndarray, log_weights: np.ndarray,
@@ -183,6 +190,8 @@ class PoseReset:
     walk: RandomWalk
     box: UniformBox
     eps: float
+    densities: WalkDensities = field(default_factory=WalkDensities, compare=False)
+    """Shared with the frame's :class:`CandidateProposal` (:class:`WalkDensities`)."""
 
     def __post_init__(self):
         object.__setattr__(self, "_walk_axes", RandomWalk(self.walk.sigma[AXES]))
@@ -217,7 +226,7 @@ class PoseReset:
         semi-axes (normalised weights): two ``(n, N)`` tables reduced by rows, no table-wide
         ``logaddexp``."""
         x = np.asarray(x, float)
-        f, _, f_a = walk_densities(x, particles, log_weights, self.walk.sigma)
+        f, _, f_a = self.densities(x, particles, log_weights, self.walk.sigma)
         return np.logaddexp(math.log1p(-self.eps) + f,
                             math.log(self.eps) + self.box.log_density(x[:, POSE]) + f_a)
 
@@ -229,8 +238,8 @@ class PoseReset:
 class CandidateProposal:
     """``pi(x) = pi_3d(p) [(1 - fresh) f(o, a) + fresh U(o) f(a)]`` with ``f`` the particle
     set's predictive density (random walk ``walk`` from weighted ``particles``; the
-    normalised ``log_weights`` that ICONDENSATION's dynamics see, so that
-    :func:`walk_densities` computes ``f(a)`` once for both)."""
+    normalised ``log_weights`` that ICONDENSATION's dynamics see, so that the shared
+    :class:`WalkDensities` computes ``f(a)`` once for both)."""
 
     positions: Mixture
     particles: np.ndarray
@@ -238,6 +247,8 @@ class CandidateProposal:
     walk: RandomWalk
     orientations: UniformBox
     fresh: float = 0.5
+    densities: WalkDensities = field(default_factory=WalkDensities, compare=False)
+    """The dynamics' (:attr:`PoseReset.densities`): ``f(a)`` computed once for both."""
 
     @property
     def empty(self) -> bool:
@@ -254,7 +265,7 @@ class CandidateProposal:
 
     def log_density(self, x: np.ndarray) -> np.ndarray:
         x = np.asarray(x, float)
-        _, f_oa, f_a = walk_densities(x, self.particles, self.log_weights, self.walk.sigma)
+        _, f_oa, f_a = self.densities(x, self.particles, self.log_weights, self.walk.sigma)
         with np.errstate(divide="ignore"):
             mix = np.logaddexp(math.log1p(-self.fresh) + f_oa if self.fresh < 1 else -np.inf,
                                math.log(self.fresh) + self.orientations.log_density(x[:, ORI])

@@ -245,7 +245,8 @@ class GestTracker:
             importance = CandidateProposal(
                 Mixture(tuple(Gaussian(p[j] + delta, pos_cov[j]) for j in use)),
                 self.pf.particles, normalize(self.pf.log_weights).log_weights, self.walk,
-                self.orientations, cfg.fresh_orientation)  # as the filter normalises them
+                self.orientations, cfg.fresh_orientation,  # as the filter normalises them
+                self.pf.dynamics.densities)
         s = self.pf.step(self._ll(views, to_view_px(pairs, origin[None], k),
                                   left.camera.intrinsics, k), rng, importance=importance)
         mean = s.mean.copy()
