@@ -13,6 +13,7 @@ from __future__ import annotations
 from dataclasses import replace
 
 import numpy as np
+import pytest
 from _synth_vision import stereo_head
 
 from humimic.bodymodel.hand import hand_ellipsoids, to_camera
@@ -104,6 +105,8 @@ def test_compiled_stereo_cue_is_the_array_form():
             np.testing.assert_allclose(ours, expect, rtol=1e-9)
             assert (ours[:3] == np.log(outlier)).all()
             assert m == 0 or ours[3] > np.log(outlier) + 5.0
+    with pytest.raises(ValueError, match="pairs"):           # pairs for three views, not two
+        blob_pair_log_likelihood(centres, rng.normal(100.0, 2.0, (2, 3, 2)), 1.0, 1e-6)
 
 
 def test_nested_walk_predictives_are_the_array_form_on_each_part():
@@ -124,6 +127,9 @@ def test_nested_walk_predictives_are_the_array_form_on_each_part():
     y[0, 7] += sigma[7]                                     # not the kept call's arguments
     again = walk_densities(y, particles, lw, sigma)
     assert again[2, 0] != got[2, 0] and (again[:, 1:] == got[:, 1:]).all()
+    for bad in ((3, 0), (0, 3, 3), (9,), (-1, 3)):           # the kernel fills ascending starts
+        with pytest.raises(ValueError, match="starts"):
+            walk_predictives(x, particles, lw, sigma, bad)
 
 
 def test_rim_samples_are_the_shape_and_skin_cues_exactly():

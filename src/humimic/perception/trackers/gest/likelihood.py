@@ -307,8 +307,12 @@ def blob_pair_log_likelihood(centres: np.ndarray, pairs: np.ndarray, sigma_px: f
     centres ``(N, V, 2)`` and the matched blob centroids ``pairs (M, V, 2)`` (px), compiled
     (:func:`.kernels.blob_pair_kernel`; :func:`blob_pair_log_likelihood_numpy` is the array
     form)."""
-    return blob_pair_kernel(np.ascontiguousarray(centres, float), np.ascontiguousarray(
-        pairs, float).reshape(-1, *np.shape(centres)[1:]), float(sigma_px),
+    centres, pairs = np.asarray(centres, float), np.asarray(pairs, float)
+    if pairs.size and pairs.shape[1:] != centres.shape[1:]:
+        raise ValueError(f"pairs {pairs.shape} must be (M, *{centres.shape[1:]}) for "
+                         f"centres {centres.shape}")
+    return blob_pair_kernel(np.ascontiguousarray(centres), np.ascontiguousarray(
+        pairs).reshape(-1, *centres.shape[1:]), float(sigma_px),
         math.log(outlier_density), EXP_FLOOR)
 
 

@@ -108,9 +108,15 @@ def walk_predictives(x: np.ndarray, particles: np.ndarray, log_weights: np.ndarr
     (ascending): ``(len(starts), n)``, the tables of :func:`walk_tables`, summed by one
     matrix product."""
     sigma = np.ascontiguousarray(sigma, float)
+    st = np.asarray(starts, np.int64)
+    if (st.ndim != 1 or not len(st) or st[0] < 0 or st[-1] >= len(sigma)
+            or np.any(np.diff(st) <= 0)):
+        # the kernel fills table q when its backward sum reaches starts[q]: unsorted or
+        # out-of-range starts would leave tables unwritten
+        raise ValueError(f"starts must ascend strictly within [0, {len(sigma)}), got {starts}")
     t, m = walk_tables(np.ascontiguousarray(x, float), np.ascontiguousarray(particles, float),
                        np.ascontiguousarray(log_weights, float), sigma,
-                       np.asarray(starts, np.int64), EXP_FLOOR)
+                       st, EXP_FLOOR)
     log_sigma = np.log(sigma)
     const = np.array([np.sum(log_sigma[s:]) + 0.5 * (len(sigma) - s) * _LOG_2PI
                       for s in starts])[:, None]
