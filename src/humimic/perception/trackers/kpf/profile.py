@@ -18,8 +18,8 @@ within some nats of ``q``'s (how far in depth the cues cannot tell the poses apa
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
 
