@@ -120,3 +120,38 @@ def test_tracker_likelihood_is_nearly_flat_along_the_ray_and_at_the_mirror():
     assert ok.sum() >= 13                                 # -100..+20 mm reachable at least
     assert np.all(np.abs(p.log_lik[ok] - p.truth) < 4.0)
     assert abs(p.flip_margin) < 2.0 and p.flip_wrist_m["elbow"] > 0.15
+
+
+def test_phases_of_the_pointing_cycle():
+    from humimic.motion.config import PointMotion
+    from humimic.perception.trackers.kpf.profile_run import PHASES, phase
+
+    c = PointMotion(rest=1.0, move=1.5, hold=2.0)
+    t = np.array([0.0, 0.99, 1.01, 2.49, 2.51, 4.49, 4.51, 5.99, 6.01, 7.01])
+    assert [PHASES[k] for k in phase(t, c)] == ["rest", "rest", "rise", "rise", "hold", "hold",
+                                                "lower", "lower", "rest", "rise"]
+
+
+def test_disparity_change_is_the_difference_of_f_b_over_z():
+    from humimic.perception.trackers.kpf.profile_run import disparity_change
+
+    f, b = 134.3, 0.07          # the wide eye at 320 px (100 deg), the DB eyes' baseline
+    assert disparity_change(f, b, 2.0, 0.02) == pytest.approx(f * b / 2.0 - f * b / 2.02)
+    # small changes: f b dz / z^2
+    assert disparity_change(f, b, 2.0, 1e-4) == pytest.approx(f * b * 1e-4 / 4.0, rel=1e-4)
+
+
+def test_command_writes_the_profile_and_plot(tmp_path, capsys):
+    """Two frames of side pointing: every frame profiled, JSON and PNG written, the summary
+    printed with the eyes' baseline read from the robot model (70 mm)."""
+    import json
+
+    from humimic.perception.reproduce import main
+
+    assert main(["schmidt-depth-profile", "--gesture", "side", "--seeds", "0", "--duration",
+                 "0.2", "--range", "50", "--out", str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    assert "baseline 70.0 mm" in out and "side   rest    2" in out
+    d = json.loads((tmp_path / "profile.json").read_text())
+    assert len(d["delta_m"]) == 11 and len(d["frames"]["side"]) == 2
+    assert (tmp_path / "depth_profile.png").stat().st_size > 1000
