@@ -27,8 +27,12 @@ from __future__ import annotations
 import numpy as np
 
 from humimic import bodymodel as bm
+from humimic.perception.trackers.kpf.frame_cues import FrameCues
+from humimic.perception.trackers.kpf.likelihood import Likelihood
 from humimic.perception.trackers.kpf.profile import depth_profile, ml_choice, within
+from humimic.perception.trackers.kpf.tracker import kpf_body
 from humimic.pipeline.stage import Stage
+from humimic.sensors.camera_model import invert_transform
 
 PHASES = ("rest", "rise", "hold", "lower")
 NATS = (0.5, 2.0)
@@ -50,14 +54,10 @@ class ProfileProbe(Stage):
     name = "depth_profile"
 
     def __init__(self, world, camera: str, cfg, skin_lut, delta: np.ndarray):
-        from humimic.perception.trackers.kpf.likelihood import Likelihood
-        from humimic.perception.trackers.kpf.tracker import kpf_body
-
         self.world, self.camera, self.cfg, self.lut = world, camera, cfg, skin_lut
         self.body = kpf_body(world.scene.model)
         self.delta = delta
-        self.lik_cls = Likelihood
-        self.lik = None
+        self.lik: Likelihood | None = None
         self.rows: list[dict] = []
         self.fx = float("nan")
 
@@ -65,9 +65,6 @@ class ProfileProbe(Stage):
         bus.subscribe("frames", self._on_frames)
 
     def _on_frames(self, topic: str, msg) -> None:
-        from humimic.perception.trackers.kpf.frame_cues import FrameCues
-        from humimic.sensors.camera_model import invert_transform
-
         frame = msg.value.get(self.camera)
         if frame is None:
             return
@@ -76,8 +73,8 @@ class ProfileProbe(Stage):
         maps = FrameCues(frame.image, self.lut, colour_gradients=self.cfg.colour_gradients)
         if self.lik is None:    # as the tracker's start: the references from the first pose
             self.fx = float(frame.camera.intrinsics.fx)
-            self.lik = self.lik_cls(self.body, frame.camera.intrinsics,
-                                    self.cfg.model_copy(update={"sigma_from_spread": False}))
+            self.lik = Likelihood(self.body, frame.camera.intrinsics,
+                                  self.cfg.model_copy(update={"sigma_from_spread": False}))
             self.lik.adapt({k: v[0] for k, v in
                             self.lik.evaluate(q[None], maps, T).colours.items()})
         p = depth_profile(self.body, lambda qs: self.lik.evaluate(qs, maps, T).log_lik,
