@@ -143,7 +143,8 @@ def test_disparity_change_is_the_difference_of_f_b_over_z():
 
 def test_command_writes_the_profile_and_plot(tmp_path, capsys):
     """Two frames of side pointing: every frame profiled, JSON and PNG written, the summary
-    printed with the eyes' baseline read from the robot model (70 mm)."""
+    printed with the eyes' baseline read from the robot model (70 mm), and the same summary
+    from the JSON (``--from``)."""
     import json
 
     from humimic.perception.reproduce import main
@@ -155,3 +156,6 @@ def test_command_writes_the_profile_and_plot(tmp_path, capsys):
     d = json.loads((tmp_path / "profile.json").read_text())
     assert len(d["delta_m"]) == 11 and len(d["frames"]["side"]) == 2
     assert (tmp_path / "depth_profile.png").stat().st_size > 1000
+    assert main(["schmidt-depth-profile", "--from", str(tmp_path)]) == 0   # re-summarised
+    again = capsys.readouterr().out
+    assert again.strip() == out[out.index("wide eye"):out.index("plot:")].strip()

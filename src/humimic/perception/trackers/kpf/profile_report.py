@@ -47,6 +47,15 @@ def posterior_error(row: dict, delta: np.ndarray) -> float:
     return float(w @ err[ok] / w.sum())
 
 
+def posterior_ray_offset(row: dict, delta: np.ndarray) -> float:
+    """The mean offset (m, signed) along the ray under the likelihood over the ray's offsets
+    (uniform prior over the grid): a weighted-average estimator's depth error."""
+    ll = np.array(row["log_lik"], float)
+    ok = np.isfinite(ll)
+    w = np.exp(ll[ok] - ll[ok].max())
+    return float(w @ delta[ok] / w.sum())
+
+
 def mirror_margin(row: dict, min_m: float = DISTINCT_M) -> float:
     """The truth's log-likelihood minus the best mirror's among those whose wrist lies at
     least ``min_m`` from the true one (nats; NaN without one)."""
@@ -58,8 +67,9 @@ def mirror_margin(row: dict, min_m: float = DISTINCT_M) -> float:
 def summarise(rows: list[dict], delta: np.ndarray) -> dict:
     """Means (and medians) over ``rows`` (frames of :class:`ProfileProbe`): interval widths
     (mm) and their censored share, :func:`ambiguity` (mm), the ray maximum's offset (mm), the
-    maximum-likelihood choice's wrist error (mm), :func:`posterior_error` (mm), the distinct
-    mirrors' margin (:func:`mirror_margin`, nats) and the share of frames it is under 0.5 nats."""
+    maximum-likelihood choice's wrist error (mm), :func:`posterior_error` and
+    :func:`posterior_ray_offset` (mm), the distinct mirrors' margin (:func:`mirror_margin`,
+    nats) and the share of frames it is under 0.5 nats."""
     if not rows:
         return {"frames": 0}
     mm = 1e3
@@ -79,6 +89,9 @@ def summarise(rows: list[dict], delta: np.ndarray) -> dict:
     out["ml_mirror_share"] = float(np.mean([r["ml"] != "ray" for r in rows]))
     out["posterior_error_mean_mm"] = float(mm * np.mean([posterior_error(r, delta)
                                                          for r in rows]))
+    po = mm * np.array([posterior_ray_offset(r, delta) for r in rows])
+    out["posterior_ray_offset_mean_mm"] = float(po.mean())
+    out["posterior_ray_offset_abs_mean_mm"] = float(np.abs(po).mean())
     m = np.array([mirror_margin(r) for r in rows], float)
     out["mirror_frames"] = int(np.isfinite(m).sum())
     m = m[np.isfinite(m)]
@@ -158,9 +171,32 @@ def plot(results_rows: dict, delta: np.ndarray, path: Path) -> Path:
     return path
 
 
-def main(argv: list[str] | None = None) -> int:
+def render_profiles(args, delta: np.ndarray) -> tuple[dict, dict]:
+    """Every gesture and seed of ``args`` rendered and profiled: ``({gesture: rows}, info)``."""
     from humimic.scenario import load_scenario
 
+    rows_by: dict[str, list] = {}
+    info: dict = {}
+    for gesture in args.gesture:
+        for seed in args.seeds:
+            sc = load_scenario(SCENARIOS_DIR / EYES[args.eye],
+                               [*args.set, f"human.motion.gestures=[{gesture}]"],
+                               seed=seed, **({} if args.duration is None
+                                             else {"duration": args.duration}))
+            if args.tracker not in (sc.trackers or {}):
+                raise ScenarioError(sc.name, "--tracker", "no such tracker", args.tracker,
+                                    ", ".join(sc.trackers or {}))
+            rows, info = profile_run(sc, args.tracker, delta)
+            for r in rows:
+                r["seed"] = seed
+            rows_by.setdefault(gesture, []).extend(rows)
+            print(f"{gesture} seed {seed}: {len(rows)} frames", flush=True)
+    info.update(eye=sc.cameras.which, resolution=list(sc.cameras.resolution),
+                distance_m=sc.human.distance, tracker=args.tracker, seeds=args.seeds)
+    return rows_by, info
+
+
+def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(prog="python -m humimic.perception.reproduce "
                                 "schmidt-depth-profile",
                                 description="the tracker likelihood's profile along the true "
@@ -175,42 +211,35 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--step", type=float, default=10.0, help="offset step (mm)")
     p.add_argument("--duration", type=float, default=None, help="simulated s per run")
     p.add_argument("--out", type=Path, default=None, help="directory for JSON and PNG")
+    p.add_argument("--from", dest="source", type=Path, default=None,
+                   help="summarise this --out directory's profile.json instead of rendering")
     args = p.parse_args(argv)
-    k = int(round(args.range / args.step))
-    delta = 1e-3 * args.step * np.arange(-k, k + 1)
-    rows_by: dict[str, list] = {}
-    info = {}
-    try:
-        for gesture in args.gesture:
-            for seed in args.seeds:
-                sc = load_scenario(SCENARIOS_DIR / EYES[args.eye],
-                                   [*args.set, f"human.motion.gestures=[{gesture}]"],
-                                   seed=seed, **({} if args.duration is None
-                                                 else {"duration": args.duration}))
-                if args.tracker not in (sc.trackers or {}):
-                    raise ScenarioError(sc.name, "--tracker", "no such tracker", args.tracker,
-                                        ", ".join(sc.trackers or {}))
-                rows, info = profile_run(sc, args.tracker, delta)
-                for r in rows:
-                    r["seed"] = seed
-                rows_by.setdefault(gesture, []).extend(rows)
-                print(f"{gesture} seed {seed}: {len(rows)} frames", flush=True)
-    except ScenarioError as err:
-        return report_error(err)
+    if args.source is not None:
+        d = json.loads((args.source / "profile.json").read_text())
+        delta, info, rows_by = np.array(d["delta_m"]), d["info"], d["frames"]
+    else:
+        k = int(round(args.range / args.step))
+        delta = 1e-3 * args.step * np.arange(-k, k + 1)
+        try:
+            rows_by, info = render_profiles(args, delta)
+        except ScenarioError as err:
+            return report_error(err)
     results = {g: {**{ph: summarise([r for r in rows if r["phase"] == ph], delta)
                       for ph in PHASES}, "all": summarise(rows, delta)}
                for g, rows in rows_by.items()}
-    print(f"\n{sc.cameras.which} eye, {sc.cameras.resolution[0]} x {sc.cameras.resolution[1]}"
-          f" (f = {info['fx_px']:.1f} px), person {sc.human.distance:g} m away; likelihood of "
-          f"trackers.{args.tracker}; seeds {args.seeds}")
+    print(f"\n{info['eye']} eye, {info['resolution'][0]} x {info['resolution'][1]}"
+          f" (f = {info['fx_px']:.1f} px), person {info['distance_m']:g} m away; likelihood of "
+          f"trackers.{info['tracker']}; seeds {info['seeds']}")
     print(table(results))
     for g, by in results.items():
         a = by["all"]
         print(f"{g}: an ML estimator over the ray and mirrors errs {a['ml_error_mean_mm']:.0f} "
               f"mm on average (goal {GOALS_MM[g]:g} mm), the likelihood's mean over them "
-              f"{a['posterior_error_mean_mm']:.0f} mm; poses within 0.5 nats of the truth "
+              f"{a['posterior_error_mean_mm']:.0f} mm (along the ray alone: |mean offset| "
+              f"{a['posterior_ray_offset_abs_mean_mm']:.0f} mm, signed "
+              f"{a['posterior_ray_offset_mean_mm']:+.0f}); poses within 0.5 nats of the truth "
               f"reach {a['ambiguity_0.5_mean_mm']:.0f} mm from it")
-    b, f, z = info["baseline_m"], info["fx_px"], sc.human.distance
+    b, f, z = info["baseline_m"], info["fx_px"], info["distance_m"]
     print(f"stereo: baseline {1e3 * b:.1f} mm (robot model); disparity at {z:g} m "
           f"{f * b / z:.2f} px; a 20 mm depth change moves it "
           f"{disparity_change(f, b, z, 0.02):.3f} px (f = {f:.1f} px)")
