@@ -159,3 +159,17 @@ def test_command_writes_the_profile_and_plot(tmp_path, capsys):
     assert main(["schmidt-depth-profile", "--from", str(tmp_path)]) == 0   # re-summarised
     again = capsys.readouterr().out
     assert again.strip() == out[out.index("wide eye"):out.index("plot:")].strip()
+
+
+def test_rescaled_profile_narrows_as_the_square_root():
+    """Scaling a parabola -x^2 / (2 s^2) by k narrows its n-nat interval by sqrt(k): at k = 4
+    the 2-nat interval is the unscaled 0.5-nat one (+-s); the mirror's margin scales by k."""
+    from humimic.perception.trackers.kpf.profile_report import rescaled
+
+    delta = np.linspace(-0.2, 0.2, 401)
+    row = {"log_lik": (-delta ** 2 / (2 * S * S)).tolist(), "flip_rel": {"wrist": -0.3},
+           "within_0.5": None, "within_2": None}
+    (r,) = rescaled([row], delta, 4.0)
+    lo, hi, censored = r["within_2"]
+    assert lo == pytest.approx(-S, abs=1e-4) and hi == pytest.approx(S, abs=1e-4)
+    assert not censored and r["flip_rel"]["wrist"] == pytest.approx(-1.2)

@@ -11,6 +11,7 @@ import numpy as np
 
 from humimic.errors import report_error
 from humimic.paths import SCENARIOS_DIR
+from humimic.perception.trackers.kpf.profile import within
 from humimic.perception.trackers.kpf.profile_run import (
     NATS,
     PHASES,
@@ -24,6 +25,21 @@ from humimic.scenario.errors import ScenarioError
 GOALS_MM = {"side": 40.0, "angle": 60.0}
 #: A mirror whose wrist lies this far (m) from the truth's counts as a distinct pose.
 DISTINCT_M = 0.05
+
+
+def rescaled(rows: list[dict], delta: np.ndarray, k: float) -> list[dict]:
+    """``rows`` with every log-likelihood difference scaled by ``k`` (the cue sigmas divided
+    by ``sqrt(k)``: the same information trusted ``k`` times more) and the intervals
+    recomputed; the maxima do not move."""
+    out = []
+    for r in rows:
+        r = {**r, "log_lik": (k * np.array(r["log_lik"], float)).tolist(),
+             "flip_rel": {f: k * v for f, v in r["flip_rel"].items()}}
+        for n in NATS:
+            lo, hi, cens = within(delta, np.array(r["log_lik"]), 0.0, n)
+            r[f"within_{n:g}"] = [lo, hi, cens]
+        out.append(r)
+    return out
 
 
 def ambiguity(row: dict, nats: float) -> float:
@@ -213,6 +229,9 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--out", type=Path, default=None, help="directory for JSON and PNG")
     p.add_argument("--from", dest="source", type=Path, default=None,
                    help="summarise this --out directory's profile.json instead of rendering")
+    p.add_argument("--scale", type=float, default=1.0,
+                   help="summarise the log-likelihoods times this (the cue sigmas divided by "
+                   "its square root; default 1)")
     args = p.parse_args(argv)
     if args.source is not None:
         d = json.loads((args.source / "profile.json").read_text())
@@ -224,6 +243,9 @@ def main(argv: list[str] | None = None) -> int:
             rows_by, info = render_profiles(args, delta)
         except ScenarioError as err:
             return report_error(err)
+    if args.scale != 1.0:
+        rows_by = {g: rescaled(rows, delta, args.scale) for g, rows in rows_by.items()}
+        print(f"log-likelihoods scaled by {args.scale:g}")
     results = {g: {**{ph: summarise([r for r in rows if r["phase"] == ph], delta)
                       for ph in PHASES}, "all": summarise(rows, delta)}
                for g, rows in rows_by.items()}
