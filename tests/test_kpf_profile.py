@@ -18,7 +18,12 @@ from humimic.perception.cues.color_models import ColorLUT, load_color_model
 from humimic.perception.trackers.kpf.config import KpfConfig
 from humimic.perception.trackers.kpf.frame_cues import FrameCues
 from humimic.perception.trackers.kpf.likelihood import Likelihood
-from humimic.perception.trackers.kpf.profile import depth_profile, ml_choice, within
+from humimic.perception.trackers.kpf.profile import (
+    depth_profile,
+    ml_choice,
+    ml_wrist,
+    within,
+)
 from humimic.perception.trackers.kpf.tracker import kpf_body
 
 S, D0 = 0.05, -0.03
@@ -62,6 +67,8 @@ def test_profile_is_the_closed_form_parabola_where_the_arm_reaches():
     assert not censored and t_max - 0.0011 <= hi <= t_max
     kind, off = ml_choice(p)
     assert kind == "ray" and off == pytest.approx(D0, abs=1e-9)
+    np.testing.assert_allclose(ml_wrist(p), W + D0 * u, atol=1e-9)
+    np.testing.assert_allclose(p.wrist[ok], W + delta[ok, None] * u, atol=1e-9)
 
 
 def _roots(c, u, centre, r):
@@ -83,6 +90,7 @@ def test_mirror_wrist_from_the_ray_sphere_intersections():
     tw = _roots(c, u, E_flip, body.skeleton.forearm)
     W_flip = c + tw[np.argmin(np.abs(tw - np.linalg.norm(W - c)))] * u
     assert p.flip_wrist_m["elbow"] == pytest.approx(np.linalg.norm(W_flip - W), abs=1e-9)
+    np.testing.assert_allclose(p.flip_wrist["elbow"], W_flip, atol=1e-9)
     target = W + D0 * u
     assert p.flip_log_lik["elbow"] == pytest.approx(
         -np.sum((W_flip - target) ** 2) / (2 * S * S), rel=1e-9)
@@ -150,11 +158,16 @@ def test_command_writes_the_profile_and_plot(tmp_path, capsys):
     from humimic.perception.reproduce import main
 
     assert main(["schmidt-depth-profile", "--gesture", "side", "--seeds", "0", "--duration",
-                 "0.2", "--range", "50", "--out", str(tmp_path)]) == 0
+                 "0.2", "--range", "50", "--torso-offset", "0", "0", "0",
+                 "--out", str(tmp_path)]) == 0
     out = capsys.readouterr().out
     assert "baseline 70.0 mm" in out and "side   rest    2" in out
     d = json.loads((tmp_path / "profile.json").read_text())
     assert len(d["delta_m"]) == 11 and len(d["frames"]["side"]) == 2
+    for r in d["frames"]["side"]:   # around the truth: the ray's wrists |delta| from it
+        ok = np.isfinite(r["log_lik"])
+        np.testing.assert_allclose(np.array(r["ray_error_m"])[ok],
+                                   np.abs(d["delta_m"])[ok], atol=1e-9)
     assert (tmp_path / "depth_profile.png").stat().st_size > 1000
     assert main(["schmidt-depth-profile", "--from", str(tmp_path)]) == 0   # re-summarised
     again = capsys.readouterr().out

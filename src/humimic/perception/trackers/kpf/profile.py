@@ -47,6 +47,10 @@ class DepthProfile:
     log-likelihood (NaN where it does not exist or is out of the joint limits)."""
     flip_wrist_m: dict[str, float]
     """The same flips -> the distance (m) of their wrist from ``q``'s."""
+    wrist: np.ndarray
+    """(K, 3) the re-solved poses' wrists (reference frame; NaN where unreachable)."""
+    flip_wrist: dict[str, np.ndarray]
+    """The flips -> their wrist (3,) (NaN where there is no such mirror)."""
 
     @property
     def flip_margin(self) -> float:
@@ -72,7 +76,8 @@ def depth_profile(body: bm.BodyModel, log_lik: Callable[[np.ndarray], np.ndarray
     moved = wrist_depth_move(body, np.repeat(q[None], len(delta), axis=0), side, delta,
                              T_cam_ref)
     target = W + delta[:, None] * u
-    reached = np.linalg.norm(body.forward(moved).joint(wrist) - target, axis=1) <= REACHED_M
+    w_moved = body.forward(moved).joint(wrist)
+    reached = np.linalg.norm(w_moved - target, axis=1) <= REACHED_M
     flips = arm_flips(body, q[None], side, c_ref)
     names = list(FLIPS)
     fq = np.concatenate([flips[n] for n in names])
@@ -83,11 +88,14 @@ def depth_profile(body: bm.BodyModel, log_lik: Callable[[np.ndarray], np.ndarray
     prof[reached] = ll[1:1 + reached.sum()]
     fll = np.full(len(names), np.nan)
     fll[fok] = ll[1 + reached.sum():]
-    fw = np.full(len(names), np.nan)
+    fwp = np.full((len(names), 3), np.nan)
     if fok.any():
-        fw[fok] = np.linalg.norm(body.forward(fq[fok]).joint(wrist) - W, axis=1)
+        fwp[fok] = body.forward(fq[fok]).joint(wrist)
+    fw = np.linalg.norm(fwp - W, axis=1)
     return DepthProfile(delta, prof, float(ll[0]), dict(zip(names, fll.tolist(), strict=True)),
-                        dict(zip(names, fw.tolist(), strict=True)))
+                        dict(zip(names, fw.tolist(), strict=True)),
+                        np.where(reached[:, None], w_moved, np.nan),
+                        dict(zip(names, fwp, strict=True)))
 
 
 def within(delta: np.ndarray, log_lik: np.ndarray, ref: float, nats: float
@@ -114,6 +122,15 @@ def within(delta: np.ndarray, log_lik: np.ndarray, ref: float, nats: float
         a = (ll[i] - floor) / (ll[i] - ll[j])          # ll[i] >= floor > ll[j]
         ends.append(delta[i] + a * (delta[j] - delta[i]))
     return float(ends[0]), float(ends[1]), censored
+
+
+def ml_wrist(p: DepthProfile) -> np.ndarray:
+    """The wrist (3,) of the pose :func:`ml_choice` picks (reference frame)."""
+    kind, _ = ml_choice(p)
+    if kind != "ray":
+        return p.flip_wrist[kind]
+    k = int(np.nanargmax(p.log_lik)) if np.any(np.isfinite(p.log_lik)) else None
+    return p.wrist[int(np.argmin(np.abs(p.delta)))] if k is None else p.wrist[k]
 
 
 def ml_choice(p: DepthProfile) -> tuple[str, float]:

@@ -52,12 +52,12 @@ def ambiguity(row: dict, nats: float) -> float:
     return float(max(far))
 
 
-def posterior_error(row: dict, delta: np.ndarray) -> float:
-    """The mean wrist error (m) under the likelihood over the ray's offsets and the mirrors,
-    ``exp(log p)`` normalised, each mirror weighing as one offset (a uniform prior over the
-    grid: what a particle set sampling these poses would average to)."""
+def posterior_error(row: dict) -> float:
+    """The mean wrist error (m, to the true wrist) under the likelihood over the ray's offsets
+    and the mirrors, ``exp(log p)`` normalised, each mirror weighing as one offset (a uniform
+    prior over the grid: what a particle set sampling these poses would average to)."""
     ll = np.array(row["log_lik"] + [row["flip_rel"][k] for k in row["flip_rel"]], float)
-    err = np.concatenate([np.abs(delta), [row["flip_wrist_m"][k] for k in row["flip_rel"]]])
+    err = np.concatenate([row["ray_error_m"], [row["flip_error_m"][k] for k in row["flip_rel"]]])
     ok = np.isfinite(ll) & np.isfinite(err)
     w = np.exp(ll[ok] - ll[ok].max())
     return float(w @ err[ok] / w.sum())
@@ -103,7 +103,7 @@ def summarise(rows: list[dict], delta: np.ndarray) -> dict:
     out["ray_ml_mean_mm"] = float(off.mean())
     out["ml_error_mean_mm"] = float(mm * np.mean([r["ml_error_m"] for r in rows]))
     out["ml_mirror_share"] = float(np.mean([r["ml"] != "ray" for r in rows]))
-    out["posterior_error_mean_mm"] = float(mm * np.mean([posterior_error(r, delta)
+    out["posterior_error_mean_mm"] = float(mm * np.mean([posterior_error(r)
                                                          for r in rows]))
     po = mm * np.array([posterior_ray_offset(r, delta) for r in rows])
     out["posterior_ray_offset_mean_mm"] = float(po.mean())
@@ -202,13 +202,15 @@ def render_profiles(args, delta: np.ndarray) -> tuple[dict, dict]:
             if args.tracker not in (sc.trackers or {}):
                 raise ScenarioError(sc.name, "--tracker", "no such tracker", args.tracker,
                                     ", ".join(sc.trackers or {}))
-            rows, info = profile_run(sc, args.tracker, delta)
+            rows, info = profile_run(sc, args.tracker, delta,
+                                     1e-3 * np.asarray(args.torso_offset))
             for r in rows:
                 r["seed"] = seed
             rows_by.setdefault(gesture, []).extend(rows)
             print(f"{gesture} seed {seed}: {len(rows)} frames", flush=True)
     info.update(eye=sc.cameras.which, resolution=list(sc.cameras.resolution),
-                distance_m=sc.human.distance, tracker=args.tracker, seeds=args.seeds)
+                distance_m=sc.human.distance, tracker=args.tracker, seeds=args.seeds,
+                torso_offset_mm=list(args.torso_offset))
     return rows_by, info
 
 
@@ -226,6 +228,9 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--range", type=float, default=200.0, help="offsets +- this (mm)")
     p.add_argument("--step", type=float, default=10.0, help="offset step (mm)")
     p.add_argument("--duration", type=float, default=None, help="simulated s per run")
+    p.add_argument("--torso-offset", type=float, nargs=3, default=(0.0, 0.0, 0.0),
+                   metavar=("X", "Y", "Z"), help="profile around the true pose with its torso "
+                   "moved by this (mm, robot base frame: x towards the person)")
     p.add_argument("--out", type=Path, default=None, help="directory for JSON and PNG")
     p.add_argument("--from", dest="source", type=Path, default=None,
                    help="summarise this --out directory's profile.json instead of rendering")
@@ -251,7 +256,8 @@ def main(argv: list[str] | None = None) -> int:
                for g, rows in rows_by.items()}
     print(f"\n{info['eye']} eye, {info['resolution'][0]} x {info['resolution'][1]}"
           f" (f = {info['fx_px']:.1f} px), person {info['distance_m']:g} m away; likelihood of "
-          f"trackers.{info['tracker']}; seeds {info['seeds']}")
+          f"trackers.{info['tracker']}; seeds {info['seeds']}; torso moved "
+          f"{info.get('torso_offset_mm', [0, 0, 0])} mm")
     print(table(results))
     for g, by in results.items():
         a = by["all"]

@@ -29,7 +29,7 @@ import numpy as np
 from humimic import bodymodel as bm
 from humimic.perception.trackers.kpf.frame_cues import FrameCues
 from humimic.perception.trackers.kpf.likelihood import Likelihood
-from humimic.perception.trackers.kpf.profile import depth_profile, ml_choice, within
+from humimic.perception.trackers.kpf.profile import depth_profile, ml_choice, ml_wrist, within
 from humimic.perception.trackers.kpf.tracker import kpf_body
 from humimic.pipeline.stage import Stage
 from humimic.sensors.camera_model import invert_transform
@@ -49,12 +49,16 @@ def phase(t: np.ndarray, motion) -> np.ndarray:
 
 
 class ProfileProbe(Stage):
-    """Profiles the likelihood around the true pose on every frame of ``camera``."""
+    """Profiles the likelihood around the true pose on every frame of ``camera``, or around
+    the true pose with its torso moved by ``torso_offset`` (m, base frame: a tracker's torso
+    error), the errors always to the true wrist."""
 
     name = "depth_profile"
 
-    def __init__(self, world, camera: str, cfg, skin_lut, delta: np.ndarray):
+    def __init__(self, world, camera: str, cfg, skin_lut, delta: np.ndarray,
+                 torso_offset=(0.0, 0.0, 0.0)):
         self.world, self.camera, self.cfg, self.lut = world, camera, cfg, skin_lut
+        self.offset = np.asarray(torso_offset, float)
         self.body = kpf_body(world.scene.model)
         self.delta = delta
         self.lik: Likelihood | None = None
@@ -69,7 +73,9 @@ class ProfileProbe(Stage):
         if frame is None:
             return
         T = invert_transform(frame.camera.T_base_cam)
-        q = bm.truth_state(self.world, self.world.gt.index_of(msg.t), "base")
+        q_true = bm.truth_state(self.world, self.world.gt.index_of(msg.t), "base")
+        q = q_true.copy()
+        q[:3] += self.offset
         maps = FrameCues(frame.image, self.lut, colour_gradients=self.cfg.colour_gradients)
         if self.lik is None:    # as the tracker's start: the references from the first pose
             self.fx = float(frame.camera.intrinsics.fx)
@@ -79,10 +85,13 @@ class ProfileProbe(Stage):
                             self.lik.evaluate(q[None], maps, T).colours.items()})
         p = depth_profile(self.body, lambda qs: self.lik.evaluate(qs, maps, T).log_lik,
                           q, T, self.delta)
-        kind, err = ml_choice(p)
-        w = self.body.forward(q[None]).joint("r_wrist")[0]
+        kind, _ = ml_choice(p)
+        w = self.body.forward(q_true[None]).joint("r_wrist")[0]
         row = {"t": float(msg.t), "range_m": float(np.linalg.norm(w - np.linalg.inv(T)[:3, 3])),
-               "log_lik": (p.log_lik - p.truth).tolist(), "ml": kind, "ml_error_m": abs(err),
+               "log_lik": (p.log_lik - p.truth).tolist(), "ml": kind,
+               "ml_error_m": float(np.linalg.norm(ml_wrist(p) - w)),
+               "ray_error_m": np.linalg.norm(p.wrist - w, axis=1).tolist(),
+               "flip_error_m": {k: float(np.linalg.norm(v - w)) for k, v in p.flip_wrist.items()},
                "ray_offset_m": float(p.delta[np.nanargmax(p.log_lik)]),
                "flip_margin": p.flip_margin, "flip_wrist_m": p.flip_wrist_m,
                "flip_rel": {k: v - p.truth for k, v in p.flip_log_lik.items()}}
@@ -110,8 +119,9 @@ def disparity_change(f_px: float, baseline: float, z: float, dz: float) -> float
     return f_px * baseline * (1.0 / z - 1.0 / (z + dz))
 
 
-def profile_run(scenario, tracker: str, delta: np.ndarray) -> tuple[list[dict], dict]:
-    """Render ``scenario`` and profile each frame; ``(rows, info)``."""
+def profile_run(scenario, tracker: str, delta: np.ndarray, torso_offset=(0.0, 0.0, 0.0)
+                ) -> tuple[list[dict], dict]:
+    """Render ``scenario`` and profile each frame (:class:`ProfileProbe`); ``(rows, info)``."""
     from humimic.perception.trackers.common import check_camera, skin_model_lut
     from humimic.pipeline.simulation import simulate
     from humimic.rngs import Rngs
@@ -124,7 +134,7 @@ def profile_run(scenario, tracker: str, delta: np.ndarray) -> tuple[list[dict], 
     try:
         camera = check_camera(scenario, world, tracker, cfg.camera)
         lut = skin_model_lut(scenario, world, [camera], f"trackers.{tracker}")
-        probe = ProfileProbe(world, camera, cfg, lut, delta)
+        probe = ProfileProbe(world, camera, cfg, lut, delta, torso_offset)
         rlog = RerunLog(world.scene, "off", None, "depth-profile")
         simulate(world, [probe], rlog, progress=False)
         info = {"fx_px": probe.fx, "baseline_m": eye_baseline(world)}
