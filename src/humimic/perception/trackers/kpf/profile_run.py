@@ -3,8 +3,9 @@ likelihood profiled along the true wrist's camera ray and at its kinematic mirro
 
 ``python -m humimic.perception.reproduce schmidt-depth-profile [--gesture side angle] [--eye
 wide|foveal] [--seeds S ...] [--set KEY=VALUE ...] [--tracker kpf] [--range MM] [--step MM]
-[--out DIR]`` renders ``scenarios/schmidt_table1.yaml``'s frames (``--eye foveal``: its
-foveal variant) for each gesture and seed -- no tracker runs -- and on each frame evaluates
+[--torso-offset X Y Z] [--out DIR] [--from DIR] [--scale K]`` renders
+``scenarios/schmidt_table1.yaml``'s frames (``--eye foveal``: its foveal variant) for each
+gesture and seed -- no tracker runs -- and on each frame evaluates
 :func:`~humimic.perception.trackers.kpf.profile.depth_profile` around the TRUE pose with the
 likelihood (eqs. 9-10, :class:`~humimic.perception.trackers.kpf.likelihood.Likelihood`) of
 the scenario's tracker ``--tracker`` (default ``kpf``, Table 1's; with
@@ -19,7 +20,10 @@ wrist error of a maximum-likelihood choice among the ray's poses and the mirrors
 mirrors' margin (truth minus the best mirror, nats). ``--out`` gets ``profile.json`` (every
 frame) and ``depth_profile.png`` (the mean profile per gesture and phase). Also printed: the
 stereo arithmetic (the eyes' baseline from the robot model, the disparity change a depth
-change makes at the person's distance), what a second eye would add.
+change makes at the person's distance), what a second eye would add. ``--torso-offset``
+(mm, base frame) profiles around the truth with its torso moved (a tracker's torso error; the
+errors stay to the true wrist); ``--from DIR`` re-summarises a ``profile.json`` and ``--scale
+K`` multiplies the log-likelihoods by K first (the cue sigmas divided by sqrt K).
 """
 
 from __future__ import annotations
