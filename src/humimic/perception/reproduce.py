@@ -2,7 +2,9 @@
 
 ``python -m humimic.perception.reproduce table2|table3|fig1 [--out DIR] [--seed N]
 [--duration S] [--archive tracking.npz]``; ``schmidt-table1`` is Schmidt et al.'s Table 1
-(:mod:`humimic.perception.trackers.kpf.table1`).
+(:mod:`humimic.perception.trackers.kpf.table1`), ``schmidt-depth-profile`` the likelihood's
+profile along the wrist's depth on its frames (:mod:`humimic.perception.trackers.kpf.
+profile_run`).
 
 Each runs its scenario (``scenarios/ude_table2_static_object.yaml``,
 ``ude_table3_static_hand.yaml``, ``ude_fig1_axes.yaml``; rerun off) into ``--out`` (default
@@ -175,6 +177,10 @@ def main(argv: list[str] | None = None) -> int:
         from humimic.perception.trackers.kpf.table1 import main as schmidt_table1
 
         return schmidt_table1(argv[1:])
+    if argv[:1] == ["schmidt-depth-profile"]:  # how well Table 1's frames observe the depth
+        from humimic.perception.trackers.kpf.profile_report import main as depth_profile
+
+        return depth_profile(argv[1:])
     p = argparse.ArgumentParser(prog="python -m humimic.perception.reproduce",
                                 description=__doc__.split("\n")[0])
     p.add_argument("which", choices=sorted(SCENARIOS))
