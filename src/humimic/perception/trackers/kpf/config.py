@@ -94,6 +94,17 @@ class KpfConfig(Section):
     start (a person standing in front of the robot); None: off, as the paper."""
     torso_prior_deg: float = Field(5.0, gt=0.0, le=180.0)
     """The prior's standard deviation of the torso's rotations (deg), with ``torso_prior_m``."""
+    twist_range_deg: tuple[float, float] | None = None
+    """Our extension: a soft range of motion of each upper arm's twist about its own axis
+    (:func:`~humimic.bodymodel.rom.humeral_twist`; [external, internal] limits, deg, + internal;
+    a person's: :data:`~humimic.bodymodel.rom.TWIST_RANGE_DEG` = [-90, 70]), a log-prior flat
+    inside and falling off with ``twist_sd_deg`` outside, on the particles' weights; None: off,
+    as the paper (its joint limits are a box on the Euler angles, which cannot bound the twist
+    of a raised arm). The kinematic flips of an arm pointing forward at an angle (Table 1's
+    angular gesture) bend the forearm backwards, 100-130 deg of external twist, and the side
+    gesture's elbow flip too; the estimates sat at up to 123 deg external (angular) and 145
+    deg internal (side) on seeds 0-4."""
+    twist_sd_deg: float = Field(10.0, gt=0.0, le=180.0)
     rescue_passes: int = Field(0, ge=0, le=5)
     """Our extension: when the best particle's log-likelihood falls more than ``rescue_drop``
     below the last frame's (the search lost a fast-moving arm), up to this many more
