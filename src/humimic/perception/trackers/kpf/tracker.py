@@ -17,6 +17,7 @@ import numpy as np
 from threadpoolctl import ThreadpoolController
 
 from humimic import bodymodel as bm
+from humimic.bodymodel.rom import humeral_twist, twist_log_prior
 from humimic.estimation.particles import kernel as kpf
 from humimic.estimation.particles.densities import Gaussian
 from humimic.estimation.particles.filters import condensation_step
@@ -145,9 +146,19 @@ class KpfTracker:
         """Log-prior of the torso pose (0 without ``torso_prior_m``)."""
         return 0.0 if self.torso_prior is None else self.torso_prior.log_density(q[:, :6])
 
+    def _arm_prior(self, q: np.ndarray) -> np.ndarray:
+        """``(N, 2)`` log-prior of each arm's (R, L) humeral twist (0 without
+        ``twist_range_deg``)."""
+        if self.cfg.twist_range_deg is None:
+            return np.zeros((len(q), len(SIDES)))
+        lo, hi = np.radians(self.cfg.twist_range_deg)
+        sd = np.radians(self.cfg.twist_sd_deg)
+        return np.column_stack([twist_log_prior(humeral_twist(s, *q[:, j:j + 3].T), lo, hi, sd)
+                                for s, (_, j) in SIDES.items()])
+
     def _log_lik(self, maps, T_cam_base):
         return distinct(lambda q: self.lik.evaluate(q, maps, T_cam_base).log_lik
-                        + self._prior(q))
+                        + self._prior(q) + self._arm_prior(q).sum(1))
 
     def _group_log_lik(self, maps, T_cam_base):
         """``(N, 3)``: the whole pose's log-likelihood (torso group), the right arm's limbs',
@@ -158,8 +169,10 @@ class KpfTracker:
 
         def f(q):
             t = self.lik.evaluate(q, maps, T_cam_base).terms
-            return np.column_stack([t.sum(1) + self._prior(q), t[:, side[0]].sum(1),
-                                    t[:, side[1]].sum(1)])
+            arm = self._arm_prior(q)
+            return np.column_stack([t.sum(1) + self._prior(q) + arm.sum(1),
+                                    t[:, side[0]].sum(1) + arm[:, 0],
+                                    t[:, side[1]].sum(1) + arm[:, 1]])
         return distinct(f)
 
     def step(self, maps: CueMaps | FrameCues, T_cam_base: np.ndarray) -> FrameResult:
