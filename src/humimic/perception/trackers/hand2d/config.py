@@ -68,9 +68,7 @@ class Hand2DConfig(Section):
     beta: float = Field(0.6, ge=0.0, le=1.0)
     """ICONDENSATION: share from the dynamics (the rest from the prior)."""
     min_hand_px: float = Field(8.0, gt=0.0, le=200.0)
-    """Smallest hand width (px) the detector starts on and the filter keeps (particles are
-    held at least this wide: a few-pixel template fits any edge and speck of skin, and with
-    a dark skin in lab_clutter the filter shrank onto one, 2 px wide, for 1 s)."""
+    """Smallest hand width (px) the detector starts on."""
     init_edge_px: float = Field(3.0, gt=0.0, le=30.0)
     """Detection: the hand template placed on a skin blob must lie within this mean edge
     distance (px) for the detectors to agree."""

@@ -176,9 +176,7 @@ class Hand2DTracker:
         step = self.pf.step(
             lambda x: log_likelihood(cues, x, self.template, self.params, self.reference),
             self.rng, importance=self._importance(image))
-        # no hand narrower than the detector starts on: a few-pixel template fits any edge
-        # and speck of skin, and the filter shrank onto them (dark skin in lab_clutter)
-        self.pf.particles[:, 2] = np.maximum(self.pf.particles[:, 2], cfg.min_hand_px)
+        self.pf.particles[:, 2] = np.maximum(self.pf.particles[:, 2], 2.0)
         mean = step.mean
         d = mean_edge_distance(cues, mean, self.template, self.params)
         skin = skin_fraction(image, self.lut, mean)
