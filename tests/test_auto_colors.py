@@ -191,8 +191,10 @@ def test_cut_background_clears_bins_the_scene_fills_more_than_the_class():
         r, g, b = (c // 4 for c in rgb)
         return r * 64 * 64 + g * 64 + b
 
-    out = cut_background(table, bits, skin, other)               # ratio 1: 0.90 > 0.05
+    out = cut_background(table, bits, skin, other, ratio=1.0)    # 0.90 > 0.05
     assert out[bin_of((52, 40, 30))] == 0.0 and out[bin_of((200, 150, 120))] == 5.0
     kept = cut_background(table, bits, skin, other, ratio=20.0)  # 0.90 < 20 x 0.05
     assert kept[bin_of((52, 40, 30))] == 5.0
     assert np.count_nonzero(out == 0.0) == 1 and np.count_nonzero(kept == 0.0) == 0
+    # without a ratio (the default) the shared bin stays: a class pixel fell in it
+    assert np.count_nonzero(cut_background(table, bits, skin, other) == 0.0) == 0
