@@ -212,9 +212,9 @@ def test_hand_people_scenario_tracks_a_dark_skinned_tutor(tmp_path):
     """menezes_hand_people's first 2 s with a dark-skinned tutor (human.skin [0.40, 0.27,
     0.20]), seed 99: the learned skin model once also took lab_clutter's dark-brown posts
     (posterior 0.80; 0.19 after the ratio cut, but speckled), and the detector started on
-    their speckle. Measured: 0 % lost, centre
-    error median 0.79 px, RMSE 1.5 px, 0 identity switches, 0 wrong-person frames (before:
-    61 %, 107 / 109 px, 1 switch, 73 wrong-person frames)."""
+    their speckle. Measured: 0 % lost, centre error median 0.92 px, RMSE 1.6 px, 0 identity
+    switches, 0 wrong-person frames, 6 s of CPU (before: 61 %, 107 / 109 px, 1 switch, 73
+    wrong-person frames)."""
     from humimic.paths import SCENARIOS_DIR
     from humimic.run import run_one
     from humimic.scenario import load_scenario
