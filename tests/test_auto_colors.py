@@ -173,3 +173,28 @@ def test_brightened_pixels_saturate_as_opencvs_scaling():
     assert got.dtype == np.uint8 and got.shape == (1500, 3)
     assert np.abs(got.astype(int) - want).max() <= 1        # rounding of halves may differ
     assert (got[1000:] == 255).mean() > 0.2                  # a bright third saturates
+
+
+def test_cut_background_clears_bins_the_scene_fills_more_than_the_class():
+    """A bin that a few shaded skin pixels share with a large surface of the scene (a dark
+    skin's shade and lab_clutter's dark-brown posts) is cleared when its share of the other
+    pixels is more than ``ratio`` times its share of the skin's; the skin's own bin, which
+    some other pixels share, stays."""
+    from humimic.perception.cues.auto_colors import cut_background
+
+    bits = 6
+    table = np.full(64**3, 5.0, np.float32)
+    skin = np.array([[200, 150, 120]] * 95 + [[52, 40, 30]] * 5, np.uint8)   # 5 % shade
+    other = np.array([[53, 41, 29]] * 900 + [[201, 151, 121]] * 100, np.uint8)  # post 90 %
+
+    def bin_of(rgb):
+        r, g, b = (c // 4 for c in rgb)
+        return r * 64 * 64 + g * 64 + b
+
+    out = cut_background(table, bits, skin, other, ratio=1.0)    # 0.90 > 0.05
+    assert out[bin_of((52, 40, 30))] == 0.0 and out[bin_of((200, 150, 120))] == 5.0
+    kept = cut_background(table, bits, skin, other, ratio=20.0)  # 0.90 < 20 x 0.05
+    assert kept[bin_of((52, 40, 30))] == 5.0
+    assert np.count_nonzero(out == 0.0) == 1 and np.count_nonzero(kept == 0.0) == 0
+    # without a ratio (the default) the shared bin stays: a class pixel fell in it
+    assert np.count_nonzero(cut_background(table, bits, skin, other) == 0.0) == 0

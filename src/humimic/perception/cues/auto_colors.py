@@ -11,8 +11,10 @@ Gaussian mixture (Ude eqs. 6-7) is fitted and tabulated
 (:class:`~humimic.perception.cues.color_models.ColorLUT`). Since the renders come from the run's
 own scene, the model sees the scenario's colours, face, lights, cameras and noise. The same
 renders of the whole scene give the other pixels (clothes, shoes, room): the table is cleared
-where they fall and no pixel of the class was seen (:func:`cut_background`), so the mixture's
-tails do not claim the scene's own look-alikes (dark shoes under a very dark skin model).
+where they fall and no pixel of the class was seen -- or, for a learner that asks (the 2-D
+hand tracker), where they are more frequent than the class's own pixels (:func:`cut_background`),
+so the mixture's tails do not claim the scene's own look-alikes (dark shoes under a very dark
+skin model, the dark-brown wood of lab_clutter under a dark one).
 
 Model and table are stored with :mod:`humimic.cache` under a hash of everything they depend on
 (:func:`inputs`: the class's materials and textures, the lights, the cameras, the geoms' shapes,
@@ -55,8 +57,20 @@ NEGATIVES_PER_FRAME = 1 << 22
 """Other pixels taken per rendered frame for :func:`cut_background` (this many: all of them;
 a sample of 6000 of 320x240 left 17 % of the shoes' pixels in bins it never hit)."""
 MIN_BACKGROUND = 3
-"""A bin is cleared when at least this many sampled other pixels fall in it (and no pixel of
-the class): a colour the scene shows, not one noise pixel."""
+"""A bin is cleared only when at least this many sampled other pixels fall in it: a colour the
+scene shows, not one noise pixel."""
+BACKGROUND_RATIO = 1.0
+"""The ratio of :func:`cut_background` a learner may ask for (``background_ratio``): a bin is
+also cleared when its share of the other pixels exceeds this many times its share of the
+class's pixels (a likelihood ratio: the colour is more typical of the scene than of the class).
+By default only bins with no class pixel at all are cleared: a few shaded skin pixels kept the
+bins of lab_clutter's dark-brown posts (51, 40, 30) under a dark skin (human.skin [0.40, 0.27,
+0.20]), whose posterior stayed 0.80 (hand 0.96); at 1.0 the posts fall to 0.19, the scene's
+pixels taken for skin from 7.2 to 1.8 %, 0.8 % of the skin's lost (default skin: no bin changes
+in menezes_fig5_hand, static, wave, menezes_gest_far, fig12/13; 11 / 19 bins in
+menezes_hand_people / menezes_fig9_leave_return, 0.1 / 0.2 % of the skin's pixels). Not the
+default for every tracker: schmidt_table1_foveal's kpf lost 32 % of its frames with it (test
+limit 10 %), not investigated."""
 
 
 class NotInView(ValueError):
@@ -78,9 +92,11 @@ def sample_ticks(n_ticks: int, n_frames: int = FRAMES) -> np.ndarray:
 
 
 def inputs(world, cameras: list[str], color_class: str, space: str, bits: int,
-           ticks: np.ndarray, gains: tuple[float, ...] = (1.0,)) -> tuple:
-    """Everything a learned model depends on, for :func:`humimic.cache.key` (``gains`` only
-    when not the renders' own: the models learned without them keep their keys)."""
+           ticks: np.ndarray, gains: tuple[float, ...] = (1.0,),
+           background_ratio: float | None = None) -> tuple:
+    """Everything a learned model depends on, for :func:`humimic.cache.key` (``gains`` and
+    ``background_ratio`` only when not the defaults: the models learned without them keep
+    their keys)."""
     m, d = world.scene.model, world.scene.data
     geoms = material_geoms(m, color_class)
     mats = np.unique(m.geom_matid[geoms])
@@ -106,14 +122,18 @@ def inputs(world, cameras: list[str], color_class: str, space: str, bits: int,
             m.mat_rgba.tobytes(), m.mat_texid.tobytes(), m.geom_rgba.tobytes(),
             m.geom_matid.tobytes(), m.geom_size.tobytes(), m.geom_type.tobytes(),
             m.geom_pos.tobytes(), m.geom_quat.tobytes(), m.tex_data.tobytes(),
-            *(() if tuple(gains) == (1.0,) else ("gains", *map(float, gains))))
+            *(() if tuple(gains) == (1.0,) else ("gains", *map(float, gains))),
+            *(() if background_ratio is None else ("background_ratio",
+                                                   float(background_ratio))))
 
 
 def digest_of(world, cameras: list[str], color_class: str = "skin", space: str = "rgb",
-              bits: int = 6, gains: tuple[float, ...] = (1.0,)) -> str:
+              bits: int = 6, gains: tuple[float, ...] = (1.0,),
+              background_ratio: float | None = None) -> str:
     """The cache key of the model :func:`learned_lut` would learn."""
     ticks = sample_ticks(world.n_ticks)
-    return cache.key(*inputs(world, cameras, color_class, space, bits, ticks, gains))
+    return cache.key(*inputs(world, cameras, color_class, space, bits, ticks, gains,
+                             background_ratio))
 
 
 def brightened(pixels: np.ndarray, gains: tuple[float, ...]) -> np.ndarray:
@@ -164,11 +184,14 @@ def learn_model(world, cameras: list[str], color_class: str, space: str,
 
 
 def cut_background(table: np.ndarray, bits: int, class_px: np.ndarray, other_px: np.ndarray,
-                   min_other: int = MIN_BACKGROUND) -> np.ndarray:
+                   min_other: int = MIN_BACKGROUND, ratio: float | None = None
+                   ) -> np.ndarray:
     """A copy of a LUT ``table`` (``(2^bits)^3`` densities, :class:`ColorLUT` layout) with 0 in
     the bins where at least ``min_other`` of ``other_px (N, 3)`` uint8 fall and none of
-    ``class_px``: the model's tails where the scene's other surfaces are, and its own class
-    was never seen, are not the class."""
+    ``class_px`` -- or, with a ``ratio`` (:data:`BACKGROUND_RATIO`), where their share of
+    ``other_px`` is more than ``ratio`` times the bin's share of ``class_px``: the model's
+    tails where the scene's other surfaces are, and its own class was never seen (or seen
+    less often), are not the class."""
     shift = 8 - bits
 
     def counts(px: np.ndarray) -> np.ndarray:
@@ -176,8 +199,13 @@ def cut_background(table: np.ndarray, bits: int, class_px: np.ndarray, other_px:
         idx = (q[:, 0] << (2 * bits)) | (q[:, 1] << bits) | q[:, 2]
         return np.bincount(idx, minlength=table.size)
 
+    c_other, c_class = counts(other_px), counts(class_px)
     out = np.array(table, np.float32, copy=True)
-    out[(counts(other_px) >= min_other) & (counts(class_px) == 0)] = 0.0
+    if ratio is None:
+        out[(c_other >= min_other) & (c_class == 0)] = 0.0
+        return out
+    n_class, n_other = max(len(class_px), 1), max(len(other_px), 1)
+    out[(c_other >= min_other) & (c_other * n_class > ratio * c_class * n_other)] = 0.0
     return out
 
 
@@ -199,13 +227,15 @@ def _restore(stored: dict[str, np.ndarray] | None, bits: int) -> ColorLUT | None
 
 
 def learned_lut(world, cameras: list[str], color_class: str = "skin", space: str = "rgb",
-                bits: int = 6, gains: tuple[float, ...] = (1.0,)) -> CachedLUT:
+                bits: int = 6, gains: tuple[float, ...] = (1.0,),
+                background_ratio: float | None = None) -> CachedLUT:
     """The colour LUT of ``color_class`` for this world: from the cache, or learned from the
     world's renders of ``cameras`` (their pixels under each of ``gains``, :func:`brightened`)
-    and stored. Raises :class:`NotInView`."""
+    and stored; ``background_ratio``: :func:`cut_background`'s ``ratio``. Raises
+    :class:`NotInView`."""
     t0 = time.perf_counter()
     ticks = sample_ticks(world.n_ticks)
-    digest = digest_of(world, cameras, color_class, space, bits, gains)
+    digest = digest_of(world, cameras, color_class, space, bits, gains, background_ratio)
     kind = f"colors-{color_class}"
     lut = _restore(cache.load(kind, digest), bits)
     cached = lut is not None
@@ -214,7 +244,7 @@ def learned_lut(world, cameras: list[str], color_class: str = "skin", space: str
         model, seen, other = learn_model(world, cameras, color_class, space, rng, ticks, bits,
                                          gains)
         lut = ColorLUT(model, bits, cut_background(ColorLUT(model, bits).table, bits, seen,
-                                                   other))
+                                                   other, ratio=background_ratio))
         cache.save(kind, digest, _store(model, lut))
     return CachedLUT(lut, cached, time.perf_counter() - t0, digest)
 

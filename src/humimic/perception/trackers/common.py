@@ -43,17 +43,20 @@ def where(scenario) -> str:
 
 
 def skin_model_lut(scenario, world, cameras, key: str, bits: int = 6,
-                   gains: tuple[float, ...] = (1.0,)) -> ColorLUT:
+                   gains: tuple[float, ...] = (1.0,),
+                   background_ratio: float | None = None) -> ColorLUT:
     """The skin colour model as a :class:`ColorLUT`: the file ``perception.color_model`` names,
     or (``auto``, the default, and without a ``perception`` section) the model learned for
     this scenario's person as ``cameras`` see them (:func:`~humimic.perception.cues.
-    auto_colors.learned_lut`, cached on disk; their pixels also under each of ``gains``).
-    ``key`` names the tracker in errors."""
+    auto_colors.learned_lut`, cached on disk; their pixels also under each of ``gains``; its
+    background cut by ``background_ratio``, :func:`~humimic.perception.cues.auto_colors.
+    cut_background`). ``key`` names the tracker in errors."""
     cfg = getattr(scenario, "perception", None)
     source = cfg.color_model if cfg is not None else "auto"
     try:
         if source == "auto":
-            return learned_lut(world, list(cameras), "skin", "rgb", bits, gains).lut
+            return learned_lut(world, list(cameras), "skin", "rgb", bits, gains,
+                               background_ratio).lut
         return file_lut(Path(source), bits).lut
     except NotInView as err:
         raise ScenarioError(where(scenario), key, f"cannot learn the skin colours: {err}",
