@@ -157,7 +157,7 @@ def test_command_writes_the_profile_and_plot(tmp_path, capsys):
 
     from humimic.perception.reproduce import main
 
-    assert main(["schmidt-depth-profile", "--gesture", "side", "--seeds", "0", "--duration",
+    assert main(["schmidt-depth-profile", "--gesture", "side", "--seeds", "1", "--duration",
                  "0.2", "--range", "50", "--torso-offset", "0", "0", "0",
                  "--out", str(tmp_path)]) == 0
     out = capsys.readouterr().out

@@ -126,3 +126,16 @@ def test_table1_bad_override_exits_2_naming_the_key(tmp_path, capsys, item, key)
     assert code == 2
     assert len(err.splitlines()) == 1 and key in err, err
     assert not (tmp_path / "sweep").exists()
+
+
+@pytest.mark.parametrize("args, key", [(["--seeds", "0"], "--seeds"),
+                                       (["--particles", "999"], "--particles")])
+def test_table1_arguments_that_select_no_run_exit_2(tmp_path, capsys, args, key):
+    """``--seeds 0`` (a count of none) or a particle count that is no row of Table 1 would
+    print an empty table: refused with one line naming the argument."""
+    from humimic.perception.trackers.kpf.table1 import main as table1
+
+    code = table1(["--no-run", *args, "--out", str(tmp_path / "sweep")])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and len(err.splitlines()) == 1 and key in err, err
+    assert not (tmp_path / "sweep").exists()

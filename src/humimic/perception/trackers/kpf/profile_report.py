@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -221,7 +222,8 @@ def main(argv: list[str] | None = None) -> int:
                                 "wrist's depth on Table 1's frames (issue 14)")
     p.add_argument("--gesture", nargs="+", choices=sorted(GOALS_MM), default=["side", "angle"])
     p.add_argument("--eye", choices=sorted(EYES), default="wide")
-    p.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2, 3, 4])
+    p.add_argument("--seeds", type=int, nargs="+", default=[5],
+                   help="N: seeds 0..N-1 (default: 5); several: these seeds (as schmidt-table1)")
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                    help="scenario override (repeatable), e.g. cameras.resolution=[640,480]")
     p.add_argument("--tracker", default="kpf", help="whose likelihood (default kpf)")
@@ -238,6 +240,12 @@ def main(argv: list[str] | None = None) -> int:
                    help="summarise the log-likelihoods times this (the cue sigmas divided by "
                    "its square root; default 1)")
     args = p.parse_args(argv)
+    if len(args.seeds) == 1:
+        if args.seeds[0] < 1:
+            print(f"schmidt-depth-profile: --seeds {args.seeds[0]}: no runs; give a count >= 1 "
+                  "(seeds 0..N-1) or two or more seeds", file=sys.stderr)
+            return 2
+        args.seeds = list(range(args.seeds[0]))
     if args.source is not None:
         d = json.loads((args.source / "profile.json").read_text())
         delta, info, rows_by = np.array(d["delta_m"]), d["info"], d["frames"]

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -41,6 +42,12 @@ TRACKERS = ("kpf", "kpf_paper", "condensation")
 EYES = {"wide": "schmidt_table1.yaml", "foveal": "schmidt_table1_foveal.yaml"}
 KEYS = ("wrist_error_mm", "wrist_lateral_mm", "wrist_depth_mm", "wrist_flip_free_mm",
         "frames_per_s")
+
+
+def _usage(message: str) -> int:
+    """A bad argument: one line on stderr, exit code 2 (as a bad scenario)."""
+    print(f"schmidt-table1: {message}", file=sys.stderr)
+    return 2
 
 
 def collect(planned) -> dict:
@@ -115,6 +122,13 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                    help="scenario override for every run (repeatable), e.g. human.distance=3")
     args = p.parse_args(argv)
+    if args.seeds is not None and len(args.seeds) == 1 and args.seeds[0] < 1:
+        return _usage(f"--seeds {args.seeds[0]}: no runs; give a count >= 1 (seeds 0..N-1) "
+                      "or two or more seeds")
+    rows = sorted({n for n, _ in CONFIGS})
+    if args.particles is not None and not set(args.particles) <= set(rows):
+        return _usage(f"--particles {' '.join(map(str, args.particles))}: Table 1's rows are "
+                      f"{' '.join(map(str, rows))}")
     sweep = load_sweep(SWEEP)
     if args.eye != "wide":   # the same sweep on the other eye's scenario, in its own directory
         sweep.config.scenario = SCENARIOS_DIR / EYES[args.eye]
