@@ -79,6 +79,14 @@ class KpfConfig(Section):
     mean wrist error 114 -> 85 mm, lost 16 % -> 7 % of frames; Table 1 (7.5 s, seeds 0-4)
     side 87 -> 71 and angular 207 -> 202 mm at (1000, 3), 124 -> 74 and 244 -> 182 at
     (150, 2). On in Table 1's ``kpf``."""
+    observed_velocity_px: float | None = Field(None, gt=0.0, le=1e4)
+    """Our extension: the arms' velocity in the linear motion model kept only along the joint
+    directions that move the arm's projected elbow and wrist
+    (:func:`~humimic.perception.trackers.kpf.velocity.observable_velocity`: the damped
+    pseudo-inverse through the image Jacobian, this its damping lambda in px / rad); None:
+    off, the whole velocity as the paper. The principle: a velocity direction whose motion
+    over one motion-model noise extent (``motion_noise`` D, ~0.1 rad) moves the image less
+    than a pixel is unobservable, lambda = 1 px / (0.25 x ~0.4 rad) ~ 10 px / rad."""
     min_random: float = Field(0.2, ge=0.0, le=1.0)
     """Smallest share of randomly propagated particles."""
     tol: float = Field(0.01, ge=0.0)

@@ -29,6 +29,7 @@ from humimic.perception.trackers.kpf.flips import FLIPS, arm_flips
 from humimic.perception.trackers.kpf.frame_cues import FrameCues
 from humimic.perception.trackers.kpf.hands import hand_blob_moves, part_centres
 from humimic.perception.trackers.kpf.likelihood import Likelihood
+from humimic.perception.trackers.kpf.velocity import observable_arm_velocity
 
 _BLAS = ThreadpoolController()
 #: The state's partition (``partitioned``): torso, right arm, left arm DOFs.
@@ -194,6 +195,9 @@ class KpfTracker:
         groups = GROUPS if cfg.partitioned else [np.arange(len(self.D))]
         resampled = kpf.partitioned_resample(self.particles, self.W, groups, rng)
         velocity = motion_velocity(self.mode, self.mode_prev, cfg.torso_velocity)
+        if cfg.observed_velocity_px is not None:
+            velocity = observable_arm_velocity(self.body, self.lik.intr, self.mode, velocity,
+                                               T_cam_base, cfg.observed_velocity_px)
         pred, moved = kpf.mixed_propagate(resampled, velocity, self.share, self.D,
                                           rng, self.limits.inside, cfg.motion_noise)
         pred = self.limits.clamp(pred)
