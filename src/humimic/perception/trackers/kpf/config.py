@@ -87,6 +87,11 @@ class KpfConfig(Section):
     off, the whole velocity as the paper. The principle: a velocity direction whose motion
     over one motion-model noise extent (``motion_noise`` D, ~0.1 rad) moves the image less
     than a pixel is unobservable, lambda = 1 px / (0.25 x ~0.4 rad) ~ 10 px / rad."""
+    velocity_smoothing: float = Field(0.0, ge=0.0, lt=1.0)
+    """Our extension: the motion model's velocity the exponential average (this factor beta)
+    of the best modes' frame-to-frame differences
+    (:func:`~humimic.perception.trackers.kpf.velocity.smoothed_velocity`), so a holding arm's
+    jitter averages out; 0: the last difference, as the paper."""
     min_random: float = Field(0.2, ge=0.0, le=1.0)
     """Smallest share of randomly propagated particles."""
     tol: float = Field(0.01, ge=0.0)
