@@ -87,3 +87,27 @@ def test_smoothed_velocity_keeps_a_steady_motion_and_damps_alternating_jitter():
         v = smoothed_velocity(v, d * (-1) ** n, beta)
     assert np.allclose(np.abs(v), np.abs(d) * (1 - beta) / (1 + beta))
     assert np.array_equal(smoothed_velocity(v, d, 0.0), d)      # the paper's velocity
+
+
+def test_per_particle_velocities_follow_their_particles_through_partitioned_resampling():
+    """``KpfConfig.particle_velocity``'s carrying: the indices drawn per group pick each group's
+    columns from one ancestor, the same ancestor for the particles and anything carried with
+    them; a group whose weight sits on one particle takes only that one; and drawing the
+    indices uses the generator as :func:`partitioned_resample` does (same particles)."""
+    from humimic.estimation.particles import kernel as kpf
+
+    rng = np.random.default_rng(5)
+    n, groups = 50, [np.arange(0, 2), np.arange(2, 5)]
+    x = rng.normal(size=(n, 5))
+    vel = 3.0 * x + 1.0                                   # a per-particle quantity
+    W = rng.random((n, 2))
+    W /= W.sum(0)
+    W[:, 1] = 0.0
+    W[17, 1] = 1.0
+    idx = kpf.partitioned_resample_indices(W, groups, np.random.default_rng(9))
+    xs, vs = kpf.partitioned_take(x, idx, groups), kpf.partitioned_take(vel, idx, groups)
+    assert np.allclose(vs, 3.0 * xs + 1.0)
+    assert np.all(xs[:, 2:] == x[17, 2:])
+    for k, g in enumerate(groups):
+        assert np.array_equal(xs[:, g], x[idx[:, k]][:, g])
+    assert np.array_equal(xs, kpf.partitioned_resample(x, W, groups, np.random.default_rng(9)))

@@ -92,6 +92,10 @@ class KpfConfig(Section):
     of the best modes' frame-to-frame differences
     (:func:`~humimic.perception.trackers.kpf.velocity.smoothed_velocity`), so a holding arm's
     jitter averages out; 0: the last difference, as the paper."""
+    particle_velocity: bool = False
+    """Our extension: each particle's motion-model velocity its own (from its ancestor's
+    position last frame to where mean shift took it), carried through the resampling, instead
+    of the one velocity from the last two best modes (the paper)."""
     min_random: float = Field(0.2, ge=0.0, le=1.0)
     """Smallest share of randomly propagated particles."""
     tol: float = Field(0.01, ge=0.0)
