@@ -13,7 +13,6 @@ from humimic.perception.trackers.kpf.velocity import (
     arm_image_jacobian,
     observable_arm_velocity,
     observable_velocity,
-    smoothed_velocity,
 )
 
 
@@ -71,22 +70,6 @@ def test_a_straight_arms_humeral_rotation_velocity_is_dropped():
     assert np.allclose(out[:6], v[:6])
     assert abs(out[8]) < 1e-4 and abs(out[12]) < 1e-4          # R_HR, L_HR
     assert np.allclose(out[[6, 7, 9]], v[[6, 7, 9]], atol=5e-3)
-
-
-def test_smoothed_velocity_keeps_a_steady_motion_and_damps_alternating_jitter():
-    """Closed forms of the exponential average: a constant difference d is reached
-    geometrically (``d (1 - beta^n)`` after n frames from 0); jitter alternating +-d settles at
-    amplitude ``d (1 - beta) / (1 + beta)``."""
-    beta, d = 0.6, np.array([0.1, -0.2])
-    v = np.zeros(2)
-    for n in range(1, 30):
-        v = smoothed_velocity(v, d, beta)
-        assert np.allclose(v, d * (1 - beta ** n))
-    v = np.zeros(2)
-    for n in range(200):
-        v = smoothed_velocity(v, d * (-1) ** n, beta)
-    assert np.allclose(np.abs(v), np.abs(d) * (1 - beta) / (1 + beta))
-    assert np.array_equal(smoothed_velocity(v, d, 0.0), d)      # the paper's velocity
 
 
 def test_per_particle_velocities_follow_their_particles_through_partitioned_resampling():

@@ -87,11 +87,6 @@ class KpfConfig(Section):
     off, the whole velocity as the paper. The principle: a velocity direction whose motion
     over one motion-model noise extent (``motion_noise`` D, ~0.1 rad) moves the image less
     than a pixel is unobservable, lambda = 1 px / (0.25 x ~0.4 rad) ~ 10 px / rad."""
-    velocity_smoothing: float = Field(0.0, ge=0.0, lt=1.0)
-    """Our extension: the motion model's velocity the exponential average (this factor beta)
-    of the best modes' frame-to-frame differences
-    (:func:`~humimic.perception.trackers.kpf.velocity.smoothed_velocity`), so a holding arm's
-    jitter averages out; 0: the last difference, as the paper."""
     particle_velocity: bool = False
     """Our extension: each particle's motion-model velocity its own (from its ancestor's
     position last frame to where mean shift took it), carried through the resampling, instead

@@ -29,7 +29,7 @@ from humimic.perception.trackers.kpf.flips import FLIPS, arm_flips
 from humimic.perception.trackers.kpf.frame_cues import FrameCues
 from humimic.perception.trackers.kpf.hands import hand_blob_moves, part_centres
 from humimic.perception.trackers.kpf.likelihood import Likelihood
-from humimic.perception.trackers.kpf.velocity import observable_arm_velocity, smoothed_velocity
+from humimic.perception.trackers.kpf.velocity import observable_arm_velocity
 
 _BLAS = ThreadpoolController()
 #: The state's partition (``partitioned``): torso, right arm, left arm DOFs.
@@ -132,7 +132,6 @@ class KpfTracker:
         ``q0`` and the colour references from its back-projection."""
         n = self.cfg.n_particles
         self.mode = self.mode_prev = self.limits.clamp(np.asarray(q0, float))
-        self.velocity = np.zeros_like(self.mode)
         self.pvel = np.zeros((n, len(self.mode)))
         c = self.cfg
         self.torso_prior = None if c.torso_prior_m is None else Gaussian(
@@ -204,9 +203,6 @@ class KpfTracker:
         else:
             resampled = kpf.partitioned_resample(self.particles, self.W, groups, rng)
             velocity = motion_velocity(self.mode, self.mode_prev, cfg.torso_velocity)
-        if cfg.velocity_smoothing > 0.0:
-            velocity = self.velocity = smoothed_velocity(self.velocity, velocity,
-                                                         cfg.velocity_smoothing)
         if cfg.observed_velocity_px is not None:
             velocity = observable_arm_velocity(self.body, self.lik.intr, self.mode, velocity,
                                                T_cam_base, cfg.observed_velocity_px)

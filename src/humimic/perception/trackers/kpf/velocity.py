@@ -12,9 +12,6 @@ the likelihood cannot pull it back from. :func:`observable_velocity` keeps of an
 ``J = U diag(s) V^T`` (px / rad, :func:`arm_image_jacobian`), the damped least-squares
 projection ``V diag(s^2 / (s^2 + lambda^2)) V^T v`` (Tikhonov; ``lambda`` in px / rad), which
 passes components whose image motion ``s`` is well above ``lambda`` and drops those well below.
-:func:`smoothed_velocity` (``KpfConfig.velocity_smoothing``) instead averages the modes'
-differences over frames: a holding arm's jitter, of random sign, averages towards zero while a
-steady motion keeps its velocity (after a lag of ~1 / (1 - beta) frames).
 """
 
 from __future__ import annotations
@@ -37,12 +34,6 @@ def observable_velocity(v: np.ndarray, J: np.ndarray, lam: float) -> np.ndarray:
     _, s, Vt = np.linalg.svd(J, full_matrices=False)
     keep = s * s / (s * s + lam * lam)
     return Vt.T @ (keep * (Vt @ v))
-
-
-def smoothed_velocity(v_prev: np.ndarray, delta: np.ndarray, beta: float) -> np.ndarray:
-    """The exponential average ``beta v_prev + (1 - beta) delta`` of the last two best modes'
-    difference ``delta`` (Schmidt sec. 5.2's velocity, ``beta = 0``)."""
-    return beta * np.asarray(v_prev, float) + (1.0 - beta) * np.asarray(delta, float)
 
 
 def arm_image_jacobian(body: bm.BodyModel, intr, q: np.ndarray, side: str,
