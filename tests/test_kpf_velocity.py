@@ -30,6 +30,9 @@ def test_observable_velocity_is_the_damped_least_squares_projection():
         assert np.allclose(observable_velocity(v, J, 1e-9), np.linalg.pinv(J) @ J @ v,
                            atol=1e-9)
         assert np.linalg.norm(observable_velocity(v, J, 1e9)) < 1e-9
+        rows = rng.normal(size=(5, d))                 # one velocity per particle: row-wise
+        assert np.allclose(observable_velocity(rows, J, 10.0),
+                           [observable_velocity(r, J, 10.0) for r in rows])
     # a DOF that moves no pixel (zero column) loses its velocity, the others keep theirs
     J = np.diag([40.0, 40.0, 0.0, 40.0])
     out = observable_velocity(np.ones(4), J, 1e-6)

@@ -29,13 +29,14 @@ ARM_POINTS = ("elbow", "wrist")
 
 def observable_velocity(v: np.ndarray, J: np.ndarray, lam: float) -> np.ndarray:
     """``V diag(s^2 / (s^2 + lam^2)) V^T v`` for ``J = U diag(s) V^T`` (``J (m, d)`` the image
-    Jacobian, ``v (d,)`` the velocity): the damped pseudo-inverse ``(J^T J + lam^2 I)^-1 J^T J``
-    applied to ``v``, i.e. ``v``'s components along the right singular vectors scaled by
-    ``s^2 / (s^2 + lam^2)``; right singular directions beyond ``m`` (``s = 0``) dropped."""
+    Jacobian, ``v (d,)`` the velocity, or ``(N, d)`` row-wise): the damped pseudo-inverse
+    ``(J^T J + lam^2 I)^-1 J^T J`` applied to ``v``, i.e. ``v``'s components along the right
+    singular vectors scaled by ``s^2 / (s^2 + lam^2)``; right singular directions beyond ``m``
+    (``s = 0``) dropped."""
     v, J = np.asarray(v, float), np.asarray(J, float)
     _, s, Vt = np.linalg.svd(J, full_matrices=False)
     keep = s * s / (s * s + lam * lam)
-    return Vt.T @ (keep * (Vt @ v))
+    return ((v @ Vt.T) * keep) @ Vt
 
 
 def arm_image_jacobian(body: bm.BodyModel, intr, q: np.ndarray, side: str,
@@ -59,13 +60,13 @@ def arm_image_jacobian(body: bm.BodyModel, intr, q: np.ndarray, side: str,
 
 def observable_arm_velocity(body: bm.BodyModel, intr, q: np.ndarray, v: np.ndarray,
                             T_cam_ref: np.ndarray, lam: float) -> np.ndarray:
-    """The motion model's velocity ``v (14,)`` with each arm's part restricted by
-    :func:`observable_velocity` through its :func:`arm_image_jacobian` at ``q`` (the last best
-    mode); the torso's part unchanged. An arm whose Jacobian is not finite (a point behind the
-    camera) keeps its velocity."""
+    """The motion model's velocity ``v (14,)`` (or one per particle, ``(N, 14)``) with each
+    arm's part restricted by :func:`observable_velocity` through its :func:`arm_image_jacobian`
+    at ``q`` (the last best mode); the torso's part unchanged. An arm whose Jacobian is not
+    finite (a point behind the camera) keeps its velocity."""
     out = np.asarray(v, float).copy()
     for side, (_, j) in SIDES.items():
         J = arm_image_jacobian(body, intr, q, side, T_cam_ref)
         if np.all(np.isfinite(J)):
-            out[j:j + 4] = observable_velocity(out[j:j + 4], J, lam)
+            out[..., j:j + 4] = observable_velocity(out[..., j:j + 4], J, lam)
     return out
