@@ -92,7 +92,10 @@ class KpfConfig(Section):
     (along the ray 179 -> 141) but side 82 -> 117 (along 73 -> 115) and the 18 s three
     gestures (schmidt_side, seeds 1-4) 77 -> 138; the error across the ray and the flip-free
     error fall everywhere (side 23 -> 12 and 49 -> 36 mm), the depth error grows. 3 px / rad:
-    side 84; no arm velocity at all: side 97. Off."""
+    side 84; no arm velocity at all: side 97. With ``particle_velocity`` (each particle's
+    velocity restricted): Table 1 side (seeds 0-9) 84 ± 49 -> 85 ± 24, angular (0-4) 182 ± 24
+    -> 123 ± 9 (better on every seed), but the 18 s gestures 77 -> 170 (depth 68 -> 167). Off:
+    the longer holds drift in depth."""
     particle_velocity: bool = False
     """Our extension: each particle's motion-model velocity its own (from its ancestor's
     position last frame to where mean shift took it), carried through the resampling, instead
