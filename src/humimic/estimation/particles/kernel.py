@@ -238,7 +238,8 @@ def mixed_propagate(particles: np.ndarray, velocity: np.ndarray, share: float, D
     two best modes' difference) with uniform noise of half-width ``motion_scale D``, the rest
     by a random walk with uniform noise of half-width ``D`` (the paper's "variance D", read as
     the noise's extent); a particle outside ``valid`` is re-drawn (up to ``retries`` times,
-    then left to the caller's clamp). Returns the particles and the motion-model mask."""
+    then left to the caller's clamp). ``velocity`` ``(d,)``, or ``(N, d)`` one per particle.
+    Returns the particles and the motion-model mask."""
     n = len(particles)
     moved = np.arange(n) < int(round(share * n))
     half = np.where(moved[:, None], motion_scale * D, D)
@@ -310,8 +311,20 @@ def partitioned_resample(particles: np.ndarray, W: np.ndarray, groups: list[np.n
     """Resample each group's dimensions with its own weights ``W[:, g]`` (systematic), the
     groups independently: partitioned sampling's recombination (MacCormick & Isard 2000) for
     groups whose likelihood terms do not interact."""
-    out = np.empty_like(particles)
+    return partitioned_take(particles, partitioned_resample_indices(W, groups, rng), groups)
+
+
+def partitioned_resample_indices(W: np.ndarray, groups: list[np.ndarray],
+                                 rng: np.random.Generator) -> np.ndarray:
+    """``(N, G)`` :func:`partitioned_resample`'s ancestor index per particle and group."""
+    return np.stack([resample_indices(np.log(np.maximum(W[:, k], 1e-300)), rng)
+                     for k in range(len(groups))], axis=1)
+
+
+def partitioned_take(x: np.ndarray, idx: np.ndarray, groups: list[np.ndarray]) -> np.ndarray:
+    """Rows of ``x (N, d)`` picked per group: ``out[:, g] = x[idx[:, k]][:, g]`` (anything
+    carried per particle, e.g. the particles themselves or their velocities)."""
+    out = np.empty_like(x)
     for k, g in enumerate(groups):
-        idx = resample_indices(np.log(np.maximum(W[:, k], 1e-300)), rng)
-        out[:, g] = particles[idx][:, g]
+        out[:, g] = x[idx[:, k]][:, g]
     return out

@@ -79,6 +79,31 @@ class KpfConfig(Section):
     mean wrist error 114 -> 85 mm, lost 16 % -> 7 % of frames; Table 1 (7.5 s, seeds 0-4)
     side 87 -> 71 and angular 207 -> 202 mm at (1000, 3), 124 -> 74 and 244 -> 182 at
     (150, 2). On in Table 1's ``kpf``."""
+    observed_velocity_px: float | None = Field(None, gt=0.0, le=1e4)
+    """Our extension: the arms' velocity in the linear motion model kept only along the joint
+    directions that move the arm's projected elbow and wrist
+    (:func:`~humimic.perception.trackers.kpf.velocity.observable_velocity`: the damped
+    pseudo-inverse through the image Jacobian, this its damping lambda in px / rad); None:
+    off, the whole velocity as the paper. The principle: a velocity direction whose motion
+    over one motion-model noise extent (``motion_noise`` D, ~0.1 rad) moves the image less
+    than a pixel is unobservable, lambda = 1 px / (0.25 x ~0.4 rad) ~ 10 px / rad (the wide
+    eye at 2 m: singular values ~40, 8-30 and 0.5-6 px / rad). Measured (Table 1's ``kpf``,
+    (1000, 3), seeds 0-4, mean wrist error, main -> 10 px / rad): angular 182 -> 143 mm
+    (along the ray 179 -> 141) but side 82 -> 117 (along 73 -> 115) and the 18 s three
+    gestures (schmidt_side, seeds 1-4) 77 -> 138; the error across the ray and the flip-free
+    error fall everywhere (side 23 -> 12 and 49 -> 36 mm), the depth error grows. 3 px / rad:
+    side 84; no arm velocity at all: side 97. With ``particle_velocity`` (each particle's
+    velocity restricted): Table 1 side (seeds 0-9) 84 ± 49 -> 85 ± 24, angular (0-4) 182 ± 24
+    -> 123 ± 9 (better on every seed), but the 18 s gestures 77 -> 170 (depth 68 -> 167). Off:
+    the longer holds drift in depth."""
+    particle_velocity: bool = False
+    """Our extension: each particle's motion-model velocity its own (from its ancestor's
+    position last frame to where mean shift took it), carried through the resampling, instead
+    of the one velocity from the last two best modes (the paper; the two coincide when the
+    posterior sits on one particle). Measured (``kpf`` of Table 1 / schmidt_side, (1000, 3)):
+    Table 1 side, seeds 0-4, 82 ± 44 -> 55 ± 18 mm (seeds 0-9: 84 ± 49 -> 69 ± 39, worse on
+    3 of 10), but angular (0-4) 182 -> 198 and the 18 s three gestures (schmidt_side, seeds
+    1-4) 77 -> 106, worse on every seed. Off."""
     min_random: float = Field(0.2, ge=0.0, le=1.0)
     """Smallest share of randomly propagated particles."""
     tol: float = Field(0.01, ge=0.0)

@@ -30,6 +30,7 @@ from humimic.perception.trackers.kpf.flips import FLIPS, arm_flips
 from humimic.perception.trackers.kpf.frame_cues import FrameCues
 from humimic.perception.trackers.kpf.hands import hand_blob_moves, part_centres
 from humimic.perception.trackers.kpf.likelihood import Likelihood
+from humimic.perception.trackers.kpf.velocity import observable_arm_velocity
 
 _BLAS = ThreadpoolController()
 #: The state's partition (``partitioned``): torso, right arm, left arm DOFs.
@@ -132,6 +133,7 @@ class KpfTracker:
         ``q0`` and the colour references from its back-projection."""
         n = self.cfg.n_particles
         self.mode = self.mode_prev = self.limits.clamp(np.asarray(q0, float))
+        self.pvel = np.zeros((n, len(self.mode)))
         c = self.cfg
         self.torso_prior = None if c.torso_prior_m is None else Gaussian(
             self.mode[:6], np.diag([c.torso_prior_m ** 2] * 3
@@ -205,8 +207,18 @@ class KpfTracker:
     def _kpf(self, maps, T_cam_base):
         cfg, rng = self.cfg, self.rng
         groups = GROUPS if cfg.partitioned else [np.arange(len(self.D))]
-        resampled = kpf.partitioned_resample(self.particles, self.W, groups, rng)
-        velocity = motion_velocity(self.mode, self.mode_prev, cfg.torso_velocity)
+        if cfg.particle_velocity:   # each particle's own, carried through the resampling
+            idx = kpf.partitioned_resample_indices(self.W, groups, rng)
+            resampled = kpf.partitioned_take(self.particles, idx, groups)
+            velocity = kpf.partitioned_take(self.pvel, idx, groups)
+            if not cfg.torso_velocity:
+                velocity[:, GROUPS[0]] = 0.0
+        else:
+            resampled = kpf.partitioned_resample(self.particles, self.W, groups, rng)
+            velocity = motion_velocity(self.mode, self.mode_prev, cfg.torso_velocity)
+        if cfg.observed_velocity_px is not None:
+            velocity = observable_arm_velocity(self.body, self.lik.intr, self.mode, velocity,
+                                               T_cam_base, cfg.observed_velocity_px)
         pred, moved = kpf.mixed_propagate(resampled, velocity, self.share, self.D,
                                           rng, self.limits.inside, cfg.motion_noise)
         pred = self.limits.clamp(pred)
@@ -221,7 +233,7 @@ class KpfTracker:
         parts, W, ll, iters = kpf.kpf_modes(pred, lik, self.D, cfg.iterations, cfg.tol,
                                             cfg.shrink, cfg.reweight == "kernel", groups,
                                             cfg.kde_stride, prior, KERNEL_DTYPE)
-        best = float(np.max(ll[:, 0]))
+        best, rescued = float(np.max(ll[:, 0])), False
         for _ in range(cfg.rescue_passes):
             # the best particle fell well below the last frame's: the search lost the pose
             # (fast motion); search again from this frame's posterior, a random walk of extent
@@ -238,12 +250,16 @@ class KpfTracker:
             iters += it2
             if float(np.max(ll2[:, 0])) > best:
                 parts, W, ll, best = p2, W2, ll2, float(np.max(ll2[:, 0]))
+                rescued = True
         self.best_prev = best
         h = cfg.shrink ** max(iters - 1, 0) * self.D
         win = cfg.window * self.D
         mode = dominant_modes(parts, W, h, win, groups, KERNEL_DTYPE)
         w = W[:, 0]
         self.share = kpf.motion_share(w, moved, cfg.min_random)
+        # each particle's velocity: from its ancestor to where mean shift took it (none when a
+        # rescue pass replaced the set: those particles have other ancestors)
+        self.pvel = np.zeros_like(parts) if rescued else parts - resampled
         self.particles, self.w, self.W = parts, w, W
         first, _ = kpf.unique_rows(np.round(parts / (cfg.window * self.D)))
         return mode, iters, parts[first[np.argsort(-w[first])][:MAX_MODES]]

@@ -1,0 +1,72 @@
+"""The motion model's velocity restricted to what the image sees (our extension of Schmidt sec.
+5.2's linear motion model, ``KpfConfig.observed_velocity_px``).
+
+Schmidt sec. 5.2: "The velocity in the linear motion model is estimated on the basis of the
+location of the best mode in time t and its corresponding location in time t - 1"; a share of
+the particles is propagated by it. One camera pins an arm only up to the directions of its
+joint space that move its image; along the others (the wrist's depth when the arm lies near
+the image plane, the humeral rotation of a straight arm) the best mode jitters from frame to
+frame, and that jitter, fed forward as velocity, pushes the arm along exactly the directions
+the likelihood cannot pull it back from. :func:`observable_velocity` keeps of an arm's velocity
+``v`` (rad per frame) only what moves its projected elbow and wrist: with the image Jacobian
+``J = U diag(s) V^T`` (px / rad, :func:`arm_image_jacobian`), the damped least-squares
+projection ``V diag(s^2 / (s^2 + lambda^2)) V^T v`` (Tikhonov; ``lambda`` in px / rad), which
+passes components whose image motion ``s`` is well above ``lambda`` and drops those well below.
+Measured (``KpfConfig.observed_velocity_px``): the image fit improves but the depth error grows
+on side pointing (the true rise has components along the weak directions too); off.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from humimic import bodymodel as bm
+from humimic.perception.trackers.kpf.depth import SIDES
+
+#: The arm points whose images pin the arm's four DOFs (two image points, four coordinates).
+ARM_POINTS = ("elbow", "wrist")
+
+
+def observable_velocity(v: np.ndarray, J: np.ndarray, lam: float) -> np.ndarray:
+    """``V diag(s^2 / (s^2 + lam^2)) V^T v`` for ``J = U diag(s) V^T`` (``J (m, d)`` the image
+    Jacobian, ``v (d,)`` the velocity, or ``(N, d)`` row-wise): the damped pseudo-inverse
+    ``(J^T J + lam^2 I)^-1 J^T J`` applied to ``v``, i.e. ``v``'s components along the right
+    singular vectors scaled by ``s^2 / (s^2 + lam^2)``; right singular directions beyond ``m``
+    (``s = 0``) dropped."""
+    v, J = np.asarray(v, float), np.asarray(J, float)
+    _, s, Vt = np.linalg.svd(J, full_matrices=False)
+    keep = s * s / (s * s + lam * lam)
+    return ((v @ Vt.T) * keep) @ Vt
+
+
+def arm_image_jacobian(body: bm.BodyModel, intr, q: np.ndarray, side: str,
+                       T_cam_ref: np.ndarray, eps: float = 1e-4) -> np.ndarray:
+    """``(4, 4)`` d(elbow u, v, wrist u, v) / d(SFE, SAA, HR, EB) (px / rad) of arm ``side``
+    (``R`` or ``L``) at state ``q (14,)`` seen by a camera (``T_cam_ref``: reference-frame
+    points -> camera, ``intr`` its intrinsics): central differences of the body model's forward
+    kinematics and the camera's projection. NaN where a point is behind the camera."""
+    prefix, j = SIDES[side]
+    q = np.asarray(q, float)
+    Q = np.repeat(q[None], 8, axis=0)
+    for k in range(4):
+        Q[2 * k, j + k] += eps
+        Q[2 * k + 1, j + k] -= eps
+    pose = body.forward(Q)
+    T = np.asarray(T_cam_ref, float)
+    uv = np.concatenate([intr.project(pose.joint(f"{prefix}_{p}") @ T[:3, :3].T + T[:3, 3])
+                         for p in ARM_POINTS], axis=1)               # (8, 4)
+    return ((uv[0::2] - uv[1::2]) / (2.0 * eps)).T
+
+
+def observable_arm_velocity(body: bm.BodyModel, intr, q: np.ndarray, v: np.ndarray,
+                            T_cam_ref: np.ndarray, lam: float) -> np.ndarray:
+    """The motion model's velocity ``v (14,)`` (or one per particle, ``(N, 14)``) with each
+    arm's part restricted by :func:`observable_velocity` through its :func:`arm_image_jacobian`
+    at ``q`` (the last best mode); the torso's part unchanged. An arm whose Jacobian is not
+    finite (a point behind the camera) keeps its velocity."""
+    out = np.asarray(v, float).copy()
+    for side, (_, j) in SIDES.items():
+        J = arm_image_jacobian(body, intr, q, side, T_cam_ref)
+        if np.all(np.isfinite(J)):
+            out[..., j:j + 4] = observable_velocity(out[..., j:j + 4], J, lam)
+    return out
