@@ -10,7 +10,12 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from humimic.bodymodel.kinematics import elbow_rotation, shoulder_rotation
-from humimic.bodymodel.rom import TWIST_RANGE_DEG, humeral_twist, twist_log_prior
+from humimic.bodymodel.rom import (
+    TWIST_RANGE_DEG,
+    arm_twist_log_prior,
+    humeral_twist,
+    twist_log_prior,
+)
 
 
 def _scipy_twist(R: np.ndarray) -> float:
@@ -58,6 +63,31 @@ def test_soft_range_log_prior_in_closed_form():
     x = np.radians([-120.0, -90.0, 0.0, 70.0, 90.0])
     want = [-0.5 * 3.0 ** 2, 0.0, 0.0, 0.0, -0.5 * 2.0 ** 2]
     np.testing.assert_allclose(twist_log_prior(x, lo, hi, sd), want, atol=1e-12)
+
+
+def test_arm_prior_fades_towards_the_overhead_pole():
+    """In full up to 135 deg of swing from the hanging axis (measured by scipy), faded
+    quadratically in 1 + cos(swing) to nothing straight up (where the twist is undefined: at
+    178 deg of elevation +-10 deg of abduction turn it by ~+-157 deg, 22-38 nats unfaded; 0.1
+    faded)."""
+    lo, hi = np.radians(TWIST_RANGE_DEG)
+    sd = np.radians(10.0)
+    rng = np.random.default_rng(8)
+    a = rng.uniform([-0.8, -0.3, -2.5], [3.1, 2.5, 2.5], (100, 3))
+    for side in ("R", "L"):
+        R = shoulder_rotation(side, *a.T)
+        axis = np.einsum("nij,j->ni", R, [0, 0, -1.0])
+        swing = np.array([Rotation.align_vectors([x], [[0.0, 0.0, -1.0]])[0].magnitude()
+                          for x in axis])
+        fade = np.minimum((1 + np.cos(swing)) / (1 + np.cos(np.radians(135.0))), 1.0) ** 2
+        assert (fade == 1.0).mean() > 0.5 and (fade < 0.5).any()   # both regimes drawn
+        want = fade * twist_log_prior(humeral_twist(side, *a.T), lo, hi, sd)
+        np.testing.assert_allclose(arm_twist_log_prior(side, *a.T, lo, hi, sd), want,
+                                   atol=1e-9)
+    up = arm_twist_log_prior("R", np.radians(178.0), np.radians([-10.0, 10.0]), 0.0, lo, hi, sd)
+    assert np.all(up > -0.3)                               # unfaded: -22 and -38 nats
+    assert np.all(twist_log_prior(humeral_twist("R", np.radians(178.0), np.radians(
+        [-10.0, 10.0]), 0.0), lo, hi, sd) < -20.0)
 
 
 def test_tracker_arm_prior_penalises_each_arm_by_its_own_twist():

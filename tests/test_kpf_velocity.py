@@ -81,6 +81,7 @@ def test_per_particle_velocities_follow_their_particles_through_partitioned_resa
     them; a group whose weight sits on one particle takes only that one; and drawing the
     indices uses the generator as :func:`partitioned_resample` does (same particles)."""
     from humimic.estimation.particles import kernel as kpf
+    from humimic.estimation.particles.resampling import resample_indices
 
     rng = np.random.default_rng(5)
     n, groups = 50, [np.arange(0, 2), np.arange(2, 5)]
@@ -94,6 +95,43 @@ def test_per_particle_velocities_follow_their_particles_through_partitioned_resa
     xs, vs = kpf.partitioned_take(x, idx, groups), kpf.partitioned_take(vel, idx, groups)
     assert np.allclose(vs, 3.0 * xs + 1.0)
     assert np.all(xs[:, 2:] == x[17, 2:])
+    # the resampling as it was written before the split (group by group, one systematic draw
+    # each from the same generator): the same particles, so the default path's draws stand
+    ref, r = np.empty_like(x), np.random.default_rng(9)
     for k, g in enumerate(groups):
-        assert np.array_equal(xs[:, g], x[idx[:, k]][:, g])
-    assert np.array_equal(xs, kpf.partitioned_resample(x, W, groups, np.random.default_rng(9)))
+        ref[:, g] = x[resample_indices(np.log(np.maximum(W[:, k], 1e-300)), r)][:, g]
+    assert np.array_equal(xs, ref)
+    assert np.array_equal(kpf.partitioned_resample(x, W, groups, np.random.default_rng(9)), ref)
+
+
+def test_tracker_per_particle_velocities_skip_jumps_and_lost_frames():
+    """In the tracker (``particle_velocity``, with ``observed_velocity_px``): a particle a flip
+    jump moved carries no velocity (a jump is no motion to repeat: with every particle offered
+    a flip most rows are zero, without jumps none), and a lost frame leaves none at all."""
+    from _kpf_synth import INTRINSICS, camera, painted_person, static_pose
+
+    from humimic.perception.blobs.config import DEFAULT_COLOR_MODEL
+    from humimic.perception.cues.color_models import ColorLUT, load_color_model
+    from humimic.perception.trackers.kpf.config import KpfConfig
+    from humimic.perception.trackers.kpf.frame_cues import FrameCues
+    from humimic.perception.trackers.kpf.tracker import KpfTracker, kpf_body
+
+    body, T, q0 = kpf_body(), camera(), static_pose()
+    img = painted_person(body, q0, T)
+    lut = ColorLUT(load_color_model(DEFAULT_COLOR_MODEL), 6)
+
+    def pvel_after_two_steps(**kw):
+        cfg = KpfConfig(n_particles=80, iterations=2, partitioned=True, particle_velocity=True,
+                        observed_velocity_px=10.0, **kw)
+        tr = KpfTracker(body, INTRINSICS, cfg, np.random.default_rng(2))
+        tr.start(q0, FrameCues(img, lut), T)
+        for _ in range(2):
+            res = tr.step(FrameCues(img, lut), T)
+        assert np.all(np.isfinite(res.mode)) and np.all(np.isfinite(tr.pvel))
+        return tr.pvel, res
+
+    still = np.all(pvel_after_two_steps()[0] == 0.0, axis=1).mean()
+    jumped = np.all(pvel_after_two_steps(flip_share=1.0)[0] == 0.0, axis=1).mean()
+    assert still < 0.1 and jumped > 0.5, (still, jumped)
+    pvel, res = pvel_after_two_steps(lost_cost=1e-3)
+    assert res.lost and np.all(pvel == 0.0)

@@ -29,14 +29,34 @@ from humimic.bodymodel.kinematics import ARM_AXES, shoulder_rotation
 
 #: (external, internal) humeral twist a person reaches (deg, + internal): AAOS / Norkin & White.
 TWIST_RANGE_DEG = (-90.0, 70.0)
+#: Swing from hanging (rad) beyond which :func:`arm_twist_log_prior` fades out.
+FADE_FROM = np.radians(135.0)
+
+
+def _twist(side: str, R: np.ndarray) -> np.ndarray:
+    """The twist angle (rad, + internal) of shoulder rotations ``R (..., 3, 3)``: ``2 atan2(q_z,
+    q_w)`` of the swing-twist decomposition about the hanging axis."""
+    return ARM_AXES[side][2][1] * np.arctan2(R[..., 1, 0] - R[..., 0, 1],
+                                             R[..., 0, 0] + R[..., 1, 1])
 
 
 def humeral_twist(side: str, sfe, saa, hr) -> np.ndarray:
     """``(...)`` the upper arm's twist about its own axis (rad, + internal; module doc) for DB's
-    shoulder angles of arm ``side`` (rad)."""
+    shoulder angles of arm ``side`` (rad). Undefined with the arm straight up (the swing's
+    pole, 180 deg from hanging), and ever more sensitive near it: at 170 deg of elevation
+    +-10 deg of abduction turn it by +-90 deg."""
+    return _twist(side, shoulder_rotation(side, sfe, saa, hr))
+
+
+def arm_twist_log_prior(side: str, sfe, saa, hr, lo: float, hi: float, sd: float
+                        ) -> np.ndarray:
+    """:func:`twist_log_prior` of arm ``side``'s :func:`humeral_twist`, in full up to
+    :data:`FADE_FROM` of swing from hanging and faded to 0 straight up, where the twist is
+    undefined: by ``((1 + cos swing) / (1 + cos FADE_FROM))^2``, which outpaces the twist's
+    growing error there (a near-overhead arm is not penalised for a twist it hardly has)."""
     R = shoulder_rotation(side, sfe, saa, hr)
-    psi = np.arctan2(R[..., 1, 0] - R[..., 0, 1], R[..., 0, 0] + R[..., 1, 1])
-    return ARM_AXES[side][2][1] * psi
+    fade = np.minimum((1.0 + R[..., 2, 2]) / (1.0 + np.cos(FADE_FROM)), 1.0) ** 2
+    return fade * twist_log_prior(_twist(side, R), lo, hi, sd)
 
 
 def twist_log_prior(twist: np.ndarray, lo: float, hi: float, sd: float) -> np.ndarray:

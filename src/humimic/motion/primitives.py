@@ -98,13 +98,19 @@ def axes_path(t: np.ndarray, center: np.ndarray, R_avatar_base: np.ndarray, ampl
     return center + s[:, None] * direction
 
 
+def point_cycle(t: np.ndarray, c: PointMotion) -> tuple[np.ndarray, np.ndarray]:
+    """The pointing gesture's ``(index k, time tau within it)`` at times ``t`` (s): each
+    gesture is ``rest``, ``move`` (raise), ``hold``, ``move`` (lower)."""
+    cycle = c.rest + 2 * c.move + c.hold
+    k = np.floor(np.asarray(t, float) / cycle).astype(int)
+    return k, np.asarray(t, float) - k * cycle
+
+
 def point_path(t: np.ndarray, p_shoulder: np.ndarray, arm: float, c: PointMotion) -> np.ndarray:
     """Schmidt-style pointing: per gesture rest (hanging), raise, hold, lower; the shoulder-palm
     direction moves on a great circle, the distance linearly, both minimum-jerk in time."""
     side = -1.0 if c.hand == "right" else 1.0
-    cycle = c.rest + 2 * c.move + c.hold
-    k = np.floor(t / cycle).astype(int)
-    tau = t - k * cycle
+    k, tau = point_cycle(t, c)
     s = np.where(tau < c.rest + c.move, min_jerk((tau - c.rest) / c.move),
                  1.0 - min_jerk((tau - c.rest - c.move - c.hold) / c.move))
     dir_rest = np.array([0.1, 0.08 * side, -1.0])

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from typing import Annotated, Literal
 
-from pydantic import Field
+from pydantic import Field, model_validator
 
 from humimic.scenario.base import Section
 
@@ -184,6 +184,14 @@ class KpfConfig(Section):
     """Lost when the best mode's mean cue cost exceeds this."""
     latency: float = Field(0.0, ge=0.0, le=5.0)
     """Declared processing delay of a pose estimate (s)."""
+
+    @model_validator(mode="after")
+    def _check(self) -> KpfConfig:
+        if self.twist_range_deg is not None and not (
+                -180.0 <= self.twist_range_deg[0] < self.twist_range_deg[1] <= 180.0):
+            raise ValueError("twist_range_deg must be [low, high] with -180 <= low < high <= "
+                             f"180 (deg), got {list(self.twist_range_deg)}")
+        return self
 
     def D(self, frame_rate: float | None = None) -> list[float]:
         """The 14 propagation extents (m, rad) in :data:`humimic.bodymodel.DOF_NAMES` order,

@@ -19,7 +19,7 @@ from humimic.perception.trackers.kpf.profile_run import (
     disparity_change,
     profile_run,
 )
-from humimic.perception.trackers.kpf.table1 import EYES
+from humimic.perception.trackers.kpf.table1 import EYES, seed_list
 from humimic.scenario.errors import ScenarioError
 
 #: Issue 14's goals: mean wrist error (mm) at 1000 particles.
@@ -240,12 +240,14 @@ def main(argv: list[str] | None = None) -> int:
                    help="summarise the log-likelihoods times this (the cue sigmas divided by "
                    "its square root; default 1)")
     args = p.parse_args(argv)
-    if len(args.seeds) == 1:
-        if args.seeds[0] < 1:
-            print(f"schmidt-depth-profile: --seeds {args.seeds[0]}: no runs; give a count >= 1 "
-                  "(seeds 0..N-1) or two or more seeds", file=sys.stderr)
-            return 2
-        args.seeds = list(range(args.seeds[0]))
+    try:
+        args.seeds = seed_list(args.seeds)
+        for name in ("step", "range", "scale"):
+            if not getattr(args, name) > 0.0:
+                raise ValueError(f"--{name} {getattr(args, name):g}: must be > 0")
+    except ValueError as err:
+        print(f"schmidt-depth-profile: {err}", file=sys.stderr)
+        return 2
     if args.source is not None:
         d = json.loads((args.source / "profile.json").read_text())
         delta, info, rows_by = np.array(d["delta_m"]), d["info"], d["frames"]

@@ -31,6 +31,7 @@ from __future__ import annotations
 import numpy as np
 
 from humimic import bodymodel as bm
+from humimic.motion.primitives import point_cycle
 from humimic.perception.trackers.kpf.frame_cues import FrameCues
 from humimic.perception.trackers.kpf.likelihood import Likelihood
 from humimic.perception.trackers.kpf.profile import depth_profile, ml_choice, ml_wrist, within
@@ -43,13 +44,12 @@ NATS = (0.5, 2.0)
 
 
 def phase(t: np.ndarray, motion) -> np.ndarray:
-    """The pointing motion's phase index into :data:`PHASES` at times ``t`` (s): each cycle
-    is ``rest``, ``move`` (rise), ``hold``, ``move`` (lower) of
-    :class:`~humimic.motion.config.PointMotion` (as :func:`humimic.motion.primitives.
-    point_path`)."""
-    c = motion
-    tau = np.mod(np.asarray(t, float), c.rest + 2 * c.move + c.hold)
-    return np.searchsorted(np.cumsum([c.rest, c.move, c.hold]), tau, side="right")
+    """The pointing motion's phase index into :data:`PHASES` at times ``t`` (s): each gesture
+    of :class:`~humimic.motion.config.PointMotion` is ``rest``, ``move`` (rise), ``hold``,
+    ``move`` (lower) (:func:`humimic.motion.primitives.point_cycle`)."""
+    _, tau = point_cycle(t, motion)
+    return np.searchsorted(np.cumsum([motion.rest, motion.move, motion.hold]), tau,
+                           side="right")
 
 
 class ProfileProbe(Stage):

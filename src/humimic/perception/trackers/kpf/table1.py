@@ -44,6 +44,17 @@ KEYS = ("wrist_error_mm", "wrist_lateral_mm", "wrist_depth_mm", "wrist_flip_free
         "frames_per_s")
 
 
+def seed_list(values: list[int]) -> list[int]:
+    """``--seeds`` of the reproduction commands: one value N, seeds 0..N-1; several, these
+    seeds. ``ValueError`` for a count below 1 (no runs)."""
+    if len(values) > 1:
+        return list(values)
+    if values[0] < 1:
+        raise ValueError(f"--seeds {values[0]}: no runs; give a count >= 1 (seeds 0..N-1) or "
+                         "two or more seeds")
+    return list(range(values[0]))
+
+
 def _usage(message: str) -> int:
     """A bad argument: one line on stderr, exit code 2 (as a bad scenario)."""
     print(f"schmidt-table1: {message}", file=sys.stderr)
@@ -122,9 +133,10 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                    help="scenario override for every run (repeatable), e.g. human.distance=3")
     args = p.parse_args(argv)
-    if args.seeds is not None and len(args.seeds) == 1 and args.seeds[0] < 1:
-        return _usage(f"--seeds {args.seeds[0]}: no runs; give a count >= 1 (seeds 0..N-1) "
-                      "or two or more seeds")
+    try:
+        seeds = None if args.seeds is None else seed_list(args.seeds)
+    except ValueError as err:
+        return _usage(str(err))
     rows = sorted({n for n, _ in CONFIGS})
     if args.particles is not None and not set(args.particles) <= set(rows):
         return _usage(f"--particles {' '.join(map(str, args.particles))}: Table 1's rows are "
@@ -136,8 +148,8 @@ def main(argv: list[str] | None = None) -> int:
     if args.particles is not None:
         sweep.config.cases = [c for c in sweep.config.cases
                               if c["trackers.kpf.n_particles"] in args.particles]
-    if args.seeds is not None:
-        sweep.config.seeds = args.seeds[0] if len(args.seeds) == 1 else args.seeds
+    if seeds is not None:
+        sweep.config.seeds = seeds
     if args.duration is not None:
         sweep.config.set["duration"] = args.duration
     try:

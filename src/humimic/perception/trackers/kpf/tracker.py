@@ -17,7 +17,7 @@ import numpy as np
 from threadpoolctl import ThreadpoolController
 
 from humimic import bodymodel as bm
-from humimic.bodymodel.rom import humeral_twist, twist_log_prior
+from humimic.bodymodel.rom import arm_twist_log_prior
 from humimic.estimation.particles import kernel as kpf
 from humimic.estimation.particles.densities import Gaussian
 from humimic.estimation.particles.filters import condensation_step
@@ -155,7 +155,7 @@ class KpfTracker:
             return np.zeros((len(q), len(SIDES)))
         lo, hi = np.radians(self.cfg.twist_range_deg)
         sd = np.radians(self.cfg.twist_sd_deg)
-        return np.column_stack([twist_log_prior(humeral_twist(s, *q[:, j:j + 3].T), lo, hi, sd)
+        return np.column_stack([arm_twist_log_prior(s, *q[:, j:j + 3].T, lo, hi, sd)
                                 for s, (_, j) in SIDES.items()])
 
     def _log_lik(self, maps, T_cam_base):
@@ -195,6 +195,7 @@ class KpfTracker:
         lost = not cost <= self.cfg.lost_cost
         if lost:   # keep the particles; no velocity, no colour adaptation
             self.mode_prev = self.mode
+            self.pvel[:] = 0.0
         else:
             self.mode_prev, self.mode = self.mode, mode
             self.lik.adapt({p: c[0] for p, c in ev.colours.items()})
@@ -221,9 +222,9 @@ class KpfTracker:
                                                T_cam_base, cfg.observed_velocity_px)
         pred, moved = kpf.mixed_propagate(resampled, velocity, self.share, self.D,
                                           rng, self.limits.inside, cfg.motion_noise)
-        pred = self.limits.clamp(pred)
+        pred = walked = self.limits.clamp(pred)
         if cfg.flip_share > 0.0:   # part of the dynamics: the reweighting's prior has them
-            pred = self._flip_jumps(pred, T_cam_base, cfg.flip_share)
+            pred = self._flip_jumps(pred.copy(), T_cam_base, cfg.flip_share)
         prior = pred
         if cfg.depth_share > 0.0:   # a proposal: the reweighting keeps the dynamics' KDE
             pred = self._depth_moves(pred.copy(), T_cam_base, cfg.depth_share)
@@ -258,8 +259,10 @@ class KpfTracker:
         w = W[:, 0]
         self.share = kpf.motion_share(w, moved, cfg.min_random)
         # each particle's velocity: from its ancestor to where mean shift took it (none when a
-        # rescue pass replaced the set: those particles have other ancestors)
+        # rescue pass replaced the set: those particles have other ancestors; none for a
+        # particle a flip, depth or hand jump moved: a jump is not a motion to repeat)
         self.pvel = np.zeros_like(parts) if rescued else parts - resampled
+        self.pvel[np.any(pred != walked, axis=1)] = 0.0
         self.particles, self.w, self.W = parts, w, W
         first, _ = kpf.unique_rows(np.round(parts / (cfg.window * self.D)))
         return mode, iters, parts[first[np.argsort(-w[first])][:MAX_MODES]]
