@@ -12,6 +12,7 @@ from humimic.perception.cues.auto_colors import (
     brightened,
     digest_of,
     file_lut,
+    inputs,
     learned_lut,
     sample_ticks,
 )
@@ -101,10 +102,16 @@ def test_cache_key_follows_the_person(cache_dir):
         # lights changed in the compiled model change the key too
         a.scene.model.light_diffuse[:] *= 0.5
         dl = digest_of(a, a.eye_cameras)
+        # a learner's background ratio (hand2d's) is its own table; without one the key is
+        # the one learned before the option existed (nothing in the inputs names it)
+        dr = digest_of(a, a.eye_cameras, background_ratio=1.0)
+        assert digest_of(a, a.eye_cameras, background_ratio=None) == dl
+        plain = inputs(a, a.eye_cameras, "skin", "rgb", 6, sample_ticks(a.n_ticks))
     finally:
         a.close()
         b.close()
-    assert len({da, db, dl}) == 3
+    assert len({da, db, dl, dr}) == 4
+    assert "background_ratio" not in repr(plain)
 
 
 def test_file_lut_cached_by_content(cache_dir, tmp_path):
