@@ -96,6 +96,16 @@ class KpfConfig(Section):
     velocity restricted): Table 1 side (seeds 0-9) 84 ± 49 -> 85 ± 24, angular (0-4) 182 ± 24
     -> 123 ± 9 (better on every seed), but the 18 s gestures 77 -> 170 (depth 68 -> 167). Off:
     the longer holds drift in depth."""
+    observed_walk_px: float | None = Field(None, gt=0.0, le=1e4)
+    """Our extension: the arms' propagation noise (the random group's and the motion group's)
+    shaped per frame by the last best mode's image Jacobian
+    (:func:`~humimic.perception.trackers.kpf.velocity.noise_shaping`): along each of the arm's
+    joint-space singular directions the noise is scaled by ``floor + (1 - floor) s^2 / (s^2 +
+    lambda^2)`` (this lambda, px / rad; ``observed_walk_floor`` the floor), full where the
+    direction moves the elbow's and wrist's images, shrunk to the floor where it does not
+    (depth-only directions, the twist of a straight arm); None: off, as the paper."""
+    observed_walk_floor: float = Field(0.25, ge=0.0, le=1.0)
+    """The noise factor along the directions that move no pixel, with ``observed_walk_px``."""
     particle_velocity: bool = False
     """Our extension: each particle's motion-model velocity its own (from its ancestor's
     position last frame to where mean shift took it), carried through the resampling, instead
