@@ -231,25 +231,32 @@ def motion_share(w: np.ndarray, moved: np.ndarray, min_random: float) -> float:
 
 def mixed_propagate(particles: np.ndarray, velocity: np.ndarray, share: float, D: np.ndarray,
                     rng: np.random.Generator, valid: Callable[[np.ndarray], np.ndarray],
-                    motion_scale: float = 0.25, retries: int = 10
-                    ) -> tuple[np.ndarray, np.ndarray]:
+                    motion_scale: float = 0.25, retries: int = 10,
+                    shape: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Schmidt sec. 5.2's mixed propagation of resampled particles ``(N, d)``: the first
     ``round(share N)`` through the linear motion model ``s + velocity`` (velocity: the last
     two best modes' difference) with uniform noise of half-width ``motion_scale D``, the rest
     by a random walk with uniform noise of half-width ``D`` (the paper's "variance D", read as
     the noise's extent); a particle outside ``valid`` is re-drawn (up to ``retries`` times,
     then left to the caller's clamp). ``velocity`` ``(d,)``, or ``(N, d)`` one per particle.
+    ``shape`` ``(d, d)`` (optional): every particle's noise ``n`` becomes ``shape @ n``.
     Returns the particles and the motion-model mask."""
     n = len(particles)
     moved = np.arange(n) < int(round(share * n))
     half = np.where(moved[:, None], motion_scale * D, D)
     base = particles + np.where(moved[:, None], velocity, 0.0)
-    out = base + rng.uniform(-1.0, 1.0, base.shape) * half
+    T = None if shape is None else np.asarray(shape, float).T
+
+    def noise(u: np.ndarray, h: np.ndarray) -> np.ndarray:
+        return u * h if T is None else (u * h) @ T
+
+    out = base + noise(rng.uniform(-1.0, 1.0, base.shape), half)
     for _ in range(retries):
         bad = ~valid(out)
         if not bad.any():
             break
-        out[bad] = base[bad] + rng.uniform(-1.0, 1.0, (int(bad.sum()), base.shape[1])) * half[bad]
+        out[bad] = base[bad] + noise(rng.uniform(-1.0, 1.0, (int(bad.sum()), base.shape[1])),
+                                     half[bad])
     return out, moved
 
 

@@ -96,6 +96,24 @@ class KpfConfig(Section):
     velocity restricted): Table 1 side (seeds 0-9) 84 ± 49 -> 85 ± 24, angular (0-4) 182 ± 24
     -> 123 ± 9 (better on every seed), but the 18 s gestures 77 -> 170 (depth 68 -> 167). Off:
     the longer holds drift in depth."""
+    observed_walk_px: float | None = Field(None, gt=0.0, le=1e4)
+    """Our extension: the arms' propagation noise (the random group's and the motion group's)
+    shaped per frame by the last best mode's image Jacobian
+    (:func:`~humimic.perception.trackers.kpf.velocity.noise_shaping`): along each of the arm's
+    joint-space singular directions the noise is scaled by ``floor + (1 - floor) s^2 / (s^2 +
+    lambda^2)`` (this lambda, px / rad; ``observed_walk_floor`` the floor), full where the
+    direction moves the elbow's and wrist's images, shrunk to the floor where it does not
+    (depth-only directions, the twist of a straight arm); None: off, as the paper. Measured
+    (Table 1's ``kpf``, (1000, 3), mean wrist error, main -> 10 px / rad floor 0.25): side
+    seeds 0-9 84 ± 49 -> 66 ± 3 mm (along the ray ~73 -> 38, across it ~23-33 -> 44; better
+    on 5 of 10 seeds, the bad seeds 152 / 188 -> 69 / 59), but angular seeds 0-4 182 ± 24 ->
+    204 ± 5 (worse on 4 of 5) and the 18 s three gestures (schmidt_side, seeds 1-4) 77 ± 18 ->
+    78 ± 2. Floor 0.5: side 65 ± 7, angular 238 ± 25; 3 px / rad floor 0.25: side (0-4) 78 ± 11,
+    angular 240 ± 28.
+    Off: it trades the image fit for depth and hurts angular pointing, whose true motion
+    has components along the weak directions."""
+    observed_walk_floor: float = Field(0.25, ge=0.0, le=1.0)
+    """The noise factor along the directions that move no pixel, with ``observed_walk_px``."""
     particle_velocity: bool = False
     """Our extension: each particle's motion-model velocity its own (from its ancestor's
     position last frame to where mean shift took it), carried through the resampling, instead

@@ -30,7 +30,7 @@ from humimic.perception.trackers.kpf.flips import FLIPS, arm_flips
 from humimic.perception.trackers.kpf.frame_cues import FrameCues
 from humimic.perception.trackers.kpf.hands import hand_blob_moves, part_centres
 from humimic.perception.trackers.kpf.likelihood import Likelihood
-from humimic.perception.trackers.kpf.velocity import observable_arm_velocity
+from humimic.perception.trackers.kpf.velocity import arm_noise_shaping, observable_arm_velocity
 
 _BLAS = ThreadpoolController()
 #: The state's partition (``partitioned``): torso, right arm, left arm DOFs.
@@ -220,8 +220,12 @@ class KpfTracker:
         if cfg.observed_velocity_px is not None:
             velocity = observable_arm_velocity(self.body, self.lik.intr, self.mode, velocity,
                                                T_cam_base, cfg.observed_velocity_px)
+        shape = None if cfg.observed_walk_px is None else arm_noise_shaping(
+            self.body, self.lik.intr, self.mode, T_cam_base, cfg.observed_walk_px,
+            cfg.observed_walk_floor)
         pred, moved = kpf.mixed_propagate(resampled, velocity, self.share, self.D,
-                                          rng, self.limits.inside, cfg.motion_noise)
+                                          rng, self.limits.inside, cfg.motion_noise,
+                                          shape=shape)
         pred = walked = self.limits.clamp(pred)
         if cfg.flip_share > 0.0:   # part of the dynamics: the reweighting's prior has them
             pred = self._flip_jumps(pred.copy(), T_cam_base, cfg.flip_share)

@@ -14,6 +14,11 @@ projection ``V diag(s^2 / (s^2 + lambda^2)) V^T v`` (Tikhonov; ``lambda`` in px 
 passes components whose image motion ``s`` is well above ``lambda`` and drops those well below.
 Measured (``KpfConfig.observed_velocity_px``): the image fit improves but the depth error grows
 on side pointing (the true rise has components along the weak directions too); off.
+
+:func:`noise_shaping` does the same to the propagation's random noise
+(``KpfConfig.observed_walk_px``): ``floor I + (1 - floor) P`` with ``P`` the damped projection
+above, the noise's extent kept along directions that move the image and shrunk to ``floor``
+along those that do not.
 """
 
 from __future__ import annotations
@@ -37,6 +42,29 @@ def observable_velocity(v: np.ndarray, J: np.ndarray, lam: float) -> np.ndarray:
     _, s, Vt = np.linalg.svd(J, full_matrices=False)
     keep = s * s / (s * s + lam * lam)
     return ((v @ Vt.T) * keep) @ Vt
+
+
+def noise_shaping(J: np.ndarray, lam: float, floor: float) -> np.ndarray:
+    """``(d, d)`` ``V diag(floor + (1 - floor) s^2 / (s^2 + lam^2)) V^T`` for ``J (m, d) =
+    U diag(s) V^T`` (right singular directions beyond ``m``: ``s = 0``, factor ``floor``): the
+    matrix that scales noise along each joint-space singular direction of ``J`` by a factor
+    near 1 where the direction moves the image (``s >> lam``) and near ``floor`` where it does
+    not. ``floor I + (1 - floor)`` times :func:`observable_velocity`'s projection (symmetric)."""
+    d = np.asarray(J).shape[1]
+    return floor * np.eye(d) + (1.0 - floor) * observable_velocity(np.eye(d), J, lam)
+
+
+def arm_noise_shaping(body: bm.BodyModel, intr, q: np.ndarray, T_cam_ref: np.ndarray,
+                      lam: float, floor: float) -> np.ndarray:
+    """``(14, 14)`` block-diagonal noise shaping (:func:`noise_shaping`) of the state: each
+    arm's block through its :func:`arm_image_jacobian` at ``q``, the torso's the identity; an
+    arm whose Jacobian is not finite (a point behind the camera) keeps the identity."""
+    A = np.eye(len(q))
+    for side, (_, j) in SIDES.items():
+        J = arm_image_jacobian(body, intr, q, side, T_cam_ref)
+        if np.all(np.isfinite(J)):
+            A[j:j + 4, j:j + 4] = noise_shaping(J, lam, floor)
+    return A
 
 
 def arm_image_jacobian(body: bm.BodyModel, intr, q: np.ndarray, side: str,
