@@ -265,8 +265,9 @@ class KpfTracker:
         # each particle's velocity: from its ancestor to where mean shift took it (none when a
         # rescue pass replaced the set: those particles have other ancestors; none for a
         # particle a flip, depth or hand jump moved: a jump is not a motion to repeat)
-        self.pvel = np.zeros_like(parts) if rescued else parts - resampled
-        self.pvel[np.any(pred != walked, axis=1)] = 0.0
+        if cfg.particle_velocity:   # only then read: no per-frame work without it
+            self.pvel = np.zeros_like(parts) if rescued else parts - resampled
+            self.pvel[np.any(pred != walked, axis=1)] = 0.0
         self.particles, self.w, self.W = parts, w, W
         first, _ = kpf.unique_rows(np.round(parts / (cfg.window * self.D)))
         return mode, iters, parts[first[np.argsort(-w[first])][:MAX_MODES]]
