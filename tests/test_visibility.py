@@ -73,6 +73,13 @@ def test_warning_line_names_poor_targets():
                                                   "cause": "out of view"}}}) == (
         "warning: head never visible (likely cause: out of view)")
     assert verdict_warning({"tracking": {"head": {"verdict": "ok"}}}) is None
+    # a scene with look-alikes of the skin is named, poor targets or not
+    colour = {"colour_warning": "the scene shows 2.14 pixels ..."}
+    assert verdict_warning({**m, "perception": colour}) == (
+        "warning: left_hand never detected (likely cause: too small: 8 px); the scene shows "
+        "2.14 pixels ...")
+    assert verdict_warning({"tracking": {}, "perception": colour}) == (
+        "warning: the scene shows 2.14 pixels ...")
 
 
 @pytest.fixture(scope="module")

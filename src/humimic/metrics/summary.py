@@ -52,7 +52,9 @@ def print_summary(metrics: dict, out_dir: str | Path, console: Console | None = 
 
 def verdict_warning(metrics: dict) -> str | None:
     """One line naming every target detected on less than half of its visible frames, or
-    never, with its likely cause (``tracking.<target>.verdict``); None when there is none."""
+    never, with its likely cause (``tracking.<target>.verdict``), and the perception stage's
+    ``colour_warning`` when it has one (a scene with look-alikes of the skin's colours); None
+    when there is neither."""
     poor = []
     for target, s in metrics.get("tracking", {}).items():
         if isinstance(s, dict) and s.get("verdict") == "poor":
@@ -60,4 +62,7 @@ def verdict_warning(metrics: dict) -> str | None:
             seen = ("never visible" if rate is None else "never detected" if rate == 0.0
                     else f"detected on {rate:.0%} of visible frames")
             poor.append(f"{target} {seen} (likely cause: {s.get('cause')})")
+    colour = metrics.get("perception", {}).get("colour_warning")
+    if colour:
+        poor.append(colour)
     return f"warning: {'; '.join(poor)}" if poor else None

@@ -37,6 +37,7 @@ import numpy as np
 
 from humimic.perception.blobs.core import FrameResult, PerceptionCore
 from humimic.perception.blobs.record import PerceptionRecord
+from humimic.perception.cues.auto_colors import LOOK_ALIKE_WARN
 from humimic.pipeline.stage import Stage
 from humimic.sensors.faults import RepeatDetector
 from humimic.viz.rerun_log import EVENTS, OTHER_COLOR, TARGET_COLORS, image_entity
@@ -75,6 +76,9 @@ class PerceptionStage(Stage):
                  frame_period: float = np.inf, duration: float = np.inf,
                  skip_repeats: bool = False):
         self.core: PerceptionCore | None = PerceptionCore(cfg, cameras, luts, rng)
+        ratios = [lut.look_alike for lut in luts.values() if lut.look_alike is not None]
+        self.look_alike = max(ratios) if ratios else None
+        """The learned skin model's look-alike pixels per skin pixel (None: from a file)."""
         self.repeats = RepeatDetector(skip_repeats)
         """Frozen frames (a camera repeating its image) are skipped like lost ones."""
         self.cameras, self.rlog = self.core.cameras, rlog
@@ -198,7 +202,12 @@ class PerceptionStage(Stage):
                "cameras": list(self.cameras), "frames": len(self.record),
                "identity_solves": self.identity_solves, "latency_ms": 1e3 * self.latency,
                "pipelined": self.pipelined, "worker": self.worker,
-               "stale_frames_skipped": self.repeats.stale_frames}
+               "stale_frames_skipped": self.repeats.stale_frames,
+               "skin_look_alike": self.look_alike}
+        if self.look_alike is not None and self.look_alike > LOOK_ALIKE_WARN:
+            out["colour_warning"] = (f"the scene shows {self.look_alike:.2f} pixels of the "
+                                     "skin's colours per skin pixel (clothes or room of the "
+                                     "skin's colour)")
         return {"perception": out}
 
     def close(self) -> None:

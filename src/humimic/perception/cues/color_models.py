@@ -253,6 +253,10 @@ class ColorLUT:
         """``p / (p + 1)`` per bin (float32, as computed on looked-up densities)."""
         self._masks: dict[float, np.ndarray] = {}
         """:meth:`mask`'s uint8 tables by threshold."""
+        self.look_alike: float | None = None
+        """For a model learned from the scene's renders: the scene's pixels it takes for the
+        class per class pixel (:func:`~humimic.perception.cues.auto_colors.look_alike_ratio`);
+        None otherwise."""
 
     def index(self, rgb_u8: np.ndarray) -> np.ndarray:
         """Table index (int32) of uint8 pixels ``(..., 3)``: ``r' 2^(2 bits) + g' 2^bits +
