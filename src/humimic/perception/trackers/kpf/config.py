@@ -182,6 +182,18 @@ class KpfConfig(Section):
     """The smallest skin blob (px^2) taken for a hand."""
     depth_extent_m: float = Field(0.25, gt=0.0, le=1.0)
     """Half-width (m) of the uniform range change of those depth moves."""
+    refine_polls: int = Field(0, ge=0, le=50)
+    """Our extension: after mean shift, this many polls of a deterministic pattern search per
+    arm (:mod:`~humimic.perception.trackers.kpf.refine`) climb the likelihood (the sigmas'
+    floors) from the dominant mode, along each arm DOF and the arm's depth direction (the
+    wrist along its camera ray); the result is the estimate. 0: off, as the paper."""
+    refine_step: float = Field(0.1, gt=0.0, le=2.0)
+    """The pattern search's first step along each arm DOF, as a fraction of D (halved after
+    each poll that finds nothing better)."""
+    refine_depth_m: float = Field(0.02, ge=0.0, le=0.5)
+    """Its first step (m) along the wrist's camera ray; 0: no depth direction."""
+    refine_inject: bool = True
+    """The refined mode replaces the lightest particle, with the heaviest's weight."""
     kde_stride: int = Field(1, ge=1, le=100)
     """The reweighting's KDEs from every k-th particle (1: all, exact; more: faster)."""
     cues: KpfCues = Field(default_factory=KpfCues)
