@@ -134,3 +134,35 @@ def test_fixed_sigma_evaluation_is_eqs_9_10_with_the_floors():
             expected -= e ** 2 / (2 * getattr(cfg.sigma, c) ** 2) / len(used)
     np.testing.assert_allclose(fixed.log_lik, expected, rtol=1e-12)
     assert not np.allclose(spread.log_lik, expected)     # the spread's sigmas differ
+
+
+def test_tracker_reports_the_refined_mode_no_worse_than_mean_shifts_and_injects_it():
+    """Two trackers on the same random stream, a rasterised person with the arms moved off the
+    start pose: the refined tracker's first estimate scores (eqs. 9-10 at the floors, written
+    out here) at least the plain one's, and sits in its particle set."""
+    from humimic.perception.trackers.kpf.frame_cues import FrameCues
+    from humimic.perception.trackers.kpf.tracker import KpfTracker
+
+    body, T = kpf_body(), camera()
+    q_img = static_pose()
+    q_start = q_img.copy()
+    q_start[6:14] += np.radians([8, -6, 10, 8, 5, -5, 6, 5])
+    img = painted_person(body, q_img, T)
+    lut = ColorLUT(load_color_model(DEFAULT_COLOR_MODEL), 6)
+    modes, trackers = {}, {}
+    for polls in (0, 6):
+        cfg = KpfConfig(n_particles=150, iterations=2, kde_stride=4, refine_polls=polls,
+                        sigma_from_spread=False)
+        tr = KpfTracker(body, INTRINSICS, cfg, np.random.default_rng(3))
+        tr.start(q_start, FrameCues(img, lut), T)
+        modes[polls] = tr.step(FrameCues(img, lut), T).mode
+        trackers[polls] = tr
+    maps = C.cue_maps(img, lut)
+    lik = Likelihood(body, INTRINSICS, cfg)          # the references as at the refinement
+    lik.adapt({p: c[0] for p, c in lik.evaluate(q_start[None], maps, T).colours.items()})
+    ll = lik.evaluate(np.stack([modes[0], modes[6]]), maps, T).log_lik
+    assert ll[1] >= ll[0]
+    assert not np.array_equal(modes[0], modes[6])
+    np.testing.assert_array_equal(modes[0][:6], modes[6][:6])   # the torso is not searched
+    assert np.any(np.all(trackers[6].particles == modes[6], axis=1))
+    np.testing.assert_allclose(trackers[6].W.sum(axis=0), 1.0)
