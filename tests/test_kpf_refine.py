@@ -166,3 +166,19 @@ def test_tracker_reports_the_refined_mode_no_worse_than_mean_shifts_and_injects_
     np.testing.assert_array_equal(modes[0][:6], modes[6][:6])   # the torso is not searched
     assert np.any(np.all(trackers[6].particles == modes[6], axis=1))
     np.testing.assert_allclose(trackers[6].W.sum(axis=0), 1.0)
+    # report only: the same tracking as the plain tracker's, the refined estimate reported
+    cfg = KpfConfig(n_particles=150, iterations=2, kde_stride=4, refine_polls=6,
+                    sigma_from_spread=False, refine_feedback=False)
+    tr = KpfTracker(body, INTRINSICS, cfg, np.random.default_rng(3))
+    ref = KpfTracker(body, INTRINSICS, cfg.model_copy(update={"refine_polls": 0}),
+                     np.random.default_rng(3))
+    for t in (tr, ref):
+        t.start(q_start, FrameCues(img, lut), T)
+    for _ in range(2):
+        res = tr.step(FrameCues(img, lut), T)
+        plain = ref.step(FrameCues(img, lut), T)
+    # equal to rounding: the refinement's evaluations widen the frame's lazily computed cue
+    # maps, whose values differ at ~1e-11 near a computed region's border
+    np.testing.assert_allclose(tr.particles, ref.particles, atol=1e-8)
+    np.testing.assert_allclose(tr.mode, plain.mode, atol=1e-8)
+    assert not np.array_equal(res.mode, plain.mode)

@@ -206,8 +206,11 @@ class KpfConfig(Section):
     refine_depth_m: float = Field(0.0, ge=0.0, le=0.5)
     """Its first step (m) along the arm's depth direction (the joint-space direction that
     moves the wrist along its camera ray, keeping its image); 0: no such direction."""
-    refine_inject: bool = True
-    """The refined mode replaces the lightest particle, with the heaviest's weight."""
+    refine_feedback: bool = True
+    """The refined mode is the tracker's too: it replaces the lightest particle (with the
+    heaviest's weight) and drives the motion model's velocity and the colour adaptation;
+    False: only reported (the tracking is the unrefined tracker's, same random stream: a
+    like-for-like measure of what the refinement does to the estimate)."""
     kde_stride: int = Field(1, ge=1, le=100)
     """The reweighting's KDEs from every k-th particle (1: all, exact; more: faster)."""
     cues: KpfCues = Field(default_factory=KpfCues)

@@ -191,8 +191,11 @@ class KpfTracker:
             mode, iters, modes = self._condensation(maps, T_cam_base), 0, None
         else:
             mode, iters, modes = self._kpf(maps, T_cam_base)
-            if self.cfg.refine_polls > 0:
-                mode = self._refine(mode, maps, T_cam_base)
+        report = mode
+        if self.cfg.refine_polls > 0 and self.cfg.filter == "kpf":
+            report = self._refine(mode, maps, T_cam_base)
+            if self.cfg.refine_feedback:
+                mode = report
         ev = self.lik.evaluate(mode[None], maps, T_cam_base)
         cost = ev.mean_cost(0)
         lost = not cost <= self.cfg.lost_cost
@@ -206,7 +209,7 @@ class KpfTracker:
         spread = np.sqrt(np.maximum(self.w @ (self.particles - mean) ** 2, 0.0))
         if modes is None:
             modes = mode[None]
-        return FrameResult(mode, self.particles, self.w, spread, lost, cost, iters, modes)
+        return FrameResult(report, self.particles, self.w, spread, lost, cost, iters, modes)
 
     def _kpf(self, maps, T_cam_base):
         cfg, rng = self.cfg, self.rng
@@ -278,7 +281,7 @@ class KpfTracker:
     def _refine(self, mode: np.ndarray, maps, T_cam_base: np.ndarray) -> np.ndarray:
         """``refine_polls``: the mode moved uphill on the likelihood (the sigmas' floors) and
         priors by a pattern search per arm (:func:`~humimic.perception.trackers.kpf.refine.
-        refine_arms`); with ``refine_inject`` it replaces the lightest particle, weighted as
+        refine_arms`); with ``refine_feedback`` it replaces the lightest particle, weighted as
         the heaviest."""
         cfg = self.cfg
 
@@ -287,7 +290,7 @@ class KpfTracker:
                     + self._prior(q) + self._arm_prior(q).sum(1))
         new, _ = refine_arms(self.body, mode, f, self.D, T_cam_base, cfg.refine_polls,
                              cfg.refine_step, cfg.refine_depth_m, self.limits)
-        if cfg.refine_inject:
+        if cfg.refine_feedback:
             k = int(np.argmin(self.w))
             self.particles = self.particles.copy()
             self.particles[k] = new
