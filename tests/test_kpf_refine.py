@@ -163,7 +163,7 @@ def test_tracker_reports_the_refined_mode_no_worse_than_mean_shifts_and_injects_
     ll = lik.evaluate(np.stack([modes[0], modes[6]]), maps, T).log_lik
     assert ll[1] >= ll[0]
     assert not np.array_equal(modes[0], modes[6])
-    np.testing.assert_array_equal(modes[0][:6], modes[6][:6])   # the torso is not searched
+    np.testing.assert_allclose(modes[0][:6], modes[6][:6], atol=1e-8)   # torso not searched
     assert np.any(np.all(trackers[6].particles == modes[6], axis=1))
     np.testing.assert_allclose(trackers[6].W.sum(axis=0), 1.0)
     # report only: the same tracking as the plain tracker's, the refined estimate reported
