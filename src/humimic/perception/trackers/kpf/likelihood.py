@@ -103,10 +103,12 @@ class Likelihood:
         """Positions (among the ellipsoids) of the parts with the skin cue."""
         self.skin_cols = np.asarray(lay.ellipsoid_idx, int)[self.skin_js]
 
-    def evaluate(self, q: np.ndarray, maps: C.CueMaps | FrameCues, T_cam_base: np.ndarray
-                 ) -> Evaluation:
+    def evaluate(self, q: np.ndarray, maps: C.CueMaps | FrameCues, T_cam_base: np.ndarray,
+                 floors: bool = False) -> Evaluation:
         """Costs and log-likelihoods of full states ``q (N, 14)``; ``maps`` the frame's maps,
-        or a :class:`FrameCues` that computes them where these particles' points fall."""
+        or a :class:`FrameCues` that computes them where these particles' points fall;
+        ``floors``: the sigmas are the configured floors whatever ``sigma_from_spread`` (one
+        objective for any batch, e.g. a local search's few candidates)."""
         cfg = self.cfg
         n = len(q)
         view = limb_view(self.body, self.body.forward(q), self.intr, T_cam_base)
@@ -142,25 +144,26 @@ class Likelihood:
             f = K.skin_fractions(maps, centre[:, j], axes[:, j], angle[:, j])
             ok = view.valid[:, view.ellipsoid_idx[j]]
             cost["skin"][:, self.skin_cols] = 1.0 - np.where(ok, f, 0.0)
-        return Evaluation(cost, self.combine(cost), colours)
+        return Evaluation(cost, self.combine(cost, floors), colours)
 
-    def sigmas(self, cost: dict[str, np.ndarray]) -> dict[str, float]:
+    def sigmas(self, cost: dict[str, np.ndarray], floors: bool = False) -> dict[str, float]:
         """Eq. 9's ``sigma_c``: the spread of each cue's costs over the particles (mean over
-        parts of the standard deviation), floored by the configured value."""
+        parts of the standard deviation), floored by the configured value (``floors``: the
+        floor alone)."""
         out = {}
         for c, e in cost.items():
             floor = self.floor[c]
             used = self.used[c]
-            if self.cfg.sigma_from_spread and used.any() and len(e) > 1:
+            if self.cfg.sigma_from_spread and not floors and used.any() and len(e) > 1:
                 out[c] = max(float(np.mean(np.std(e[:, used], axis=0))), floor)
             else:
                 out[c] = floor
         return out
 
-    def combine(self, cost: dict[str, np.ndarray]) -> np.ndarray:
+    def combine(self, cost: dict[str, np.ndarray], floors: bool = False) -> np.ndarray:
         """Schmidt eqs. 9-10 per part ``l``: ``1/N_l sum_c -e^2 / (2 sigma_c^2)``, ``(N, parts)``
-        (their sum over parts is the pose's log-likelihood)."""
-        sig = self.sigmas(cost)
+        (their sum over parts is the pose's log-likelihood; ``floors``: :meth:`sigmas`')."""
+        sig = self.sigmas(cost, floors)
         total = 0.0
         for c, e in cost.items():
             if self.any_used[c]:

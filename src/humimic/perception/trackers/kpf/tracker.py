@@ -30,6 +30,7 @@ from humimic.perception.trackers.kpf.flips import FLIPS, arm_flips
 from humimic.perception.trackers.kpf.frame_cues import FrameCues
 from humimic.perception.trackers.kpf.hands import hand_blob_moves, part_centres
 from humimic.perception.trackers.kpf.likelihood import Likelihood
+from humimic.perception.trackers.kpf.refine import refine_arms
 from humimic.perception.trackers.kpf.velocity import arm_noise_shaping, observable_arm_velocity
 
 _BLAS = ThreadpoolController()
@@ -190,6 +191,11 @@ class KpfTracker:
             mode, iters, modes = self._condensation(maps, T_cam_base), 0, None
         else:
             mode, iters, modes = self._kpf(maps, T_cam_base)
+        report = mode
+        if self.cfg.refine_polls > 0 and self.cfg.filter == "kpf":
+            report = self._refine(mode, maps, T_cam_base)
+            if self.cfg.refine_feedback:
+                mode = report
         ev = self.lik.evaluate(mode[None], maps, T_cam_base)
         cost = ev.mean_cost(0)
         lost = not cost <= self.cfg.lost_cost
@@ -203,7 +209,7 @@ class KpfTracker:
         spread = np.sqrt(np.maximum(self.w @ (self.particles - mean) ** 2, 0.0))
         if modes is None:
             modes = mode[None]
-        return FrameResult(mode, self.particles, self.w, spread, lost, cost, iters, modes)
+        return FrameResult(report, self.particles, self.w, spread, lost, cost, iters, modes)
 
     def _kpf(self, maps, T_cam_base):
         cfg, rng = self.cfg, self.rng
@@ -271,6 +277,28 @@ class KpfTracker:
         self.particles, self.w, self.W = parts, w, W
         first, _ = kpf.unique_rows(np.round(parts / (cfg.window * self.D)))
         return mode, iters, parts[first[np.argsort(-w[first])][:MAX_MODES]]
+
+    def _refine(self, mode: np.ndarray, maps, T_cam_base: np.ndarray) -> np.ndarray:
+        """``refine_polls``: the mode moved uphill on the likelihood (the sigmas' floors) and
+        priors by a pattern search per arm (:func:`~humimic.perception.trackers.kpf.refine.
+        refine_arms`); with ``refine_feedback`` it replaces the lightest particle, weighted as
+        the heaviest."""
+        cfg = self.cfg
+
+        def f(q):
+            return (self.lik.evaluate(q, maps, T_cam_base, floors=True).log_lik
+                    + self._prior(q) + self._arm_prior(q).sum(1))
+        new, _ = refine_arms(self.body, mode, f, self.D, T_cam_base, cfg.refine_polls,
+                             cfg.refine_step, cfg.refine_depth_m, self.limits)
+        if cfg.refine_feedback:
+            k = int(np.argmin(self.w))
+            self.particles = self.particles.copy()
+            self.particles[k] = new
+            self.W = self.W.copy()
+            self.W[k] = self.W.max(axis=0)
+            self.W /= self.W.sum(axis=0, keepdims=True)
+            self.w = self.W[:, 0]
+        return new
 
     def _depth_moves(self, pred: np.ndarray, T_cam_base: np.ndarray, share: float
                      ) -> np.ndarray:
