@@ -122,6 +122,14 @@ class KpfConfig(Section):
     Table 1 side, seeds 0-4, 82 ± 44 -> 55 ± 18 mm (seeds 0-9: 84 ± 49 -> 69 ± 39, worse on
     3 of 10), but angular (0-4) 182 -> 198 and the 18 s three gestures (schmidt_side, seeds
     1-4) 77 -> 106, worse on every seed. Off."""
+    particle_velocity_innovation: bool = False
+    """With ``particle_velocity``: each particle's velocity the motion model's velocity it was
+    propagated with plus its mean-shift correction
+    (:func:`~humimic.perception.trackers.kpf.velocity.particle_velocities`), without the
+    propagation noise; False: its whole displacement, noise included."""
+    particle_velocity_decay: float = Field(1.0, ge=0.0, le=1.0)
+    """With ``particle_velocity``: the factor on each particle's velocity per frame (1: kept
+    whole)."""
     min_random: float = Field(0.2, ge=0.0, le=1.0)
     """Smallest share of randomly propagated particles."""
     tol: float = Field(0.01, ge=0.0)

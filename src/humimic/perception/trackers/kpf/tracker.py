@@ -30,7 +30,11 @@ from humimic.perception.trackers.kpf.flips import FLIPS, arm_flips
 from humimic.perception.trackers.kpf.frame_cues import FrameCues
 from humimic.perception.trackers.kpf.hands import hand_blob_moves, part_centres
 from humimic.perception.trackers.kpf.likelihood import Likelihood
-from humimic.perception.trackers.kpf.velocity import arm_noise_shaping, observable_arm_velocity
+from humimic.perception.trackers.kpf.velocity import (
+    arm_noise_shaping,
+    observable_arm_velocity,
+    particle_velocities,
+)
 
 _BLAS = ThreadpoolController()
 #: The state's partition (``partitioned``): torso, right arm, left arm DOFs.
@@ -266,7 +270,9 @@ class KpfTracker:
         # rescue pass replaced the set: those particles have other ancestors; none for a
         # particle a flip, depth or hand jump moved: a jump is not a motion to repeat)
         if cfg.particle_velocity:   # only then read: no per-frame work without it
-            self.pvel = np.zeros_like(parts) if rescued else parts - resampled
+            self.pvel = np.zeros_like(parts) if rescued else particle_velocities(
+                parts, resampled, walked, velocity, moved, cfg.particle_velocity_innovation,
+                cfg.particle_velocity_decay)
             self.pvel[np.any(pred != walked, axis=1)] = 0.0
         self.particles, self.w, self.W = parts, w, W
         first, _ = kpf.unique_rows(np.round(parts / (cfg.window * self.D)))
