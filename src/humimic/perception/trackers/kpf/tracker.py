@@ -229,7 +229,8 @@ class KpfTracker:
             cfg.observed_walk_floor)
         pred, moved = kpf.mixed_propagate(resampled, velocity, self.share, self.D,
                                           rng, self.limits.inside, cfg.motion_noise,
-                                          shape=shape)
+                                          shape=shape,
+                                          shape_moved=cfg.observed_walk_groups == "both")
         pred = walked = self.limits.clamp(pred)
         if cfg.flip_share > 0.0:   # part of the dynamics: the reweighting's prior has them
             pred = self._flip_jumps(pred.copy(), T_cam_base, cfg.flip_share)
