@@ -232,7 +232,7 @@ def motion_share(w: np.ndarray, moved: np.ndarray, min_random: float) -> float:
 def mixed_propagate(particles: np.ndarray, velocity: np.ndarray, share: float, D: np.ndarray,
                     rng: np.random.Generator, valid: Callable[[np.ndarray], np.ndarray],
                     motion_scale: float = 0.25, retries: int = 10,
-                    shape: np.ndarray | None = None, shape_moved: bool = True
+                    shape: np.ndarray | None = None, shape_groups: str = "both"
                     ) -> tuple[np.ndarray, np.ndarray]:
     """Schmidt sec. 5.2's mixed propagation of resampled particles ``(N, d)``: the first
     ``round(share N)`` through the linear motion model ``s + velocity`` (velocity: the last
@@ -241,7 +241,8 @@ def mixed_propagate(particles: np.ndarray, velocity: np.ndarray, share: float, D
     the noise's extent); a particle outside ``valid`` is re-drawn (up to ``retries`` times,
     then left to the caller's clamp). ``velocity`` ``(d,)``, or ``(N, d)`` one per particle.
     ``shape`` ``(d, d)`` (optional): every particle's noise ``n`` becomes ``shape @ n``
-    (``shape_moved=False``: the random group's only, the motion group's noise left whole).
+    (``shape_groups``: ``both`` groups', or only the ``random`` or the ``motion`` group's,
+    the other's noise left whole).
     Returns the particles and the motion-model mask."""
     n = len(particles)
     moved = np.arange(n) < int(round(share * n))
@@ -249,7 +250,7 @@ def mixed_propagate(particles: np.ndarray, velocity: np.ndarray, share: float, D
     base = particles + np.where(moved[:, None], velocity, 0.0)
     T = None if shape is None else np.asarray(shape, float).T
 
-    shaped = np.ones(n, bool) if shape_moved else ~moved
+    shaped = {"both": np.ones(n, bool), "random": ~moved, "motion": moved}[shape_groups]
 
     def noise(u: np.ndarray, h: np.ndarray, rows: np.ndarray) -> np.ndarray:
         u = u * h

@@ -114,9 +114,9 @@ class KpfConfig(Section):
     has components along the weak directions."""
     observed_walk_floor: float = Field(0.25, ge=0.0, le=1.0)
     """The noise factor along the directions that move no pixel, with ``observed_walk_px``."""
-    observed_walk_groups: Literal["both", "random"] = "both"
-    """Which propagation groups' noise ``observed_walk_px`` shapes: ``both``, or ``random``
-    (the random group's only; the motion group's noise left whole)."""
+    observed_walk_groups: Literal["both", "random", "motion"] = "both"
+    """Which propagation groups' noise ``observed_walk_px`` shapes: ``both``, or only the
+    ``random`` or the ``motion`` group's (the other's noise left whole)."""
     particle_velocity: bool = False
     """Our extension: each particle's motion-model velocity its own (from its ancestor's
     position last frame to where mean shift took it), carried through the resampling, instead

@@ -230,7 +230,7 @@ class KpfTracker:
         pred, moved = kpf.mixed_propagate(resampled, velocity, self.share, self.D,
                                           rng, self.limits.inside, cfg.motion_noise,
                                           shape=shape,
-                                          shape_moved=cfg.observed_walk_groups == "both")
+                                          shape_groups=cfg.observed_walk_groups)
         pred = walked = self.limits.clamp(pred)
         if cfg.flip_share > 0.0:   # part of the dynamics: the reweighting's prior has them
             pred = self._flip_jumps(pred.copy(), T_cam_base, cfg.flip_share)
