@@ -137,7 +137,8 @@ class KpfConfig(Section):
     update without the propagation noise); False: its whole displacement, noise included.
     Measured (Table 1's ``kpf``, (1000, 3), with ``observed_velocity_px`` 10, mean wrist
     error): angular seeds 0-4 182 ± 24 (main) / 123 ± 9 (noise included) -> 116 ± 7 mm, but
-    the 18 s three gestures (schmidt_side) seeds 1-3 81 (main) / 177 -> 125. Off."""
+    the 18 s three gestures (schmidt_side) seeds 1-4 77 ± 18 (main) / 170 ± 60 -> 121 ± 25.
+    Off."""
     particle_velocity_decay: float = Field(1.0, ge=0.0, le=1.0)
     """Our extension, with ``particle_velocity``: the factor on each particle's velocity per
     frame (1: kept whole). Measured (as above, ``observed_velocity_px`` 10): 0.5: angular
