@@ -137,7 +137,8 @@ class KpfConfig(Section):
     update without the propagation noise); False: its whole displacement, noise included.
     Measured (Table 1's ``kpf``, (1000, 3), with ``observed_velocity_px`` 10, mean wrist
     error): angular seeds 0-4 182 ± 24 (main) / 123 ± 9 (noise included) -> 116 ± 7 mm
-    (seeds 5-9: main 199 -> 123, better on every seed), but
+    (seeds 5-9: main 199 -> 123, better on every seed; another person, darker skin, red
+    shirt, seeds 0-2: 159 -> 137, better on 2 of 3), but
     the 18 s three gestures (schmidt_side) seeds 1-4 77 ± 18 (main) / 170 ± 60 -> 121 ± 25.
     Off."""
     particle_velocity_decay: float = Field(1.0, ge=0.0, le=1.0)
