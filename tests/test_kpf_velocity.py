@@ -13,6 +13,7 @@ from humimic.perception.trackers.kpf.velocity import (
     arm_image_jacobian,
     observable_arm_velocity,
     observable_velocity,
+    particle_velocities,
 )
 
 
@@ -135,3 +136,28 @@ def test_tracker_per_particle_velocities_skip_jumps_and_lost_frames():
     assert still < 0.1 and jumped > 0.5, (still, jumped)
     pvel, res = pvel_after_two_steps(lost_cost=1e-3)
     assert res.lost and np.all(pvel == 0.0)
+
+
+def test_particle_velocities_with_and_without_the_propagation_noise():
+    """Built from known parts: ancestors, a velocity per particle used by the motion group
+    only, uniform noise and a mean-shift correction. The whole displacement is velocity +
+    noise + correction; the innovation form drops the noise (random group: the correction
+    alone); ``decay`` scales both; a ``(d,)`` velocity acts as the same row for every
+    particle."""
+    rng = np.random.default_rng(5)
+    n, d = 7, 14
+    resampled, v = rng.normal(size=(n, d)), rng.normal(size=(n, d))
+    moved = np.arange(n) < 4
+    noise, shift = rng.uniform(-1, 1, (n, d)), 0.1 * rng.normal(size=(n, d))
+    walked = resampled + v * moved[:, None] + noise
+    parts = walked + shift
+    whole = particle_velocities(parts, resampled, walked, v, moved, innovation=False)
+    assert np.allclose(whole[:4], v[:4] + noise[:4] + shift[:4])
+    assert np.allclose(whole[4:], noise[4:] + shift[4:])
+    innov = particle_velocities(parts, resampled, walked, v, moved, innovation=True, decay=0.5)
+    assert np.allclose(innov[:4], 0.5 * (v[:4] + shift[:4]))
+    assert np.allclose(innov[4:], 0.5 * shift[4:])
+    one = rng.normal(size=d)
+    walked1 = resampled + one * moved[:, None] + noise
+    got = particle_velocities(walked1 + shift, resampled, walked1, one, moved, innovation=True)
+    assert np.allclose(got, one * moved[:, None] + shift)

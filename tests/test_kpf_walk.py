@@ -61,6 +61,24 @@ def test_shaped_propagation_has_the_closed_form_covariance():
     assert np.allclose(np.cov(out.T), np.diag(D ** 2 / 3.0), atol=0.02 * D.max() ** 2)
 
 
+def test_shaping_one_group_only_leaves_the_others_noise_diagonal():
+    """``shape_groups="random"`` (``observed_walk_groups``): the random group's covariance
+    ``A diag(D^2 / 3) A^T``, the motion group's the paper's ``diag((0.25 D)^2 / 3)``
+    (sample covariances of 200k draws each); ``"motion"`` the other way round."""
+    rng = np.random.default_rng(6)
+    d, n = 4, 400_000
+    D = np.array([0.4, 0.35, 0.6, 0.45])
+    A = noise_shaping(rng.normal(size=(3, d)) * 20.0, 10.0, 0.25)
+    walk, motion = np.diag(D ** 2 / 3.0), np.diag((0.25 * D) ** 2 / 3.0)
+    for groups, want_r, want_m in (("random", A @ walk @ A.T, motion),
+                                   ("motion", walk, A @ motion @ A.T)):
+        out, moved = kpf.mixed_propagate(np.zeros((n, d)), np.zeros(d), 0.5, D, rng,
+                                         lambda q: np.ones(len(q), bool), 0.25, shape=A,
+                                         shape_groups=groups)
+        assert np.abs(np.cov(out[~moved].T) - want_r).max() < 0.02 * np.abs(want_r).max()
+        assert np.abs(np.cov(out[moved].T) - want_m).max() < 0.02 * np.abs(want_m).max()
+
+
 def test_a_straight_arms_twist_noise_is_floored_and_the_torso_untouched():
     """The tracker's use: a straight arm's humeral rotation moves no pixel, so its noise keeps
     the floor; the torso's block is the identity."""

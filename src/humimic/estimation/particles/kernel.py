@@ -232,14 +232,17 @@ def motion_share(w: np.ndarray, moved: np.ndarray, min_random: float) -> float:
 def mixed_propagate(particles: np.ndarray, velocity: np.ndarray, share: float, D: np.ndarray,
                     rng: np.random.Generator, valid: Callable[[np.ndarray], np.ndarray],
                     motion_scale: float = 0.25, retries: int = 10,
-                    shape: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+                    shape: np.ndarray | None = None, shape_groups: str = "both"
+                    ) -> tuple[np.ndarray, np.ndarray]:
     """Schmidt sec. 5.2's mixed propagation of resampled particles ``(N, d)``: the first
     ``round(share N)`` through the linear motion model ``s + velocity`` (velocity: the last
     two best modes' difference) with uniform noise of half-width ``motion_scale D``, the rest
     by a random walk with uniform noise of half-width ``D`` (the paper's "variance D", read as
     the noise's extent); a particle outside ``valid`` is re-drawn (up to ``retries`` times,
     then left to the caller's clamp). ``velocity`` ``(d,)``, or ``(N, d)`` one per particle.
-    ``shape`` ``(d, d)`` (optional): every particle's noise ``n`` becomes ``shape @ n``.
+    ``shape`` ``(d, d)`` (optional): every particle's noise ``n`` becomes ``shape @ n``
+    (``shape_groups``: ``both`` groups', or only the ``random`` or the ``motion`` group's,
+    the other's noise left whole).
     Returns the particles and the motion-model mask."""
     n = len(particles)
     moved = np.arange(n) < int(round(share * n))
@@ -247,16 +250,21 @@ def mixed_propagate(particles: np.ndarray, velocity: np.ndarray, share: float, D
     base = particles + np.where(moved[:, None], velocity, 0.0)
     T = None if shape is None else np.asarray(shape, float).T
 
-    def noise(u: np.ndarray, h: np.ndarray) -> np.ndarray:
-        return u * h if T is None else (u * h) @ T
+    shaped = {"both": np.ones(n, bool), "random": ~moved, "motion": moved}[shape_groups]
 
-    out = base + noise(rng.uniform(-1.0, 1.0, base.shape), half)
+    def noise(u: np.ndarray, h: np.ndarray, rows: np.ndarray) -> np.ndarray:
+        u = u * h
+        if T is not None:
+            u[rows] = u[rows] @ T
+        return u
+
+    out = base + noise(rng.uniform(-1.0, 1.0, base.shape), half, shaped)
     for _ in range(retries):
         bad = ~valid(out)
         if not bad.any():
             break
         out[bad] = base[bad] + noise(rng.uniform(-1.0, 1.0, (int(bad.sum()), base.shape[1])),
-                                     half[bad])
+                                     half[bad], shaped[bad])
     return out, moved
 
 

@@ -114,6 +114,14 @@ class KpfConfig(Section):
     has components along the weak directions."""
     observed_walk_floor: float = Field(0.25, ge=0.0, le=1.0)
     """The noise factor along the directions that move no pixel, with ``observed_walk_px``."""
+    observed_walk_groups: Literal["both", "random", "motion"] = "both"
+    """Which propagation groups' noise ``observed_walk_px`` shapes: ``both``, or only the
+    ``random`` or the ``motion`` group's (the other's noise left whole). Measured with
+    ``observed_velocity_px`` 10 and ``particle_velocity`` (Table 1's ``kpf``, (1000, 3)):
+    ``both``: schmidt_side (seeds 1-4) 77 ± 1 mm (main 77 ± 18), Table 1 side (0-4) 77 ± 2,
+    angular (0-4) 197 ± 5 (main 182 ± 24); ``random``: angular 215 (seeds 0-2); ``motion``:
+    angular 118 ± 10 but schmidt_side 115 ± 38. The random group's shaping is what keeps the
+    long runs' depth and what costs angular pointing. ``both`` as before."""
     particle_velocity: bool = False
     """Our extension: each particle's motion-model velocity its own (from its ancestor's
     position last frame to where mean shift took it), carried through the resampling, instead
@@ -122,6 +130,22 @@ class KpfConfig(Section):
     Table 1 side, seeds 0-4, 82 ± 44 -> 55 ± 18 mm (seeds 0-9: 84 ± 49 -> 69 ± 39, worse on
     3 of 10), but angular (0-4) 182 -> 198 and the 18 s three gestures (schmidt_side, seeds
     1-4) 77 -> 106, worse on every seed. Off."""
+    particle_velocity_innovation: bool = False
+    """Our extension, with ``particle_velocity``: each particle's velocity the motion model's
+    velocity it was propagated with plus its mean-shift correction
+    (:func:`~humimic.perception.trackers.kpf.velocity.particle_velocities`, an alpha-beta
+    update without the propagation noise); False: its whole displacement, noise included.
+    Measured (Table 1's ``kpf``, (1000, 3), with ``observed_velocity_px`` 10, mean wrist
+    error): angular seeds 0-4 182 ± 24 (main) / 123 ± 9 (noise included) -> 116 ± 7 mm
+    (seeds 5-9: main 199 -> 123, better on every seed; another person, darker skin, red
+    shirt, seeds 0-2: 159 -> 137, better on 2 of 3), but
+    the 18 s three gestures (schmidt_side) seeds 1-4 77 ± 18 (main) / 170 ± 60 -> 121 ± 25.
+    Off."""
+    particle_velocity_decay: float = Field(1.0, ge=0.0, le=1.0)
+    """Our extension, with ``particle_velocity``: the factor on each particle's velocity per
+    frame (1: kept whole). Measured (as above, ``observed_velocity_px`` 10): 0.5: angular
+    131 ± 9, side (seeds 0-4) 90 ± 23 (main 82 ± 44), schmidt_side (1-4) 123 ± 33 (main
+    77 ± 18, 1.0: 170 ± 60); 0.8: angular 134 ± 12, schmidt_side 180 ± 58. Off (1.0)."""
     min_random: float = Field(0.2, ge=0.0, le=1.0)
     """Smallest share of randomly propagated particles."""
     tol: float = Field(0.01, ge=0.0)

@@ -31,7 +31,11 @@ from humimic.perception.trackers.kpf.frame_cues import FrameCues
 from humimic.perception.trackers.kpf.hands import hand_blob_moves, part_centres
 from humimic.perception.trackers.kpf.likelihood import Likelihood
 from humimic.perception.trackers.kpf.refine import refine_arms
-from humimic.perception.trackers.kpf.velocity import arm_noise_shaping, observable_arm_velocity
+from humimic.perception.trackers.kpf.velocity import (
+    arm_noise_shaping,
+    observable_arm_velocity,
+    particle_velocities,
+)
 
 _BLAS = ThreadpoolController()
 #: The state's partition (``partitioned``): torso, right arm, left arm DOFs.
@@ -231,7 +235,8 @@ class KpfTracker:
             cfg.observed_walk_floor)
         pred, moved = kpf.mixed_propagate(resampled, velocity, self.share, self.D,
                                           rng, self.limits.inside, cfg.motion_noise,
-                                          shape=shape)
+                                          shape=shape,
+                                          shape_groups=cfg.observed_walk_groups)
         pred = walked = self.limits.clamp(pred)
         if cfg.flip_share > 0.0:   # part of the dynamics: the reweighting's prior has them
             pred = self._flip_jumps(pred.copy(), T_cam_base, cfg.flip_share)
@@ -272,7 +277,9 @@ class KpfTracker:
         # rescue pass replaced the set: those particles have other ancestors; none for a
         # particle a flip, depth or hand jump moved: a jump is not a motion to repeat)
         if cfg.particle_velocity:   # only then read: no per-frame work without it
-            self.pvel = np.zeros_like(parts) if rescued else parts - resampled
+            self.pvel = np.zeros_like(parts) if rescued else particle_velocities(
+                parts, resampled, walked, velocity, moved, cfg.particle_velocity_innovation,
+                cfg.particle_velocity_decay)
             self.pvel[np.any(pred != walked, axis=1)] = 0.0
         self.particles, self.w, self.W = parts, w, W
         first, _ = kpf.unique_rows(np.round(parts / (cfg.window * self.D)))

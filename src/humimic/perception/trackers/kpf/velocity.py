@@ -32,6 +32,26 @@ from humimic.perception.trackers.kpf.depth import SIDES
 ARM_POINTS = ("elbow", "wrist")
 
 
+def particle_velocities(parts: np.ndarray, resampled: np.ndarray, walked: np.ndarray,
+                        velocity: np.ndarray, moved: np.ndarray, innovation: bool,
+                        decay: float = 1.0) -> np.ndarray:
+    """``(N, d)`` each particle's velocity for the next frame's linear motion model
+    (``KpfConfig.particle_velocity``), times ``decay``: ``innovation=False``, its whole
+    displacement this frame, ``parts - resampled`` (ancestor -> where mean shift took it: the
+    propagation noise included); ``innovation=True``, the motion model's velocity it was
+    propagated with (``velocity``, ``(d,)`` or ``(N, d)``, for the ``moved`` ones; zero for
+    the random group) plus the mean-shift correction ``parts - walked`` (``walked`` the
+    propagated particles), i.e. the displacement without the injected noise (an alpha-beta
+    filter's velocity update, gain 1: along directions the likelihood does not pull, the
+    velocity does not random-walk with the noise)."""
+    parts, resampled = np.asarray(parts, float), np.asarray(resampled, float)
+    if not innovation:
+        return decay * (parts - resampled)
+    used = np.where(np.asarray(moved, bool)[:, None], np.broadcast_to(velocity, parts.shape),
+                    0.0)
+    return decay * (used + parts - np.asarray(walked, float))
+
+
 def observable_velocity(v: np.ndarray, J: np.ndarray, lam: float) -> np.ndarray:
     """``V diag(s^2 / (s^2 + lam^2)) V^T v`` for ``J = U diag(s) V^T`` (``J (m, d)`` the image
     Jacobian, ``v (d,)`` the velocity, or ``(N, d)`` row-wise): the damped pseudo-inverse
