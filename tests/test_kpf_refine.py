@@ -66,6 +66,9 @@ def test_pattern_search_ignores_non_finite_values():
     res = pattern_search(f, np.zeros(2), np.eye(2), np.full(2, 1.0), polls=50)
     assert np.isfinite(res.value) and res.x[0] <= 0.5
     np.testing.assert_allclose(res.x, [0.5, 1.0], atol=1e-3)   # the best finite point
+    # a non-finite start is left for the first finite candidate (it blocked the search)
+    start = pattern_search(f, np.array([0.6, 0.0]), np.eye(2), np.full(2, 0.5), polls=50)
+    assert np.isfinite(start.value) and start.x[0] <= 0.5
 
 
 def _ray(body, q, T, side="r"):
@@ -112,7 +115,7 @@ def test_refine_arms_climbs_a_closed_form_wrist_objective():
     for s in ("r", "l"):
         e0 = np.linalg.norm(body.forward(q0[None]).joint(f"{s}_wrist")[0] - targets[s])
         e1 = np.linalg.norm(body.forward(out[None]).joint(f"{s}_wrist")[0] - targets[s])
-        assert e1 < 0.1 * e0 and e1 < 0.003       # measured ~1e-4 m from ~0.04 m
+        assert e0 > 0.02 and e1 < 3e-4            # measured ~1e-4 m from ~0.04 m
 
 
 def test_fixed_sigma_evaluation_is_eqs_9_10_with_the_floors():

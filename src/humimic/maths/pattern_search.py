@@ -41,6 +41,8 @@ def pattern_search(f: Callable[[np.ndarray], np.ndarray], x0: np.ndarray,
     step = np.asarray(steps, float).copy()
     fx = float(np.asarray(f(x[None]), float)[0])
     start, n = fx, 1
+    if not np.isfinite(fx):     # a non-finite start: any finite candidate beats it
+        fx = -np.inf
     for _ in range(polls):
         delta = np.concatenate([dirs * step[:, None], -dirs * step[:, None]])
         cand = x[None] + delta

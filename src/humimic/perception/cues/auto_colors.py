@@ -164,11 +164,12 @@ def bin_variance(bits: int) -> float:
 def learn_model(world, cameras: list[str], color_class: str, space: str,
                 rng: np.random.Generator, ticks: np.ndarray, bits: int = 6,
                 gains: tuple[float, ...] = (1.0,)
-                ) -> tuple[ColorModel, np.ndarray, np.ndarray]:
+                ) -> tuple[ColorModel, np.ndarray, np.ndarray, np.ndarray]:
     """A colour model of ``color_class`` learned from the world's own renders; also the
     class's pixels it was fitted to (without the darkest: with them, the face's dark features
     would keep the shoes' bins) and the other pixels of the same renders, for
-    :func:`cut_background`.
+    :func:`cut_background`, and the class's pixels as rendered (before ``gains``), for
+    :func:`look_alike_ratio`.
 
     Each component's covariance is at least one LUT bin wide (:func:`bin_variance` added to
     its diagonal): the LUT evaluates the density at bin centres, and a noiseless render gives
@@ -180,6 +181,7 @@ def learn_model(world, cameras: list[str], color_class: str, space: str,
     pos, neg = frame_pixels(world, cameras, ticks, geoms, noise, rng,
                             negatives_per_frame=NEGATIVES_PER_FRAME)
     pixels = trim_dark(np.concatenate(pos)) if pos else np.zeros((0, 3), np.uint8)
+    plain = pixels
     if tuple(gains) != (1.0,) and len(pixels):
         pixels = brightened(pixels, gains)
     if len(pixels) < MIN_PIXELS:
@@ -190,7 +192,7 @@ def learn_model(world, cameras: list[str], color_class: str, space: str,
         pixels = pixels[rng.choice(len(pixels), MAX_PIXELS, replace=False)]
     model = fit_color_model(pixels, space, COMPONENTS, rng, name=color_class, tol=TOL,
                             max_iter=100, reg_covar=bin_variance(bits))
-    return model, seen, np.concatenate(neg) if neg else np.zeros((0, 3), np.uint8)
+    return model, seen, np.concatenate(neg) if neg else np.zeros((0, 3), np.uint8), plain
 
 
 def bin_counts(px: np.ndarray, bits: int) -> np.ndarray:
@@ -271,11 +273,11 @@ def learned_lut(world, cameras: list[str], color_class: str = "skin", space: str
     cached = lut is not None
     if lut is None:
         rng = np.random.default_rng(int(digest[:15], 16))
-        model, seen, other = learn_model(world, cameras, color_class, space, rng, ticks, bits,
-                                         gains)
+        model, seen, other, plain = learn_model(world, cameras, color_class, space, rng,
+                                                ticks, bits, gains)
         lut = ColorLUT(model, bits, cut_background(ColorLUT(model, bits).table, bits, seen,
                                                    other, ratio=background_ratio))
-        lut.look_alike = look_alike_ratio(lut.table, bits, seen, other)
+        lut.look_alike = look_alike_ratio(lut.table, bits, plain, other)
         cache.save(kind, digest, _store(model, lut))
     return CachedLUT(lut, cached, time.perf_counter() - t0, digest)
 

@@ -207,31 +207,29 @@ class KpfConfig(Section):
     depth_extent_m: float = Field(0.25, gt=0.0, le=1.0)
     """Half-width (m) of the uniform range change of those depth moves."""
     refine_polls: int = Field(0, ge=0, le=50)
-    """Our extension: after mean shift, this many polls of a deterministic pattern search per
-    arm (:mod:`~humimic.perception.trackers.kpf.refine`) climb the likelihood (the sigmas'
-    floors) and priors from the dominant mode along each arm DOF (and with
+    """Our extension (``filter: kpf`` only): after mean shift, this many polls of a deterministic
+    pattern search per arm (:mod:`~humimic.perception.trackers.kpf.refine`) climb the likelihood
+    (the sigmas' floors) and priors from the dominant mode along each arm DOF (and with
     ``refine_depth_m`` the wrist's camera ray); the result is the estimate. 0: off, as the
-    paper. Why: in Table 1's holds (``kpf``, (1000, 3), seeds 0-4) the along-ray wrist error
-    is a bias and a slow drift, not jitter (side: rms 42 mm, of it |mean| 24 and a linear
-    drift rms 28, frame-to-frame jitter 7; angular: bias 280, jitter 12: a temporal smoothing
-    could remove ~10 mm at most), and the estimate scores below the truth (margin +1.6 / +1.2
-    nats; above the truth in 6-8 % of frames): a search that stops short. Measured (mean
-    wrist error, mm, main -> 6 polls, step 0.1 D, no depth direction, fed back): Table 1 side
-    seeds 0-9 84 ± 49 -> 63 ± 13 (the bad seeds 152 / 188 -> 82 / 61, but worse on 5 of 10;
-    across the ray 28 -> 16, flip-free 53 -> 45), angular seeds 0-4 182 ± 24 -> 187 ± 12
-    (across 26 -> 18, flip-free 67 -> 47), seeds 0-9 191 ± 23 -> 197 ± 18; another person
-    (skin [0.45, 0.30, 0.22], red shirt, seeds 5-7) side 72 -> 64 (worse on 1 of 3), angular
-    172 -> 203;
-    the 18 s gestures (schmidt_side, seeds 1-4) 77 ± 17 -> 91 ± 28 (worse on 3 of 4);
-    ~9 % fewer frames per CPU second. The search gap closes (the estimate scores above the
-    truth in ~50 % of frames, margin +0.7 / +0.1 nats) but the depth does not follow: what
-    is left is the likelihood's depth ambiguity, which no local search resolves. With the
-    20 mm depth direction: side (0-4) 100 ± 20, angular 162 ± 27; 12 polls: side 73 ± 32;
-    step 0.05 D: side 99 ± 50; not fed back: side 90 ± 28. Like for like (``refine_feedback``
-    off: the same tracking, only the reported estimate refined): side (0-4) 82 ± 44 -> 82 ±
-    45 (across 23 -> 21, along 73 -> 75), angular 182 ± 24 -> 183 ± 27 (across 26 -> 24, along
-    179 -> 180); with the depth direction side 85 ± 43 (along 79). Off: no setting helps
-    everywhere."""
+    paper. Why: in Table 1's holds (``kpf``, (1000, 3), seeds 0-4) the along-ray wrist error is
+    a bias and a slow drift, not jitter (side: rms 42 mm, of it |mean| 24 and a linear drift rms
+    28, frame-to-frame jitter 7; angular: bias 280, jitter 12: a temporal smoothing could remove
+    ~10 mm at most), and the estimate scores below the truth (margin +1.6 / +1.2 nats; above the
+    truth in 6-8 % of frames): a search that stops short. Measured (mean wrist error, mm, main
+    -> 6 polls, step 0.1 D, no depth direction, fed back): Table 1 side seeds 0-9 84 ± 49 -> 63
+    ± 13 (the bad seeds 152 / 188 -> 82 / 61, but worse on 5 of 10; across the ray 28 -> 16,
+    flip-free 53 -> 45), angular seeds 0-4 182 ± 24 -> 187 ± 12 (across 26 -> 18, flip-free 67
+    -> 47), seeds 0-9 191 ± 23 -> 197 ± 18; another person (skin [0.45, 0.30, 0.22], red shirt,
+    seeds 5-7) side 72 -> 64 (worse on 1 of 3), angular 172 -> 203; the 18 s gestures
+    (schmidt_side, seeds 1-4) 77 ± 17 -> 91 ± 28 (worse on 3 of 4); ~9 % fewer frames per CPU
+    second. The search gap closes (the estimate scores above the truth in ~50 % of frames,
+    margin +0.7 / +0.1 nats) but the depth does not follow: what is left is the likelihood's
+    depth ambiguity, which no local search resolves. With the 20 mm depth direction: side (0-4)
+    100 ± 20, angular 162 ± 27; 12 polls: side 73 ± 32; step 0.05 D: side 99 ± 50; not fed back:
+    side 90 ± 28. Like for like (``refine_feedback`` off: the same tracking, only the reported
+    estimate refined): side (0-4) 82 ± 44 -> 82 ± 45 (across 23 -> 21, along 73 -> 75), angular
+    182 ± 24 -> 183 ± 27 (across 26 -> 24, along 179 -> 180); with the depth direction side 85 ±
+    43 (along 79). Off: no setting helps everywhere."""
     refine_step: float = Field(0.1, gt=0.0, le=2.0)
     """The pattern search's first step along each arm DOF, as a fraction of D (halved after
     each poll that finds nothing better)."""

@@ -163,9 +163,13 @@ class KpfTracker:
         return np.column_stack([arm_twist_log_prior(s, *q[:, j:j + 3].T, lo, hi, sd)
                                 for s, (_, j) in SIDES.items()])
 
+    def _log_post(self, q, maps, T_cam_base, floors: bool = False) -> np.ndarray:
+        """The log-likelihood (eqs. 9-10) plus the torso and twist log-priors of poses ``q``."""
+        return (self.lik.evaluate(q, maps, T_cam_base, floors=floors).log_lik
+                + self._prior(q) + self._arm_prior(q).sum(1))
+
     def _log_lik(self, maps, T_cam_base):
-        return distinct(lambda q: self.lik.evaluate(q, maps, T_cam_base).log_lik
-                        + self._prior(q) + self._arm_prior(q).sum(1))
+        return distinct(lambda q: self._log_post(q, maps, T_cam_base))
 
     def _group_log_lik(self, maps, T_cam_base):
         """``(N, 3)``: the whole pose's log-likelihood (torso group), the right arm's limbs',
@@ -196,7 +200,8 @@ class KpfTracker:
         else:
             mode, iters, modes = self._kpf(maps, T_cam_base)
         report = mode
-        if self.cfg.refine_polls > 0 and self.cfg.filter == "kpf":
+        refined = self.cfg.refine_polls > 0 and self.cfg.filter == "kpf"
+        if refined:
             report = self._refine(mode, maps, T_cam_base)
             if self.cfg.refine_feedback:
                 mode = report
@@ -213,6 +218,8 @@ class KpfTracker:
         spread = np.sqrt(np.maximum(self.w @ (self.particles - mean) ** 2, 0.0))
         if modes is None:
             modes = mode[None]
+        elif refined:    # the reported (refined) mode first, as the display expects
+            modes = np.vstack([report[None], modes])[:MAX_MODES]
         return FrameResult(report, self.particles, self.w, spread, lost, cost, iters, modes)
 
     def _kpf(self, maps, T_cam_base):
@@ -293,14 +300,15 @@ class KpfTracker:
         cfg = self.cfg
 
         def f(q):
-            return (self.lik.evaluate(q, maps, T_cam_base, floors=True).log_lik
-                    + self._prior(q) + self._arm_prior(q).sum(1))
+            return self._log_post(q, maps, T_cam_base, floors=True)
         new, _ = refine_arms(self.body, mode, f, self.D, T_cam_base, cfg.refine_polls,
                              cfg.refine_step, cfg.refine_depth_m, self.limits)
         if cfg.refine_feedback:
             k = int(np.argmin(self.w))
             self.particles = self.particles.copy()
             self.particles[k] = new
+            self.pvel = self.pvel.copy()    # no velocity of its own (not the replaced one's)
+            self.pvel[k] = 0.0
             self.W = self.W.copy()
             self.W[k] = self.W.max(axis=0)
             self.W /= self.W.sum(axis=0, keepdims=True)
