@@ -81,6 +81,15 @@ in menezes_fig5_hand, static, wave, menezes_gest_far, fig12/13; 11 / 19 bins in
 menezes_hand_people / menezes_fig9_leave_return, 0.1 / 0.2 % of the skin's pixels). Not the
 default for every tracker: schmidt_table1_foveal's kpf lost 32 % of its frames with it (test
 limit 10 %), not investigated."""
+BACKGROUND_ODDS = 1.0
+"""The ``odds`` of :func:`cut_background` a learner may ask for (``background_odds``): a bin
+is also cleared when the scene's other pixels in it outnumber the class's own this many times
+in the renders -- the class's posterior in the scene's own frequencies (``ratio`` compares
+shares, a likelihood ratio: the class's few pixels weigh ~100 times the room's many, so a
+colour both show stays the class's). Ude & Atkeson's blobs ask for it (:mod:`humimic.
+perception.blobs.build`): under a dark skin [0.40, 0.27, 0.20] in lab_clutter, ``ratio`` 1.0
+left half the posts' pixels above posterior 0.5 (the posts' lit face is the shaded skin's
+colour), ``odds`` 1.0 leaves ~4 %; see ``blobs.build.BACKGROUND_ODDS`` for what it measured."""
 
 
 class NotInView(ValueError):
@@ -139,11 +148,19 @@ def inputs(world, cameras: list[str], color_class: str, space: str, bits: int,
 
 def digest_of(world, cameras: list[str], color_class: str = "skin", space: str = "rgb",
               bits: int = 6, gains: tuple[float, ...] = (1.0,),
-              background_ratio: float | None = None) -> str:
+              background_ratio: float | None = None,
+              background_odds: float | None = None) -> str:
     """The cache key of the model :func:`learned_lut` would learn."""
     ticks = sample_ticks(world.n_ticks)
-    return cache.key(*inputs(world, cameras, color_class, space, bits, ticks, gains,
-                             background_ratio))
+    return _with_odds(cache.key(*inputs(world, cameras, color_class, space, bits, ticks, gains,
+                                        background_ratio)), background_odds)
+
+
+def _with_odds(digest: str, background_odds: float | None) -> str:
+    """The cache key of a table cut with ``background_odds`` from the fit keyed ``digest``."""
+    if background_odds is None:
+        return digest
+    return cache.key(digest, "background_odds", float(background_odds))
 
 
 def brightened(pixels: np.ndarray, gains: tuple[float, ...]) -> np.ndarray:
@@ -217,21 +234,25 @@ def look_alike_ratio(table: np.ndarray, bits: int, class_px: np.ndarray,
 
 
 def cut_background(table: np.ndarray, bits: int, class_px: np.ndarray, other_px: np.ndarray,
-                   min_other: int = MIN_BACKGROUND, ratio: float | None = None
-                   ) -> np.ndarray:
+                   min_other: int = MIN_BACKGROUND, ratio: float | None = None,
+                   odds: float | None = None) -> np.ndarray:
     """A copy of a LUT ``table`` (``(2^bits)^3`` densities, :class:`ColorLUT` layout) with 0 in
     the bins where at least ``min_other`` of ``other_px (N, 3)`` uint8 fall and none of
     ``class_px`` -- or, with a ``ratio`` (:data:`BACKGROUND_RATIO`), where their share of
-    ``other_px`` is more than ``ratio`` times the bin's share of ``class_px``: the model's
-    tails where the scene's other surfaces are, and its own class was never seen (or seen
-    less often), are not the class."""
+    ``other_px`` is more than ``ratio`` times the bin's share of ``class_px``; or, with
+    ``odds`` (:data:`BACKGROUND_ODDS`), where they are more than ``odds`` times as many as the
+    class's pixels in the bin: the model's tails where the scene's other surfaces are, and its
+    own class was never seen (or seen less often), are not the class."""
     c_other, c_class = bin_counts(other_px, bits), bin_counts(class_px, bits)
     out = np.array(table, np.float32, copy=True)
-    if ratio is None:
-        out[(c_other >= min_other) & (c_class == 0)] = 0.0
-        return out
-    n_class, n_other = max(len(class_px), 1), max(len(other_px), 1)
-    out[(c_other >= min_other) & (c_other * n_class > ratio * c_class * n_other)] = 0.0
+    shown = c_other >= min_other
+    cut = shown & (c_class == 0)
+    if ratio is not None:
+        n_class, n_other = max(len(class_px), 1), max(len(other_px), 1)
+        cut |= shown & (c_other * n_class > ratio * c_class * n_other)
+    if odds is not None:  # the class's posterior in the scene's own frequencies
+        cut |= shown & (c_other > odds * c_class)
+    out[cut] = 0.0
     return out
 
 
@@ -258,23 +279,28 @@ def _restore(stored: dict[str, np.ndarray] | None, bits: int) -> ColorLUT | None
 
 def learned_lut(world, cameras: list[str], color_class: str = "skin", space: str = "rgb",
                 bits: int = 6, gains: tuple[float, ...] = (1.0,),
-                background_ratio: float | None = None) -> CachedLUT:
+                background_ratio: float | None = None,
+                background_odds: float | None = None) -> CachedLUT:
     """The colour LUT of ``color_class`` for this world: from the cache, or learned from the
     world's renders of ``cameras`` (their pixels under each of ``gains``, :func:`brightened`)
-    and stored; ``background_ratio``: :func:`cut_background`'s ``ratio``. Raises
-    :class:`NotInView`."""
+    and stored; ``background_ratio``, ``background_odds``: :func:`cut_background`'s ``ratio``
+    and ``odds``. The renders' noise and the fit are seeded without ``background_odds`` (it
+    only cuts the table afterwards): a person whose table it leaves alone gets the same table
+    with or without it. Raises :class:`NotInView`."""
     t0 = time.perf_counter()
     ticks = sample_ticks(world.n_ticks)
-    digest = digest_of(world, cameras, color_class, space, bits, gains, background_ratio)
+    fit_digest = digest_of(world, cameras, color_class, space, bits, gains, background_ratio)
+    digest = _with_odds(fit_digest, background_odds)
     kind = f"colors-{color_class}"
     lut = _restore(cache.load(kind, digest), bits)
     cached = lut is not None
     if lut is None:
-        rng = np.random.default_rng(int(digest[:15], 16))
+        rng = np.random.default_rng(int(fit_digest[:15], 16))
         model, seen, other = learn_model(world, cameras, color_class, space, rng, ticks, bits,
                                          gains)
         lut = ColorLUT(model, bits, cut_background(ColorLUT(model, bits).table, bits, seen,
-                                                   other, ratio=background_ratio))
+                                                   other, ratio=background_ratio,
+                                                   odds=background_odds))
         lut.look_alike = look_alike_ratio(lut.table, bits, seen, other)
         cache.save(kind, digest, _store(model, lut))
     return CachedLUT(lut, cached, time.perf_counter() - t0, digest)
