@@ -14,12 +14,7 @@ from humimic.perception.blobs.config import DEFAULT_COLOR_MODEL, TRACKABLE_TARGE
 from humimic.perception.blobs.record import PerceptionRecord
 from humimic.perception.blobs.report import TrackingReport
 from humimic.perception.blobs.stage import PerceptionStage
-from humimic.perception.cues.auto_colors import (
-    BACKGROUND_ODDS,
-    NotInView,
-    file_lut,
-    learned_lut,
-)
+from humimic.perception.cues.auto_colors import NotInView, file_lut, learned_lut
 from humimic.perception.cues.color_models import ColorLUT
 from humimic.pipeline.stage import Stage
 from humimic.scenario.errors import ScenarioError
@@ -62,8 +57,7 @@ def load_luts(scenario, world, cams) -> dict[str, ColorLUT]:
     """One :class:`ColorLUT` per tracked target (published first, then distractors); targets
     with the same colour model (file, or ``auto``: learned for this world's person as seen by
     ``cams``, :mod:`humimic.perception.cues.auto_colors`, its bins cleared where the scene's
-    other pixels outnumber the skin's: :data:`~humimic.perception.cues.auto_colors.
-    BACKGROUND_ODDS`) share one LUT object."""
+    other pixels outnumber the skin's ``background_odds`` times) share one LUT object."""
     cfg, where = scenario.perception, _where(scenario)
     targets = list(cfg.targets)
     if cfg.identify_all:
@@ -80,7 +74,7 @@ def load_luts(scenario, world, cams) -> dict[str, ColorLUT]:
                 try:
                     by_source[source] = learned_lut(world, list(cams), "skin", "rgb",
                                                     cfg.lut_bits,
-                                                    background_odds=BACKGROUND_ODDS).lut
+                                                    background_odds=cfg.background_odds).lut
                 except NotInView as err:
                     raise ScenarioError(where, key, f"cannot learn the skin colours: {err}",
                                         "auto", f"a colour-model file, e.g. "
