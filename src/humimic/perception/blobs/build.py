@@ -56,7 +56,8 @@ def _source(cfg, target: str) -> Path | str:
 def load_luts(scenario, world, cams) -> dict[str, ColorLUT]:
     """One :class:`ColorLUT` per tracked target (published first, then distractors); targets
     with the same colour model (file, or ``auto``: learned for this world's person as seen by
-    ``cams``, :mod:`humimic.perception.cues.auto_colors`) share one LUT object."""
+    ``cams``, :mod:`humimic.perception.cues.auto_colors`, its bins cleared where the scene's
+    other pixels outnumber the skin's ``background_odds`` times) share one LUT object."""
     cfg, where = scenario.perception, _where(scenario)
     targets = list(cfg.targets)
     if cfg.identify_all:
@@ -72,7 +73,8 @@ def load_luts(scenario, world, cams) -> dict[str, ColorLUT]:
             if source == "auto":
                 try:
                     by_source[source] = learned_lut(world, list(cams), "skin", "rgb",
-                                                    cfg.lut_bits).lut
+                                                    cfg.lut_bits,
+                                                    background_odds=cfg.background_odds).lut
                 except NotInView as err:
                     raise ScenarioError(where, key, f"cannot learn the skin colours: {err}",
                                         "auto", f"a colour-model file, e.g. "

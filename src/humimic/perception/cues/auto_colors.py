@@ -11,10 +11,11 @@ Gaussian mixture (Ude eqs. 6-7) is fitted and tabulated
 (:class:`~humimic.perception.cues.color_models.ColorLUT`). Since the renders come from the run's
 own scene, the model sees the scenario's colours, face, lights, cameras and noise. The same
 renders of the whole scene give the other pixels (clothes, shoes, room): the table is cleared
-where they fall and no pixel of the class was seen -- or, for a learner that asks (the 2-D
-hand tracker), where they are more frequent than the class's own pixels (:func:`cut_background`),
-so the mixture's tails do not claim the scene's own look-alikes (dark shoes under a very dark
-skin model, the dark-brown wood of lab_clutter under a dark one).
+where they fall and no pixel of the class was seen -- or, for a learner that asks, where they
+are more frequent than the class's own pixels, as shares of each (the 2-D hand tracker) or as
+counts (Ude's blobs) (:func:`cut_background`), so the mixture's tails do not claim the scene's
+own look-alikes (dark shoes under a very dark skin model, the dark-brown wood of lab_clutter
+under a dark one).
 
 Model and table are stored with :mod:`humimic.cache` under a hash of everything they depend on
 (:func:`inputs`: the class's materials and textures, the lights, the cameras, the geoms' shapes,
@@ -65,7 +66,8 @@ learning renders; another noise draw within 10 %): the default person 0, a beige
 Atkeson's blobs in ude_fig1_axes (seed 77, 3 s, right hand): default 0 (detected on 92 % of
 visible frames, filtered RMSE 13 mm), the first beige 0.30 (92 %, 17 mm), the second 2.1
 (28 %, 48 false frames: the shirt taken for the hand), the brown 3.1 (68 %, 116 mm), the dark
-skin in lab_clutter 2.0 (2.5 %)."""
+skin in lab_clutter 2.0 (2.5 %) -- all before the blobs' own cut (:data:`BACKGROUND_ODDS`:
+0.03-0.13 and 89-92 %, no false frames)."""
 MIN_BACKGROUND = 3
 """A bin is cleared only when at least this many sampled other pixels fall in it: a colour the
 scene shows, not one noise pixel."""
@@ -81,6 +83,24 @@ in menezes_fig5_hand, static, wave, menezes_gest_far, fig12/13; 11 / 19 bins in
 menezes_hand_people / menezes_fig9_leave_return, 0.1 / 0.2 % of the skin's pixels). Not the
 default for every tracker: schmidt_table1_foveal's kpf lost 32 % of its frames with it (test
 limit 10 %), not investigated."""
+BACKGROUND_ODDS = 1.0
+"""The ``odds`` of :func:`cut_background` a learner may ask for (``background_odds``): a bin
+is also cleared when the scene's other pixels in it outnumber the class's own this many times
+in the renders -- the class's posterior in the scene's own frequencies. (``ratio`` compares
+shares, a likelihood ratio: the skin's ~7000 learning pixels weigh ~180 times the room's 1.2
+million, so a colour both show stays the skin's.) Ude & Atkeson's blobs ask for it
+(:mod:`humimic.perception.blobs.build`). Measured, ude_fig1_axes seed 77 in lab_clutter, skin
+[0.40, 0.27, 0.20]: the posts' main bins hold 18-119 shaded skin pixels (0.3-1.7 % of the
+skin's) and 900-1300 of the room's (0.1 %): ``ratio`` 1.0 kept them (54 % of the posts'
+pixels cleared, 50 % still above posterior 0.5 in the run's images; the hand touches a post
+in 51 of 60 sampled eye images, and blobs sat on the posts in 40 % of frames), ``odds`` 1.0
+clears 98 % of them (3.5 % above 0.5) and 9 % of the skin's learning pixels (the hand's pixels
+above 0.5: 99.9 -> 96 %). Right hand detected on 2.5 % -> 92 % of visible frames (``ratio``:
+7 %); skins [0.45, 0.30, 0.22] / [0.30, 0.20, 0.15] seeds 5, 41, 77: 7-13 % / 2-24 % -> 92-94 %
+/ 92 %, as in the plain lab (92 %); skin-like shirts in the lab (the :data:`LOOK_ALIKE_WARN`
+cases): [0.80, 0.66, 0.52] 28 % (48 false frames) -> 89 % (0), [0.60, 0.45, 0.35] 68 % -> 91 %
+(filtered RMSE 116 -> 25 mm). The default person: no bin changes in any ude scenario (lab or
+lab_clutter), the same table."""
 
 
 class NotInView(ValueError):
@@ -139,11 +159,19 @@ def inputs(world, cameras: list[str], color_class: str, space: str, bits: int,
 
 def digest_of(world, cameras: list[str], color_class: str = "skin", space: str = "rgb",
               bits: int = 6, gains: tuple[float, ...] = (1.0,),
-              background_ratio: float | None = None) -> str:
+              background_ratio: float | None = None,
+              background_odds: float | None = None) -> str:
     """The cache key of the model :func:`learned_lut` would learn."""
     ticks = sample_ticks(world.n_ticks)
-    return cache.key(*inputs(world, cameras, color_class, space, bits, ticks, gains,
-                             background_ratio))
+    return _with_odds(cache.key(*inputs(world, cameras, color_class, space, bits, ticks, gains,
+                                        background_ratio)), background_odds)
+
+
+def _with_odds(digest: str, background_odds: float | None) -> str:
+    """The cache key of a table cut with ``background_odds`` from the fit keyed ``digest``."""
+    if background_odds is None:
+        return digest
+    return cache.key(digest, "background_odds", float(background_odds))
 
 
 def brightened(pixels: np.ndarray, gains: tuple[float, ...]) -> np.ndarray:
@@ -219,21 +247,25 @@ def look_alike_ratio(table: np.ndarray, bits: int, class_px: np.ndarray,
 
 
 def cut_background(table: np.ndarray, bits: int, class_px: np.ndarray, other_px: np.ndarray,
-                   min_other: int = MIN_BACKGROUND, ratio: float | None = None
-                   ) -> np.ndarray:
+                   min_other: int = MIN_BACKGROUND, ratio: float | None = None,
+                   odds: float | None = None) -> np.ndarray:
     """A copy of a LUT ``table`` (``(2^bits)^3`` densities, :class:`ColorLUT` layout) with 0 in
     the bins where at least ``min_other`` of ``other_px (N, 3)`` uint8 fall and none of
     ``class_px`` -- or, with a ``ratio`` (:data:`BACKGROUND_RATIO`), where their share of
-    ``other_px`` is more than ``ratio`` times the bin's share of ``class_px``: the model's
-    tails where the scene's other surfaces are, and its own class was never seen (or seen
-    less often), are not the class."""
+    ``other_px`` is more than ``ratio`` times the bin's share of ``class_px``; or, with
+    ``odds`` (:data:`BACKGROUND_ODDS`), where they are more than ``odds`` times as many as the
+    class's pixels in the bin: the model's tails where the scene's other surfaces are, and its
+    own class was never seen (or seen less often), are not the class."""
     c_other, c_class = bin_counts(other_px, bits), bin_counts(class_px, bits)
     out = np.array(table, np.float32, copy=True)
-    if ratio is None:
-        out[(c_other >= min_other) & (c_class == 0)] = 0.0
-        return out
-    n_class, n_other = max(len(class_px), 1), max(len(other_px), 1)
-    out[(c_other >= min_other) & (c_other * n_class > ratio * c_class * n_other)] = 0.0
+    shown = c_other >= min_other
+    cut = shown & (c_class == 0)
+    if ratio is not None:
+        n_class, n_other = max(len(class_px), 1), max(len(other_px), 1)
+        cut |= shown & (c_other * n_class > ratio * c_class * n_other)
+    if odds is not None:  # the class's posterior in the scene's own frequencies
+        cut |= shown & (c_other > odds * c_class)
+    out[cut] = 0.0
     return out
 
 
@@ -260,23 +292,28 @@ def _restore(stored: dict[str, np.ndarray] | None, bits: int) -> ColorLUT | None
 
 def learned_lut(world, cameras: list[str], color_class: str = "skin", space: str = "rgb",
                 bits: int = 6, gains: tuple[float, ...] = (1.0,),
-                background_ratio: float | None = None) -> CachedLUT:
+                background_ratio: float | None = None,
+                background_odds: float | None = None) -> CachedLUT:
     """The colour LUT of ``color_class`` for this world: from the cache, or learned from the
     world's renders of ``cameras`` (their pixels under each of ``gains``, :func:`brightened`)
-    and stored; ``background_ratio``: :func:`cut_background`'s ``ratio``. Raises
-    :class:`NotInView`."""
+    and stored; ``background_ratio``, ``background_odds``: :func:`cut_background`'s ``ratio``
+    and ``odds``. The renders' noise and the fit are seeded without ``background_odds`` (it
+    only cuts the table afterwards): a person whose table it leaves alone gets the same table
+    with or without it. Raises :class:`NotInView`."""
     t0 = time.perf_counter()
     ticks = sample_ticks(world.n_ticks)
-    digest = digest_of(world, cameras, color_class, space, bits, gains, background_ratio)
+    fit_digest = digest_of(world, cameras, color_class, space, bits, gains, background_ratio)
+    digest = _with_odds(fit_digest, background_odds)
     kind = f"colors-{color_class}"
     lut = _restore(cache.load(kind, digest), bits)
     cached = lut is not None
     if lut is None:
-        rng = np.random.default_rng(int(digest[:15], 16))
+        rng = np.random.default_rng(int(fit_digest[:15], 16))
         model, seen, other, plain = learn_model(world, cameras, color_class, space, rng,
                                                 ticks, bits, gains)
         lut = ColorLUT(model, bits, cut_background(ColorLUT(model, bits).table, bits, seen,
-                                                   other, ratio=background_ratio))
+                                                   other, ratio=background_ratio,
+                                                   odds=background_odds))
         lut.look_alike = look_alike_ratio(lut.table, bits, plain, other)
         cache.save(kind, digest, _store(model, lut))
     return CachedLUT(lut, cached, time.perf_counter() - t0, digest)
