@@ -158,8 +158,11 @@ def test_tracker_reports_the_refined_mode_no_worse_than_mean_shifts_and_injects_
                         sigma_from_spread=False)
         tr = KpfTracker(body, INTRINSICS, cfg, np.random.default_rng(3))
         tr.start(q_start, FrameCues(img, lut), T)
-        modes[polls] = tr.step(FrameCues(img, lut), T).mode
+        out = tr.step(FrameCues(img, lut), T)
+        modes[polls] = out.mode
         trackers[polls] = tr
+        if polls:   # the refined mode leads the displayed modes
+            np.testing.assert_array_equal(out.modes[0], out.mode)
     maps = C.cue_maps(img, lut)
     lik = Likelihood(body, INTRINSICS, cfg)          # the references as at the refinement
     lik.adapt({p: c[0] for p, c in lik.evaluate(q_start[None], maps, T).colours.items()})
@@ -168,6 +171,16 @@ def test_tracker_reports_the_refined_mode_no_worse_than_mean_shifts_and_injects_
     assert not np.array_equal(modes[0], modes[6])
     np.testing.assert_allclose(modes[0][:6], modes[6][:6], atol=1e-8)   # torso not searched
     assert np.any(np.all(trackers[6].particles == modes[6], axis=1))
+    # with per-particle velocities the injected particle has none of its own (not the
+    # replaced particle's)
+    tv = KpfTracker(body, INTRINSICS, cfg.model_copy(update={"particle_velocity": True}),
+                    np.random.default_rng(3))
+    tv.start(q_start, FrameCues(img, lut), T)
+    for _ in range(2):
+        mode = tv.step(FrameCues(img, lut), T).mode
+        injected = np.all(tv.particles == mode, axis=1)
+        assert np.any(injected) and not np.any(tv.pvel[injected])
+        assert np.count_nonzero(np.any(tv.pvel != 0.0, axis=1)) > 0.5 * len(tv.pvel)
     np.testing.assert_allclose(trackers[6].W.sum(axis=0), 1.0)
     # report only: the same tracking as the plain tracker's, the refined estimate reported
     cfg = KpfConfig(n_particles=150, iterations=2, kde_stride=4, refine_polls=6,

@@ -161,3 +161,42 @@ def test_particle_velocities_with_and_without_the_propagation_noise():
     walked1 = resampled + one * moved[:, None] + noise
     got = particle_velocities(walked1 + shift, resampled, walked1, one, moved, innovation=True)
     assert np.allclose(got, one * moved[:, None] + shift)
+
+
+def test_tracker_passes_the_restricted_velocity_and_the_clamped_walk(monkeypatch):
+    """The innovation velocity's wiring in the tracker: ``particle_velocities`` gets the very
+    velocity ``observable_arm_velocity`` returned this frame and the walked particles inside
+    the joint limits, and the tracker keeps what it returns."""
+    from _kpf_synth import painted_person
+
+    from humimic.perception.blobs.config import DEFAULT_COLOR_MODEL
+    from humimic.perception.cues.color_models import ColorLUT, load_color_model
+    from humimic.perception.trackers.kpf import tracker as tracker_mod
+    from humimic.perception.trackers.kpf.config import KpfConfig
+    from humimic.perception.trackers.kpf.frame_cues import FrameCues
+
+    seen: dict = {}
+
+    def spy(name, fn):
+        def wrapped(*a, **k):
+            seen[name] = (a, fn(*a, **k))
+            return seen[name][1]
+        monkeypatch.setattr(tracker_mod, name, wrapped)
+
+    spy("observable_arm_velocity", tracker_mod.observable_arm_velocity)
+    spy("particle_velocities", tracker_mod.particle_velocities)
+    body, T, q0 = kpf_body(), camera(), static_pose()
+    img = painted_person(body, q0, T)
+    lut = ColorLUT(load_color_model(DEFAULT_COLOR_MODEL), 6)
+    cfg = KpfConfig(n_particles=80, iterations=2, particle_velocity=True,
+                    observed_velocity_px=10.0, particle_velocity_innovation=True)
+    tr = tracker_mod.KpfTracker(body, INTRINSICS, cfg, np.random.default_rng(4))
+    tr.start(q0, FrameCues(img, lut), T)
+    for _ in range(2):
+        tr.step(FrameCues(img, lut), T)
+        args, out = seen["particle_velocities"]
+        parts, resampled, walked, velocity, moved, innovation, decay = args
+        assert velocity is seen["observable_arm_velocity"][1]
+        assert innovation is True and decay == 1.0
+        assert np.all(tr.limits.inside(walked))
+        np.testing.assert_array_equal(tr.pvel, out)   # no jumps: every row kept
