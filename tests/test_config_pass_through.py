@@ -69,3 +69,12 @@ def test_slam_measurement_noise_keys_are_the_filters_parameter_names():
     slam = settings_from_config(cfg).slam
     assert (slam.sigma_accel, slam.sigma_gyro, slam.sigma_px) == (0.7, 0.02, 1.5)
     assert slam != SlamParams()
+
+
+def test_background_odds_default_is_the_documented_constant():
+    """``perception.background_odds``'s default is written as a literal (the schema cannot
+    import ``auto_colors``: it imports the scenario loader): it must stay the constant whose
+    docstring holds the measurements."""
+    from humimic.perception.cues.auto_colors import BACKGROUND_ODDS
+
+    assert PerceptionConfig.model_fields["background_odds"].default == BACKGROUND_ODDS

@@ -124,15 +124,15 @@ class PerceptionConfig(Section):
     colors: list[TargetColor] = Field(default_factory=list)
     """Per-target colour models, overriding ``color_model``."""
     background_odds: float | None = Field(1.0, gt=0.0, le=1000.0)
-    """Our extension: the ``auto`` model's table is cleared in the colours where the scene's
-    other pixels (clothes, room) outnumber the skin's this many times in the learning renders
-    (:data:`~humimic.perception.cues.auto_colors.BACKGROUND_ODDS`); None: only the colours the
-    skin never showed. Measured (ude_fig1_axes seed 77, 3 s): a dark skin among lab_clutter's
-    posts 2.5 -> 92 % of visible frames, a skin-like shirt 28 -> 89 %; the default person's
-    table unchanged. The cost: the shade of a dark skin goes with the posts (8.5 % of the hanging
-    left hand's pixels in ude_wave_tracking, skin [0.45, 0.30, 0.22] in lab_clutter: its raw
-    RMSE 8.4 -> 15.8 mm, detected 88 -> 93 %). Odds 2 / 4: that hand 13.8 / 10.4 mm, but the
-    shirt 80 / 23 %."""
+    """Our extension: the ``auto`` model's table is cleared in the colours where the scene's other
+    pixels (clothes, room) outnumber the skin's this many times in the learning renders
+    (:data:`~humimic.perception.cues.auto_colors.BACKGROUND_ODDS`, kept equal by a test); None:
+    only the colours the skin never showed. Measured (ude_fig1_axes seed 77, 3 s): a dark skin
+    among lab_clutter's posts 2.5 -> 92 % of visible frames, a skin-like shirt 28 -> 89 %; the
+    default person's table unchanged. The cost: the shade of a dark skin goes with the posts
+    (8.5 % of the hanging left hand's pixels in ude_wave_tracking, skin [0.45, 0.30, 0.22] in
+    lab_clutter: its raw RMSE 8.4 -> 15.8 mm, detected 88 -> 93 %). Odds 2 / 4: that hand 13.8 /
+    10.4 mm, but the shirt 80 / 23 %."""
     identify_all: bool = True
     """Also track the other trackable parts that share a target's colour model (reported as
     distractors, not published), so that e.g. a hand is never taken for the head."""
