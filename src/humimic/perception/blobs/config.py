@@ -140,6 +140,12 @@ class PerceptionConfig(Section):
     """A target is measured only when the evidence for its identity beats the next best
     assignment by this much (rule units, see :mod:`humimic.perception.blobs.identity`); 0 also
     publishes guesses (e.g. a lone blob seen by one eye first)."""
+    lock_names: bool = True
+    """Our extension: a blob whose name was sure keeps it while its region of interest touches
+    no other same-coloured blob's (EM cannot have swapped it), whatever the image rules (which
+    assume a person facing the robot) say; a kept name they contradict is not published
+    (:mod:`humimic.perception.blobs.identity`). False: the rules may rename any blob at an
+    identity decision (measured in ude_cmu_turn, a person turning round: TODO)."""
     roi_side: int = Field(20, ge=4, le=200)
     """EM samples per side of each blob's region of interest (cost is bounded by it)."""
     roi_k_sigma: float = Field(3.0, gt=0.0, le=10.0)
