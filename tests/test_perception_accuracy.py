@@ -228,11 +228,18 @@ def test_turning_person_hands_hidden_and_said_so():
         assert 0.6 <= s["visible_fraction"] <= 0.9, s  # measured 0.714 (right), 0.829 (left)
         assert s["detection_rate"] > s["detection_rate_all"]  # hidden frames not held against
         assert s["verdict"] == "ok" or s["cause"], s  # a poor hand names its likely cause
-    # after the turn the hands swap sides in the image: the side rules name them wrongly,
-    # and the verdict says so (measured: poor, false detections 35 % / 20 % of reports)
+    # after the turn the hands swap sides in the image and the side rules, which assume a
+    # person facing the robot, name them the wrong way round. The left hand's blob, tracked
+    # alone through the turn, keeps its sure name (perception.lock_names) and is not
+    # published while the rules contradict it; before the lock the rules renamed it the right
+    # hand (measured: right hand 31 % of its reports false; with the lock 6 %, the rest from
+    # blobs found afresh with the back to the robot, as the left hand's 12 %)
+    right = tr["right_hand"]
+    assert right["false_detection_rate"] <= 0.12, right
+    assert right["detection_rate"] >= 0.45  # measured 0.475 with and without the lock
     assert any(tr[h]["verdict"] == "poor" for h in ("right_hand", "left_hand"))
     head = tr["head"]
-    assert head["visible_fraction"] == 1.0 and head["detection_rate"] >= 0.7  # measured 0.828
+    assert head["visible_fraction"] == 1.0 and head["detection_rate"] >= 0.7  # measured 0.817
 
 
 # ---- a dark skin among lab_clutter's posts ---------------------------------------------------
