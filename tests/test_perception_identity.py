@@ -17,6 +17,7 @@ from humimic.perception.blobs.identity import (
     assign,
     image_rule_cost,
     stereo_evidence,
+    turned_round,
 )
 from humimic.perception.blobs.stereo import StereoRig
 
@@ -24,6 +25,9 @@ TARGETS = ["head", "right_hand", "left_hand"]
 #: Person ~1.2 m in front (base x forward, y left, z up): their right hand is at +y.
 TRUTH = {"head": ((1.25, 0.0, 1.55), 0.047), "right_hand": ((1.05, 0.30, 1.25), 0.028),
          "left_hand": ((1.15, -0.25, 1.0), 0.022)}
+TURNED = {"head": TRUTH["head"], "right_hand": ((1.15, -0.25, 1.0), 0.028),
+          "left_hand": ((1.05, 0.30, 1.25), 0.022)}
+"""The same person with the back to the robot: the right hand at -y (the image's right)."""
 
 
 def blobs_seen(cam, names, slots, radii=None, truth=TRUTH):
@@ -168,10 +172,8 @@ def test_a_person_turned_round_keeps_the_locked_hand_names(head):
     been swapped since (locked) are kept, and reported unsure rather than renamed; the head,
     which the rules still name right, stays sure."""
     cam_l, cam_r, rig = head
-    turned = {"head": TRUTH["head"],
-              "right_hand": ((1.15, -0.25, 1.0), 0.028), "left_hand": ((1.05, 0.30, 1.25), 0.022)}
-    left = blobs_seen(cam_l, TARGETS, range(3), truth=turned)
-    right = blobs_seen(cam_r, TARGETS, range(3), truth=turned)
+    left = blobs_seen(cam_l, TARGETS, range(3), truth=TURNED)
+    right = blobs_seen(cam_r, TARGETS, range(3), truth=TURNED)
     # the rules' view: the mirrored hands break the order rule and both side rules per eye
     cost = image_rule_cost(dict(zip(TARGETS, left, strict=True)))
     assert cost == 1.0 + 0.5 + 0.5
@@ -191,6 +193,28 @@ def test_a_person_turned_round_keeps_the_locked_hand_names(head):
     names_l, _, _ = assign(TARGETS, left, right, truth_names, truth_names, ev,
                            locked_left={2: "left_hand"})
     assert names_l == truth_names
+
+
+def test_locked_names_that_mirror_the_rules_show_the_person_turned(head):
+    """The turned person's locked (true) names break every side rule in both eyes and the
+    mirrored rules not at all: turned round. Facing away, fresh blobs (no history, no lock) are
+    then named right and surely; the person facing the robot is not judged turned, nor is one
+    whose right hand alone crossed over to the image's right."""
+    cam_l, cam_r, rig = head
+    truth_names = dict(enumerate(TARGETS))
+    eyes = [blobs_seen(cam, TARGETS, range(3), truth=TURNED) for cam in (cam_l, cam_r)]
+    assert turned_round(*eyes, truth_names, truth_names, away=False)
+    assert not turned_round(*eyes, truth_names, truth_names, away=True)  # already judged so
+    ev = stereo_evidence(rig, cam_l, cam_r, *eyes)
+    names_l, names_r, margins = assign(TARGETS, *eyes, {}, {}, ev, away=True)
+    assert names_l == truth_names and names_r == truth_names
+    assert min(margins.values()) >= 1.0
+    facing = [blobs_seen(cam, TARGETS, range(3)) for cam in (cam_l, cam_r)]
+    assert not turned_round(*facing, truth_names, truth_names, away=False)
+    crossed = dict(TRUTH, right_hand=((1.05, -0.45, 1.25), 0.028))  # right of the left hand
+    eyes = [blobs_seen(cam, TARGETS, range(3), truth=crossed) for cam in (cam_l, cam_r)]
+    assert image_rule_cost(dict(zip(TARGETS, eyes[0], strict=True))) == 1.5  # order + side
+    assert not turned_round(*eyes, truth_names, truth_names, away=False)
 
 
 def test_locks_that_cannot_hold_bind_nothing(head):

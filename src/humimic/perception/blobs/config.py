@@ -136,6 +136,12 @@ class PerceptionConfig(Section):
     identify_all: bool = True
     """Also track the other trackable parts that share a target's colour model (reported as
     distractors, not published), so that e.g. a hand is never taken for the head."""
+    track_facing: bool = True
+    """Our extension (with ``lock_names``): when locked names break the image rules in both eyes
+    (at least :data:`~humimic.perception.blobs.identity.TURN_RULES` violations) and the rules of
+    a person with the back to the robot not at all, the person is judged turned round and the
+    rules are mirrored (their right hand on the image's right) until locked names show the
+    reverse; ``perception.facing_turns`` counts the changes. Measured: TODO."""
     identity_margin: float = Field(1.0, ge=0.0, le=10.0)
     """A target is measured only when the evidence for its identity beats the next best
     assignment by this much (rule units, see :mod:`humimic.perception.blobs.identity`); 0 also

@@ -63,6 +63,9 @@ HEAD_MIN_RADIUS_M = 0.038
 #: Metric sigma radius (m) above which a blob is too large to be a hand (hands <~0.035 m).
 HAND_MAX_RADIUS_M = 0.042
 HANDS = ("right_hand", "left_hand")
+#: Image-rule violations (both eyes) of locked names, none under the other facing, that show
+#: a person turned round (:func:`turned_round`).
+TURN_RULES = 2.0
 
 
 @dataclass(frozen=True)
@@ -95,11 +98,15 @@ class PairEvidence:
     only a lower bound)."""
 
 
-def image_rule_cost(assigned: dict[str, Blob]) -> float:
-    """Rule violations of one eye's assignment ``{target: blob}`` (see the module docstring)."""
+def image_rule_cost(assigned: dict[str, Blob], away: bool = False) -> float:
+    """Rule violations of one eye's assignment ``{target: blob}`` (see the module docstring);
+    ``away``: for a person with the back to the robot, whose hands the image shows mirrored
+    (the right hand right of the left hand and of the head)."""
     cost = 0.0
     head = assigned.get("head")
     right, left = assigned.get("right_hand"), assigned.get("left_hand")
+    if away:
+        right, left = left, right
     for hand in (right, left):  # a head cut by the border may look smaller than a hand
         if (head is not None and hand is not None and not head.clipped
                 and hand.area > head.area):
@@ -190,7 +197,8 @@ def _keeps_locks(blobs: list[Blob], names: tuple[str, ...],
 def assign(targets: list[str], left: list[Blob], right: list[Blob],
            previous_left: dict[int, str], previous_right: dict[int, str],
            evidence: PairEvidence | None = None, keep: float = KEEP,
-           locked_left: dict[int, str] | None = None, locked_right: dict[int, str] | None = None
+           locked_left: dict[int, str] | None = None, locked_right: dict[int, str] | None = None,
+           away: bool = False
            ) -> tuple[dict[int, str], dict[int, str], dict[str, float]]:
     """The cheapest joint identity assignment and per-target margins.
 
@@ -203,18 +211,18 @@ def assign(targets: list[str], left: list[Blob], right: list[Blob],
     ``locked_*`` (``{slot: target}``): names the chosen assignment must keep (see the module
     docstring); a lock on a slot not among the blobs is ignored, and locks that no assignment
     can keep all (e.g. naming a target not in ``targets``) bind nothing; margins still weigh
-    every assignment.
+    every assignment. ``away``: the image rules of a person with the back to the robot.
     """
     options: list[tuple[float, float, tuple[str, ...], tuple[str, ...]]] = []
     allowed: list[bool] = []
     for names_l in _maps(left, targets):
         free_l = _keeps_locks(left, names_l, locked_left)
-        cost_l = image_rule_cost(dict(zip(names_l, left, strict=True)))
+        cost_l = image_rule_cost(dict(zip(names_l, left, strict=True)), away)
         kept_l = keep * sum(previous_left.get(b.slot) == n
                             for b, n in zip(left, names_l, strict=True))
         where_l = {n: i for i, n in enumerate(names_l)}
         for names_r in _maps(right, targets):
-            cost = cost_l + image_rule_cost(dict(zip(names_r, right, strict=True)))
+            cost = cost_l + image_rule_cost(dict(zip(names_r, right, strict=True)), away)
             kept = kept_l + keep * sum(previous_right.get(b.slot) == n
                                        for b, n in zip(right, names_r, strict=True))
             if evidence is not None:
@@ -253,3 +261,16 @@ def assign(targets: list[str], left: list[Blob], right: list[Blob],
         margins[target] = (min(alt) - ref) if alt else math.inf
     return ({b.slot: n for b, n in zip(left, best_l, strict=True)},
             {b.slot: n for b, n in zip(right, best_r, strict=True)}, margins)
+
+
+def turned_round(left: list[Blob], right: list[Blob], names_left: dict[int, str],
+                 names_right: dict[int, str], away: bool) -> bool:
+    """Whether names kept by locks show the person turned round: the image rules of the
+    current facing (``away``) count at least :data:`TURN_RULES` violations over both eyes and
+    those of the other facing none (a mirrored picture of head and hands; one hand crossing
+    over leaves the other on its side and breaks a rule either way)."""
+    def cost(facing: bool) -> float:
+        return sum(image_rule_cost({names[b.slot]: b for b in blobs if b.slot in names}, facing)
+                   for blobs, names in ((left, names_left), (right, names_right)))
+
+    return cost(away) >= TURN_RULES and cost(not away) == 0.0
