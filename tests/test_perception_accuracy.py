@@ -239,7 +239,7 @@ def test_turning_person_hands_hidden_and_said_so():
     for hand in ("right_hand", "left_hand"):
         assert tr[hand]["false_detection_rate"] <= 0.03, tr[hand]
     # the hands are still measured on < 50 % of their visible frames (0.475 / 0.424, as on
-    # main): seen edge-on after the turn, their blobs (~2 x 5 px) fill too little of the
+    # main): seen edge-on after the turn, their blobs (sd ~1 x 2.5 px) fill too little of the
     # stereo template (few_target_pixels)
     assert tr["right_hand"]["detection_rate"] >= 0.45
     assert any(tr[h]["verdict"] == "poor" for h in ("right_hand", "left_hand"))
