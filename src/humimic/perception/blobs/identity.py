@@ -31,7 +31,9 @@ targets under:
   cheapest assignment is chosen among those that keep every locked name. The image rules
   assume a person facing the robot; one who turns round shows the hands mirrored, and without
   the lock the rules renamed the tracked left hand the right one (ude_cmu_turn: 31 % of the
-  right hand's reports false).
+  right hand's reports false). Locked names that break every side rule in both eyes while the
+  mirrored rules hold show the person turned round (:func:`turned_round`); the perception core
+  then applies the mirrored rules (``away``) until locked names show the reverse.
 
 Between events identities follow the tracker's blobs (continuity alone), so hands may cross.
 Each target also gets a *margin*: how much more evidence cost (without continuity) the cheapest
