@@ -16,6 +16,7 @@ from humimic.perception.blobs.em_blobs import (
     m_step,
     quad_features,
     roi_samples,
+    rois_overlap,
     shape_density,
 )
 from humimic.perception.cues.color_models import ColorLUT, ColorModel, fit_color_model
@@ -101,6 +102,26 @@ def test_roi_samples_bounded_and_without_duplicates():
         assert len(roi.area) <= 3 * 20 * 20
         keys = roi.uv[:, 1] * W + roi.uv[:, 0]
         assert len(np.unique(keys)) == len(keys)
+
+
+def test_rois_overlap_when_the_sampled_boxes_share_pixels():
+    """Two blobs' regions overlap exactly when roi_samples (full resolution) drops pixels of the
+    second box as already sampled by the first: EM can hand pixels between them only then."""
+    p = EMParams(roi_side=200)
+    img = np.zeros((240, 320, 3), np.uint8)
+    cov_a, cov_b = np.diag([4.0, 9.0]), np.diag([16.0, 1.0])
+    reach = 2 * p.margin_px + p.roi_k_sigma * np.array([2.0 + 4.0, 3.0 + 1.0])  # half sides
+    a = np.array([100.0, 120.0])
+
+    def shared(b) -> bool:
+        both = roi_samples(img, np.stack([a, b]), np.stack([cov_a, cov_b]), p)
+        alone = [roi_samples(img, c[None], v[None], p) for c, v in ((a, cov_a), (b, cov_b))]
+        return len(both.area) < sum(len(r.area) for r in alone)
+
+    for direction in (np.array([1.0, 0.0]), np.array([0.0, -1.0]), np.array([1.0, 1.0])):
+        for f in (0.5, 0.9, 1.1, 2.0):
+            b = a + f * reach * direction
+            assert rois_overlap(a, cov_a, b, cov_b, p) == shared(b) == (f < 1.0), (direction, f)
 
 
 def _track(lut, params, frames, truth_fn, axes, angles, noise_rng, K, start_err=2.0):

@@ -17,6 +17,7 @@ from humimic.perception.blobs.identity import (
     assign,
     image_rule_cost,
     stereo_evidence,
+    turned_round,
 )
 from humimic.perception.blobs.stereo import StereoRig
 
@@ -24,14 +25,17 @@ TARGETS = ["head", "right_hand", "left_hand"]
 #: Person ~1.2 m in front (base x forward, y left, z up): their right hand is at +y.
 TRUTH = {"head": ((1.25, 0.0, 1.55), 0.047), "right_hand": ((1.05, 0.30, 1.25), 0.028),
          "left_hand": ((1.15, -0.25, 1.0), 0.022)}
+TURNED = {"head": TRUTH["head"], "right_hand": ((1.15, -0.25, 1.0), 0.028),
+          "left_hand": ((1.05, 0.30, 1.25), 0.022)}
+"""The same person with the back to the robot: the right hand at -y (the image's right)."""
 
 
-def blobs_seen(cam, names, slots, radii=None):
+def blobs_seen(cam, names, slots, radii=None, truth=TRUTH):
     """Blobs of ``names`` in ``cam`` placed in tracker ``slots``: the projected centre and an
     isotropic shape whose sigma radius is the part's metric radius at its depth."""
     out = []
     for name, slot in zip(names, slots, strict=True):
-        p, r = TRUTH[name]
+        p, r = truth[name]
         r = radii.get(name, r) if radii else r
         z = (np.linalg.inv(cam.T_base_cam) @ np.append(p, 1.0))[2]
         sigma_px = r * cam.intrinsics.fx / z
@@ -160,3 +164,101 @@ def test_clipped_by_border():
     assert not clipped_by_border([100.0, 100.0], cov, 320, 240)
     assert clipped_by_border([8.0, 100.0], cov, 320, 240)
     assert clipped_by_border([100.0, 225.0], cov, 320, 240)
+
+
+def test_a_person_turned_round_keeps_the_locked_hand_names(head):
+    """With the back to the robot the person's right hand is at -y, on the image's right: every
+    side rule then names the hands the wrong way round. Names that were sure and could not have
+    been swapped since (locked) are kept, and reported unsure rather than renamed; the head,
+    which the rules still name right, stays sure."""
+    cam_l, cam_r, rig = head
+    left = blobs_seen(cam_l, TARGETS, range(3), truth=TURNED)
+    right = blobs_seen(cam_r, TARGETS, range(3), truth=TURNED)
+    # the rules' view: the mirrored hands break the order rule and both side rules per eye
+    cost = image_rule_cost(dict(zip(TARGETS, left, strict=True)))
+    assert cost == 1.0 + 0.5 + 0.5
+    truth_names = dict(enumerate(TARGETS))
+    ev = stereo_evidence(rig, cam_l, cam_r, left, right)
+    # continuity alone (what a tracked blob had before the lock): renamed, and vouched for
+    names_l, names_r, margins = assign(TARGETS, left, right, truth_names, truth_names, ev)
+    assert names_l[1] == "left_hand" and names_r[1] == "left_hand"
+    assert margins["right_hand"] >= 1.0
+    # locked: the true names, the hands not vouched for, the head still sure
+    names_l, names_r, margins = assign(TARGETS, left, right, truth_names, truth_names, ev,
+                                       locked_left=truth_names, locked_right=truth_names)
+    assert names_l == truth_names and names_r == truth_names
+    assert margins["right_hand"] < 0.0 and margins["left_hand"] < 0.0
+    assert margins["head"] >= 1.0
+    # a lock on one hand in one eye is enough to keep both hands' names in that eye
+    names_l, _, _ = assign(TARGETS, left, right, truth_names, truth_names, ev,
+                           locked_left={2: "left_hand"})
+    assert names_l == truth_names
+
+
+def test_locked_names_that_mirror_the_rules_show_the_person_turned(head):
+    """The turned person's locked (true) names break every side rule in both eyes and the
+    mirrored rules not at all: turned round. Facing away, fresh blobs (no history, no lock) are
+    then named right and surely; the person facing the robot is not judged turned, nor is one
+    whose right hand alone crossed over to the image's right."""
+    cam_l, cam_r, rig = head
+    truth_names = dict(enumerate(TARGETS))
+    eyes = [blobs_seen(cam, TARGETS, range(3), truth=TURNED) for cam in (cam_l, cam_r)]
+    assert turned_round(*eyes, truth_names, truth_names, away=False)
+    assert not turned_round(*eyes, truth_names, truth_names, away=True)  # already judged so
+    ev = stereo_evidence(rig, cam_l, cam_r, *eyes)
+    names_l, names_r, margins = assign(TARGETS, *eyes, {}, {}, ev, away=True)
+    assert names_l == truth_names and names_r == truth_names
+    assert min(margins.values()) >= 1.0
+    facing = [blobs_seen(cam, TARGETS, range(3)) for cam in (cam_l, cam_r)]
+    assert not turned_round(*facing, truth_names, truth_names, away=False)
+    crossed = dict(TRUTH, right_hand=((1.05, -0.45, 1.25), 0.028))  # right of the left hand
+    eyes = [blobs_seen(cam, TARGETS, range(3), truth=crossed) for cam in (cam_l, cam_r)]
+    assert image_rule_cost(dict(zip(TARGETS, eyes[0], strict=True))) == 1.5  # order + side
+    assert not turned_round(*eyes, truth_names, truth_names, away=False)
+
+
+def test_locks_that_cannot_hold_bind_nothing(head):
+    """Two slots locked to one name (no assignment keeps both): the rules decide as without
+    locks."""
+    cam_l, cam_r, rig = head
+    left, right = blobs_seen(cam_l, TARGETS, range(3)), blobs_seen(cam_r, TARGETS, range(3))
+    ev = stereo_evidence(rig, cam_l, cam_r, left, right)
+    free = assign(TARGETS, left, right, {}, {}, ev)
+    bad = {1: "left_hand", 2: "left_hand"}
+    assert assign(TARGETS, left, right, {}, {}, ev, locked_left=bad) == free
+
+
+def test_core_releases_a_lock_when_em_could_have_swapped_the_blob():
+    """PerceptionCore keeps a sure name locked while its blob is tracked without a break and its
+    region of interest (em_blobs.rois_overlap) touches no other same-coloured blob's; a blob
+    that came that close, was lost, or restarted (younger than when locked) loses its lock."""
+    from humimic.perception.blobs.config import PerceptionConfig
+    from humimic.perception.blobs.core import PerceptionCore
+    from humimic.perception.cues.color_models import ColorLUT, fit_color_model
+
+    rng = np.random.default_rng(0)
+    lut = ColorLUT(fit_color_model(rng.integers(100, 200, (500, 3)).astype(np.uint8), "rgb", 1,
+                                   rng))
+    core = PerceptionCore(PerceptionConfig(targets=TARGETS), ("L", "R"), dict.fromkeys(TARGETS,
+                          lut), rng)
+    sd = 2.0  # px: each region spans +-(3 sd + 4 px) = +-10 px
+    cov = sd**2 * np.eye(2)
+
+    def tracked(hand_gap: float, with_right: bool = True):
+        blobs = {0: Blob(0, np.array([160.0, 60.0]), 16 * cov),
+                 2: Blob(2, np.array([200.0, 150.0]), cov)}
+        if with_right:
+            blobs[1] = Blob(1, np.array([200.0 - hand_gap, 150.0]), cov)
+        return [blobs, dict(blobs)]
+
+    def locked_after(trk, age_now=12):
+        core.locked = [{k: (n, 10) for k, n in enumerate(TARGETS)} for _ in range(2)]
+        for t in core.trackers:
+            t.tracker._age[:] = age_now
+        core._release_locks(trk)
+        return [sorted(lk) for lk in core.locked]
+
+    assert locked_after(tracked(25.0)) == [[0, 1, 2]] * 2  # apart: every name stays locked
+    assert locked_after(tracked(15.0)) == [[0]] * 2  # the hands' regions overlap
+    assert locked_after(tracked(25.0, with_right=False)) == [[0, 2]] * 2  # right hand lost
+    assert locked_after(tracked(25.0), age_now=3) == [[]] * 2  # restarted since locked

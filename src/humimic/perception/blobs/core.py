@@ -31,8 +31,15 @@ import numpy as np
 
 from humimic.messages import Measurement, Measurements
 from humimic.perception.blobs.detection import DetectingTracker, DetectionParams, TargetState
-from humimic.perception.blobs.em_blobs import EMParams
-from humimic.perception.blobs.identity import Blob, assign, clipped_by_border, stereo_evidence
+from humimic.perception.blobs.em_blobs import EMParams, rois_overlap
+from humimic.perception.blobs.identity import (
+    HANDS,
+    Blob,
+    assign,
+    clipped_by_border,
+    stereo_evidence,
+    turned_round,
+)
 from humimic.perception.blobs.record import STATE_CODE
 from humimic.perception.blobs.stereo import StereoParams, StereoRig
 from humimic.scenario.base import pass_through
@@ -73,6 +80,8 @@ class FrameResult:
     """``(t, seen, centre, cov)`` for the blob ellipses in rerun."""
     identity_solves: int
     """Identity decisions so far (running count)."""
+    facing_turns: int = 0
+    """Times the person was judged to have turned round so far (running count)."""
 
 
 class PerceptionCore:
@@ -100,6 +109,15 @@ class PerceptionCore:
                                           em_params(cfg)) for r in rng.spawn(2)]
         self.stereo = stereo_params(cfg)
         self.identity_margin = cfg.identity_margin
+        self.lock_names = cfg.lock_names
+        self.track_facing = cfg.lock_names and cfg.track_facing
+        self.away = False
+        """The person is judged to have the back to the robot (mirrored image rules)."""
+        self.facing_turns = 0
+        self._turn_events: list[tuple[float, str, str, str]] = []
+        self.em = em_params(cfg)
+        self.locked: list[dict[int, tuple[str, int]]] = [{}, {}]
+        """Per eye, slot -> (name, age when last sure): names EM cannot have swapped since."""
         self.color_mask = cfg.stereo.color_mask
         self.match_std = cfg.match_std if cfg.covariance == "following" else None
         self.C_px = np.eye(2) * cfg.pixel_std**2
@@ -120,10 +138,11 @@ class PerceptionCore:
                                            strict=True)]
         rig = StereoRig(il.camera, ir.camera, self.stereo)
         keys = [frozenset(tr) for tr in tracked]
+        self._release_locks(tracked)
         settled = any(int(t.tracker.age[k]) == SETTLE_FRAMES
                       for t, tr in zip(self.trackers, tracked, strict=True) for k in tr)
         if keys != self._tracked or settled:
-            self._identify(tracked, rig, il.camera, ir.camera)
+            self._identify(t, tracked, rig, il.camera, ir.camera)
             self._tracked = keys
         slot_of = [{name: k for k, name in ident.items()} for ident in self.ident]
 
@@ -169,16 +188,24 @@ class PerceptionCore:
                     measured[name] = Measurement(name, m.p_base, m.R_base,
                                                  {self.cameras[0]: m.uv_left,
                                                   self.cameras[1]: m.uv_right})
-        events = self._update_states(t, seen.all(1) & confirmed)
+        if self.lock_names:
+            for i in np.flatnonzero(seen.all(1) & confirmed).tolist():
+                for eye in (0, 1):
+                    k = slot_of[eye][self.targets[i]]
+                    self.locked[eye][k] = (self.targets[i], int(age[eye][k]))
+        events = self._turn_events + self._update_states(t, seen.all(1) & confirmed)
+        self._turn_events = []
         row = (t, np.stack([il.camera.T_base_cam, ir.camera.T_base_cam]),
                np.array([STATE_CODE[self.state[x]] for x in self.targets]), seen, confirmed,
                centre, cov, ok, reason, p_base, R_base, uv_match, score)
         return FrameResult(Measurements(measured, {x: self.state[x] for x in self.published}),
                            row, (il.camera.intrinsics, ir.camera.intrinsics), events,
-                           (t, seen, centre, cov), self.identity_solves)
+                           (t, seen, centre, cov), self.identity_solves, self.facing_turns)
 
-    def _identify(self, tracked, rig, cam_l, cam_r) -> None:
-        """Re-decide the identities of every colour group's tracked blobs (both eyes)."""
+    def _identify(self, t: float, tracked, rig, cam_l, cam_r) -> None:
+        """Re-decide the identities of every colour group's tracked blobs (both eyes); locked
+        names that show the person turned round flip the image rules' facing
+        (:func:`~humimic.perception.blobs.identity.turned_round`)."""
         self.identity_solves += 1
         new: list[dict[int, str]] = [{}, {}]
         for group in self.groups:
@@ -193,11 +220,42 @@ class PerceptionCore:
             ev = stereo_evidence(rig, cam_l, cam_r, blobs[0], blobs[1],
                                  z_range=(self.stereo.z_min, self.stereo.z_max))
             prev = [{k: v for k, v in self.ident[eye].items() if k in group} for eye in (0, 1)]
-            left, right, margins = assign(names, blobs[0], blobs[1], prev[0], prev[1], ev)
+            locks = [{k: v[0] for k, v in self.locked[eye].items() if k in group}
+                     for eye in (0, 1)]
+            args = (names, blobs[0], blobs[1], prev[0], prev[1], ev)
+            kw = {"locked_left": locks[0], "locked_right": locks[1]}
+            left, right, margins = assign(*args, **kw, away=self.away)
+            if (self.track_facing and any(n in HANDS for lk in locks for n in lk.values())
+                    and turned_round(blobs[0], blobs[1], left, right, self.away)):
+                old = "away" if self.away else "toward"
+                self.away = not self.away
+                self.facing_turns += 1
+                self._turn_events.append(
+                    (t, "person", f"facing {old} -> {'away' if self.away else 'toward'}",
+                     "INFO"))
+                left, right, margins = assign(*args, **kw, away=self.away)
             new[0].update(left)
             new[1].update(right)
             self.margin.update(margins)
         self.ident = new
+
+    def _release_locks(self, tracked) -> None:
+        """Drop the locks of blobs no longer tracked without a break (lost, or restarted: younger
+        than when locked) or whose region of interest overlaps another tracked blob of their
+        colour group in that eye (EM may then have swapped them)."""
+        for eye, tr in enumerate(tracked):
+            age = self.trackers[eye].tracker.age
+            lock = self.locked[eye]
+            for k in list(lock):
+                if k not in tr or int(age[k]) < lock[k][1]:
+                    del lock[k]
+            for group in self.groups:
+                mine = [k for k in group if k in tr]
+                for a in mine:
+                    if a in lock and any(rois_overlap(tr[a].centre, tr[a].cov, tr[b].centre,
+                                                      tr[b].cov, self.em)
+                                         for b in mine if b != a):
+                        del lock[a]
 
     def _update_states(self, t: float, tracking: np.ndarray) -> list[tuple]:
         events = []

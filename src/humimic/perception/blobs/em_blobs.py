@@ -161,6 +161,21 @@ class RoiSamples:
     """(M,) internal position variance of each sample's cell, (stride^2 - 1)/12."""
 
 
+def roi_half_sides(covs: np.ndarray, params: EMParams) -> np.ndarray:
+    """``(K, 2)`` half sides (px) of each blob's region of interest: +-(``roi_k_sigma`` sigma +
+    ``margin_px``) along u and v (``covs`` ``(K, 2, 2)``)."""
+    sd = np.sqrt(np.maximum(np.asarray(covs, float)[:, [0, 1], [0, 1]], 0.0))
+    return params.roi_k_sigma * sd + params.margin_px
+
+
+def rois_overlap(centre_a, cov_a, centre_b, cov_b, params: EMParams) -> bool:
+    """Whether two blobs' regions of interest (:func:`roi_half_sides`) overlap: only then can
+    EM hand pixels of one to the other."""
+    h = roi_half_sides(np.stack([cov_a, cov_b]), params)
+    return bool(np.all(np.abs(np.asarray(centre_a, float) - np.asarray(centre_b, float))
+                       <= h[0] + h[1]))
+
+
 def roi_samples(image: np.ndarray, centres: np.ndarray, covs: np.ndarray,
                 params: EMParams) -> RoiSamples:
     """Sample each blob's box (+-(roi_k_sigma sigma + margin)) with a stride capping it at
@@ -171,10 +186,8 @@ def roi_samples(image: np.ndarray, centres: np.ndarray, covs: np.ndarray,
     H, W = image.shape[:2]
     boxes: list[tuple[int, int, int, int]] = []
     pix, us, vs, ss = [], [], [], []
-    for (cx, cy), (vxx, vyy) in zip(centres.tolist(), covs[:, [0, 1], [0, 1]].tolist(),
-                                    strict=True):
-        hx = params.roi_k_sigma * math.sqrt(max(vxx, 0.0)) + params.margin_px
-        hy = params.roi_k_sigma * math.sqrt(max(vyy, 0.0)) + params.margin_px
+    for (cx, cy), (hx, hy) in zip(centres.tolist(), roi_half_sides(covs, params).tolist(),
+                                  strict=True):
         if not (math.isfinite(cx + cy + hx + hy)):
             continue
         x0, x1 = max(0, math.floor(cx - hx)), min(W - 1, math.ceil(cx + hx))

@@ -24,13 +24,23 @@ targets under:
   only part of its object: it is never "too small to be the head" (area or size rule), so a
   head in a corner of a foveal view stays the head;
 * continuity: ``-keep`` per blob that keeps its current identity, so tracked blobs keep their
-  names (one rule against is not enough to swap; two are).
+  names (one rule against is not enough to swap; two are);
+* locked names (our extension): a blob whose name was sure and whose region of interest has
+  not touched another same-coloured blob's since (:func:`~humimic.perception.blobs.em_blobs.
+  rois_overlap`) is the same object, whatever the rules say: EM cannot have swapped it. The
+  cheapest assignment is chosen among those that keep every locked name. The image rules
+  assume a person facing the robot; one who turns round shows the hands mirrored, and without
+  the lock the rules renamed the tracked left hand the right one (ude_cmu_turn: 31 % of the
+  right hand's reports false). Locked names that break every side rule in both eyes while the
+  mirrored rules hold show the person turned round (:func:`turned_round`); the perception core
+  then applies the mirrored rules (``away``) until locked names show the reverse.
 
 Between events identities follow the tracker's blobs (continuity alone), so hands may cross.
 Each target also gets a *margin*: how much more evidence cost (without continuity) the cheapest
 assignment that names it differently has. A margin of 0 means the evidence cannot tell (e.g. a
-lone blob seen by one eye), a negative one that it disagrees with the names kept; the perception
-stage publishes a target only when its margin is large enough.
+lone blob seen by one eye), a negative one that it disagrees with the names kept (or locked);
+the perception stage publishes a target only when its margin is large enough, so a locked name
+the rules contradict is kept but not vouched for.
 """
 
 from __future__ import annotations
@@ -55,6 +65,9 @@ HEAD_MIN_RADIUS_M = 0.038
 #: Metric sigma radius (m) above which a blob is too large to be a hand (hands <~0.035 m).
 HAND_MAX_RADIUS_M = 0.042
 HANDS = ("right_hand", "left_hand")
+#: Image-rule violations (both eyes) of locked names, none under the other facing, that show
+#: a person turned round (:func:`turned_round`).
+TURN_RULES = 2.0
 
 
 @dataclass(frozen=True)
@@ -87,11 +100,15 @@ class PairEvidence:
     only a lower bound)."""
 
 
-def image_rule_cost(assigned: dict[str, Blob]) -> float:
-    """Rule violations of one eye's assignment ``{target: blob}`` (see the module docstring)."""
+def image_rule_cost(assigned: dict[str, Blob], away: bool = False) -> float:
+    """Rule violations of one eye's assignment ``{target: blob}`` (see the module docstring);
+    ``away``: for a person with the back to the robot, whose hands the image shows mirrored
+    (the right hand right of the left hand and of the head)."""
     cost = 0.0
     head = assigned.get("head")
     right, left = assigned.get("right_hand"), assigned.get("left_hand")
+    if away:
+        right, left = left, right
     for hand in (right, left):  # a head cut by the border may look smaller than a hand
         if (head is not None and hand is not None and not head.clipped
                 and hand.area > head.area):
@@ -171,9 +188,19 @@ def _maps(blobs: list[Blob], targets: list[str]):
     return itertools.permutations(targets, len(blobs))
 
 
+def _keeps_locks(blobs: list[Blob], names: tuple[str, ...],
+                 locked: dict[int, str] | None) -> bool:
+    """Whether naming ``blobs`` ``names`` keeps every lock on them."""
+    if not locked:
+        return True
+    return all(locked.get(b.slot, n) == n for b, n in zip(blobs, names, strict=True))
+
+
 def assign(targets: list[str], left: list[Blob], right: list[Blob],
            previous_left: dict[int, str], previous_right: dict[int, str],
-           evidence: PairEvidence | None = None, keep: float = KEEP
+           evidence: PairEvidence | None = None, keep: float = KEEP,
+           locked_left: dict[int, str] | None = None, locked_right: dict[int, str] | None = None,
+           away: bool = False
            ) -> tuple[dict[int, str], dict[int, str], dict[str, float]]:
     """The cheapest joint identity assignment and per-target margins.
 
@@ -183,15 +210,21 @@ def assign(targets: list[str], left: list[Blob], right: list[Blob],
     candidate in ``targets`` order. A target's margin is how much more *evidence* cost (rules
     and stereo, without the continuity bonus) the cheapest assignment that gives it other
     blobs has (inf if none exists): continuity chooses between equals, but never vouches.
+    ``locked_*`` (``{slot: target}``): names the chosen assignment must keep (see the module
+    docstring); a lock on a slot not among the blobs is ignored, and locks that no assignment
+    can keep all (e.g. naming a target not in ``targets``) bind nothing; margins still weigh
+    every assignment. ``away``: the image rules of a person with the back to the robot.
     """
     options: list[tuple[float, float, tuple[str, ...], tuple[str, ...]]] = []
+    allowed: list[bool] = []
     for names_l in _maps(left, targets):
-        cost_l = image_rule_cost(dict(zip(names_l, left, strict=True)))
+        free_l = _keeps_locks(left, names_l, locked_left)
+        cost_l = image_rule_cost(dict(zip(names_l, left, strict=True)), away)
         kept_l = keep * sum(previous_left.get(b.slot) == n
                             for b, n in zip(left, names_l, strict=True))
         where_l = {n: i for i, n in enumerate(names_l)}
         for names_r in _maps(right, targets):
-            cost = cost_l + image_rule_cost(dict(zip(names_r, right, strict=True)))
+            cost = cost_l + image_rule_cost(dict(zip(names_r, right, strict=True)), away)
             kept = kept_l + keep * sum(previous_right.get(b.slot) == n
                                        for b, n in zip(right, names_r, strict=True))
             if evidence is not None:
@@ -207,8 +240,12 @@ def assign(targets: list[str], left: list[Blob], right: list[Blob],
                             evidence.clipped is not None and bool(evidence.clipped[i, j]))
                         cost -= PAIR_BONUS
             options.append((cost - kept, cost, names_l, names_r))
-    best = min(range(len(options)), key=lambda k: (options[k][0], k))
+            allowed.append(free_l and _keeps_locks(right, names_r, locked_right))
+    if not any(allowed):  # locks that cannot all hold (e.g. two slots, one name): none binds
+        allowed = [True] * len(options)
+    best = min((k for k in range(len(options)) if allowed[k]), key=lambda k: (options[k][0], k))
     _, evidence0, best_l, best_r = options[best]
+    bound = best != min(range(len(options)), key=lambda k: (options[k][0], k))
 
     def slots(names_l, names_r, target):
         sl = next((b.slot for b, n in zip(left, names_l, strict=True) if n == target), None)
@@ -219,6 +256,23 @@ def assign(targets: list[str], left: list[Blob], right: list[Blob],
     for target in targets:
         mine = slots(best_l, best_r, target)
         alt = [c for _, c, nl, nr in options if slots(nl, nr, target) != mine]
-        margins[target] = (min(alt) - evidence0) if alt else math.inf
+        # a lock that overruled the rules weighs against the locked names only: the others
+        # are judged on the cheapest assignment that names them alike
+        ref = min(c for _, c, nl, nr in options if slots(nl, nr, target) == mine) if bound \
+            else evidence0
+        margins[target] = (min(alt) - ref) if alt else math.inf
     return ({b.slot: n for b, n in zip(left, best_l, strict=True)},
             {b.slot: n for b, n in zip(right, best_r, strict=True)}, margins)
+
+
+def turned_round(left: list[Blob], right: list[Blob], names_left: dict[int, str],
+                 names_right: dict[int, str], away: bool) -> bool:
+    """Whether names kept by locks show the person turned round: the image rules of the
+    current facing (``away``) count at least :data:`TURN_RULES` violations over both eyes and
+    those of the other facing none (a mirrored picture of head and hands; one hand crossing
+    over leaves the other on its side and breaks a rule either way)."""
+    def cost(facing: bool) -> float:
+        return sum(image_rule_cost({names[b.slot]: b for b in blobs if b.slot in names}, facing)
+                   for blobs, names in ((left, names_left), (right, names_right)))
+
+    return cost(away) >= TURN_RULES and cost(not away) == 0.0

@@ -101,6 +101,7 @@ class PerceptionStage(Stage):
         self._viz = None
         self.record = record
         self.identity_solves = 0
+        self.facing_turns = 0
         self._bus = self._timer = None
 
     # ---- pipeline ----------------------------------------------------------------------------
@@ -169,6 +170,7 @@ class PerceptionStage(Stage):
             self.record.intrinsics = out.intrinsics
         self.record.append(*out.record_row)
         self.identity_solves = out.identity_solves
+        self.facing_turns = out.facing_turns
         self._events += [(t, f"{EVENTS}/perception/{name}", text, level)
                          for t, name, text, level in out.events]
         self._viz = out.viz
@@ -200,7 +202,8 @@ class PerceptionStage(Stage):
     def metrics(self) -> dict:
         out = {"targets": self.published, "distractors": self.targets[len(self.published):],
                "cameras": list(self.cameras), "frames": len(self.record),
-               "identity_solves": self.identity_solves, "latency_ms": 1e3 * self.latency,
+               "identity_solves": self.identity_solves, "facing_turns": self.facing_turns,
+               "latency_ms": 1e3 * self.latency,
                "pipelined": self.pipelined, "worker": self.worker,
                "stale_frames_skipped": self.repeats.stale_frames,
                "skin_look_alike": self.look_alike}
