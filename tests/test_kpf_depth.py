@@ -11,7 +11,7 @@ from _kpf_synth import INTRINSICS, camera, painted_person, static_pose
 from scipy.spatial.transform import Rotation
 
 from humimic.maths.rotations import rotation_between
-from humimic.perception.trackers.kpf.depth import wrist_depth_move
+from humimic.perception.trackers.kpf.depth import keep_wrist_range, wrist_depth_move
 from humimic.perception.trackers.kpf.tracker import kpf_body
 
 
@@ -43,6 +43,31 @@ def test_wrist_moves_along_its_camera_ray_by_delta():
                                    np.linalg.norm(a.joint(j1) - a.joint(j0), axis=1), atol=1e-9)
     # untouched: out of reach or out of the joint limits
     assert np.all(body.free_limits.inside(out))
+
+
+def test_keep_wrist_range_puts_the_wrist_at_the_reference_distance_on_its_own_ray():
+    """``keep_wrist_range``: the moved wrist is on the camera ray through the unmoved one (its
+    image kept) at the camera distance of the reference pose's wrist (plain vector norms in
+    the camera frame), the shoulder fixed."""
+    body = kpf_body()
+    rng = np.random.default_rng(7)
+    n = 200
+    q = np.zeros((n, 14))
+    q[:, 3] = np.pi
+    q[:, 6:14] = rng.uniform([-0.3, 0.1, -0.5, 0.3] * 2, [1.2, 1.2, 0.5, 1.5] * 2, (n, 8))
+    q = body.free_limits.clamp(q)
+    ref = body.free_limits.clamp(q + rng.uniform(-0.2, 0.2, q.shape) * (np.arange(14) >= 6))
+    T = camera()
+    out = keep_wrist_range(body, q, ref, "R", T)
+    moved = np.any(out != q, axis=1)
+    assert moved.mean() > 0.5
+    a, b, r = (body.forward(x).to(T).joint("r_wrist") for x in (q, out, ref))
+    cos = np.sum(a * b, 1) / np.linalg.norm(a, axis=1) / np.linalg.norm(b, axis=1)
+    assert np.all(cos[moved] > 1 - 1e-10)
+    np.testing.assert_allclose(np.linalg.norm(b[moved], axis=1),
+                               np.linalg.norm(r[moved], axis=1), atol=1e-9)
+    np.testing.assert_allclose(body.forward(out).joint("r_shoulder"),
+                               body.forward(q).joint("r_shoulder"), atol=1e-12)
 
 
 def test_rotation_between_matches_scipy():

@@ -146,6 +146,20 @@ class KpfConfig(Section):
     frame (1: kept whole). Measured (as above, ``observed_velocity_px`` 10): 0.5: angular
     131 ± 9, side (seeds 0-4) 90 ± 23 (main 82 ± 44), schmidt_side (1-4) 123 ± 33 (main
     77 ± 18, 1.0: 170 ± 60); 0.8: angular 134 ± 12, schmidt_side 180 ± 58. Off (1.0)."""
+    keep_range_share: float = Field(0.0, ge=0.0, le=1.0)
+    """Our extension: the share of the random group's particles per arm and frame whose wrist,
+    after the random walk, is put back at the camera distance it would have under the motion
+    model (its ancestor moved by the motion model's velocity), on its new camera ray
+    (:func:`~humimic.perception.trackers.kpf.depth.keep_wrist_range`): the walk re-takes the
+    image across the ray without re-drawing the depth, which the likelihood hardly judges
+    (flat within ~0.5 nats over 130 mm along the ray). Part of the dynamics (the reweighting's
+    prior); 0: off, as the paper."""
+    keep_range_groups: Literal["random", "motion", "both"] = "random"
+    """Whose particles ``keep_range_share`` applies to: the ``random`` group's, the ``motion``
+    group's, or ``both``."""
+    keep_range_target: Literal["motion", "ancestor"] = "motion"
+    """The camera distance ``keep_range_share`` restores: ``motion``, the ancestor's moved by
+    the motion model's velocity; ``ancestor``, the ancestor's own (no range rate carried)."""
     min_random: float = Field(0.2, ge=0.0, le=1.0)
     """Smallest share of randomly propagated particles."""
     tol: float = Field(0.01, ge=0.0)

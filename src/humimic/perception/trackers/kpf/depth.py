@@ -51,3 +51,23 @@ def wrist_depth_move(body: bm.BodyModel, q: np.ndarray, side: str, delta: np.nda
     out[:, j:j + 3], out[:, j + 3] = angles, eb
     ok &= np.all(np.isfinite(out), axis=1) & body.free_limits.inside(out)
     return np.where(ok[:, None], out, q)
+
+
+def wrist_ranges(body: bm.BodyModel, q: np.ndarray, side: str, c_ref: np.ndarray
+                 ) -> np.ndarray:
+    """``(N,)`` the distance (m) of arm ``side``'s wrist of states ``q (N, 14)`` from the camera
+    centre ``c_ref (3,)`` (reference frame)."""
+    prefix, _ = SIDES[side]
+    W = body.forward(np.atleast_2d(np.asarray(q, float))).joint(f"{prefix}_wrist")
+    return np.linalg.norm(W - np.asarray(c_ref, float), axis=1)
+
+
+def keep_wrist_range(body: bm.BodyModel, q: np.ndarray, q_ref: np.ndarray, side: str,
+                     T_cam_ref: np.ndarray) -> np.ndarray:
+    """States ``(N, 14)``: arm ``side`` of ``q (N, 14)`` re-solved (:func:`wrist_depth_move`)
+    so its wrist lies at the camera distance of ``q_ref``'s ``(N, 14)``, on its own camera
+    ray (the wrist's image kept): a move across the ray at a given depth. Rows the move cannot
+    reach (out of the arm's reach or the joint limits) are left unchanged."""
+    c = np.linalg.inv(np.asarray(T_cam_ref, float))[:3, 3]
+    delta = wrist_ranges(body, q_ref, side, c) - wrist_ranges(body, q, side, c)
+    return wrist_depth_move(body, q, side, delta, T_cam_ref)

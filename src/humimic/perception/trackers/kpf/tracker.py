@@ -25,7 +25,7 @@ from humimic.estimation.particles.kernel_groups import dominant_modes
 from humimic.estimation.particles.weights import uniform_log_weights
 from humimic.perception.cues.importance import skin_blobs
 from humimic.perception.trackers.kpf.cues import CueMaps
-from humimic.perception.trackers.kpf.depth import SIDES, wrist_depth_move
+from humimic.perception.trackers.kpf.depth import SIDES, keep_wrist_range, wrist_depth_move
 from humimic.perception.trackers.kpf.flips import FLIPS, arm_flips
 from humimic.perception.trackers.kpf.frame_cues import FrameCues
 from humimic.perception.trackers.kpf.hands import hand_blob_moves, part_centres
@@ -244,7 +244,14 @@ class KpfTracker:
                                           rng, self.limits.inside, cfg.motion_noise,
                                           shape=shape,
                                           shape_groups=cfg.observed_walk_groups)
-        pred = walked = self.limits.clamp(pred)
+        pred = self.limits.clamp(pred)
+        if cfg.keep_range_share > 0.0:   # part of the walk: the reweighting's prior has them
+            target = resampled if cfg.keep_range_target == "ancestor" else self.limits.clamp(
+                resampled + velocity)
+            rows = {"random": ~moved, "motion": moved,
+                    "both": np.ones(len(pred), bool)}[cfg.keep_range_groups]
+            pred = self._keep_range(pred, target, rows, T_cam_base, cfg.keep_range_share)
+        walked = pred
         if cfg.flip_share > 0.0:   # part of the dynamics: the reweighting's prior has them
             pred = self._flip_jumps(pred.copy(), T_cam_base, cfg.flip_share)
         prior = pred
@@ -314,6 +321,20 @@ class KpfTracker:
             self.W /= self.W.sum(axis=0, keepdims=True)
             self.w = self.W[:, 0]
         return new
+
+    def _keep_range(self, pred: np.ndarray, target: np.ndarray, rows: np.ndarray,
+                    T_cam_base: np.ndarray, share: float) -> np.ndarray:
+        """``keep_range_share``: a ``share`` of the particles ``rows`` (mask) per arm get their
+        wrist put back, on its new camera ray, at the camera distance of ``target``'s: the
+        propagation's move across the ray keeps the depth
+        (:func:`~humimic.perception.trackers.kpf.depth.keep_wrist_range`)."""
+        pred = pred.copy()
+        for side in SIDES:
+            pick = np.flatnonzero(rows & (self.rng.random(len(pred)) < share))
+            if len(pick):
+                pred[pick] = keep_wrist_range(self.body, pred[pick], target[pick], side,
+                                              T_cam_base)
+        return pred
 
     def _depth_moves(self, pred: np.ndarray, T_cam_base: np.ndarray, share: float
                      ) -> np.ndarray:
