@@ -11,7 +11,11 @@ from _kpf_synth import INTRINSICS, camera, painted_person, static_pose
 from scipy.spatial.transform import Rotation
 
 from humimic.maths.rotations import rotation_between
-from humimic.perception.trackers.kpf.depth import keep_wrist_range, wrist_depth_move
+from humimic.perception.trackers.kpf.depth import (
+    keep_wrist_range,
+    reachable_range_change,
+    wrist_depth_move,
+)
 from humimic.perception.trackers.kpf.tracker import kpf_body
 
 
@@ -68,6 +72,32 @@ def test_keep_wrist_range_puts_the_wrist_at_the_reference_distance_on_its_own_ra
                                np.linalg.norm(r[moved], axis=1), atol=1e-9)
     np.testing.assert_allclose(body.forward(out).joint("r_shoulder"),
                                body.forward(q).joint("r_shoulder"), atol=1e-12)
+
+
+def test_reachable_range_change_clips_to_the_reach_found_by_a_scan():
+    """``reachable_range_change``: a requested change along the wrist's camera ray within the
+    arm's reach is kept, one beyond it is clipped to the farthest reachable point on that side
+    (found independently by scanning the ray in 0.1 mm steps)."""
+    body = kpf_body()
+    rng = np.random.default_rng(3)
+    n = 60
+    q = np.zeros((n, 14))
+    q[:, 3] = np.pi
+    q[:, 6:10] = rng.uniform([-0.3, 0.1, -0.5, 0.0], [1.2, 1.5, 0.5, 0.6], (n, 4))
+    q = body.free_limits.clamp(q)
+    delta = rng.uniform(-0.4, 0.4, n)
+    T = camera()
+    c = np.linalg.inv(T)[:3, 3]
+    got = reachable_range_change(body, q, "R", delta, c, margin=1e-3)
+    pose = body.forward(q)
+    S, W = pose.joint("r_shoulder"), pose.joint("r_wrist")
+    R = (1 - 1e-3) * (body.skeleton.upper_arm + body.skeleton.forearm)
+    t = np.arange(-0.6, 0.6, 1e-4)
+    for k in range(n):
+        u = (W[k] - c) / np.linalg.norm(W[k] - c)
+        ok = t[np.linalg.norm(W[k] - S[k] + t[:, None] * u, axis=1) <= R]
+        want = np.clip(delta[k], ok.min(), ok.max())
+        assert got[k] == pytest.approx(want, abs=2e-4)
 
 
 def test_rotation_between_matches_scipy():

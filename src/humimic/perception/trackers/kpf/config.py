@@ -160,6 +160,10 @@ class KpfConfig(Section):
     keep_range_target: Literal["motion", "ancestor"] = "motion"
     """The camera distance ``keep_range_share`` restores: ``motion``, the ancestor's moved by
     the motion model's velocity; ``ancestor``, the ancestor's own (no range rate carried)."""
+    keep_range_clip: bool = False
+    """With ``keep_range_share``: a wrist whose reference distance is out of the arm's reach
+    (a nearly straight arm: ~40 % of a random walk's particles) moved to the nearest reachable
+    distance on its ray; False: left where the walk put it."""
     min_random: float = Field(0.2, ge=0.0, le=1.0)
     """Smallest share of randomly propagated particles."""
     tol: float = Field(0.01, ge=0.0)

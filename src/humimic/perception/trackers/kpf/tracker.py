@@ -333,7 +333,7 @@ class KpfTracker:
             pick = np.flatnonzero(rows & (self.rng.random(len(pred)) < share))
             if len(pick):
                 pred[pick] = keep_wrist_range(self.body, pred[pick], target[pick], side,
-                                              T_cam_base)
+                                              T_cam_base, self.cfg.keep_range_clip)
         return pred
 
     def _depth_moves(self, pred: np.ndarray, T_cam_base: np.ndarray, share: float
