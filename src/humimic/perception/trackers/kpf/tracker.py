@@ -246,11 +246,7 @@ class KpfTracker:
                                           shape_groups=cfg.observed_walk_groups)
         pred = self.limits.clamp(pred)
         if cfg.keep_range_share > 0.0:   # part of the walk: the reweighting's prior has them
-            target = resampled if cfg.keep_range_target == "ancestor" else self.limits.clamp(
-                resampled + velocity)
-            rows = {"random": ~moved, "motion": moved,
-                    "both": np.ones(len(pred), bool)}[cfg.keep_range_groups]
-            pred = self._keep_range(pred, target, rows, T_cam_base, cfg.keep_range_share)
+            pred = self._keep_range(pred, resampled, velocity, moved, T_cam_base)
         walked = pred
         if cfg.flip_share > 0.0:   # part of the dynamics: the reweighting's prior has them
             pred = self._flip_jumps(pred.copy(), T_cam_base, cfg.flip_share)
@@ -322,18 +318,20 @@ class KpfTracker:
             self.w = self.W[:, 0]
         return new
 
-    def _keep_range(self, pred: np.ndarray, target: np.ndarray, rows: np.ndarray,
-                    T_cam_base: np.ndarray, share: float) -> np.ndarray:
-        """``keep_range_share``: a ``share`` of the particles ``rows`` (mask) per arm get their
-        wrist put back, on its new camera ray, at the camera distance of ``target``'s: the
-        propagation's move across the ray keeps the depth
+    def _keep_range(self, pred, resampled, velocity, moved, T_cam_base) -> np.ndarray:
+        """``keep_range_share``: wrists of ``pred`` put back at their ancestor's (``resampled``,
+        moved by ``velocity`` with ``keep_range_target: motion``) camera distance, on their ray
         (:func:`~humimic.perception.trackers.kpf.depth.keep_wrist_range`)."""
-        pred = pred.copy()
+        c, pred = self.cfg, pred.copy()
+        target = resampled if c.keep_range_target == "ancestor" else self.limits.clamp(
+            resampled + velocity)
+        rows = {"random": ~moved, "motion": moved, "both": np.ones(len(pred), bool)}[
+            c.keep_range_groups]
         for side in SIDES:
-            pick = np.flatnonzero(rows & (self.rng.random(len(pred)) < share))
+            pick = np.flatnonzero(rows & (self.rng.random(len(pred)) < c.keep_range_share))
             if len(pick):
                 pred[pick] = keep_wrist_range(self.body, pred[pick], target[pick], side,
-                                              T_cam_base, self.cfg.keep_range_clip)
+                                              T_cam_base, c.keep_range_clip)
         return pred
 
     def _depth_moves(self, pred: np.ndarray, T_cam_base: np.ndarray, share: float
