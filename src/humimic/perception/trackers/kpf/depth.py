@@ -7,7 +7,9 @@ from the shoulder-wrist distance (law of cosines), the upper arm turned by the s
 rotation that takes the wrist there (keeping the arm's swivel about the shoulder-wrist line as
 far as possible), and the shoulder angles from that rotation. The wrist's image stays put while
 the arm changes its depth, so the likelihood can choose between depths a random walk in joint
-space would rarely reach in one frame.
+space would rarely reach in one frame. :func:`keep_wrist_range` uses the same move the other
+way round (``KpfConfig.keep_range_share``): a propagated wrist put back at a reference camera
+distance on its new ray, so that the propagation moves the arm across the ray and not along it.
 """
 
 from __future__ import annotations
