@@ -167,9 +167,10 @@ class KpfConfig(Section):
     longer follows an arm pointing towards the camera, |along| in the hold 280 -> 396). Without
     the clip: side (seeds 1, 2, 3, 6) 32 but schmidt_side (1, 2) 117 (main 91). Only the random
     group, the motion model's distance: side (0-6) 126 (main 95: the velocity alone carries the
-    lowering arm into the flip); only the motion group, the ancestor's: side (0-7) 70 (main 88),
-    angular 201, schmidt_side 90 (main 77); both groups, the motion model's distance, clipped:
-    angular (0, 1) 264, schmidt_side (1, 2) 204. With the angular options
+    lowering arm into the flip); only the random group, the ancestor's, clipped: side 73 ± 21,
+    angular 205 ± 14, schmidt_side 86 ± 28; only the motion group, the ancestor's: side (0-7) 70
+    (main 88), angular 201, schmidt_side 90 (main 77); both groups, the motion model's distance,
+    clipped: angular (0, 1) 264, schmidt_side (1, 2) 204. With the angular options
     (``particle_velocity``, ``particle_velocity_innovation``, ``observed_velocity_px`` 10; both,
     ancestor, clipped): side 56 ± 13 (better on 6 of 10), angular 187 ± 6 (better on 2 of 5),
     schmidt_side 117 ± 64 (seed 3: 62 -> 213); share 0.7 with them: angular (0-2) 176 (main
