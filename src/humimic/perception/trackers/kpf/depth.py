@@ -7,7 +7,9 @@ from the shoulder-wrist distance (law of cosines), the upper arm turned by the s
 rotation that takes the wrist there (keeping the arm's swivel about the shoulder-wrist line as
 far as possible), and the shoulder angles from that rotation. The wrist's image stays put while
 the arm changes its depth, so the likelihood can choose between depths a random walk in joint
-space would rarely reach in one frame.
+space would rarely reach in one frame. :func:`keep_wrist_range` uses the same move the other
+way round (``KpfConfig.keep_range_share``): a propagated wrist put back at a reference camera
+distance on its new ray, so that the propagation moves the arm across the ray and not along it.
 """
 
 from __future__ import annotations
@@ -51,3 +53,46 @@ def wrist_depth_move(body: bm.BodyModel, q: np.ndarray, side: str, delta: np.nda
     out[:, j:j + 3], out[:, j + 3] = angles, eb
     ok &= np.all(np.isfinite(out), axis=1) & body.free_limits.inside(out)
     return np.where(ok[:, None], out, q)
+
+
+def wrist_ranges(body: bm.BodyModel, q: np.ndarray, side: str, c_ref: np.ndarray
+                 ) -> np.ndarray:
+    """``(N,)`` the distance (m) of arm ``side``'s wrist of states ``q (N, 14)`` from the camera
+    centre ``c_ref (3,)`` (reference frame)."""
+    prefix, _ = SIDES[side]
+    W = body.forward(np.atleast_2d(np.asarray(q, float))).joint(f"{prefix}_wrist")
+    return np.linalg.norm(W - np.asarray(c_ref, float), axis=1)
+
+
+def reachable_range_change(body: bm.BodyModel, q: np.ndarray, side: str, delta: np.ndarray,
+                           c_ref: np.ndarray, margin: float = 1e-3) -> np.ndarray:
+    """``delta (N,)`` (m, range changes of arm ``side``'s wrist along its camera ray from the
+    camera centre ``c_ref``) clipped to the arm's reach: the wrist ``W + t u`` stays within
+    ``(1 - margin)`` times the upper arm plus forearm of the shoulder ``S`` (the roots of
+    ``|W - S + t u|^2 = R^2``; a wrist beyond it is brought to the nearest reachable point);
+    0 where the ray misses that sphere."""
+    prefix, _ = SIDES[side]
+    pose = body.forward(np.atleast_2d(np.asarray(q, float)))
+    S, W = pose.joint(f"{prefix}_shoulder"), pose.joint(f"{prefix}_wrist")
+    u = W - np.asarray(c_ref, float)
+    u /= np.linalg.norm(u, axis=1, keepdims=True)
+    R = (1.0 - margin) * (body.skeleton.upper_arm + body.skeleton.forearm)
+    b = np.sum(u * (W - S), axis=1)
+    disc = b * b - (np.sum((W - S) ** 2, axis=1) - R * R)
+    s = np.sqrt(np.maximum(disc, 0.0))
+    return np.where(disc > 0.0, np.clip(np.asarray(delta, float), -b - s, -b + s), 0.0)
+
+
+def keep_wrist_range(body: bm.BodyModel, q: np.ndarray, q_ref: np.ndarray, side: str,
+                     T_cam_ref: np.ndarray, clip: bool = False) -> np.ndarray:
+    """States ``(N, 14)``: arm ``side`` of ``q (N, 14)`` re-solved (:func:`wrist_depth_move`)
+    so its wrist lies at the camera distance of ``q_ref``'s ``(N, 14)``, on its own camera
+    ray (the wrist's image kept): a move across the ray at a given depth. Rows the move cannot
+    reach (out of the arm's reach or the joint limits) are left unchanged; ``clip``: out of
+    reach, moved to the reachable distance nearest to it
+    (:func:`reachable_range_change`) instead."""
+    c = np.linalg.inv(np.asarray(T_cam_ref, float))[:3, 3]
+    delta = wrist_ranges(body, q_ref, side, c) - wrist_ranges(body, q, side, c)
+    if clip:
+        delta = reachable_range_change(body, q, side, delta, c)
+    return wrist_depth_move(body, q, side, delta, T_cam_ref)

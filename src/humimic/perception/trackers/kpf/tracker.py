@@ -25,7 +25,7 @@ from humimic.estimation.particles.kernel_groups import dominant_modes
 from humimic.estimation.particles.weights import uniform_log_weights
 from humimic.perception.cues.importance import skin_blobs
 from humimic.perception.trackers.kpf.cues import CueMaps
-from humimic.perception.trackers.kpf.depth import SIDES, wrist_depth_move
+from humimic.perception.trackers.kpf.depth import SIDES, keep_wrist_range, wrist_depth_move
 from humimic.perception.trackers.kpf.flips import FLIPS, arm_flips
 from humimic.perception.trackers.kpf.frame_cues import FrameCues
 from humimic.perception.trackers.kpf.hands import hand_blob_moves, part_centres
@@ -244,7 +244,10 @@ class KpfTracker:
                                           rng, self.limits.inside, cfg.motion_noise,
                                           shape=shape,
                                           shape_groups=cfg.observed_walk_groups)
-        pred = walked = self.limits.clamp(pred)
+        pred = self.limits.clamp(pred)
+        if cfg.keep_range_share > 0.0:   # part of the walk: the reweighting's prior has them
+            pred = self._keep_range(pred, resampled, velocity, moved, T_cam_base)
+        walked = pred
         if cfg.flip_share > 0.0:   # part of the dynamics: the reweighting's prior has them
             pred = self._flip_jumps(pred.copy(), T_cam_base, cfg.flip_share)
         prior = pred
@@ -314,6 +317,22 @@ class KpfTracker:
             self.W /= self.W.sum(axis=0, keepdims=True)
             self.w = self.W[:, 0]
         return new
+
+    def _keep_range(self, pred, resampled, velocity, moved, T_cam_base) -> np.ndarray:
+        """``keep_range_share``: wrists of ``pred`` put back at their ancestor's (``resampled``,
+        moved by ``velocity`` with ``keep_range_target: motion``) camera distance, on their ray
+        (:func:`~humimic.perception.trackers.kpf.depth.keep_wrist_range`)."""
+        c, pred = self.cfg, pred.copy()
+        target = resampled if c.keep_range_target == "ancestor" else self.limits.clamp(
+            resampled + velocity)
+        rows = {"random": ~moved, "motion": moved, "both": np.ones(len(pred), bool)}[
+            c.keep_range_groups]
+        for side in SIDES:
+            pick = np.flatnonzero(rows & (self.rng.random(len(pred)) < c.keep_range_share))
+            if len(pick):
+                pred[pick] = keep_wrist_range(self.body, pred[pick], target[pick], side,
+                                              T_cam_base, c.keep_range_clip)
+        return pred
 
     def _depth_moves(self, pred: np.ndarray, T_cam_base: np.ndarray, share: float
                      ) -> np.ndarray:
