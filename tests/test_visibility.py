@@ -12,6 +12,7 @@ from scipy.spatial.distance import mahalanobis
 from humimic.metrics.summary import verdict_warning
 from humimic.metrics.visibility import cause, off_target
 from humimic.paths import SCENARIOS_DIR
+from humimic.perception.cues.auto_colors import look_alike_report
 from humimic.rngs import Rngs
 from humimic.scenario import load_scenario
 from humimic.sensors.visibility import (
@@ -80,6 +81,14 @@ def test_warning_line_names_poor_targets():
         "2.14 pixels ...")
     assert verdict_warning({"tracking": {}, "perception": colour}) == (
         "warning: the scene shows 2.14 pixels ...")
+    # and each tracker's own skin model (trackers.<name>), after the blobs'
+    trackers = {"kpf": {"frames": 3, **look_alike_report(3.14159)},
+                "gest": look_alike_report(0.2), "face": {"frames": 3}}
+    assert trackers["gest"] == {"skin_look_alike": 0.2} and look_alike_report(None) == {
+        "skin_look_alike": None}
+    assert verdict_warning({"tracking": {}, "perception": colour, "trackers": trackers}) == (
+        "warning: the scene shows 2.14 pixels ...; kpf's skin model: the scene shows 3.14 "
+        "pixels of the skin's colours per skin pixel (clothes or room of the skin's colour)")
 
 
 @pytest.fixture(scope="module")

@@ -53,8 +53,8 @@ def print_summary(metrics: dict, out_dir: str | Path, console: Console | None = 
 def verdict_warning(metrics: dict) -> str | None:
     """One line naming every target detected on less than half of its visible frames, or
     never, with its likely cause (``tracking.<target>.verdict``), and the perception stage's
-    ``colour_warning`` when it has one (a scene with look-alikes of the skin's colours); None
-    when there is neither."""
+    ``colour_warning`` and each tracker's (``trackers.<name>.colour_warning``) when they have
+    one (a scene with look-alikes of the skin's colours); None when there is neither."""
     poor = []
     for target, s in metrics.get("tracking", {}).items():
         if isinstance(s, dict) and s.get("verdict") == "poor":
@@ -65,4 +65,7 @@ def verdict_warning(metrics: dict) -> str | None:
     colour = metrics.get("perception", {}).get("colour_warning")
     if colour:
         poor.append(colour)
+    for name, s in metrics.get("trackers", {}).items():  # each tracker's own skin model
+        if isinstance(s, dict) and s.get("colour_warning"):
+            poor.append(f"{name}'s skin model: {s['colour_warning']}")
     return f"warning: {'; '.join(poor)}" if poor else None

@@ -37,7 +37,7 @@ import numpy as np
 
 from humimic.perception.blobs.core import FrameResult, PerceptionCore
 from humimic.perception.blobs.record import PerceptionRecord
-from humimic.perception.cues.auto_colors import LOOK_ALIKE_WARN
+from humimic.perception.cues.auto_colors import look_alike_report
 from humimic.pipeline.stage import Stage
 from humimic.sensors.faults import RepeatDetector
 from humimic.viz.rerun_log import EVENTS, OTHER_COLOR, TARGET_COLORS, image_entity
@@ -206,11 +206,7 @@ class PerceptionStage(Stage):
                "latency_ms": 1e3 * self.latency,
                "pipelined": self.pipelined, "worker": self.worker,
                "stale_frames_skipped": self.repeats.stale_frames,
-               "skin_look_alike": self.look_alike}
-        if self.look_alike is not None and self.look_alike > LOOK_ALIKE_WARN:
-            out["colour_warning"] = (f"the scene shows {self.look_alike:.2f} pixels of the "
-                                     "skin's colours per skin pixel (clothes or room of the "
-                                     "skin's colour)")
+               **look_alike_report(self.look_alike)}
         return {"perception": out}
 
     def close(self) -> None:

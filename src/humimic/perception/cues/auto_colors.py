@@ -231,6 +231,17 @@ def bin_counts(px: np.ndarray, bits: int) -> np.ndarray:
     return np.bincount(idx, minlength=1 << (3 * bits))
 
 
+def look_alike_report(ratio: float | None) -> dict:
+    """A stage's metrics of the skin model it uses: ``skin_look_alike`` (the learned model's
+    :func:`look_alike_ratio`; None for a model read from a file) and, above
+    :data:`LOOK_ALIKE_WARN`, ``colour_warning`` (a line for the run's warning)."""
+    out = {"skin_look_alike": ratio}
+    if ratio is not None and ratio > LOOK_ALIKE_WARN:
+        out["colour_warning"] = (f"the scene shows {ratio:.2f} pixels of the skin's colours "
+                                 "per skin pixel (clothes or room of the skin's colour)")
+    return out
+
+
 def look_alike_ratio(table: np.ndarray, bits: int, class_px: np.ndarray,
                      other_px: np.ndarray) -> float | None:
     """Pixels of the scene's other surfaces (``other_px (N, 3)`` uint8: clothes, room) that

@@ -25,7 +25,7 @@ import rerun as rr
 from humimic.messages import TRACK_STATES, Tracks2D
 from humimic.metrics.tracks2d import ImageTruth, project_truth, scores
 from humimic.perception.blobs.config import DEFAULT_COLOR_MODEL
-from humimic.perception.cues.auto_colors import NotInView, file_lut, learned_lut
+from humimic.perception.cues.auto_colors import NotInView, file_lut, learned_lut, look_alike_report
 from humimic.perception.cues.color_models import ColorLUT
 from humimic.pipeline.stage import Stage
 from humimic.scenario.errors import ScenarioError
@@ -103,6 +103,8 @@ class PoseTrackerStage(Stage):
     per-frame compute (``frames_per_s`` excludes rendering)."""
 
     kind = "tracker"
+    skin_lut = None
+    """The skin :class:`ColorLUT` the tracker uses, if any: its look-alike ratio is scored."""
 
     def __init__(self, name: str, latency: float = 0.0):
         self.name = f"trackers.{name}"
@@ -150,6 +152,8 @@ class PoseTrackerStage(Stage):
                "frames_per_s": n / self.compute_s if self.compute_s > 0 else None,
                "lost_fraction": float(np.mean(lost)) if n else None}
         out.update(self.scores())
+        if self.skin_lut is not None:
+            out.update(look_alike_report(self.skin_lut.look_alike))
         return {"trackers": {self.tracker_name: out}}
 
 
@@ -189,6 +193,9 @@ class ImageTrackerStage(Stage):
     frame, ready ``latency`` later), keeps every frame's camera and tracks, times the tracker's
     compute (``frames_per_s`` excludes rendering) and scores its first track against the
     ground truth of ``target`` (a site of physical size ``size_m``)."""
+
+    skin_lut = None
+    """The skin :class:`ColorLUT` the tracker uses, if any: its look-alike ratio is scored."""
 
     def __init__(self, name: str, camera: str, target: str, size_m: float, gt, rlog=None,
                  latency: float = 0.0, people=None, visibility=None):
@@ -323,4 +330,6 @@ class ImageTrackerStage(Stage):
             uv, scale, tracking, truth = self.arrays()
             out.update(scores(np.array(self.times), uv, scale, tracking, truth, self.others()))
             out["hidden_frames"] = int(np.sum(~truth.visible))
+        if self.skin_lut is not None:
+            out.update(look_alike_report(self.skin_lut.look_alike))
         return {"trackers": {self.tracker_name: out}}

@@ -51,7 +51,7 @@ class GestStage(PoseTrackerStage):
         super().__init__(name, cfg.latency)
         self.cfg, self.cameras, self.world, self.rng, self.rlog = cfg, cameras, world, rng, rlog
         self.foveal = foveal
-        self.tracker = GestTracker(cfg, lut)
+        self.tracker, self.skin_lut = GestTracker(cfg, lut), lut
         load_kernels(lut, cfg.bins)     # numba's kernels, before the first timed frame
         self.side = "R" if cfg.hand == "right" else "L"
         self.results: list[GestResult | None] = []

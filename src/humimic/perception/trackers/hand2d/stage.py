@@ -19,7 +19,7 @@ class Hand2DStage(ImageTrackerStage):
                  visibility=None, people=None):
         super().__init__(name, camera, cfg.target, HAND_WIDTH_M, gt, rlog, cfg.latency,
                          people, visibility)
-        self.cfg, self.tracker = cfg, tracker
+        self.cfg, self.tracker, self.skin_lut = cfg, tracker, tracker.lut
         load_kernels(None, cfg.bins)     # numba's colour-count kernel, before frame one
 
     def metrics(self) -> dict:

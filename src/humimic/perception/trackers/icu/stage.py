@@ -24,7 +24,7 @@ class IcuStage(ImageTrackerStage):
                  people=None, visibility=None, fx_px: float | None = None):
         super().__init__(name, camera, "head", HEAD_WIDTH_M, gt, rlog, cfg.latency, people,
                          visibility)
-        self.tracker, self.identity = tracker, identity
+        self.tracker, self.identity, self.skin_lut = tracker, identity, tracker.skin
         load_kernels(None, cfg.bins)     # numba's colour-count kernel, before frame one
         self.near, self.fx_px = cfg.near, fx_px
         self.module = "init"

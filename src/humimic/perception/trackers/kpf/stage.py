@@ -18,6 +18,7 @@ import numpy as np
 
 from humimic import bodymodel as bm
 from humimic.messages import PoseEstimate
+from humimic.perception.cues.auto_colors import look_alike_report
 from humimic.perception.trackers.common import pose_error_plot
 from humimic.perception.trackers.kpf.frame_cues import FrameCues
 from humimic.perception.trackers.kpf.scores import ENDPOINTS, KpfRecord, errors, kpf_metrics
@@ -85,8 +86,9 @@ class KpfStage(Stage):
                       self.world.gt.T_world_frame("base"))
 
     def metrics(self) -> dict:
-        return {"trackers": {self.name: kpf_metrics(self.rec, self.world, self.body,
-                                                    self.camera)}}
+        return {"trackers": {self.name: {
+            **kpf_metrics(self.rec, self.world, self.body, self.camera),
+            **look_alike_report(self.skin_lut.look_alike)}}}
 
     def log(self, rlog) -> None:
         log_run(rlog, self.name, self.rec, self.world, self.body)

@@ -44,7 +44,7 @@ class TbpStage(PoseTrackerStage):
     def __init__(self, name: str, cfg, camera: str, body, lut, world, rng):
         super().__init__(name, cfg.latency)
         self.cfg, self.camera, self.world, self.rng = cfg, camera, world, rng
-        self.tracker = TbpTracker(cfg, body, lut)
+        self.tracker, self.skin_lut = TbpTracker(cfg, body, lut), lut
         load_kernels(lut, cfg.bins)          # the cue images' numba kernels, before frame one
         body.forward(np.zeros((1, len(body.free))))     # and the compiled forward kinematics
         head = body.part("head")
