@@ -125,7 +125,9 @@ class Hand2DTracker:
             flow = self.flow(np.ascontiguousarray(self.prev_grey[y0:y1, x0:x1]), g)
         if skin is None and "skin" in self.cfg.cues:
             skin = self.lut.posterior(image[y0:y1, x0:x1]).astype(np.float32)
-        return frame_cues(g, flow, (x0, y0), self.params, self.cfg.min_flow_px, qimage,
+        edged = (g if self.cfg.edges == "grey" or image.ndim == 2
+                 else np.ascontiguousarray(image[y0:y1, x0:x1]))
+        return frame_cues(edged, flow, (x0, y0), self.params, self.cfg.min_flow_px, qimage,
                           need_dt, skin)
 
     def _rim(self, state: np.ndarray, origin: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
