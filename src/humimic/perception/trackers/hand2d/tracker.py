@@ -148,6 +148,12 @@ class Hand2DTracker:
                            self.template, self.cfg.min_hand_px, self.cfg.init_edge_px, is_face)
         best = det.best
         nan = np.full(4, np.nan)
+        if len(det.states) > 1 and self.use_flow and self.prev_grey is None:
+            # several hand-shaped blobs and no flow yet to say which one waves (the first
+            # frame): wait a frame rather than take the best template fit -- a coin toss
+            # (the synthetic tutor and distractor hands' fits differ by 0.1-0.3 px, and which
+            # is closer depends on the edge detector)
+            best = None
         if best is None:
             return HandStep(self.state, nan, np.nan, None, None, np.nan, np.nan, det.blobs,
                             None)
