@@ -45,7 +45,10 @@ class Hand2DConfig(Section):
     ``edges``). Under other light a skin hand can match the grey wall behind it in grey level
     and lose its grey edges: menezes_hand_people with ``lighting.ambient: 0.1,
     lighting.diffuse: 0.3`` (3 s), the waving hand's template 21.8 px from the nearest grey
-    edge against 2.8 px on colour edges; measured per run in the README (Any light)."""
+    edge against 2.8 px on colour edges. 3 s runs of menezes_hand_people, lost grey -> colour:
+    16 -> 0 % (default light), 41 -> 23 % (that dim light), 27 -> 0 % (ambient 0.6, diffuse
+    0.9), 47 -> 0 % at 3 m; more in the README (Any light). Costs ~1.7 ms of CPU more per
+    tracking frame (``bench_hand2d.py``: 4.6 -> 6.3 ms)."""
     similarity: Literal["normal", "dt"] = "normal"
     """Edge distance along the template normals (eqs. 2, 4) or by distance transform (3, 5)."""
     sigma_s: float = Field(36.0, gt=0.0, le=1e4)
