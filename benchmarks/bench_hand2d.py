@@ -35,7 +35,7 @@ from run_all import print_table  # noqa: E402
 from humimic.paths import SCENARIOS_DIR  # noqa: E402
 from humimic.perception.blobs.config import DEFAULT_COLOR_MODEL  # noqa: E402
 from humimic.perception.cues.color_models import ColorLUT, load_color_model  # noqa: E402
-from humimic.perception.cues.edges import canny, grey  # noqa: E402
+from humimic.perception.cues.edges import canny, colour_canny, grey  # noqa: E402
 from humimic.perception.cues.motion import OpticalFlow  # noqa: E402
 from humimic.perception.faces.detect import FaceDetector  # noqa: E402
 from humimic.perception.trackers.hand2d.likelihood import (  # noqa: E402
@@ -120,13 +120,16 @@ def bench(repeats: int, clock: str = "wall") -> list[Row]:
     gr, pr = np.ascontiguousarray(g[y0:y1, x0:x1]), np.ascontiguousarray(prev[y0:y1, x0:x1])
     flow = OpticalFlow()
     fl = flow(pr, gr)
-    cues = frame_cues(gr, fl, (x0, y0), tracker.params, cfg.min_flow_px, None)
+    # the edges' input as the tracker gives it: the colour ROI (edges: colour) or the grey one
+    er = gr if cfg.edges == "grey" else np.ascontiguousarray(img[y0:y1, x0:x1])
+    cues = frame_cues(er, fl, (x0, y0), tracker.params, cfg.min_flow_px, None)
     x = tracker.pf.particles
     size = f"ROI {x1 - x0}x{y1 - y0}"
     for name, fn in ((f"Canny, {size}", lambda: canny(gr)),
+                     (f"Canny on the colour gradient, {size}", lambda: colour_canny(er)),
                      (f"optical flow (DIS), {size}", lambda: flow(pr, gr)),
                      (f"cue maps (edges + moving edges), {size}",
-                      lambda: frame_cues(gr, fl, (x0, y0), tracker.params, 0.5, None)),
+                      lambda: frame_cues(er, fl, (x0, y0), tracker.params, 0.5, None)),
                      ("likelihood eq. 4, N=100, Np=30",
                       lambda: log_likelihood(cues, x, tracker.template, tracker.params, None)),
                      ("skin mask, whole image (detection frames)", lambda: lut.posterior(img)),

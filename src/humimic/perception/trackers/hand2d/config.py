@@ -39,6 +39,16 @@ class Hand2DConfig(Section):
     ``skin`` in the lab_clutter room (Fig. 5, seeds 1/9/4): lost 21/22/29 % -> 10/11/9 % of
     the frames, centre RMSE 6.6/5.8/6.9 -> 2.4/3.3/2.5 px; another person behind the hand
     (menezes_hand_people): lost 35 -> 13 %, 0 identity switches either way."""
+    edges: Literal["grey", "colour"] = "colour"
+    """The shape cue's edges (also the detector's and the loss test's): Canny on the grey
+    image (the paper) or on the colour gradient (the strongest channel's, as GEST's and TBP's
+    ``edges``). Under other light a skin hand can match the grey wall behind it in grey level
+    and lose its grey edges: menezes_hand_people with ``lighting.ambient: 0.1,
+    lighting.diffuse: 0.3`` (3 s), the waving hand's template 21.8 px from the nearest grey
+    edge against 2.8 px on colour edges. 3 s runs of menezes_hand_people, lost grey -> colour:
+    16 -> 0 % (default light), 41 -> 23 % (that dim light), 27 -> 0 % (ambient 0.6, diffuse
+    0.9), 47 -> 0 % at 3 m; more in the README (Any light). Costs ~1.7 ms of CPU more per
+    tracking frame (``bench_hand2d.py``: 4.6 -> 6.3 ms)."""
     similarity: Literal["normal", "dt"] = "normal"
     """Edge distance along the template normals (eqs. 2, 4) or by distance transform (3, 5)."""
     sigma_s: float = Field(36.0, gt=0.0, le=1e4)

@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from humimic.perception.cues.edges import (
-    canny,
+    colour_canny,
     distance_transform,
     dt_distance,
     normal_edge_distance,
@@ -89,12 +89,14 @@ def roi_of(points: np.ndarray, margin: float, width: int, height: int
     return x0, y0, x1, y1
 
 
-def frame_cues(grey_roi: np.ndarray, flow: np.ndarray | None, origin, p: Params,
+def frame_cues(roi_image: np.ndarray, flow: np.ndarray | None, origin, p: Params,
                min_flow_px: float, qimage: QuantizedImage | None, need_dt: bool = False,
                skin: np.ndarray | None = None) -> FrameCues:
-    """Edges and moving edges of a grey ROI (``flow`` over the same ROI, or None: nothing
-    moves), with their distance transforms only where the similarity (or ``need_dt``) asks."""
-    edges = canny(grey_roi)
+    """Edges and moving edges of an ROI (``flow`` over the same ROI, or None: nothing
+    moves), with their distance transforms only where the similarity (or ``need_dt``) asks.
+    A grey ROI gets Canny on its grey levels (the paper), an RGB one Canny on its colour
+    gradient (:func:`~humimic.perception.cues.edges.colour_canny`, ``edges: colour``)."""
+    edges = colour_canny(roi_image)
     moving = (moving_edges(edges, flow, min_flow_px) if flow is not None
               else np.zeros_like(edges))
     dt = distance_transform(edges) if need_dt or p.similarity == "dt" else None

@@ -125,7 +125,9 @@ class Hand2DTracker:
             flow = self.flow(np.ascontiguousarray(self.prev_grey[y0:y1, x0:x1]), g)
         if skin is None and "skin" in self.cfg.cues:
             skin = self.lut.posterior(image[y0:y1, x0:x1]).astype(np.float32)
-        return frame_cues(g, flow, (x0, y0), self.params, self.cfg.min_flow_px, qimage,
+        edged = (g if self.cfg.edges == "grey" or image.ndim == 2
+                 else np.ascontiguousarray(image[y0:y1, x0:x1]))
+        return frame_cues(edged, flow, (x0, y0), self.params, self.cfg.min_flow_px, qimage,
                           need_dt, skin)
 
     def _rim(self, state: np.ndarray, origin: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -146,6 +148,12 @@ class Hand2DTracker:
                            self.template, self.cfg.min_hand_px, self.cfg.init_edge_px, is_face)
         best = det.best
         nan = np.full(4, np.nan)
+        if len(det.states) > 1 and self.use_flow and self.prev_grey is None:
+            # several hand-shaped blobs and no flow yet to say which one waves (the first
+            # frame): wait a frame rather than take the best template fit -- a coin toss
+            # (the synthetic tutor and distractor hands' fits differ by 0.1-0.3 px, and which
+            # is closer depends on the edge detector)
+            best = None
         if best is None:
             return HandStep(self.state, nan, np.nan, None, None, np.nan, np.nan, det.blobs,
                             None)
