@@ -17,6 +17,17 @@ PALETTE = {"torso": (40, 60, 160), "head": (224, 172, 140), "r_hand": (224, 172,
            "l_forearm": (230, 200, 60)}
 
 
+def facing_arm_poses(body: bm.BodyModel, rng: np.random.Generator, n: int, low, high,
+                     arms: slice = slice(6, 10)) -> np.ndarray:
+    """``n`` poses of a person facing the camera (torso at the base origin, turned by pi), the
+    ``arms`` DOFs (default the right arm's four) uniform in ``[low, high)``, clamped to the
+    body's limits."""
+    q = np.zeros((n, 14))
+    q[:, 3] = np.pi
+    q[:, arms] = rng.uniform(low, high, (n, q[:, arms].shape[1]))
+    return body.free_limits.clamp(q)
+
+
 def camera() -> np.ndarray:
     """T_cam_base of a camera 2 m in front of the body looking back at it (OpenCV axes)."""
     R_base_cam = np.column_stack([[0, 1, 0], [0, 0, -1], [-1, 0, 0]]).astype(float)

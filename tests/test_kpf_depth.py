@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from _kpf_synth import INTRINSICS, camera, painted_person, static_pose
+from _kpf_synth import INTRINSICS, camera, facing_arm_poses, painted_person, static_pose
 from scipy.spatial.transform import Rotation
 
 from humimic.maths.rotations import rotation_between
@@ -56,10 +56,8 @@ def test_keep_wrist_range_puts_the_wrist_at_the_reference_distance_on_its_own_ra
     body = kpf_body()
     rng = np.random.default_rng(7)
     n = 200
-    q = np.zeros((n, 14))
-    q[:, 3] = np.pi
-    q[:, 6:14] = rng.uniform([-0.3, 0.1, -0.5, 0.3] * 2, [1.2, 1.2, 0.5, 1.5] * 2, (n, 8))
-    q = body.free_limits.clamp(q)
+    q = facing_arm_poses(body, rng, n, [-0.3, 0.1, -0.5, 0.3] * 2, [1.2, 1.2, 0.5, 1.5] * 2,
+                         slice(6, 14))
     ref = body.free_limits.clamp(q + rng.uniform(-0.2, 0.2, q.shape) * (np.arange(14) >= 6))
     T = camera()
     out = keep_wrist_range(body, q, ref, "R", T)
@@ -81,10 +79,7 @@ def test_reachable_range_change_clips_to_the_reach_found_by_a_scan():
     body = kpf_body()
     rng = np.random.default_rng(3)
     n = 60
-    q = np.zeros((n, 14))
-    q[:, 3] = np.pi
-    q[:, 6:10] = rng.uniform([-0.3, 0.1, -0.5, 0.0], [1.2, 1.5, 0.5, 0.6], (n, 4))
-    q = body.free_limits.clamp(q)
+    q = facing_arm_poses(body, rng, n, [-0.3, 0.1, -0.5, 0.0], [1.2, 1.5, 0.5, 0.6])
     delta = rng.uniform(-0.4, 0.4, n)
     T = camera()
     c = np.linalg.inv(T)[:3, 3]

@@ -6,7 +6,7 @@ minimiser, and the turned arm's hand against the rasterised body model's hand pi
 from __future__ import annotations
 
 import numpy as np
-from _kpf_synth import INTRINSICS, camera, painted_person, static_pose
+from _kpf_synth import INTRINSICS, camera, facing_arm_poses, painted_person, static_pose
 from scipy.spatial import cKDTree
 
 from humimic import bodymodel as bm
@@ -68,10 +68,7 @@ def test_arm_turn_keeps_the_elbow_and_takes_the_hand_to_its_target_direction():
     body = kpf_body()
     rng = np.random.default_rng(3)
     n = 100
-    q = np.zeros((n, 14))
-    q[:, 3] = np.pi
-    q[:, 6:10] = rng.uniform([-0.2, 0.2, -0.4, 0.3], [1.0, 1.0, 0.4, 1.2], (n, 4))
-    q = body.free_limits.clamp(q)
+    q = facing_arm_poses(body, rng, n, [-0.2, 0.2, -0.4, 0.3], [1.0, 1.0, 0.4, 1.2])
     pose = body.forward(q)
     S, H = pose.joint("r_shoulder"), part_centres(body, pose, "r_hand")
     turn = rng.normal(0, 0.15, (n, 3))
