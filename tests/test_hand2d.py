@@ -295,12 +295,13 @@ def test_hand_people_scenario_tracks_in_dim_light(tmp_path):
 
 def test_waits_for_motion_before_choosing_between_hands(lut):
     """Two still hand-shaped skin blobs on the first frame (no flow yet to say which waves):
-    the detector waits; on the next frame the one that moved is taken, whichever fits the
-    template better."""
+    the detector waits; on the next frame the one that moved is taken, though the still one
+    fits the template better (chamfer distance 0.93 against 0.97-1.03: the waving hand is
+    turned by 0.3 rad)."""
     rng = np.random.default_rng(11)
     tr = Hand2DTracker(Hand2DConfig(kind="hand2d", rho=5.0), lut, W, H,
                        np.random.default_rng(12), faces=None)
-    still, waving = (220.0, 80.0, 30.0, 0.3), (90.0, 130.0, 30.0, 0.0)
+    still, waving = (220.0, 80.0, 30.0, 0.0), (90.0, 130.0, 30.0, 0.3)
     assert tr.step(_frame(rng, (still, waving))).state == "init"
     s = tr.step(_frame(rng, (still, (waving[0] + 6.0, *waving[1:]))))
     assert s.state == "tracking" and np.hypot(s.mean[0] - 96.0, s.mean[1] - 130.0) < 4.0

@@ -143,7 +143,6 @@ def test_tracker_keep_range_puts_the_propagated_wrists_at_their_ancestors_distan
     from the start pose (every ancestor the same), the particles handed to mean shift have
     their right wrist at the start pose's camera distance (plain norms in the camera frame)
     where the arm reaches it, while the plain walk spreads it by centimetres."""
-    from _kpf_synth import painted_person
 
     from humimic.perception.blobs.config import DEFAULT_COLOR_MODEL
     from humimic.perception.cues.color_models import ColorLUT, load_color_model

@@ -159,34 +159,37 @@ class KpfConfig(Section):
     kinematic flip (-450 mm along the ray, kept through the rest); the 18 s gestures
     (schmidt_side) jump in one frame of the rise (a random re-take, e.g. -30 -> -110 mm).
     Measured (mean wrist error, mm, main -> option; side seeds 0-9, angular 0-4, schmidt_side
-    1-4): share 1, ``both`` groups, the ``ancestor``'s distance, ``keep_range_clip``: side 84 ±
-    49 -> 41 ± 12 (better on 8 of 10; along the ray 27, |along| by phase rest / rise / hold /
-    lower 83 / 89 / 33 / 89 -> 27 / 30 / 21 / 33), schmidt_side 77 ± 18 -> 68 ± 26 (better on 3
-    of 4), another person (skin [0.45, 0.30, 0.22], shirt [0.25, 0.55, 0.30], seeds 0-2) side 77
-    -> 49 and angular 193 -> 213; angular 182 ± 24 -> 223 ± 12 (worse on all 5: the depth no
-    longer follows an arm pointing towards the camera, |along| in the hold 280 -> 396). Without
-    the clip: side (seeds 1, 2, 3, 6) 32 but schmidt_side (1, 2) 117 (main 91). Only the random
-    group, the motion model's distance: side (0-6) 126 (main 95: the velocity alone carries the
-    lowering arm into the flip); only the random group, the ancestor's, clipped: side 73 ± 21,
-    angular 205 ± 14, schmidt_side 86 ± 28; only the motion group, the ancestor's: side (0-7) 70
-    (main 88), angular 201, schmidt_side 90 (main 77); both groups, the motion model's distance,
-    clipped: angular (0, 1) 264, schmidt_side (1, 2) 204. With the angular options
-    (``particle_velocity``, ``particle_velocity_innovation``, ``observed_velocity_px`` 10; both,
-    ancestor, clipped): side 56 ± 13 (better on 6 of 10), angular 187 ± 6 (better on 2 of 5),
-    schmidt_side 117 ± 64 (seed 3: 62 -> 213); share 0.7 with them: angular (0-2) 176 (main
-    195), schmidt_side (1, 2) 139 (main 91). Off: no setting beats main on all three (the frozen
-    depth costs angular pointing)."""
-    keep_range_groups: Literal["random", "motion", "both"] = "random"
+    1-4): share 1 with the defaults below (``both`` groups, the ``ancestor``'s distance,
+    clipped): side 84 ± 49 -> 41 ± 12 (better on 8 of 10; along the ray 27, |along| by phase
+    rest / rise / hold / lower 83 / 89 / 33 / 89 -> 27 / 30 / 21 / 33), schmidt_side 77 ± 18 ->
+    68 ± 26 (better on 3 of 4), another person (skin [0.45, 0.30, 0.22], shirt [0.25, 0.55,
+    0.30], seeds 0-2) side 77 -> 49 and angular 193 -> 213; angular 182 ± 24 -> 223 ± 12 (worse
+    on all 5: the depth no longer follows an arm pointing towards the camera, |along| in the
+    hold 280 -> 396). Without the clip: side (seeds 1, 2, 3, 6) 32 but schmidt_side (1, 2) 117
+    (main 91). Only the random group, the motion model's distance: side (0-6) 126 (main 95: the
+    velocity alone carries the lowering arm into the flip); only the random group, the
+    ancestor's, clipped: side 73 ± 21, angular 205 ± 14, schmidt_side 86 ± 28; only the motion
+    group, the ancestor's: side (0-7) 70 (main 88), angular 201, schmidt_side 90 (main 77);
+    both groups, the motion model's distance, clipped: angular (0, 1) 264, schmidt_side (1, 2)
+    204. With the angular options (``particle_velocity``, ``particle_velocity_innovation``,
+    ``observed_velocity_px`` 10; both, ancestor, clipped): side 56 ± 13 (better on 6 of 10),
+    angular 187 ± 6 (better on 2 of 5), schmidt_side 117 ± 64 (seed 3: 62 -> 213); share 0.7
+    with them: angular (0-2) 176 (main 195), schmidt_side (1, 2) 139 (main 91). Off: no setting
+    beats main on all three (the frozen depth costs angular pointing)."""
+    keep_range_groups: Literal["random", "motion", "both"] = "both"
     """Whose particles ``keep_range_share`` applies to: the ``random`` group's, the ``motion``
-    group's, or ``both``."""
-    keep_range_target: Literal["motion", "ancestor"] = "motion"
+    group's, or ``both`` (the best measured, above)."""
+    keep_range_target: Literal["motion", "ancestor"] = "ancestor"
     """The camera distance ``keep_range_share`` restores: ``motion``, the ancestor's moved by
-    the motion model's velocity; ``ancestor``, the ancestor's own (no range rate carried)."""
-    keep_range_clip: bool = False
+    the motion model's velocity; ``ancestor`` (the best measured), the ancestor's own (no
+    range rate carried)."""
+    keep_range_clip: bool = True
     """With ``keep_range_share``: a wrist whose reference distance is out of the arm's reach
     (a nearly straight arm: ~40 % of a random walk's particles) moved to the nearest reachable
     distance on its ray (:func:`~humimic.perception.trackers.kpf.depth.reachable_range_change`);
-    False: left where the propagation put it (the depth re-drawn after all)."""
+    False: left where the propagation put it (the depth re-drawn after all). Only the outer
+    reach is clipped: a wrist asked nearer the shoulder than the arm can fold stays where the
+    propagation put it."""
     min_random: float = Field(0.2, ge=0.0, le=1.0)
     """Smallest share of randomly propagated particles."""
     tol: float = Field(0.01, ge=0.0)

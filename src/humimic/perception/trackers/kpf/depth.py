@@ -90,9 +90,23 @@ def keep_wrist_range(body: bm.BodyModel, q: np.ndarray, q_ref: np.ndarray, side:
     ray (the wrist's image kept): a move across the ray at a given depth. Rows the move cannot
     reach (out of the arm's reach or the joint limits) are left unchanged; ``clip``: out of
     reach, moved to the reachable distance nearest to it
-    (:func:`reachable_range_change`) instead."""
+    (:func:`reachable_range_change`, the outer reach only) instead."""
     c = np.linalg.inv(np.asarray(T_cam_ref, float))[:3, 3]
     delta = wrist_ranges(body, q_ref, side, c) - wrist_ranges(body, q, side, c)
     if clip:
         delta = reachable_range_change(body, q, side, delta, c)
     return wrist_depth_move(body, q, side, delta, T_cam_ref)
+
+
+def kept_ranges(body: bm.BodyModel, q: np.ndarray, q_ref: np.ndarray, rows: np.ndarray,
+                share: float, T_cam_ref: np.ndarray, clip: bool, rng: np.random.Generator
+                ) -> np.ndarray:
+    """A copy of states ``q (N, 14)`` where, per arm, each of ``rows`` (bool ``(N,)``) is
+    drawn with probability ``share`` and its wrist put back at ``q_ref``'s camera distance
+    (:func:`keep_wrist_range`)."""
+    q = np.array(q, float)
+    for side in SIDES:
+        pick = np.flatnonzero(rows & (rng.random(len(q)) < share))
+        if len(pick):
+            q[pick] = keep_wrist_range(body, q[pick], q_ref[pick], side, T_cam_ref, clip)
+    return q

@@ -25,7 +25,7 @@ from humimic.estimation.particles.kernel_groups import dominant_modes
 from humimic.estimation.particles.weights import uniform_log_weights
 from humimic.perception.cues.importance import skin_blobs
 from humimic.perception.trackers.kpf.cues import CueMaps
-from humimic.perception.trackers.kpf.depth import SIDES, keep_wrist_range, wrist_depth_move
+from humimic.perception.trackers.kpf.depth import SIDES, kept_ranges, wrist_depth_move
 from humimic.perception.trackers.kpf.flips import FLIPS, arm_flips
 from humimic.perception.trackers.kpf.frame_cues import FrameCues
 from humimic.perception.trackers.kpf.hands import hand_blob_moves, part_centres
@@ -322,17 +322,13 @@ class KpfTracker:
         """``keep_range_share``: wrists of ``pred`` put back at their ancestor's (``resampled``,
         moved by ``velocity`` with ``keep_range_target: motion``) camera distance, on their ray
         (:func:`~humimic.perception.trackers.kpf.depth.keep_wrist_range`)."""
-        c, pred = self.cfg, pred.copy()
+        c = self.cfg
         target = resampled if c.keep_range_target == "ancestor" else self.limits.clamp(
             resampled + velocity)
         rows = {"random": ~moved, "motion": moved, "both": np.ones(len(pred), bool)}[
             c.keep_range_groups]
-        for side in SIDES:
-            pick = np.flatnonzero(rows & (self.rng.random(len(pred)) < c.keep_range_share))
-            if len(pick):
-                pred[pick] = keep_wrist_range(self.body, pred[pick], target[pick], side,
-                                              T_cam_base, c.keep_range_clip)
-        return pred
+        return kept_ranges(self.body, pred, target, rows, c.keep_range_share, T_cam_base,
+                           c.keep_range_clip, self.rng)
 
     def _depth_moves(self, pred: np.ndarray, T_cam_base: np.ndarray, share: float
                      ) -> np.ndarray:
