@@ -255,7 +255,7 @@ def test_core_releases_a_lock_when_em_could_have_swapped_the_blob():
         core.locked = [{k: (n, 10) for k, n in enumerate(TARGETS)} for _ in range(2)]
         for t in core.trackers:
             t.tracker._age[:] = age_now
-        core._release_locks(trk)
+        core._release_locks(0.0, trk, core._touching(trk))
         return [sorted(lk) for lk in core.locked]
 
     assert locked_after(tracked(25.0)) == [[0, 1, 2]] * 2  # apart: every name stays locked
