@@ -228,6 +228,40 @@ def test_locks_that_cannot_hold_bind_nothing(head):
     assert assign(TARGETS, left, right, {}, {}, ev, locked_left=bad) == free
 
 
+def test_a_lock_that_can_hold_holds_beside_one_that_cannot(head):
+    """A lock naming no target (or a name another lock takes too) binds nothing; the other
+    locks of that eye still hold: the turned person's locked left hand keeps its name."""
+    cam_l, cam_r, rig = head
+    left = blobs_seen(cam_l, TARGETS, range(3), truth=TURNED)
+    right = blobs_seen(cam_r, TARGETS, range(3), truth=TURNED)
+    ev = stereo_evidence(rig, cam_l, cam_r, left, right)
+    truth_names = dict(enumerate(TARGETS))
+    for bad in ({0: "nose"}, {0: "right_hand", 1: "right_hand"}):
+        names_l, _, _ = assign(TARGETS, left, right, truth_names, truth_names, ev,
+                               locked_left={2: "left_hand", **bad})
+        assert names_l == truth_names
+
+
+def test_names_the_locks_fix(head):
+    """Locked names, the head, a locked blob's only stereo partner, and the last blob of a full
+    eye are fixed; a name the rules alone chose is not."""
+    from humimic.perception.blobs.identity import fixed_names
+
+    cam_l, cam_r, rig = head
+    left = blobs_seen(cam_l, TARGETS, range(3))
+    right = blobs_seen(cam_r, TARGETS, range(3))
+    ev = stereo_evidence(rig, cam_l, cam_r, left, right)
+    assert (~ev.inconsistent).sum() == 3  # each blob's partner is unique
+    names = dict(enumerate(TARGETS))
+    full = fixed_names([{2: "left_hand"}, {}], (names, names), (left, right), ev, 3)
+    assert full == [names, names]  # the right eye's left hand by stereo, right hands last
+    two = fixed_names([{2: "left_hand"}, {}], ({0: "head", 2: "left_hand"}, names),
+                      (left[::2], right), ev.__class__(ev.inconsistent[::2], ev.radius_m[::2]),
+                      3)
+    assert two == [{0: "head", 2: "left_hand"}, names]
+    assert fixed_names([{}, {}], (names, names), (left, right), ev, 3) == [{0: "head"}] * 2
+
+
 def test_core_releases_a_lock_when_em_could_have_swapped_the_blob():
     """PerceptionCore keeps a sure name locked while its blob is tracked without a break and its
     region of interest (em_blobs.rois_overlap) touches no other same-coloured blob's; a blob
@@ -255,7 +289,7 @@ def test_core_releases_a_lock_when_em_could_have_swapped_the_blob():
         core.locked = [{k: (n, 10) for k, n in enumerate(TARGETS)} for _ in range(2)]
         for t in core.trackers:
             t.tracker._age[:] = age_now
-        core._release_locks(trk)
+        core._release_locks(0.0, trk, core._touching(trk))
         return [sorted(lk) for lk in core.locked]
 
     assert locked_after(tracked(25.0)) == [[0, 1, 2]] * 2  # apart: every name stays locked

@@ -137,11 +137,13 @@ class PerceptionConfig(Section):
     """Also track the other trackable parts that share a target's colour model (reported as
     distractors, not published), so that e.g. a hand is never taken for the head."""
     track_facing: bool = True
-    """Our extension (with ``lock_names``): when locked names break the image rules in both eyes
-    (at least :data:`~humimic.perception.blobs.identity.TURN_RULES` violations) and the rules of
-    a person with the back to the robot not at all, the person is judged turned round and the
-    rules are mirrored (their right hand on the image's right) until locked names show the
-    reverse; ``perception.facing_turns`` counts the changes. Measured (ude_cmu_turn seed 1):
+    """Our extension (with ``lock_names``): when the names the locks fix (the head's among them,
+    in both eyes: :func:`~humimic.perception.blobs.identity.fixed_names`) break the image rules
+    (at least :data:`~humimic.perception.blobs.identity.TURN_RULES` violations over both eyes)
+    and the rules of a person with the back to the robot not at all, the person is judged
+    turned round and the rules are mirrored (their right hand on the image's right) until
+    locked names show the reverse, or the person (head and hands) is lost in both eyes;
+    ``perception.facing_turns`` counts the turns judged. Measured (ude_cmu_turn seed 1):
     one turn, no false report on either hand (lock alone 6 % / 12 %, main 31 % / 12 %)."""
     identity_margin: float = Field(1.0, ge=0.0, le=10.0)
     """A target is measured only when the evidence for its identity beats the next best
@@ -150,9 +152,10 @@ class PerceptionConfig(Section):
     lock_names: bool = True
     """Our extension: a blob whose name was sure keeps it while its region of interest touches
     no other same-coloured blob's (EM cannot have swapped it), whatever the image rules (which
-    assume a person facing the robot) say; a kept name they contradict is not published
-    (:mod:`humimic.perception.blobs.identity`). False: the rules may rename any blob at an
-    identity decision. Measured (ude_cmu_turn seed 1, a person turning round): the rules
+    assume a person facing the robot) say; blobs whose regions touched are renamed when they
+    part, and locked again only if that decision is sure; a kept name they contradict is not
+    published (:mod:`humimic.perception.blobs.identity`). False: the rules may rename any blob
+    at an identity decision. Measured (ude_cmu_turn seed 1, a person turning round): the rules
     renamed the tracked left hand the right one, 31 % of the right hand's reports false; with
     the lock 6 % (without ``track_facing``), detection rates unchanged."""
     roi_side: int = Field(20, ge=4, le=200)

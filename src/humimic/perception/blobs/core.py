@@ -25,6 +25,7 @@ change is reported as an event. Only tracked targets are measured.
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass
 
 import numpy as np
@@ -37,6 +38,7 @@ from humimic.perception.blobs.identity import (
     Blob,
     assign,
     clipped_by_border,
+    fixed_names,
     stereo_evidence,
     turned_round,
 )
@@ -125,6 +127,8 @@ class PerceptionCore:
         self.margin: dict[str, float] = dict.fromkeys(self.targets, 0.0)
         """Identity margin of each target at the last decision (see identity.assign)."""
         self._tracked: list[frozenset] = [frozenset(), frozenset()]
+        self._touch: list[set[int]] = [set(), set()]
+        """Per eye, the slots whose regions touched a same-coloured blob's last frame."""
         self.state = dict.fromkeys(self.targets, "searching")
         self.identity_solves = 0
 
@@ -138,10 +142,14 @@ class PerceptionCore:
                                            strict=True)]
         rig = StereoRig(il.camera, ir.camera, self.stereo)
         keys = [frozenset(tr) for tr in tracked]
-        self._release_locks(tracked)
+        touching = self._touching(tracked)
+        self._release_locks(t, tracked, touching)
         settled = any(int(t.tracker.age[k]) == SETTLE_FRAMES
                       for t, tr in zip(self.trackers, tracked, strict=True) for k in tr)
-        if keys != self._tracked or settled:
+        # blobs apart again after their regions touched may have been swapped by EM: re-decide
+        parted = any(self._touch[e] - touching[e] for e in (0, 1))
+        self._touch = touching
+        if keys != self._tracked or settled or parted:
             self._identify(t, tracked, rig, il.camera, ir.camera)
             self._tracked = keys
         slot_of = [{name: k for k, name in ident.items()} for ident in self.ident]
@@ -188,11 +196,15 @@ class PerceptionCore:
                     measured[name] = Measurement(name, m.p_base, m.R_base,
                                                  {self.cameras[0]: m.uv_left,
                                                   self.cameras[1]: m.uv_right})
-        if self.lock_names:
+        if self.lock_names:  # sure names of blobs EM cannot swap now (regions apart)
             for i in np.flatnonzero(seen.all(1) & confirmed).tolist():
-                for eye in (0, 1):
-                    k = slot_of[eye][self.targets[i]]
-                    self.locked[eye][k] = (self.targets[i], int(age[eye][k]))
+                x = self.targets[i]
+                for eye, lock in enumerate(self.locked):
+                    k = slot_of[eye][x]
+                    if k not in touching[eye]:
+                        for j in [j for j, v in lock.items() if v[0] == x]:
+                            del lock[j]
+                        lock[k] = (x, int(age[eye][k]))
         events = self._turn_events + self._update_states(t, seen.all(1) & confirmed)
         self._turn_events = []
         row = (t, np.stack([il.camera.T_base_cam, ir.camera.T_base_cam]),
@@ -225,8 +237,13 @@ class PerceptionCore:
             args = (names, blobs[0], blobs[1], prev[0], prev[1], ev)
             kw = {"locked_left": locks[0], "locked_right": locks[1]}
             left, right, margins = assign(*args, **kw, away=self.away)
+            # a turn is judged on the names the locks fix (identity.fixed_names), the head's
+            # among them in both eyes: without the head a hand crossing over the other at
+            # another height breaks the order rule alone
+            sure = fixed_names(locks, (left, right), blobs, ev, len(names))
             if (self.track_facing and any(n in HANDS for lk in locks for n in lk.values())
-                    and turned_round(blobs[0], blobs[1], left, right, self.away)):
+                    and all("head" in sn.values() for sn in sure)
+                    and turned_round(blobs[0], blobs[1], sure[0], sure[1], self.away)):
                 old = "away" if self.away else "toward"
                 self.away = not self.away
                 self.facing_turns += 1
@@ -239,23 +256,32 @@ class PerceptionCore:
             self.margin.update(margins)
         self.ident = new
 
-    def _release_locks(self, tracked) -> None:
+    def _touching(self, tracked) -> list[set[int]]:
+        """Per eye, the tracked slots whose region of interest (after EM) overlaps another
+        tracked blob's of their colour group: EM may swap them."""
+        out: list[set[int]] = [set(), set()]
+        for eye, tr in enumerate(tracked):
+            for group in self.groups:
+                for a, b in itertools.combinations([k for k in group if k in tr], 2):
+                    if rois_overlap(tr[a].centre, tr[a].cov, tr[b].centre, tr[b].cov, self.em):
+                        out[eye] |= {a, b}
+        return out
+
+    def _release_locks(self, t: float, tracked, touching) -> None:
         """Drop the locks of blobs no longer tracked without a break (lost, or restarted: younger
-        than when locked) or whose region of interest overlaps another tracked blob of their
-        colour group in that eye (EM may then have swapped them)."""
+        than when locked) or ``touching`` another of their colour (:meth:`_touching`). A person
+        judged turned round faces the robot again (the default) once the person (head and hands)
+        is lost in both eyes."""
         for eye, tr in enumerate(tracked):
             age = self.trackers[eye].tracker.age
             lock = self.locked[eye]
             for k in list(lock):
-                if k not in tr or int(age[k]) < lock[k][1]:
+                if k not in tr or int(age[k]) < lock[k][1] or k in touching[eye]:
                     del lock[k]
-            for group in self.groups:
-                mine = [k for k in group if k in tr]
-                for a in mine:
-                    if a in lock and any(rois_overlap(tr[a].centre, tr[a].cov, tr[b].centre,
-                                                      tr[b].cov, self.em)
-                                         for b in mine if b != a):
-                        del lock[a]
+        skin = [k for k, x in enumerate(self.targets) if x in ("head", *HANDS)]
+        if self.away and not any(k in tr for tr in tracked for k in skin):
+            self.away = False
+            self._turn_events.append((t, "person", "facing away -> toward (person lost)", "INFO"))
 
     def _update_states(self, t: float, tracking: np.ndarray) -> list[tuple]:
         events = []

@@ -32,8 +32,9 @@ targets under:
   assume a person facing the robot; one who turns round shows the hands mirrored, and without
   the lock the rules renamed the tracked left hand the right one (ude_cmu_turn: 31 % of the
   right hand's reports false). Locked names that break every side rule in both eyes while the
-  mirrored rules hold show the person turned round (:func:`turned_round`); the perception core
-  then applies the mirrored rules (``away``) until locked names show the reverse.
+  mirrored rules hold show the person turned round (:func:`turned_round`, judged on the names
+  the locks fix, :func:`fixed_names`, with the head seen); the perception core then applies
+  the mirrored rules (``away``) until locked names show the reverse or the person is lost.
 
 Between events identities follow the tracker's blobs (continuity alone), so hands may cross.
 Each target also gets a *margin*: how much more evidence cost (without continuity) the cheapest
@@ -188,11 +189,17 @@ def _maps(blobs: list[Blob], targets: list[str]):
     return itertools.permutations(targets, len(blobs))
 
 
-def _keeps_locks(blobs: list[Blob], names: tuple[str, ...],
-                 locked: dict[int, str] | None) -> bool:
+def _holding_locks(blobs: list[Blob], targets: list[str],
+                   locked: dict[int, str] | None) -> dict[int, str]:
+    """The locks on ``blobs`` that can all hold: each names one of ``targets`` no other lock on
+    ``blobs`` names (two slots locked to one name: neither binds; the others still do)."""
+    mine = [(b.slot, locked[b.slot]) for b in blobs if locked and locked.get(b.slot) in targets]
+    names = [n for _, n in mine]
+    return {k: n for k, n in mine if names.count(n) == 1}
+
+
+def _keeps_locks(blobs: list[Blob], names: tuple[str, ...], locked: dict[int, str]) -> bool:
     """Whether naming ``blobs`` ``names`` keeps every lock on them."""
-    if not locked:
-        return True
     return all(locked.get(b.slot, n) == n for b, n in zip(blobs, names, strict=True))
 
 
@@ -211,10 +218,13 @@ def assign(targets: list[str], left: list[Blob], right: list[Blob],
     and stereo, without the continuity bonus) the cheapest assignment that gives it other
     blobs has (inf if none exists): continuity chooses between equals, but never vouches.
     ``locked_*`` (``{slot: target}``): names the chosen assignment must keep (see the module
-    docstring); a lock on a slot not among the blobs is ignored, and locks that no assignment
-    can keep all (e.g. naming a target not in ``targets``) bind nothing; margins still weigh
-    every assignment. ``away``: the image rules of a person with the back to the robot.
+    docstring); a lock on a slot not among the blobs is ignored, and so is one naming a target
+    not in ``targets`` or one another lock in that eye names too (:func:`_holding_locks`; the
+    others hold); margins still weigh every assignment. ``away``: the image rules of a person
+    with the back to the robot.
     """
+    locked_left = _holding_locks(left, targets, locked_left)
+    locked_right = _holding_locks(right, targets, locked_right)
     options: list[tuple[float, float, tuple[str, ...], tuple[str, ...]]] = []
     allowed: list[bool] = []
     for names_l in _maps(left, targets):
@@ -241,8 +251,6 @@ def assign(targets: list[str], left: list[Blob], right: list[Blob],
                         cost -= PAIR_BONUS
             options.append((cost - kept, cost, names_l, names_r))
             allowed.append(free_l and _keeps_locks(right, names_r, locked_right))
-    if not any(allowed):  # locks that cannot all hold (e.g. two slots, one name): none binds
-        allowed = [True] * len(options)
     best = min((k for k in range(len(options)) if allowed[k]), key=lambda k: (options[k][0], k))
     _, evidence0, best_l, best_r = options[best]
     bound = best != min(range(len(options)), key=lambda k: (options[k][0], k))
@@ -265,12 +273,37 @@ def assign(targets: list[str], left: list[Blob], right: list[Blob],
             {b.slot: n for b, n in zip(right, best_r, strict=True)}, margins)
 
 
+def fixed_names(locked, names, blobs, evidence: PairEvidence, n_targets: int
+                ) -> list[dict[int, str]]:
+    """Per eye, the names the locks fix (``locked``, ``names`` and ``blobs``: (left, right)
+    ``{slot: target}``, ``{slot: target}`` of :func:`assign` and blob lists): the locked ones,
+    the head's (the image rules name it by size whatever the facing), the name of a fixed
+    blob's only stereo-consistent partner in the other eye (one object), and the last blob's
+    when every other one is fixed and the eye sees as many blobs as there are targets."""
+    fixed = [{**lk, **{k: x for k, x in nm.items() if x == "head"}}
+             for lk, nm in zip(locked, names, strict=True)]
+    ok = ~evidence.inconsistent
+    for i, j in zip(*np.nonzero(ok), strict=True):
+        if ok[i].sum() == 1 and ok[:, j].sum() == 1:  # each the other's only partner
+            a, b = blobs[0][i].slot, blobs[1][j].slot
+            x = fixed[0].get(a, fixed[1].get(b))
+            if x is not None and names[0].get(a) == x == names[1].get(b):
+                fixed[0][a] = fixed[1][b] = x
+    for fx, nm in zip(fixed, names, strict=True):
+        rest = [k for k in nm if k not in fx]
+        if len(nm) == n_targets and len(rest) == 1:
+            fx[rest[0]] = nm[rest[0]]
+    return fixed
+
+
 def turned_round(left: list[Blob], right: list[Blob], names_left: dict[int, str],
                  names_right: dict[int, str], away: bool) -> bool:
     """Whether names kept by locks show the person turned round: the image rules of the
     current facing (``away``) count at least :data:`TURN_RULES` violations over both eyes and
     those of the other facing none (a mirrored picture of head and hands; one hand crossing
-    over leaves the other on its side and breaks a rule either way)."""
+    over leaves the other on its side and breaks a rule either way). The caller passes names it
+    is sure of, head and both hands in both eyes: without the head, one hand crossing over the
+    other at another height breaks the order rule alone, once per eye."""
     def cost(facing: bool) -> float:
         return sum(image_rule_cost({names[b.slot]: b for b in blobs if b.slot in names}, facing)
                    for blobs, names in ((left, names_left), (right, names_right)))

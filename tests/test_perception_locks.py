@@ -1,0 +1,130 @@
+"""Locked blob names and the facing of the person through PerceptionCore.process: scripted
+blobs (the trackers replaced by the 3-D truth projected into a synthetic stereo head, see
+test_perception_identity.blobs_seen), so every frame's truth is known."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from _synth_vision import stereo_head
+from test_perception_identity import TARGETS, TRUTH, TURNED, blobs_seen
+
+from humimic.perception.blobs.config import PerceptionConfig
+from humimic.perception.blobs.core import PerceptionCore
+from humimic.perception.blobs.detection import TargetReport, TargetState
+from humimic.perception.blobs.em_blobs import rois_overlap
+from humimic.perception.cues.color_models import ColorLUT, fit_color_model
+from humimic.sensors.camera_model import CameraImage
+
+#: The hands side by side, close enough for their regions of interest to overlap.
+TOUCHING = dict(TRUTH, right_hand=((1.1, 0.02, 1.1), 0.028), left_hand=((1.1, -0.02, 1.1), 0.022))
+HEAD, RIGHT, LEFT = range(3)
+
+
+class Scripted:
+    """A PerceptionCore whose trackers report the blobs of a given truth in given slots."""
+
+    def __init__(self, **cfg):
+        self.cams = stereo_head(k1=0.0, k2=0.0, hfov_deg=90.0)
+        rng = np.random.default_rng(0)
+        lut = ColorLUT(fit_color_model(rng.integers(100, 200, (500, 3)).astype(np.uint8), "rgb",
+                                       1, rng))
+        self.core = PerceptionCore(PerceptionConfig(targets=TARGETS, **cfg), ("L", "R"),
+                                   dict.fromkeys(TARGETS, lut), rng)
+        self.seen: list[dict] = [{}, {}]
+        for eye, det in enumerate(self.core.trackers):
+            det.process = lambda t, image, eye=eye: [
+                TargetReport(x, TargetState.TRACKING, 0, self.seen[eye][k].centre,
+                             self.seen[eye][k].cov, 1.0, None) if k in self.seen[eye]
+                else TargetReport(x, TargetState.SEARCHING, 2, np.zeros(2), np.eye(2), 0.0,
+                                  None)
+                for k, x in enumerate(TARGETS)]
+        self.t = 0.0
+        self.events: list[tuple] = []
+
+    def frames(self, n, truth=TRUTH, slots=(HEAD, RIGHT, LEFT), hidden=((), ())):
+        """``n`` frames of ``truth`` (head, right, left hand in tracker ``slots``); ``hidden``:
+        per eye, the parts not seen."""
+        for _ in range(n):
+            for eye, cam in enumerate(self.cams):
+                blobs = blobs_seen(cam, TARGETS, slots, truth=truth)
+                self.seen[eye] = {b.slot: b for b, x in zip(blobs, TARGETS, strict=True)
+                                  if x not in hidden[eye]}
+                age = self.core.trackers[eye].tracker._age
+                for k in range(3):
+                    age[k] = age[k] + 1 if k in self.seen[eye] else 0
+            img = np.zeros((480, 640, 3), np.uint8)
+            images = {n: CameraImage(self.t, c, img) for n, c in zip("LR", self.cams,
+                                                                     strict=True)}
+            self.events += self.core.process(self.t, images).events
+            self.t += 1.0 / 30.0
+
+    def names(self, eye=0):
+        return {k: self.core.ident[eye].get(k) for k in range(3)}
+
+    def sure(self):
+        """Hands published as sure (margin at least identity_margin)."""
+        return {x for x in TARGETS if self.core.margin[x] >= self.core.identity_margin}
+
+
+@pytest.fixture(autouse=True)
+def no_stereo_matching(monkeypatch):
+    """Blank images: stereo matching (not under test) fails fast instead of searching."""
+    from humimic.perception.blobs.stereo import StereoRig
+
+    fail = type("Match", (), {"ok": False, "reason": "not_matched", "score": 0.0})
+    monkeypatch.setattr(StereoRig, "match_many", lambda self, *a, **k: [fail() for _ in a[2]])
+
+
+def test_hands_em_swapped_while_touching_get_their_names_back_when_they_part():
+    """EM may swap two blobs while their regions of interest overlap: their locks go and are not
+    taken again from the margin decided before (which vouched for the old names); when the
+    regions part the names are re-decided, so the swapped slots are renamed, then locked."""
+    s = Scripted()
+    s.frames(10)
+    assert s.core.locked[0] == {HEAD: ("head", 10), RIGHT: ("right_hand", 10),
+                                LEFT: ("left_hand", 10)}
+    cl = blobs_seen(s.cams[0], TARGETS, range(3), truth=TOUCHING)
+    assert rois_overlap(cl[1].centre, cl[1].cov, cl[2].centre, cl[2].cov, s.core.em)
+    s.frames(3, TOUCHING)
+    assert all(set(lk) == {HEAD} for lk in s.core.locked)  # hands touching: no lock
+    s.frames(1, slots=(HEAD, LEFT, RIGHT))  # apart again, EM swapped the hands' slots
+    truth_names = {HEAD: "head", RIGHT: "left_hand", LEFT: "right_hand"}
+    assert s.names(0) == truth_names and s.names(1) == truth_names
+    s.frames(8, slots=(HEAD, LEFT, RIGHT))
+    assert {k: v[0] for k, v in s.core.locked[0].items()} == truth_names
+    s.frames(1, slots=(HEAD, LEFT, RIGHT), hidden=((), ("head",)))  # another decision
+    s.frames(8, slots=(HEAD, LEFT, RIGHT))
+    assert s.names(0) == truth_names and s.core.facing_turns == 0 and not s.core.away
+    assert s.sure() == set(TARGETS)
+
+
+def test_a_facing_person_crossing_a_hand_over_without_the_head_seen_is_not_turned():
+    """With the head out of view, one hand crossing over the other at another height breaks the
+    order rule once per eye and the mirrored rules not at all: no evidence of a turn without
+    the head (the names stay, locked, and the rules keep facing the robot)."""
+    s = Scripted()
+    s.frames(10)
+    crossed = dict(TRUTH, right_hand=((1.05, -0.45, 1.25), 0.028))  # right of the left hand
+    s.frames(2, crossed)
+    s.frames(3, crossed, hidden=(("head",), ("head",)))
+    assert s.core.facing_turns == 0 and not s.core.away
+    assert s.names(0) == {HEAD: None, RIGHT: "right_hand", LEFT: "left_hand"}
+
+
+def test_a_person_judged_turned_faces_the_robot_again_once_lost():
+    """A turn seen with locked hands and the head mirrors the rules; once head and hands are
+    lost in both eyes the person is taken as facing the robot again (the default), so fresh
+    blobs of a person facing the robot are named right and surely."""
+    s = Scripted()
+    s.frames(10)
+    s.frames(2, TURNED)  # turned round between two frames: the locked names stay
+    s.frames(1, TURNED, hidden=((), ("head",)))
+    s.frames(1, TURNED)  # the head back: a decision on the locked hands and the head
+    assert s.core.facing_turns == 1 and s.core.away
+    s.frames(1, hidden=(TARGETS, TARGETS))
+    assert not s.core.away and s.core.facing_turns == 1
+    assert any("away -> toward" in e[2] for e in s.events)
+    s.frames(8, slots=(HEAD, LEFT, RIGHT))
+    assert s.names(0) == {HEAD: "head", RIGHT: "left_hand", LEFT: "right_hand"}
+    assert s.sure() == set(TARGETS)
