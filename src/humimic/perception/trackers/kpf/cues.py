@@ -164,7 +164,9 @@ def cue_maps(image: np.ndarray, skin_lut: ColorLUT, levels: int = 3, k_edge: flo
     # not cv2.magnitude: with IPP (OpenCV's wheels) its result depends on the arrays'
     # address modulo 64 (~1 ulp on a third of the pixels), so the same frame gave other
     # maps in another process; numpy's float32 ufuncs are exact per element
-    f = _norm_factor(np.sqrt(gu * gu + gv * gv), k_edge)
+    mag = gu * gu
+    mag += gv * gv
+    f = _norm_factor(np.sqrt(mag, out=mag), k_edge)
     gradient = cv2.merge([gu * f, gv * f])
     pyramid = [g]
     for _ in range(1, levels):
