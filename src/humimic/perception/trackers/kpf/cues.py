@@ -161,7 +161,12 @@ def cue_maps(image: np.ndarray, skin_lut: ColorLUT, levels: int = 3, k_edge: flo
     g = cv2.GaussianBlur(grey, (5, 5), 1.0)
     gu, gv = strongest_channel(cv2.Sobel(g, cv2.CV_32F, 1, 0, ksize=3, scale=1.0 / 8.0),
                                cv2.Sobel(g, cv2.CV_32F, 0, 1, ksize=3, scale=1.0 / 8.0))
-    f = _norm_factor(cv2.magnitude(gu, gv), k_edge)
+    # not cv2.magnitude: with IPP (OpenCV's wheels) its result depends on the arrays'
+    # address modulo 64 (~1 ulp on a third of the pixels), so the same frame gave other
+    # maps in another process; numpy's float32 ufuncs are exact per element
+    mag = gu * gu
+    mag += gv * gv
+    f = _norm_factor(np.sqrt(mag, out=mag), k_edge)
     gradient = cv2.merge([gu * f, gv * f])
     pyramid = [g]
     for _ in range(1, levels):
