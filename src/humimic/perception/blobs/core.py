@@ -107,8 +107,9 @@ class PerceptionCore:
                     break
             else:
                 self.groups.append([k])
+        self.em = em_params(cfg)
         self.trackers = [DetectingTracker(self.targets, lut_list, r, detection_params(cfg),
-                                          em_params(cfg)) for r in rng.spawn(2)]
+                                          self.em) for r in rng.spawn(2)]
         self.stereo = stereo_params(cfg)
         self.identity_margin = cfg.identity_margin
         self.lock_names = cfg.lock_names
@@ -117,7 +118,6 @@ class PerceptionCore:
         """The person is judged to have the back to the robot (mirrored image rules)."""
         self.facing_turns = 0
         self._turn_events: list[tuple[float, str, str, str]] = []
-        self.em = em_params(cfg)
         self.locked: list[dict[int, tuple[str, int]]] = [{}, {}]
         """Per eye, slot -> (name, age when last sure): names EM cannot have swapped since."""
         self.color_mask = cfg.stereo.color_mask
