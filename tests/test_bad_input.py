@@ -84,7 +84,16 @@ def test_head_camera_resolution_is_bounded(tmp_path, capsys):
     code, err = _cli(tmp_path, capsys, GOOD, "--set",
                      "sensors.head_camera.resolution=[100000, 100000]")
     assert code == 2
-    assert "sensors.head_camera" in err and "resolution must be within 16x16 .. 1920x1440" in err
+    assert ("sensors.head_camera.resolution: must be within 16x16 .. 1920x1440 (width x height)"
+            " (got [100000, 100000])") in err
+
+
+def test_section_check_does_not_dump_the_section(tmp_path, capsys):
+    """A section-level check (the distortion against the field of view) names the section and
+    says the values in its message, without repeating the whole section as the value."""
+    code, err = _cli(tmp_path, capsys, GOOD, "--set", "cameras.distortion=[-0.9, 0]")
+    assert code == 2 and "cameras: distortion [-0.9, 0] cannot be undistorted" in err
+    assert "(got {" not in err
 
 
 @pytest.mark.parametrize("key", ["cameras.resolution.5", "cameras.resolution.x",

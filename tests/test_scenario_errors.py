@@ -43,6 +43,8 @@ def _run(tmp_path, text: str, *extra: str, capsys) -> tuple[int, str]:
      ["human.motion.amplitud", "did you mean 'amplitude'"]),
     (GOOD + "cameras: {resolution: [320, 240], rate: -5}\n", ["cameras.rate", "out of range"]),
     (GOOD + "cameras: {which: fovea}\n", ["cameras.which", "did you mean 'foveal'"]),
+    (GOOD + "trackers: {k: {kind: kpf, d_arm: [1, 2]}}\n",
+     ["trackers.k.d_arm", "unknown key", "did you mean 'D_arm_deg'"]),
     (GOOD.replace("motion: {kind: wave, hand: right, amplitude: 0.25, period: 2.0}",
                   "motion: {kind: bvh, file: no_such_clip.bvh}"),
      ["human.motion.file", "file not found", "no_such_clip.bvh"]),

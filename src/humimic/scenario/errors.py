@@ -190,8 +190,10 @@ def from_validation_error(err: ValidationError, root: type[BaseModel], file: str
         source, line = f"{file} ({option})", None
 
     def suggest(word: str, options: list[str]) -> str | None:
-        close = difflib.get_close_matches(str(word), [str(o) for o in options], n=1, cutoff=0.5)
-        return close[0] if close else None
+        """The closest of ``options`` to ``word``, ignoring case (``d_arm`` -> ``D_arm_deg``)."""
+        by_lower = {str(o).lower(): str(o) for o in options}
+        close = difflib.get_close_matches(str(word).lower(), list(by_lower), n=1, cutoff=0.5)
+        return by_lower[close[0]] if close else None
 
     if kind == "extra_forbidden":
         model = model_at(root, loc)
@@ -218,4 +220,6 @@ def from_validation_error(err: ValidationError, root: type[BaseModel], file: str
         return ScenarioError(source, key, "out of range", value, _BOUNDS[kind].format(**ctx),
                              None, line)
     message = e["msg"].removeprefix("Value error, ")
+    if isinstance(value, dict):   # a section's own check: its message names the values
+        value = None
     return ScenarioError(source, key, message, value, None, None, line)

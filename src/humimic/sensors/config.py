@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 from typing import Literal
 
-from pydantic import Field, model_validator
+from pydantic import Field, field_validator, model_validator
 
 from humimic.scenario.base import Section
 from humimic.sensors.camera_model import corner_radius, max_invertible_radius
@@ -15,12 +15,13 @@ from humimic.world.names import EYE_HFOV_DEG
 MIN_RESOLUTION, MAX_RESOLUTION = (16, 16), (1920, 1440)
 
 
-def check_resolution(resolution: tuple[int, int]) -> None:
-    """ValueError unless ``resolution`` is within :data:`MIN_RESOLUTION` ..
-    :data:`MAX_RESOLUTION`."""
+def check_resolution(resolution: tuple[int, int]) -> tuple[int, int]:
+    """``resolution``; ValueError unless it is within :data:`MIN_RESOLUTION` ..
+    :data:`MAX_RESOLUTION` (a field validator: the error names the ``resolution`` key)."""
     (w, h), (w0, h0), (w1, h1) = resolution, MIN_RESOLUTION, MAX_RESOLUTION
     if not (w0 <= w <= w1 and h0 <= h <= h1):
-        raise ValueError(f"resolution must be within {w0}x{h0} .. {w1}x{h1}, got {w}x{h}")
+        raise ValueError(f"must be within {w0}x{h0} .. {w1}x{h1} (width x height)")
+    return resolution
 
 
 def check_distortion(distortion: tuple[float, float], hfov_deg: float,
@@ -87,9 +88,13 @@ class Cameras(Section):
     frames when a stage scores against it; each sample costs two segmentation renders per
     camera. 0: none (no visibility scores)."""
 
+    @field_validator("resolution")
+    @classmethod
+    def _check_resolution(cls, resolution: tuple[int, int]) -> tuple[int, int]:
+        return check_resolution(resolution)
+
     @model_validator(mode="after")
-    def _check_resolution(self) -> Cameras:
-        check_resolution(self.resolution)
+    def _check_distortion(self) -> Cameras:
         kinds = ("wide", "foveal") if self.which == "both" else (self.which,)
         check_distortion(self.distortion, max(EYE_HFOV_DEG[k] for k in kinds), self.resolution)
         return self
@@ -109,9 +114,13 @@ class HeadCamera(Section):
     """Radial distortion k1, k2 (OpenCV convention, :mod:`humimic.sensors.camera_model`)."""
     noise_std: float = Field(0.0, ge=0.0, le=50.0)
 
+    @field_validator("resolution")
+    @classmethod
+    def _check_resolution(cls, resolution: tuple[int, int]) -> tuple[int, int]:
+        return check_resolution(resolution)
+
     @model_validator(mode="after")
     def _check_image(self) -> HeadCamera:
-        check_resolution(self.resolution)
         check_distortion(self.distortion, self.hfov_deg, self.resolution)
         return self
 
