@@ -129,7 +129,8 @@ def test_table1_bad_override_exits_2_naming_the_key(tmp_path, capsys, item, key)
 
 
 @pytest.mark.parametrize("args, key", [(["--seeds", "0"], "--seeds"),
-                                       (["--particles", "999"], "--particles")])
+                                       (["--particles", "999"], "--particles"),
+                                       (["--jobs", "0"], "--jobs")])
 def test_table1_arguments_that_select_no_run_exit_2(tmp_path, capsys, args, key):
     """``--seeds 0`` (a count of none) or a particle count that is no row of Table 1 would
     print an empty table: refused with one line naming the argument."""

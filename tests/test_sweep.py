@@ -147,3 +147,16 @@ def test_ray_backend_without_ray_exits_2_with_install_hint(tmp_path, monkeypatch
     err = capsys.readouterr().err
     assert "ray is not installed" in err and "pip install 'humimic[cluster]'" in err
     assert not (tmp_path / "out").exists()
+
+
+def test_plot_lines_are_named_by_the_keys_that_tell_them_apart():
+    """Keys swept together with the x axis (Table 1's particles and iterations of every
+    tracker) are not in the line labels; an independent key is."""
+    from humimic.sweep.plots import line_keys
+    from humimic.sweep.summary import Group
+
+    groups = [Group({"n": n, "it": 2 if n == 150 else 3, "other.n": n, "gesture": g})
+              for n in (150, 250, 1000) for g in ("side", "angle")]
+    assert line_keys(groups, ["gesture", "n", "it", "other.n"], "n") == ["gesture"]
+    crossed = [Group({"n": n, "it": it}) for n in (150, 1000) for it in (2, 3)]
+    assert line_keys(crossed, ["n", "it"], "n") == ["it"]

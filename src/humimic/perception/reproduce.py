@@ -183,7 +183,8 @@ def main(argv: list[str] | None = None) -> int:
         return depth_profile(argv[1:])
     p = argparse.ArgumentParser(prog="python -m humimic.perception.reproduce",
                                 description=__doc__.split("\n")[0])
-    p.add_argument("which", choices=sorted(SCENARIOS))
+    p.add_argument("which", choices=sorted([*SCENARIOS, "schmidt-table1",
+                                            "schmidt-depth-profile"]))
     p.add_argument("--out", type=Path, default=None, help="run directory")
     p.add_argument("--seed", type=int, default=None)
     p.add_argument("--duration", type=float, default=None, help="override duration (s)")

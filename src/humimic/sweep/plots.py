@@ -61,8 +61,19 @@ def plot_metric(path: Path, metric: str, groups: list[Group], point_keys: list[s
     return path
 
 
+def line_keys(groups: list[Group], point_keys: list[str], x_key: str) -> list[str]:
+    """The swept keys that tell the lines apart: every key but ``x_key`` and those it
+    determines (Table 1's cases set every tracker's particles and iterations together: one
+    x value, one value of each -- naming them in each line's label only hides the axes)."""
+    def determined(k: str) -> bool:
+        seen: dict = {}
+        return all(seen.setdefault(repr(g.values.get(x_key)), repr(g.values.get(k)))
+                   == repr(g.values.get(k)) for g in groups)
+    return [k for k in point_keys if k != x_key and not determined(k)]
+
+
 def _lines(ax, groups, point_keys, x_key, metric) -> None:
-    others = [k for k in point_keys if k != x_key]
+    others = line_keys(groups, point_keys, x_key)
     series: dict[str, list[tuple[float, float, float]]] = {}
     for g in groups:
         mean, std, n = g.stats(metric)

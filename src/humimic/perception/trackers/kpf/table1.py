@@ -133,6 +133,8 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                    help="scenario override for every run (repeatable), e.g. human.distance=3")
     args = p.parse_args(argv)
+    if args.jobs < 1:
+        return _usage(f"--jobs {args.jobs}: give 1 or more parallel runs")
     try:
         seeds = None if args.seeds is None else seed_list(args.seeds)
     except ValueError as err:
