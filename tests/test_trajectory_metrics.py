@@ -122,3 +122,65 @@ def test_cli_prints_the_rmse_and_rejects_bad_input(data_dir, tmp_path, capsys):
     write_tum(tmp_path / "copy.txt", t, T)
     assert main(["ape", est, str(tmp_path / "copy.txt")]) == 0
     assert float(capsys.readouterr().out.split()[2]) < 1e-8
+
+
+def _static_and_jittered(n=60, seed=2):
+    """A head standing still (the reference) and an estimate jittering around it by ~5 mm."""
+    rng = np.random.default_rng(seed)
+    p_ref = np.tile([0.1, 1.6, -2.5], (n, 1))
+    p_est = p_ref + rng.normal(0.0, 0.005, (n, 3))
+    return p_ref, p_est
+
+
+@pytest.mark.parametrize("kind", ["static", "line"])
+def test_umeyama_refuses_a_degenerate_reference_as_evo_does(kind):
+    """Standing still or walking a straight line does not define a rotation (nor a scale):
+    evo raises, so must we (before: scale 0 and an ATE of exactly 0 for a still wearer)."""
+    from evo.core.geometry import GeometryException, umeyama_alignment
+
+    from humimic.maths.align import DegenerateAlignment
+
+    p_ref, p_est = _static_and_jittered()
+    if kind == "line":
+        p_ref = p_ref + np.linspace(0.0, 1.0, len(p_ref))[:, None] * [1.0, 0.0, 0.0]
+    with pytest.raises(GeometryException):
+        umeyama_alignment(p_est.T, p_ref.T, True)
+    for with_scale in (False, True):
+        with pytest.raises(DegenerateAlignment):
+            umeyama(p_est, p_ref, with_scale)
+    # a plane is enough for both
+    rng = np.random.default_rng(3)
+    p_plane = p_ref + rng.normal(0.0, 0.1, (len(p_ref), 3)) * [1.0, 0.0, 1.0]
+    R_evo, t_evo, s_evo = umeyama_alignment(p_est.T, p_plane.T, True)
+    R, t, s = umeyama(p_est, p_plane, True)
+    np.testing.assert_allclose(R, R_evo, atol=1e-9)
+    assert s == pytest.approx(s_evo, rel=1e-9)
+
+
+def test_slam_scores_leave_the_aligned_ate_undefined_for_a_still_wearer():
+    from humimic.estimation.ekf.slam_record import trajectory_scores
+
+    p_ref, p_est = _static_and_jittered()
+    t = np.arange(len(p_ref)) / 30.0
+    q = np.tile([1.0, 0.0, 0.0, 0.0], (len(t), 1))
+    out = trajectory_scores(t, p_est, q, p_ref, np.tile(np.eye(3), (len(t), 1, 1)))
+    assert out["ate_se3_rmse_m"] is None
+    assert out["ate_sim3_rmse_m"] is None and out["sim3_scale"] is None
+    # the relative error needs no alignment and is still scored: the estimate's displacement
+    # over each step of RPE_DELTA_FRAMES (the truth did not move)
+    from humimic.estimation.ekf.slam_record import RPE_DELTA_FRAMES as d
+
+    steps = np.linalg.norm(p_est[d::d] - p_est[:-d:d][: len(p_est[d::d])], axis=1)
+    assert out["rpe_rmse_m"] == pytest.approx(np.sqrt(np.mean(steps ** 2)), rel=1e-9)
+
+
+def test_cli_rejects_a_degenerate_alignment_in_one_line(tmp_path, capsys):
+    p_ref, p_est = _static_and_jittered()
+    t = np.arange(len(p_ref)) / 30.0
+    q = np.tile([0.0, 0.0, 0.0, 1.0], (len(t), 1))
+    write_tum(tmp_path / "gt.txt", t, poses_from(p_ref, q))
+    write_tum(tmp_path / "est.txt", t, poses_from(p_est, q))
+    assert main(["ape", str(tmp_path / "gt.txt"), str(tmp_path / "est.txt"), "--align",
+                 "sim3"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "alignment is undetermined" in err

@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from humimic.maths.align import DegenerateAlignment
 from humimic.maths.stats import chi2_band, finite_or_none, nees, rmse
 from humimic.maths.trajectory import ape, rpe
 from humimic.motion import quat
@@ -67,17 +68,21 @@ def pose_errors(p: np.ndarray, q: np.ndarray, p_true: np.ndarray, R_true: np.nda
 def trajectory_scores(t: np.ndarray, p: np.ndarray, q: np.ndarray, p_true: np.ndarray,
                       R_true: np.ndarray) -> dict:
     """ATE after SE(3) and Sim(3) alignment (Umeyama) and the RPE over
-    :data:`RPE_DELTA_FRAMES` frames (:mod:`humimic.maths.trajectory`, evo's conventions)."""
+    :data:`RPE_DELTA_FRAMES` frames (:mod:`humimic.maths.trajectory`, evo's conventions); the
+    aligned scores are None when the true path does not span a plane (standing still)."""
     T_est = np.zeros((len(t), 4, 4))
     T_est[:, :3, :3], T_est[:, :3, 3], T_est[:, 3, 3] = quat.to_matrix(q), p, 1.0
     T_ref = T_est.copy()
     T_ref[:, :3, :3], T_ref[:, :3, 3] = R_true, p_true
     out: dict = {}
     if len(t) >= 3:
-        out["ate_se3_rmse_m"] = finite_or_none(ape(t, T_ref, t, T_est, "se3").rmse_m)
-        sim3 = ape(t, T_ref, t, T_est, "sim3")
-        out["ate_sim3_rmse_m"] = finite_or_none(sim3.rmse_m)
-        out["sim3_scale"] = finite_or_none(sim3.scale)
+        try:
+            se3, sim3 = ape(t, T_ref, t, T_est, "se3"), ape(t, T_ref, t, T_est, "sim3")
+            out["ate_se3_rmse_m"] = finite_or_none(se3.rmse_m)
+            out["ate_sim3_rmse_m"] = finite_or_none(sim3.rmse_m)
+            out["sim3_scale"] = finite_or_none(sim3.scale)
+        except DegenerateAlignment:  # e.g. the wearer stood still: no alignment is defined
+            out.update(ate_se3_rmse_m=None, ate_sim3_rmse_m=None, sim3_scale=None)
     if len(t) > RPE_DELTA_FRAMES:
         out["rpe_rmse_m"] = finite_or_none(rpe(t, T_ref, t, T_est, RPE_DELTA_FRAMES).rmse_m)
         out["rpe_delta_frames"] = RPE_DELTA_FRAMES
