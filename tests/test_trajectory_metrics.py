@@ -122,3 +122,98 @@ def test_cli_prints_the_rmse_and_rejects_bad_input(data_dir, tmp_path, capsys):
     write_tum(tmp_path / "copy.txt", t, T)
     assert main(["ape", est, str(tmp_path / "copy.txt")]) == 0
     assert float(capsys.readouterr().out.split()[2]) < 1e-8
+
+
+def _static_and_jittered(n=60, seed=2):
+    """A head standing still (the reference) and an estimate jittering around it by ~5 mm."""
+    rng = np.random.default_rng(seed)
+    p_ref = np.tile([0.1, 1.6, -2.5], (n, 1))
+    p_est = p_ref + rng.normal(0.0, 0.005, (n, 3))
+    return p_ref, p_est
+
+
+def test_umeyama_refuses_a_scale_for_a_still_reference_as_evo_does():
+    """A reference that does not move has no Sim(3) scale (least squares: 0, an ATE of exactly
+    0): evo raises, so must we; the rigid alignment's ATE is the estimate's spread (any R)."""
+    from evo.core.geometry import GeometryException, umeyama_alignment
+
+    from humimic.maths.align import DegenerateAlignment
+
+    p_ref, p_est = _static_and_jittered()
+    with pytest.raises(GeometryException):
+        umeyama_alignment(p_est.T, p_ref.T, True)
+    with pytest.raises(DegenerateAlignment):
+        umeyama(p_est, p_ref, with_scale=True)
+    t = np.arange(len(p_ref)) / 30.0
+    T_ref, T_est = (poses_from(p, np.tile([0.0, 0, 0, 1], (len(p), 1))) for p in (p_ref, p_est))
+    spread = np.linalg.norm(p_est - p_est.mean(axis=0), axis=1)
+    assert ape(t, T_ref, t, T_est, "se3").rmse_m == pytest.approx(
+        np.sqrt(np.mean(spread ** 2)), rel=1e-9)
+    with pytest.raises(DegenerateAlignment):
+        ape(t, T_ref, t, T_est, "sim3")
+
+
+def test_umeyama_keeps_the_scale_of_a_straight_line():
+    """A straight path (a jump straight up) leaves the rotation about it free but not the
+    scale nor the ATE: they match evo's on the same line bent by 1 um (evo refuses rank 1)."""
+    from evo.core.geometry import umeyama_alignment
+
+    p_ref, p_est = _static_and_jittered()
+    p_ref = p_ref + np.linspace(0.0, 0.4, len(p_ref))[:, None] * [0.0, 1.0, 0.0]
+    p_est = p_est + 1.02 * (p_ref - p_ref[0])
+    bent = p_ref + np.random.default_rng(5).normal(0.0, 1e-6, p_ref.shape) * [1.0, 0.0, 1.0]
+    R_e, t_e, s_e = umeyama_alignment(p_est.T, bent.T, True)
+    R, t, s = umeyama(p_est, p_ref, with_scale=True)
+    assert s == pytest.approx(s_e, rel=1e-4)
+    ate = np.sqrt(np.mean(np.sum((p_ref - (s * p_est @ R.T + t)) ** 2, axis=1)))
+    ate_e = np.sqrt(np.mean(np.sum((bent - (s_e * p_est @ R_e.T + t_e)) ** 2, axis=1)))
+    assert ate == pytest.approx(ate_e, rel=1e-3)
+
+
+def test_slam_scores_leave_the_aligned_ate_undefined_for_a_still_wearer():
+    from humimic.estimation.ekf.slam_record import trajectory_scores
+
+    p_ref, p_est = _static_and_jittered()
+    t = np.arange(len(p_ref)) / 30.0
+    q = np.tile([1.0, 0.0, 0.0, 0.0], (len(t), 1))
+    out = trajectory_scores(t, p_est, q, p_ref, np.tile(np.eye(3), (len(t), 1, 1)))
+    assert out["ate_se3_rmse_m"] > 0.005  # the jitter, rigidly aligned
+    assert out["ate_sim3_rmse_m"] is None and out["sim3_scale"] is None
+    # the relative error needs no alignment and is still scored: the estimate's displacement
+    # over each 1 s step (the truth did not move)
+    d = out["rpe_delta_frames"]
+    assert d == 30  # 1 s at 30 Hz
+    steps = np.linalg.norm(p_est[d::d] - p_est[:-d:d][: len(p_est[d::d])], axis=1)
+    assert out["rpe_rmse_m"] == pytest.approx(np.sqrt(np.mean(steps ** 2)), rel=1e-9)
+
+
+def test_cli_rejects_a_degenerate_alignment_in_one_line(tmp_path, capsys):
+    p_ref, p_est = _static_and_jittered()
+    t = np.arange(len(p_ref)) / 30.0
+    q = np.tile([0.0, 0.0, 0.0, 1.0], (len(t), 1))
+    write_tum(tmp_path / "gt.txt", t, poses_from(p_ref, q))
+    write_tum(tmp_path / "est.txt", t, poses_from(p_est, q))
+    assert main(["ape", str(tmp_path / "gt.txt"), str(tmp_path / "est.txt"), "--align",
+                 "sim3"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "alignment is undetermined" in err
+    assert main(["ape", str(tmp_path / "gt.txt"), str(tmp_path / "est.txt"), "--align",
+                 "se3"]) == 0
+
+
+@pytest.mark.parametrize("rate", [15.0, 30.0, 60.0])
+def test_slam_relative_error_spans_one_second_at_any_camera_rate(rate):
+    """rpe_rmse_m is documented over 1 s: at 15 Hz that is 15 frames, not 30 (2 s)."""
+    from humimic.estimation.ekf.slam_record import trajectory_scores
+
+    rng = np.random.default_rng(4)
+    t = np.arange(int(6 * rate)) / rate
+    p_ref = np.column_stack([0.5 * t, 0.1 * np.sin(t), 0.05 * np.cos(2 * t)])  # a walk
+    p_est = p_ref + np.cumsum(rng.normal(0.0, 0.002, p_ref.shape), axis=0)  # drifting
+    I3 = np.tile(np.eye(3), (len(t), 1, 1))
+    out = trajectory_scores(t, p_est, np.tile([1.0, 0, 0, 0], (len(t), 1)), p_ref, I3)
+    d = round(rate)
+    assert out["rpe_delta_frames"] == d
+    e = p_est - p_ref  # identity rotations: the relative error is the drift over 1 s
+    steps = np.linalg.norm(e[d::d] - e[:-d:d][: len(e[d::d])], axis=1)
+    assert out["rpe_rmse_m"] == pytest.approx(np.sqrt(np.mean(steps ** 2)), rel=1e-9)

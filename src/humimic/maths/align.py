@@ -6,6 +6,12 @@ patterns", IEEE TPAMI 13(4), 1991, eqs. 34-43). :func:`alignment` names the thre
 trajectory evaluation: ``none`` (the estimate is already in the reference frame, e.g. the
 paper's W fixed by the screen's corners), ``se3`` (rotation + translation) and ``sim3``
 (+ scale, for monocular estimates of arbitrary scale).
+
+A Sim(3) alignment to a reference that does not move (a head standing still) is undetermined:
+the least-squares scale is 0, which collapses the estimate onto the reference's point and
+scores an ATE of exactly 0; :func:`umeyama` raises :class:`DegenerateAlignment` there. (evo
+refuses any covariance of rank < 2, a straight line too; there the rotation about the line is
+arbitrary but the translation errors, and the scale, are not, so they are kept.)
 """
 
 from __future__ import annotations
@@ -18,10 +24,15 @@ Align = Literal["none", "se3", "sim3"]
 ALIGNMENTS: tuple[str, ...] = ("none", "se3", "sim3")
 
 
+class DegenerateAlignment(ValueError):
+    """The points do not determine the similarity alignment (their covariance is 0)."""
+
+
 def umeyama(src: np.ndarray, dst: np.ndarray, with_scale: bool = False
             ) -> tuple[np.ndarray, np.ndarray, float]:
     """``(R (3, 3), t (3,), s)`` with ``dst ~ s R src + t`` in the least-squares sense
-    (Umeyama eqs. 34-43); ``src``, ``dst`` are ``(N, 3)`` corresponding points, N >= 3."""
+    (Umeyama eqs. 34-43); ``src``, ``dst`` are ``(N, 3)`` corresponding points, N >= 3.
+    Raises :class:`DegenerateAlignment` for a scale when their covariance is 0."""
     x, y = np.asarray(src, float), np.asarray(dst, float)
     if x.shape != y.shape or x.ndim != 2 or len(x) < 3:
         raise ValueError(f"need two (N, 3) arrays with N >= 3, got {x.shape} and {y.shape}")
@@ -30,6 +41,9 @@ def umeyama(src: np.ndarray, dst: np.ndarray, with_scale: bool = False
     var_x = np.mean(np.sum(xc * xc, axis=1))  # eq. 36
     cov = yc.T @ xc / len(x)  # eq. 38
     U, d, Vt = np.linalg.svd(cov)
+    if with_scale and not np.any(d > np.finfo(float).eps):  # evo's rank test, at rank 0
+        raise DegenerateAlignment("the reference trajectory does not move (e.g. standing "
+                                  "still): a similarity alignment is undetermined")
     S = np.eye(3)
     if np.linalg.det(U) * np.linalg.det(Vt) < 0:  # eq. 39: a reflection, not a rotation
         S[2, 2] = -1.0

@@ -13,13 +13,21 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from humimic.maths.align import DegenerateAlignment
 from humimic.maths.stats import chi2_band, finite_or_none, nees, rmse
 from humimic.maths.trajectory import ape, rpe
 from humimic.motion import quat
 from humimic.spill import SpillRows
 
-#: Relative pose error over this many frames (1 s at the head camera's 30 Hz).
-RPE_DELTA_FRAMES = 30
+#: Relative pose error over this time (s): :func:`rpe_delta_frames` frames at the head camera's
+#: rate (30 at the paper's 30 Hz; before, 30 frames at any rate: 2 s at 15 Hz).
+RPE_WINDOW_S = 1.0
+
+
+def rpe_delta_frames(t: np.ndarray) -> int:
+    """Frames spanning :data:`RPE_WINDOW_S` at the median frame interval of ``t`` (at least 1)."""
+    dt = float(np.median(np.diff(t))) if len(t) > 1 else 0.0
+    return max(1, round(RPE_WINDOW_S / dt)) if dt > 0 else 1
 
 
 @dataclass
@@ -66,8 +74,9 @@ def pose_errors(p: np.ndarray, q: np.ndarray, p_true: np.ndarray, R_true: np.nda
 
 def trajectory_scores(t: np.ndarray, p: np.ndarray, q: np.ndarray, p_true: np.ndarray,
                       R_true: np.ndarray) -> dict:
-    """ATE after SE(3) and Sim(3) alignment (Umeyama) and the RPE over
-    :data:`RPE_DELTA_FRAMES` frames (:mod:`humimic.maths.trajectory`, evo's conventions)."""
+    """ATE after SE(3) and Sim(3) alignment (Umeyama) and the RPE over :data:`RPE_WINDOW_S`
+    (:mod:`humimic.maths.trajectory`, evo's conventions); the Sim(3) scores are None when the
+    true path does not move (standing still)."""
     T_est = np.zeros((len(t), 4, 4))
     T_est[:, :3, :3], T_est[:, :3, 3], T_est[:, 3, 3] = quat.to_matrix(q), p, 1.0
     T_ref = T_est.copy()
@@ -75,12 +84,16 @@ def trajectory_scores(t: np.ndarray, p: np.ndarray, q: np.ndarray, p_true: np.nd
     out: dict = {}
     if len(t) >= 3:
         out["ate_se3_rmse_m"] = finite_or_none(ape(t, T_ref, t, T_est, "se3").rmse_m)
-        sim3 = ape(t, T_ref, t, T_est, "sim3")
-        out["ate_sim3_rmse_m"] = finite_or_none(sim3.rmse_m)
-        out["sim3_scale"] = finite_or_none(sim3.scale)
-    if len(t) > RPE_DELTA_FRAMES:
-        out["rpe_rmse_m"] = finite_or_none(rpe(t, T_ref, t, T_est, RPE_DELTA_FRAMES).rmse_m)
-        out["rpe_delta_frames"] = RPE_DELTA_FRAMES
+        try:
+            sim3 = ape(t, T_ref, t, T_est, "sim3")
+            out["ate_sim3_rmse_m"] = finite_or_none(sim3.rmse_m)
+            out["sim3_scale"] = finite_or_none(sim3.scale)
+        except DegenerateAlignment:  # the wearer stood still: no scale is defined
+            out.update(ate_sim3_rmse_m=None, sim3_scale=None)
+    delta = rpe_delta_frames(t)
+    if len(t) > delta:
+        out["rpe_rmse_m"] = finite_or_none(rpe(t, T_ref, t, T_est, delta).rmse_m)
+        out["rpe_delta_frames"] = delta
     return out
 
 

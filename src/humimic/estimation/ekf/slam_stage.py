@@ -17,8 +17,9 @@ head camera (frame I) in the paper's W:
 * ``ate_rmse_m`` -- position error, no alignment (the screen fixes the frame);
   ``horizontal_rmse_m`` (x, z: Table II's), ``vertical_rmse_m``, ``position_max_error_m``;
 * ``ate_se3_rmse_m``, ``ate_sim3_rmse_m`` (and ``sim3_scale``) -- the same after the best rigid
-  (similarity) alignment; ``rpe_rmse_m`` -- relative translation error over
-  ``rpe_delta_frames`` frames (1 s) (:mod:`humimic.maths.trajectory`, evo's conventions);
+  (similarity) alignment; the Sim(3) ones None when the wearer's head did not move (its scale is
+  undetermined); ``rpe_rmse_m`` -- relative translation error over ``rpe_delta_frames``
+  frames, 1 s at the head camera's rate (:mod:`humimic.maths.trajectory`, evo's conventions);
 * ``heading_rmse_deg`` (the optical axis about W's vertical), ``rotation_rmse_deg``;
 * ``features_per_frame`` (measured), ``features_predicted_per_frame``,
   ``frames_without_features`` (and ``_fraction``), ``map_size_mean``, features added /
