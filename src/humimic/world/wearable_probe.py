@@ -7,8 +7,8 @@ Any scenario with the head camera on gets, in ``metrics.json``:
   room's texture as a feature tracker sees it along the path;
 * ``marker_in_view_fraction``: frames in which the Wii remote's red marker centre projects
   inside the image, in front of the camera (ground truth; occlusion not considered);
-* ``head_path_length_m`` (horizontal, in the paper's W), ``head_speed_max_m_s`` (3-D),
-  ``head_yaw_range_deg``: how the interface (frame I) moved;
+* ``head_path_horizontal_m`` (the path over the floor, in the paper's W: a jump adds nothing),
+  ``head_speed_max_m_s`` (3-D), ``head_yaw_range_deg``: how the interface (frame I) moved;
 * ``imu_orientation_error_rms_deg``: the head IMU's orientation error (yaw, pitch, roll, the
   Euler angles of :data:`humimic.sensors.inertial.EULER`).
 """
@@ -76,7 +76,7 @@ class WearableProbe(Stage):
             "corners_per_frame_p05": float(np.percentile(corners, 5)),
             "corners_per_frame_mean": float(corners.mean()),
             "marker_in_view_fraction": float(inside.mean()),
-            "head_path_length_m": float(np.sum(np.linalg.norm(np.diff(xz, axis=0), axis=1))),
+            "head_path_horizontal_m": float(np.sum(np.linalg.norm(np.diff(xz, axis=0), axis=1))),
             "head_speed_max_m_s": float(np.max(np.linalg.norm(gt.v_world("headcam"), axis=1))),
             "head_yaw_range_deg": float(np.ptp(yaw)),
         }
