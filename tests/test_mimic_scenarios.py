@@ -38,6 +38,19 @@ def test_oracle_wave_meets_the_accuracy_goals(wave):
     assert palm["clamped_fraction"] == 0.0 and palm["lost_fraction"] == 0.0
 
 
+def test_a_mapping_on_a_still_hand_is_named_in_the_warning(root, tmp_path, wave):
+    """The person waves the left hand while the mapping copies the right: the robot has nothing
+    to copy, and the run's warning line says so (the waving hand's RMS motion about its mean:
+    measured 167 mm over 2.5 s; the still hand's 0.0 -- the avatar is scripted)."""
+    from humimic.metrics.summary import verdict_warning
+
+    assert 80.0 <= wave["mimicry"]["R_palm"]["human_motion_rms_mm"] <= 340.0
+    assert "mimicry.R_palm" not in (verdict_warning(wave) or "")
+    m = _run(root, tmp_path, "mimic_wave", "human.motion.hand=left", duration=2.0)
+    assert m["mimicry"]["R_palm"]["human_motion_rms_mm"] < 1.0
+    assert "mimicry.R_palm: its human part right_hand hardly moved" in verdict_warning(m)
+
+
 def test_both_interpolation_modes_are_scored_and_extrapolation_cancels_the_lag(wave):
     interp = wave["mimicry"]["R_palm"]["interpolation"]
     assert set(interp) == {"hold", "extrapolate"}

@@ -2,7 +2,9 @@
 
 ``mimicry.<robot_site>``: ``rmse_mm`` between the site's displacement and the human part's true
 displacement after the mapping, ``lag_ms`` (cross-correlation peak: a lag, not a delay),
-``jerk`` (RMS third derivative, m/s^3; ``jerk_human`` for the mapped truth), ``joint_limit_hits``
+``jerk`` (RMS third derivative, m/s^3; ``jerk_human`` for the mapped truth),
+``human_motion_rms_mm`` (the mapped truth's RMS distance from its mean: what there was to copy;
+a run's warning line names a site under :data:`STILL_TARGET_MM`), ``joint_limit_hits``
 (servo ticks at which an arm or torso joint target sits on the IK's limit band;
 ``joint_limit_hits_by_joint`` counts them per joint), ``clamped_fraction``;
 
@@ -51,6 +53,11 @@ from humimic.metrics.mimicry import (
 from humimic.sensors.camera_model import R_MJCAM_CV, Intrinsics
 from humimic.spill import row_blocks
 from humimic.world.names import ROBOT_JOINTS, TORSO_JOINTS
+
+#: A mapped human part moving less than this (RMS about its mean, mm) gives the robot nothing to
+#: copy: the run's warning line names the site (e.g. the mapping left on ``right_hand`` while
+#: the person waves the left).
+STILL_TARGET_MM = 10.0
 
 #: Joints whose limits matter for a site (its arm and the torso).
 ARM_JOINTS = {
@@ -242,6 +249,7 @@ def site_metrics(stage, i: int, ch) -> tuple[dict, dict]:
         "max_error_mm": _mm(top),
         "jerk": _num(rms_jerk(s["robot"], dt)),
         "jerk_human": _num(rms_jerk(s["true_now"], dt)),
+        "human_motion_rms_mm": _mm(rmse(s["true_now"] - np.nanmean(s["true_now"], axis=0))),
         "joint_limit_hits": hits,
         "joint_limit_hits_by_joint": hits_by_joint,
         "clamped_fraction": float(rec.clamped[k0:rec.n, i].mean()),

@@ -8,6 +8,7 @@ from rich.console import Console
 from rich.table import Table
 
 from humimic.metrics.flatten import flatten_metrics
+from humimic.metrics.mimicry_report import STILL_TARGET_MM
 
 #: Score sections of ``metrics.json`` (shared/design.md's namespaces) and how many keys deep
 #: the table goes: ``trackers.<name>.recognition.<count>`` is four.
@@ -54,7 +55,8 @@ def verdict_warning(metrics: dict) -> str | None:
     """One line naming every target detected on less than half of its visible frames, or
     never, with its likely cause (``tracking.<target>.verdict``), and the perception stage's
     ``colour_warning`` and each tracker's (``trackers.<name>.colour_warning``) when they have
-    one (a scene with look-alikes of the skin's colours); None when there is neither."""
+    one (a scene with look-alikes of the skin's colours), and each mimicry site whose human
+    part hardly moved (``mimicry.<site>.human_motion_rms_mm``); None when there is none."""
     poor = []
     for target, s in metrics.get("tracking", {}).items():
         if isinstance(s, dict) and s.get("verdict") == "poor":
@@ -68,4 +70,10 @@ def verdict_warning(metrics: dict) -> str | None:
     for name, s in metrics.get("trackers", {}).items():  # each tracker's own skin model
         if isinstance(s, dict) and s.get("colour_warning"):
             poor.append(f"{name}'s skin model: {s['colour_warning']}")
+    for site, s in metrics.get("mimicry", {}).items():  # a mapping with nothing to copy
+        moved = s.get("human_motion_rms_mm") if isinstance(s, dict) else None
+        if moved is not None and moved < STILL_TARGET_MM:
+            poor.append(f"mimicry.{site}: its human part {s.get('target')} hardly moved "
+                        f"({moved:.1f} mm RMS): nothing to copy (is mimic.map on the moving "
+                        f"part?)")
     return f"warning: {'; '.join(poor)}" if poor else None
