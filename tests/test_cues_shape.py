@@ -156,6 +156,15 @@ def test_templates_place_scale_rotate_and_have_unit_normals():
         R = np.array([[0.0, -1.0], [1.0, 0.0]])
         np.testing.assert_allclose(p[0], [100.0, 50.0] + 20.0 * t.points @ R.T, atol=1e-9)
         np.testing.assert_allclose(n[0], t.normals @ R.T, atol=1e-9)
+        # many states at once (every other row of a wider array): each its own rotation
+        rng = np.random.default_rng(2)
+        x = np.column_stack([rng.uniform(0, 320, (14, 2)), rng.uniform(5, 60, 14),
+                             rng.uniform(-4, 4, 14), np.zeros(14)])[::2]
+        p, n = t.place(x)
+        for i, (u, v, s, th, _) in enumerate(x):
+            R = np.array([[np.cos(th), -np.sin(th)], [np.sin(th), np.cos(th)]])
+            np.testing.assert_allclose(p[i], [u, v] + s * t.points @ R.T, atol=1e-9)
+            np.testing.assert_allclose(n[i], t.normals @ R.T, atol=1e-12)
     h = hand(60)
     w, ht = np.ptp(h.points, axis=0)
     assert np.isclose(ht / w, 0.08 / 0.045, rtol=0.02)
