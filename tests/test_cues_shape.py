@@ -13,8 +13,10 @@ from humimic.perception.cues.edges import (
     distance_transform,
     dt_distance,
     edge_maps,
+    least_cost_along_normal,
     nearest_along_normal,
     normal_edge_distance,
+    normal_offsets,
     shape_log_likelihood,
     strongest_channel_sobel,
 )
@@ -154,6 +156,15 @@ def test_templates_place_scale_rotate_and_have_unit_normals():
         R = np.array([[0.0, -1.0], [1.0, 0.0]])
         np.testing.assert_allclose(p[0], [100.0, 50.0] + 20.0 * t.points @ R.T, atol=1e-9)
         np.testing.assert_allclose(n[0], t.normals @ R.T, atol=1e-9)
+        # many states at once (every other row of a wider array): each its own rotation
+        rng = np.random.default_rng(2)
+        x = np.column_stack([rng.uniform(0, 320, (14, 2)), rng.uniform(5, 60, 14),
+                             rng.uniform(-4, 4, 14), np.zeros(14)])[::2]
+        p, n = t.place(x)
+        for i, (u, v, s, th, _) in enumerate(x):
+            R = np.array([[np.cos(th), -np.sin(th)], [np.sin(th), np.cos(th)]])
+            np.testing.assert_allclose(p[i], [u, v] + s * t.points @ R.T, atol=1e-9)
+            np.testing.assert_allclose(n[i], t.normals @ R.T, atol=1e-12)
     h = hand(60)
     w, ht = np.ptp(h.points, axis=0)
     assert np.isclose(ht / w, 0.08 / 0.045, rtol=0.02)
@@ -183,6 +194,31 @@ def test_moving_edges_follow_the_moving_object():
     assert (mm.moving[5:66, 5:56] > 0).sum() < 0.1 * static_edges.sum()
     none = motion_edge_maps(maps, None)
     assert not none.moving.any() and none.dt_moving.max() == pytest.approx(30.0)
+
+
+def test_least_cost_along_normal_reads_the_probes_as_cv2_remap():
+    """The compiled probe walk against OpenCV's nearest-neighbour remap of every probe,
+    half-pixel ties (round half to even), probes off the image and NaN points included."""
+    rng = np.random.default_rng(7)
+    code = rng.integers(0, 3, (37, 53)).astype(np.uint8)
+    pts = rng.uniform(-15, 65, (9, 30, 2))
+    pts[::2] = np.round(pts[::2] * 2) / 2               # ties
+    pts[0, 0] = np.nan
+    ang = rng.uniform(0, 2 * np.pi, pts.shape[:-1])
+    nrm = np.stack([np.cos(ang), np.sin(ang)], -1)
+    nrm[1] = np.round(nrm[1] * 2) / 2                   # probes on ties too
+    search = 6
+    cost_of_value = np.full(256, np.inf)
+    cost_of_value[1], cost_of_value[2] = 0.7, 0.0
+    off = normal_offsets(search).astype(np.float32)[:, None, None]
+    p, n = pts.astype(np.float32), nrm.astype(np.float32)
+    u, v = p[..., 0] + off * n[..., 0], p[..., 1] + off * n[..., 1]   # (K, 9, 30)
+    read = cv2.remap(code, u.reshape(len(off), -1), v.reshape(len(off), -1),
+                     cv2.INTER_NEAREST, borderMode=cv2.BORDER_CONSTANT, borderValue=0)
+    expect = (np.abs(off[:, 0, 0]).astype(np.float64)[:, None] + cost_of_value[read]).min(0)
+    got = least_cost_along_normal(code, pts, nrm, search, cost_of_value)
+    np.testing.assert_array_equal(got, expect.reshape(9, 30))
+    assert np.isinf(got[0, 0]) and np.isfinite(got).mean() > 0.3   # measured 0.39
 
 
 def test_eq5_and_eq4_against_direct_formulas():

@@ -185,16 +185,51 @@ def probe_along_normal(image: np.ndarray, points: np.ndarray, normals: np.ndarra
     return np.abs(off[:, 0]).astype(np.float64), remap_uv(image, u, v, 0, cv2.INTER_NEAREST)
 
 
+def least_cost_along_normal(image: np.ndarray, points: np.ndarray, normals: np.ndarray,
+                            search_px: int, cost_of_value: np.ndarray) -> np.ndarray:
+    """Per point ``(..., 2)``, the least ``|o| + cost_of_value[image(x(j) + o n(j))]`` over
+    the probes of :func:`probe_along_normal` (a uint8 ``image``, ``cost_of_value`` (256,);
+    probes off the image read 0) -> ``points.shape[:-1]``: the probes and their values as
+    :func:`probe_along_normal` gives them, in one compiled pass with no (K, M) temporaries."""
+    p = np.asarray(points, np.float32).reshape(-1, 2)
+    n = np.asarray(normals, np.float32).reshape(-1, 2)
+    off = normal_offsets(search_px).astype(np.float32)
+    out = _least_cost(np.ascontiguousarray(image, np.uint8), p, n, off,
+                      np.asarray(cost_of_value, np.float64))
+    return out.reshape(np.shape(points)[:-1])
+
+
+@njit
+def _least_cost(image, p, n, off, cost_of_value):
+    h, w = image.shape
+    out = np.empty(len(p))
+    for j in range(len(p)):
+        best = np.inf
+        for k in range(len(off)):
+            u = p[j, 0] + off[k] * n[j, 0]      # float32 as probe_along_normal's
+            v = p[j, 1] + off[k] * n[j, 1]
+            value = 0
+            if u == u and v == v:               # cv2.remap's INTER_NEAREST: round half to
+                iu, iv = np.rint(u), np.rint(v)  # even, outside the image reads 0
+                if 0.0 <= iu < w and 0.0 <= iv < h:
+                    value = image[int(iv), int(iu)]
+            c = abs(np.float64(off[k])) + cost_of_value[value]
+            if c < best:
+                best = c
+        out[j] = best
+    return out
+
+
 def nearest_along_normal(mask: np.ndarray, points: np.ndarray, normals: np.ndarray,
                          search_px: int) -> np.ndarray:
     """Distance (px) from each point to the nearest set pixel of ``mask`` along its normal
     within ``search_px``; ``inf`` where there is none. ``(N, N_p, 2)`` -> ``(N, N_p)``."""
     src = mask if mask.dtype == np.uint8 else (mask > 0).astype(np.uint8)
-    dist, values = probe_along_normal(src, points, normals, search_px)
-    hit = values > 0
-    first = np.argmax(hit, axis=0)
-    out = np.where(hit.any(axis=0), dist[first], np.inf)
-    return out.reshape(np.shape(points)[:-1])
+    return least_cost_along_normal(src, points, normals, search_px, _HIT_COST)
+
+
+_HIT_COST = np.r_[np.inf, np.zeros(255)]
+"""Any set pixel costs nothing beyond its distance; an unset one is no hit."""
 
 
 def normal_edge_distance(edges: np.ndarray, points: np.ndarray, normals: np.ndarray,

@@ -25,7 +25,7 @@ from humimic.perception.cues.edges import (
     _reduce,
     distance_transform,
     grey,
-    probe_along_normal,
+    least_cost_along_normal,
     remap_uv,
 )
 
@@ -93,10 +93,9 @@ def motion_normal_distance(maps: MotionEdgeMaps, points: np.ndarray, normals: np
     One gather of an edge code (0 none, 1 static, 2 moving) at every probe; each probe costs
     its offset, plus ``rho`` on a static edge, ``inf`` off the edges."""
     code = (maps.edges > 0).astype(np.uint8) + (maps.moving > 0).astype(np.uint8)
-    dist, c = probe_along_normal(code, points, normals, search_px)
-    d = dist[:, None]
-    cost = np.where(c == 2, d, np.where(c == 1, d + rho, np.inf)).min(axis=0)  # eq. 4
-    cost = cost.reshape(np.shape(points)[:-1])
+    cost_of_code = np.full(256, np.inf)
+    cost_of_code[1], cost_of_code[2] = rho, 0.0
+    cost = least_cost_along_normal(code, points, normals, search_px, cost_of_code)  # eq. 4
     return _reduce(np.minimum(cost, search_px + rho), reduce)
 
 
