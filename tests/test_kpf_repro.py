@@ -11,18 +11,10 @@ rather than loaded from the cache give the same bits.)"""
 
 from __future__ import annotations
 
-import os
-import subprocess
-import sys
-import textwrap
-from pathlib import Path
+from _repro import outputs_in_two_processes
 
-CHILD = textwrap.dedent("""
-    import hashlib, os, sys
-    if os.environ.get("REPRO_PERTURB"):
-        import cv2
-        cv2.setNumThreads(1)
-    import numpy as np
+CHILD = """
+    import hashlib
     from _kpf_synth import INTRINSICS, camera, painted_person, static_pose
     from humimic.paths import SCENARIOS_DIR
     from humimic.perception.blobs.config import DEFAULT_COLOR_MODEL
@@ -31,9 +23,7 @@ CHILD = textwrap.dedent("""
     from humimic.perception.trackers.kpf.tracker import KpfTracker, kpf_body
     from humimic.scenario import load_scenario
 
-    keep = []
-    if os.environ.get("REPRO_PERTURB"):   # shift later allocations' addresses
-        keep = [np.empty(k) for k in range(1, 40, 3)] + [bytearray(k) for k in range(1, 99, 7)]
+    shift_heap()
     body, T, q0 = kpf_body(), camera(), static_pose()
     lut = ColorLUT(load_color_model(DEFAULT_COLOR_MODEL), 6)
     frames = []
@@ -51,28 +41,14 @@ CHILD = textwrap.dedent("""
         tr.start(q0, FrameCues(frames[0], lut, **kw), T)
         for img in frames[1:]:
             res = tr.step(FrameCues(img, lut, **kw), T)
-            keep.append(np.empty(len(keep) % 7 + 1))
+            shift_heap()
             for a in (res.mode, res.particles, res.weights):
                 h.update(np.ascontiguousarray(a, float).tobytes())
         print(name, repr(res.mode[6:10].tolist()))
     print(h.hexdigest())
-""")
-
-
-def _track(perturb: bool) -> str:
-    tests = Path(__file__).resolve().parent
-    src = tests.parent / "src"
-    env = dict(os.environ)
-    env["PYTHONPATH"] = os.pathsep.join([str(tests), str(src), env.get("PYTHONPATH", "")])
-    env["PYTHONHASHSEED"] = "1" if perturb else "2"
-    if perturb:
-        env.update(REPRO_PERTURB="1", OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1")
-    out = subprocess.run([sys.executable, "-c", CHILD], env=env, capture_output=True,
-                         text=True, timeout=600, check=False)
-    assert out.returncode == 0, out.stderr[-3000:]
-    return out.stdout
+"""
 
 
 def test_kpf_tracking_is_bit_identical_across_processes():
-    a, b = _track(False), _track(True)
+    a, b = outputs_in_two_processes(CHILD)
     assert a == b

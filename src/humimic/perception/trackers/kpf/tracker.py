@@ -14,7 +14,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from threadpoolctl import ThreadpoolController
 
 from humimic import bodymodel as bm
 from humimic.bodymodel.rom import arm_twist_log_prior
@@ -23,6 +22,7 @@ from humimic.estimation.particles.densities import Gaussian
 from humimic.estimation.particles.filters import condensation_step
 from humimic.estimation.particles.kernel_groups import dominant_modes
 from humimic.estimation.particles.weights import uniform_log_weights
+from humimic.maths.blas import one_blas_thread
 from humimic.perception.cues.importance import skin_blobs
 from humimic.perception.trackers.kpf.cues import CueMaps
 from humimic.perception.trackers.kpf.depth import SIDES, kept_ranges, wrist_depth_move
@@ -37,7 +37,6 @@ from humimic.perception.trackers.kpf.velocity import (
     particle_velocities,
 )
 
-_BLAS = ThreadpoolController()
 #: The state's partition (``partitioned``): torso, right arm, left arm DOFs.
 GROUPS = [np.arange(0, 6), np.arange(6, 10), np.arange(10, 14)]
 #: Mean-shift modes reported per frame (the heaviest distinct ones), for display.
@@ -191,7 +190,7 @@ class KpfTracker:
         spinning on a shared 2-core machine made them 5x slower)."""
         if self.particles is None:
             raise RuntimeError("KpfTracker.step before start")
-        with _BLAS.limit(limits=1, user_api="blas"):
+        with one_blas_thread():
             return self._step(maps, T_cam_base)
 
     def _step(self, maps: CueMaps | FrameCues, T_cam_base: np.ndarray) -> FrameResult:
