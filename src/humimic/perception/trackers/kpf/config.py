@@ -288,6 +288,12 @@ class KpfConfig(Section):
     kde_stride: int = Field(1, ge=1, le=100)
     """The reweighting's KDEs from every k-th particle (1: all, exact; more: faster)."""
     cues: KpfCues = Field(default_factory=KpfCues)
+    skin_ring: float | None = Field(None, gt=1.0, le=4.0)
+    """Our extension: the hands' skin surround (:mod:`~humimic.perception.trackers.kpf.
+    skin_ring`), the skin fraction on a ring at this multiple of the model hand's image
+    ellipse as a cost (sigma: ``sigma.skin``) added to the hand's term, so a model hand too
+    small for its skin blob (too far: a kinematic mirror) scores worse; None: off, as the
+    paper (skin inside the ellipse only)."""
     colour_gradients: bool = False
     """Our extension: the edge and ridge cues on the strongest colour channel's derivatives
     at each pixel instead of grey levels' (clothes as bright as the background keep their
