@@ -36,10 +36,13 @@ def test_ring_skin_on_a_disc():
     centre, axes, angle = np.array([[[60.0, 50.0]]]), np.array([[[5.0, 5.0]]]), np.zeros((1, 1))
     assert R.ring_skin(maps, centre, axes, angle, 1.5)[0, 0] == 1.0     # ring radius 7.5
     assert R.ring_skin(maps, centre, axes, angle, 2.6)[0, 0] == 0.0     # 13
-    # a ring of radius 10 centred 10 px right of the disc's centre: the arc within the
-    # disc is the third of the circle whose points lie within 10 px of the disc's centre
-    half = R.ring_skin(maps, np.array([[[70.0, 50.0]]]), np.array([[[5.0, 5.0]]]), angle, 2.0)
-    assert half[0, 0] == pytest.approx(1.0 / 3.0, abs=1.5 / R.RING_POINTS)
+    # a ring of radius 10 centred 10 px below the disc's centre: its points within the disc
+    # (by their distance to its centre, an independent count of the raster's pixels)
+    pts = R.ring_points(np.array([[[60.0, 60.0]]]), np.array([[[5.0, 5.0]]]), angle, 2.0)
+    want = np.mean(np.linalg.norm(np.rint(pts[0, 0]) - [60, 50], axis=1) <= 10.0)
+    assert 0.0 < want < 1.0
+    part = R.ring_skin(maps, np.array([[[60.0, 60.0]]]), np.array([[[5.0, 5.0]]]), angle, 2.0)
+    assert part[0, 0] == pytest.approx(want, abs=1.0 / R.RING_POINTS)
 
 
 def test_ring_log_term_is_eq9s_gaussian():

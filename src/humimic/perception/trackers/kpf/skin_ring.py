@@ -7,8 +7,8 @@ perception.trackers.kpf.flips`) put the hand at the same image point but at anot
 so at another image size: in Table 1's angular pointing hold (the wide eye, 320 x 240, 2 m)
 the true hand's ellipse has semi-axes ~6.5 x 3.5 px at 1.6 m, its mirrors' ~5 x 2.3 px at
 1.9-2.1 m; the skin fraction of the disc 1.4 x the model ellipse is 0.53 at the truth and
-0.71-0.88 at the mirrors. The surround term scores the fraction ``s`` of skin on a ring of
-:data:`RING_POINTS` points at ``scale`` times the model ellipse's semi-axes
+0.71-0.88 at the mirrors. The surround term scores the fraction ``s`` of skin on the sides of a
+ring (:data:`RING_POINTS` points) at ``scale`` times the model ellipse's semi-axes
 (:func:`ring_skin`) as a cost, ``-s^2 / (2 sigma^2)`` (:func:`ring_log_term`, eq. 9's form),
 added to the hand's log-likelihood term: a hand too small for its blob is penalised.
 """
@@ -19,9 +19,12 @@ import numpy as np
 
 from humimic.perception.trackers.kpf.cues import CueMaps, sample
 
-#: Points on the surround ring (evenly spaced in the ellipse's parameter angle).
+#: Points on the surround ring: two arcs of +-45 deg about the minor axis (the hand's sides,
+#: evenly spaced in the ellipse's parameter angle), not along the major axis, where the hand
+#: continues into the wrist and the fingers.
 RING_POINTS = 16
-_T = np.linspace(0.0, 2.0 * np.pi, RING_POINTS, endpoint=False)
+_T = np.concatenate([np.linspace(-0.25 * np.pi, 0.25 * np.pi, RING_POINTS // 2) + a
+                     for a in (0.5 * np.pi, 1.5 * np.pi)])
 _UNIT = np.stack([np.cos(_T), np.sin(_T)], axis=-1)
 
 
