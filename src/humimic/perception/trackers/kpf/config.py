@@ -146,13 +146,6 @@ class KpfConfig(Section):
     frame (1: kept whole). Measured (as above, ``observed_velocity_px`` 10): 0.5: angular
     131 ± 9, side (seeds 0-4) 90 ± 23 (main 82 ± 44), schmidt_side (1-4) 123 ± 33 (main
     77 ± 18, 1.0: 170 ± 60); 0.8: angular 134 ± 12, schmidt_side 180 ± 58. Off (1.0)."""
-    velocity_gate_px: float | None = Field(None, gt=0.0, le=1000.0)
-    """Our extension: each arm's motion-model velocity (the modes' or, with
-    ``particle_velocity``, the particles') zeroed while the arm's best mode moved its projected
-    elbow and wrist less than this (px) between the last two frames
-    (:mod:`~humimic.perception.trackers.kpf.velocity_gate`): momentum carries the arm through
-    the branch points where its mirrors meet, and does not drift the depth of a still arm;
-    None: off, as the paper."""
     keep_range_share: float = Field(0.0, ge=0.0, le=1.0)
     """Our extension: the share of the propagated particles (of ``keep_range_groups``) per arm and
     frame whose wrist, after the propagation, is put back at a reference camera distance

@@ -33,11 +33,9 @@ from humimic.perception.trackers.kpf.likelihood import Likelihood
 from humimic.perception.trackers.kpf.refine import refine_arms
 from humimic.perception.trackers.kpf.velocity import (
     arm_noise_shaping,
-    motion_velocity,
     observable_arm_velocity,
     particle_velocities,
 )
-from humimic.perception.trackers.kpf.velocity_gate import gated_velocity
 
 _BLAS = ThreadpoolController()
 #: The state's partition (``partitioned``): torso, right arm, left arm DOFs.
@@ -82,6 +80,15 @@ class FrameResult:
     iterations: int
     modes: np.ndarray
     """(M, 14) distinct mean-shift modes (the particles' converged positions, deduplicated)."""
+
+
+def motion_velocity(mode: np.ndarray, mode_prev: np.ndarray, torso: bool = True) -> np.ndarray:
+    """Schmidt sec. 5.2's linear motion model's velocity, the last two best modes' difference
+    ``(14,)``; ``torso=False`` (``KpfConfig.torso_velocity``): zero on the torso's DOFs."""
+    v = np.asarray(mode, float) - np.asarray(mode_prev, float)
+    if not torso:
+        v[GROUPS[0]] = 0.0
+    return v
 
 
 def distinct(fn):
@@ -227,9 +234,6 @@ class KpfTracker:
         else:
             resampled = kpf.partitioned_resample(self.particles, self.W, groups, rng)
             velocity = motion_velocity(self.mode, self.mode_prev, cfg.torso_velocity)
-        if cfg.velocity_gate_px is not None:   # our extension (kpf/velocity_gate.py)
-            velocity = gated_velocity(self.body, self.lik.intr, self.mode, self.mode_prev,
-                                      velocity, T_cam_base, cfg.velocity_gate_px)
         if cfg.observed_velocity_px is not None:
             velocity = observable_arm_velocity(self.body, self.lik.intr, self.mode, velocity,
                                                T_cam_base, cfg.observed_velocity_px)

@@ -30,17 +30,6 @@ from humimic.perception.trackers.kpf.depth import SIDES
 
 #: The arm points whose images pin the arm's four DOFs (two image points, four coordinates).
 ARM_POINTS = ("elbow", "wrist")
-#: The torso's DOFs in the state (:data:`humimic.bodymodel.DOF_NAMES` order).
-TORSO = slice(0, 6)
-
-
-def motion_velocity(mode: np.ndarray, mode_prev: np.ndarray, torso: bool = True) -> np.ndarray:
-    """Schmidt sec. 5.2's linear motion model's velocity, the last two best modes' difference
-    ``(14,)``; ``torso=False`` (``KpfConfig.torso_velocity``): zero on the torso's DOFs."""
-    v = np.asarray(mode, float) - np.asarray(mode_prev, float)
-    if not torso:
-        v[TORSO] = 0.0
-    return v
 
 
 def particle_velocities(parts: np.ndarray, resampled: np.ndarray, walked: np.ndarray,
