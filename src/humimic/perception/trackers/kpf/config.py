@@ -298,7 +298,8 @@ class KpfConfig(Section):
     estimate to a mirror 250-460 mm away); with ``flip_share`` 0.1 (the jumps that reach the
     mirrors) angular 138 ± 13 (147, 139, 152, 119, 134; ``flip_share`` alone 161 ± 45), but
     side seeds 0-4 76 ± 24 -> 122 ± 74 and the 18 s gestures (schmidt_side, seeds 1-4)
-    85 ± 30 -> 131 ± 26. Off: the flips it needs cost side pointing."""
+    85 ± 30 -> 131 ± 26; angular seeds 5-9 211 ± 30 -> 157 ± 53, another person (darker
+    skin, green shirt, seeds 0-2) 178 -> 185. Off: the flips it needs cost side pointing."""
     colour_gradients: bool = False
     """Our extension: the edge and ridge cues on the strongest colour channel's derivatives
     at each pixel instead of grey levels' (clothes as bright as the background keep their
