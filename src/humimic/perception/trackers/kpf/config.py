@@ -288,6 +288,18 @@ class KpfConfig(Section):
     kde_stride: int = Field(1, ge=1, le=100)
     """The reweighting's KDEs from every k-th particle (1: all, exact; more: faster)."""
     cues: KpfCues = Field(default_factory=KpfCues)
+    skin_ring: float | None = Field(None, gt=1.0, le=4.0)
+    """Our extension: the hands' skin surround (:mod:`~humimic.perception.trackers.kpf.
+    skin_ring`), the skin fraction on a ring at this multiple of the model hand's image
+    ellipse as a cost (sigma: ``sigma.skin``) added to the hand's term, so a model hand too
+    small for its skin blob (too far: a kinematic mirror) scores worse; None: off, as the
+    paper (skin inside the ellipse only). Measured (Table 1's ``kpf``, (1000, 3), mean wrist
+    error, mm, main -> 1.5): angular seeds 0-4 193 ± 28 -> 190 ± 23 (alone it cannot move the
+    estimate to a mirror 250-460 mm away); with ``flip_share`` 0.1 (the jumps that reach the
+    mirrors) angular 138 ± 13 (147, 139, 152, 119, 134; ``flip_share`` alone 161 ± 45), but
+    side seeds 0-4 76 ± 24 -> 122 ± 74 and the 18 s gestures (schmidt_side, seeds 1-4)
+    85 ± 30 -> 131 ± 26; angular seeds 5-9 211 ± 30 -> 157 ± 53, another person (darker
+    skin, green shirt, seeds 0-2) 178 -> 185. Off: the flips it needs cost side pointing."""
     colour_gradients: bool = False
     """Our extension: the edge and ridge cues on the strongest colour channel's derivatives
     at each pixel instead of grey levels' (clothes as bright as the background keep their

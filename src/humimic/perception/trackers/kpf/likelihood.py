@@ -25,6 +25,7 @@ from humimic.maths.arrays import stack
 from humimic.perception.trackers.kpf import cues as C
 from humimic.perception.trackers.kpf import limb_cues as K
 from humimic.perception.trackers.kpf.frame_cues import FrameCues, sample_box
+from humimic.perception.trackers.kpf.skin_ring import ring_log_term, ring_pad, ring_skin
 
 CUE_NAMES = ("edge", "ridge", "colour", "skin")
 #: The colour polygons are pulled towards the limb's axis by this fraction of its half-width.
@@ -102,6 +103,8 @@ class Likelihood:
         self.skin_js = np.array([j for j, p in enumerate(ell) if "skin" in self.use[p]], int)
         """Positions (among the ellipsoids) of the parts with the skin cue."""
         self.skin_cols = np.asarray(lay.ellipsoid_idx, int)[self.skin_js]
+        self.hand_js = np.array([j for j in self.skin_js if limb_type(ell[j]) == "hand"], int)
+        """Positions (among the ellipsoids) of the hands with the skin cue (``skin_ring``)."""
 
     def evaluate(self, q: np.ndarray, maps: C.CueMaps | FrameCues, T_cam_base: np.ndarray,
                  floors: bool = False) -> Evaluation:
@@ -113,8 +116,11 @@ class Likelihood:
         n = len(q)
         view = limb_view(self.body, self.body.forward(q), self.intr, T_cam_base)
         ellipses = view.ellipses
+        ring = cfg.skin_ring if len(self.hand_js) else None
         if isinstance(maps, FrameCues):
-            maps = maps.covering(*sample_box(view, ellipses))
+            lo, hi = sample_box(view, ellipses)
+            pad = 0.0 if ring is None else ring_pad(ellipses[1][:, self.hand_js], ring)
+            maps = maps.covering(lo - pad, hi + pad)
         planes = np.full((len(CUE_NAMES), n, len(self.parts)), np.nan)
         cost = dict(zip(CUE_NAMES, planes, strict=True))
         ok = view.valid[:, view.cone_idx] & view.generators
@@ -144,7 +150,13 @@ class Likelihood:
             f = K.skin_fractions(maps, centre[:, j], axes[:, j], angle[:, j])
             ok = view.valid[:, view.ellipsoid_idx[j]]
             cost["skin"][:, self.skin_cols] = 1.0 - np.where(ok, f, 0.0)
-        return Evaluation(cost, self.combine(cost, floors), colours)
+        terms = self.combine(cost, floors)
+        if ring is not None:   # our extension: the hands' skin surround (kpf/skin_ring.py)
+            j = self.hand_js
+            s = ring_skin(maps, centre[:, j], axes[:, j], angle[:, j], ring)
+            s = np.where(view.valid[:, view.ellipsoid_idx[j]], s, 0.0)
+            terms[:, np.asarray(view.ellipsoid_idx)[j]] += ring_log_term(s, self.floor["skin"])
+        return Evaluation(cost, terms, colours)
 
     def sigmas(self, cost: dict[str, np.ndarray], floors: bool = False) -> dict[str, float]:
         """Eq. 9's ``sigma_c``: the spread of each cue's costs over the particles (mean over
