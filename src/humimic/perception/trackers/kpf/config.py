@@ -190,6 +190,16 @@ class KpfConfig(Section):
     False: left where the propagation put it (the depth re-drawn after all). Only the outer
     reach is clipped: a wrist asked nearer the shoulder than the arm can fold stays where the
     propagation put it."""
+    keep_range_gate_deg: tuple[float, float] | None = None
+    """Our extension, with ``keep_range_share``: [lo, hi] (deg); the share of kept ranges
+    scaled per arm by a smooth step of the arm's (shoulder -> wrist) angle out of the image
+    plane (:mod:`~humimic.perception.trackers.kpf.depth_gate`): whole below lo, none above
+    hi. An arm near the image plane projects to ``cos`` of that angle times its length,
+    second order in its depth, an arm pointing towards the camera to first order: hold the
+    depth the likelihood cannot judge, free the one it can. None: no gate."""
+    keep_range_gate_on: Literal["proposal", "ancestor", "mode"] = "proposal"
+    """The arm the gate measures: each propagated particle's (``proposal``), its ancestor's,
+    or the last best mode's (one gate per arm)."""
     min_random: float = Field(0.2, ge=0.0, le=1.0)
     """Smallest share of randomly propagated particles."""
     tol: float = Field(0.01, ge=0.0)
@@ -312,6 +322,10 @@ class KpfConfig(Section):
                 -180.0 <= self.twist_range_deg[0] < self.twist_range_deg[1] <= 180.0):
             raise ValueError("twist_range_deg must be [low, high] with -180 <= low < high <= "
                              f"180 (deg), got {list(self.twist_range_deg)}")
+        if self.keep_range_gate_deg is not None and not (
+                0.0 <= self.keep_range_gate_deg[0] < self.keep_range_gate_deg[1] <= 90.0):
+            raise ValueError("keep_range_gate_deg must be [lo, hi] with 0 <= lo < hi <= 90 "
+                             f"(deg), got {list(self.keep_range_gate_deg)}")
         return self
 
     def D(self, frame_rate: float | None = None) -> list[float]:
