@@ -93,15 +93,13 @@ def test_tracker_gate_open_keeps_no_range_and_shut_keeps_them_all(monkeypatch):
     lut = ColorLUT(load_color_model(DEFAULT_COLOR_MODEL), 6)
     r0 = np.linalg.norm(body.forward(q0[None]).to(T).joint("r_wrist")[0])
     exact = {}
-    for on in ("proposal", "mode"):
-        for gate in ((85.0, 90.0), (0.0, 1e-3)):
-            cfg = KpfConfig(n_particles=200, iterations=1, keep_range_share=1.0,
-                            keep_range_gate_deg=gate, keep_range_gate_on=on)
-            tr = tracker_mod.KpfTracker(body, INTRINSICS, cfg, np.random.default_rng(2))
-            tr.start(q0, FrameCues(img, lut), T)
-            tr.step(FrameCues(img, lut), T)
-            r = np.linalg.norm(body.forward(seen[-1]).to(T).joint("r_wrist"), axis=1)
-            exact[on, gate[0]] = np.mean(np.abs(r - r0) < 1e-6)
-    for on in ("proposal", "mode"):
-        assert exact[on, 85.0] > 0.6, exact            # measured 0.79, as ungated
-        assert exact[on, 0.0] < 0.05, exact            # measured 0
+    for gate in ((85.0, 90.0), (0.0, 1e-3)):
+        cfg = KpfConfig(n_particles=200, iterations=1, keep_range_share=1.0,
+                        keep_range_gate_deg=gate)
+        tr = tracker_mod.KpfTracker(body, INTRINSICS, cfg, np.random.default_rng(2))
+        tr.start(q0, FrameCues(img, lut), T)
+        tr.step(FrameCues(img, lut), T)
+        r = np.linalg.norm(body.forward(seen[-1]).to(T).joint("r_wrist"), axis=1)
+        exact[gate[0]] = np.mean(np.abs(r - r0) < 1e-6)
+    assert exact[85.0] > 0.6, exact                  # measured 0.79, as ungated
+    assert exact[0.0] < 0.05, exact                  # measured 0

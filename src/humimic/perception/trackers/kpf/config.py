@@ -197,9 +197,6 @@ class KpfConfig(Section):
     hi. An arm near the image plane projects to ``cos`` of that angle times its length,
     second order in its depth, an arm pointing towards the camera to first order: hold the
     depth the likelihood cannot judge, free the one it can. None: no gate."""
-    keep_range_gate_on: Literal["proposal", "ancestor", "mode"] = "proposal"
-    """The arm the gate measures: each propagated particle's (``proposal``), its ancestor's,
-    or the last best mode's (one gate per arm)."""
     min_random: float = Field(0.2, ge=0.0, le=1.0)
     """Smallest share of randomly propagated particles."""
     tol: float = Field(0.01, ge=0.0)

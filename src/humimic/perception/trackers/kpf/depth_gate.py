@@ -50,13 +50,11 @@ def arm_hold_shares(body: bm.BodyModel, q: np.ndarray, c_ref: np.ndarray, lo: fl
             for s, (p, _) in SIDES.items()}
 
 
-def keep_range_gates(body: bm.BodyModel, cfg, pred: np.ndarray, ancestors: np.ndarray,
-                     mode: np.ndarray, T_cam_ref: np.ndarray) -> dict[str, np.ndarray] | None:
-    """The gates of ``KpfConfig`` ``cfg``'s kept ranges (None without ``keep_range_gate_deg``):
-    from the propagated particles ``pred``, their ``ancestors`` (both ``(N, 14)``) or the last
-    best ``mode`` ``(14,)`` (one gate per arm), as ``keep_range_gate_on`` says."""
+def keep_range_gates(body: bm.BodyModel, cfg, pred: np.ndarray, T_cam_ref: np.ndarray
+                     ) -> dict[str, np.ndarray] | None:
+    """The gates of ``KpfConfig`` ``cfg``'s kept ranges from the propagated particles ``pred``
+    ``(N, 14)`` (None without ``keep_range_gate_deg``)."""
     if cfg.keep_range_gate_deg is None:
         return None
-    q = {"proposal": pred, "ancestor": ancestors, "mode": mode}[cfg.keep_range_gate_on]
     c = np.linalg.inv(np.asarray(T_cam_ref, float))[:3, 3]
-    return arm_hold_shares(body, q, c, *np.radians(cfg.keep_range_gate_deg))
+    return arm_hold_shares(body, pred, c, *np.radians(cfg.keep_range_gate_deg))

@@ -328,7 +328,7 @@ class KpfTracker:
             resampled + velocity)
         rows = {"random": ~moved, "motion": moved, "both": np.ones(len(pred), bool)}[
             c.keep_range_groups]
-        gates = keep_range_gates(self.body, c, pred, resampled, self.mode, T_cam_base)
+        gates = keep_range_gates(self.body, c, pred, T_cam_base)
         return kept_ranges(self.body, pred, target, rows, c.keep_range_share, T_cam_base,
                            c.keep_range_clip, self.rng, gates)
 
