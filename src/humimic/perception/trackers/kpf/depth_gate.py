@@ -9,6 +9,16 @@ towards the camera, whose image shortens to first order (``d cos / d theta = -si
 the likelihood does judge its depth. The gate makes the share of kept ranges a function of
 the arm's (shoulder -> wrist) angle out of the image plane: all kept below ``lo``, none above
 ``hi``, a smooth step between.
+
+Measured, it does not help (``KpfConfig.keep_range_gate_deg``): the gate is local, the error
+is not. The tracker's depth error is a kinematic flip (the arm pose with the same elbow and
+wrist images, :mod:`~humimic.perception.trackers.kpf.flips`), and the two poses of a flip pair
+lie on opposite sides of the gate. Table 1's camera sees the hanging and the side-pointing arm
+tilted ~13 deg away from the camera (the angle about the ray through the arm's middle; the
+wrist's range a constant 2.11 m), the arm pointing at 45 deg ~32 deg towards it (range 1.70
+m). The angular arm's flip is the side-like pose (+14 deg): held, so the estimate stays in it
+for the whole hold; the side arm's flip is the angular-like pose (-32 deg): once a slow drift
+carries the estimate past ``lo`` it is free and falls into it.
 """
 
 from __future__ import annotations
