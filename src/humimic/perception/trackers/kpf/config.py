@@ -199,10 +199,10 @@ class KpfConfig(Section):
     depth the likelihood cannot judge, free the one it can. None: no gate. Measured (Table 1's
     ``kpf``, (1000, 3), mean wrist error, mm, main -> share 1 with the gate [15, 35] on each
     propagated particle): side seeds 0-9 85 ± 41 -> 66 ± 18 (better on 8 of 10; along the ray
-    74 -> 51), another person (skin [0.45, 0.30, 0.22], shirt [0.25, 0.55, 0.30]) side seeds
+    74 -> 51, across it 28 -> 33), another person (skin [0.45, 0.30, 0.22], shirt [0.25, 0.55, 0.30]) side seeds
     0-1 105 -> 52, but angular seeds 0-4 193 ± 28 -> 238 ± 12 (worse on all 5; the other person
     seed 0 172 -> 244) and the 18 s gestures (schmidt_side) seeds 1-4 85 ± 30 -> 147 ± 63 (seed 1
-    67 -> 234; ungated share 1: 53 ± 3). Why: the error is a kinematic flip, and a flip pair
+    67 -> 234; ungated share 1 on the same main: 53 ± 3, angular 224 ± 13). Why: the error is a kinematic flip, and a flip pair
     lies on both sides of the gate (module docstring): the angular arm's flip (~13 deg away
     from the camera) is held, the side arm's (~32 deg towards it) is free, so the gate keeps
     the one and releases into the other. With ``flip_share`` 0.1 as well:
