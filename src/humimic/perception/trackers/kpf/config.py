@@ -190,6 +190,24 @@ class KpfConfig(Section):
     False: left where the propagation put it (the depth re-drawn after all). Only the outer
     reach is clipped: a wrist asked nearer the shoulder than the arm can fold stays where the
     propagation put it."""
+    keep_range_gate_deg: tuple[float, float] | None = None
+    """Our extension, with ``keep_range_share``: [lo, hi] (deg); the share of kept ranges scaled per
+    arm by a smooth step of the arm's (shoulder -> wrist) angle out of the image plane
+    (:mod:`~humimic.perception.trackers.kpf.depth_gate`): whole below lo, none above hi. An arm near
+    the image plane projects to ``cos`` of that angle times its length, second order in its depth,
+    an arm pointing towards the camera to first order: hold the depth the likelihood cannot judge,
+    free the one it can. None: no gate. Measured (Table 1's ``kpf``, (1000, 3), mean wrist error,
+    mm, main -> share 1 with the gate [15, 35] on each propagated particle): side seeds 0-9 85 ± 41
+    -> 66 ± 18 (better on 8 of 10; along the ray 74 -> 51, across it 28 -> 33), another person (skin
+    [0.45, 0.30, 0.22], shirt [0.25, 0.55, 0.30]) side seeds 0-1 105 -> 52, but angular seeds 0-4
+    193 ± 28 -> 238 ± 12 (worse on all 5; the other person seed 0 172 -> 244) and the 18 s gestures
+    (schmidt_side) seeds 1-4 85 ± 30 -> 147 ± 63 (seed 1 67 -> 234; ungated share 1 on the same
+    main: 53 ± 3, angular 224 ± 13). Why: the error is a kinematic flip, and a flip pair lies on
+    both sides of the gate (module docstring): the angular arm's flip (~13 deg away from the camera)
+    is held, the side arm's (~32 deg towards it) is free, so the gate keeps the one and releases
+    into the other. With ``flip_share`` 0.1 as well: angular seeds 0-1 205 / 205 (main 192 / 226),
+    side seeds 1, 6 136 / 82 (main 89 / 190). Off: worse than the ungated option on the long runs
+    and than main on angular pointing."""
     min_random: float = Field(0.2, ge=0.0, le=1.0)
     """Smallest share of randomly propagated particles."""
     tol: float = Field(0.01, ge=0.0)
@@ -324,6 +342,10 @@ class KpfConfig(Section):
                 -180.0 <= self.twist_range_deg[0] < self.twist_range_deg[1] <= 180.0):
             raise ValueError("twist_range_deg must be [low, high] with -180 <= low < high <= "
                              f"180 (deg), got {list(self.twist_range_deg)}")
+        if self.keep_range_gate_deg is not None and not (
+                0.0 <= self.keep_range_gate_deg[0] < self.keep_range_gate_deg[1] <= 90.0):
+            raise ValueError("keep_range_gate_deg must be [lo, hi] with 0 <= lo < hi <= 90 "
+                             f"(deg), got {list(self.keep_range_gate_deg)}")
         return self
 
     def D(self, frame_rate: float | None = None) -> list[float]:

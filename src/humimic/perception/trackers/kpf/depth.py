@@ -99,14 +99,16 @@ def keep_wrist_range(body: bm.BodyModel, q: np.ndarray, q_ref: np.ndarray, side:
 
 
 def kept_ranges(body: bm.BodyModel, q: np.ndarray, q_ref: np.ndarray, rows: np.ndarray,
-                share: float, T_cam_ref: np.ndarray, clip: bool, rng: np.random.Generator
-                ) -> np.ndarray:
+                share: float, T_cam_ref: np.ndarray, clip: bool, rng: np.random.Generator,
+                gates: dict[str, np.ndarray] | None = None) -> np.ndarray:
     """A copy of states ``q (N, 14)`` where, per arm, each of ``rows`` (bool ``(N,)``) is
-    drawn with probability ``share`` and its wrist put back at ``q_ref``'s camera distance
-    (:func:`keep_wrist_range`)."""
+    drawn with probability ``share`` (times ``gates[side]``, ``(N,)`` or ``(1,)``, if given:
+    :mod:`~humimic.perception.trackers.kpf.depth_gate`) and its wrist put back at ``q_ref``'s
+    camera distance (:func:`keep_wrist_range`)."""
     q = np.array(q, float)
     for side in SIDES:
-        pick = np.flatnonzero(rows & (rng.random(len(q)) < share))
+        p = share if gates is None else share * gates[side]
+        pick = np.flatnonzero(rows & (rng.random(len(q)) < p))
         if len(pick):
             q[pick] = keep_wrist_range(body, q[pick], q_ref[pick], side, T_cam_ref, clip)
     return q

@@ -26,6 +26,7 @@ from humimic.maths.blas import one_blas_thread
 from humimic.perception.cues.importance import skin_blobs
 from humimic.perception.trackers.kpf.cues import CueMaps
 from humimic.perception.trackers.kpf.depth import SIDES, kept_ranges, wrist_depth_move
+from humimic.perception.trackers.kpf.depth_gate import keep_range_gates
 from humimic.perception.trackers.kpf.flips import FLIPS, arm_flips
 from humimic.perception.trackers.kpf.frame_cues import FrameCues
 from humimic.perception.trackers.kpf.hands import hand_blob_moves, part_centres
@@ -320,14 +321,15 @@ class KpfTracker:
     def _keep_range(self, pred, resampled, velocity, moved, T_cam_base) -> np.ndarray:
         """``keep_range_share``: wrists of ``pred`` put back at their ancestor's (``resampled``,
         moved by ``velocity`` with ``keep_range_target: motion``) camera distance, on their ray
-        (:func:`~humimic.perception.trackers.kpf.depth.keep_wrist_range`)."""
+        (:func:`~humimic.perception.trackers.kpf.depth.keep_wrist_range`), gated."""
         c = self.cfg
         target = resampled if c.keep_range_target == "ancestor" else self.limits.clamp(
             resampled + velocity)
         rows = {"random": ~moved, "motion": moved, "both": np.ones(len(pred), bool)}[
             c.keep_range_groups]
+        gates = keep_range_gates(self.body, c, pred, T_cam_base)
         return kept_ranges(self.body, pred, target, rows, c.keep_range_share, T_cam_base,
-                           c.keep_range_clip, self.rng)
+                           c.keep_range_clip, self.rng, gates)
 
     def _depth_moves(self, pred: np.ndarray, T_cam_base: np.ndarray, share: float
                      ) -> np.ndarray:
