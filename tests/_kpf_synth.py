@@ -52,3 +52,29 @@ def painted_person(body: bm.BodyModel, q0: np.ndarray, T_cam_base: np.ndarray) -
     for p, name in enumerate(body.part_names):
         img[labels == p + 1] = PALETTE.get(name, (128, 128, 128))
     return img
+
+
+def propagated_wrist_ranges(monkeypatch, cfg) -> tuple[np.ndarray, float]:
+    """One kpf step from :func:`static_pose` on its painted image (every ancestor the same):
+    the camera distances (m) of the right wrists of the particles handed to mean shift (the
+    propagation's output, caught with a spy on ``kpf_modes``), and the start pose's."""
+    from humimic.perception.blobs.config import DEFAULT_COLOR_MODEL
+    from humimic.perception.cues.color_models import ColorLUT, load_color_model
+    from humimic.perception.trackers.kpf import tracker as tracker_mod
+    from humimic.perception.trackers.kpf.frame_cues import FrameCues
+
+    seen: list = []
+    kpf_modes = tracker_mod.kpf.kpf_modes
+
+    def spy(particles, *a, **k):
+        seen.append(particles.copy())
+        return kpf_modes(particles, *a, **k)
+    monkeypatch.setattr(tracker_mod.kpf, "kpf_modes", spy)
+    body, T, q0 = tracker_mod.kpf_body(), camera(), static_pose()
+    img = painted_person(body, q0, T)
+    lut = ColorLUT(load_color_model(DEFAULT_COLOR_MODEL), 6)
+    r0 = float(np.linalg.norm(body.forward(q0[None]).to(T).joint("r_wrist")[0]))
+    tr = tracker_mod.KpfTracker(body, INTRINSICS, cfg, np.random.default_rng(2))
+    tr.start(q0, FrameCues(img, lut), T)
+    tr.step(FrameCues(img, lut), T)
+    return np.linalg.norm(body.forward(seen[-1]).to(T).joint("r_wrist"), axis=1), r0

@@ -7,7 +7,14 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from _kpf_synth import INTRINSICS, camera, facing_arm_poses, painted_person, static_pose
+from _kpf_synth import (
+    INTRINSICS,
+    camera,
+    facing_arm_poses,
+    painted_person,
+    propagated_wrist_ranges,
+    static_pose,
+)
 from scipy.spatial.transform import Rotation
 
 from humimic.maths.rotations import rotation_between
@@ -144,32 +151,14 @@ def test_tracker_keep_range_puts_the_propagated_wrists_at_their_ancestors_distan
     their right wrist at the start pose's camera distance (plain norms in the camera frame)
     where the arm reaches it, while the plain walk spreads it by centimetres."""
 
-    from humimic.perception.blobs.config import DEFAULT_COLOR_MODEL
-    from humimic.perception.cues.color_models import ColorLUT, load_color_model
-    from humimic.perception.trackers.kpf import tracker as tracker_mod
     from humimic.perception.trackers.kpf.config import KpfConfig
-    from humimic.perception.trackers.kpf.frame_cues import FrameCues
 
-    seen: list = []
-    kpf_modes = tracker_mod.kpf.kpf_modes
-
-    def spy(particles, *a, **k):
-        seen.append(particles.copy())
-        return kpf_modes(particles, *a, **k)
-    monkeypatch.setattr(tracker_mod.kpf, "kpf_modes", spy)
-    body, T, q0 = kpf_body(), camera(), static_pose()
-    img = painted_person(body, q0, T)
-    lut = ColorLUT(load_color_model(DEFAULT_COLOR_MODEL), 6)
-    r0 = np.linalg.norm(body.forward(q0[None]).to(T).joint("r_wrist")[0])
     spread = {}
     for share in (0.0, 1.0):
         cfg = KpfConfig(n_particles=200, iterations=1, keep_range_share=share,
                         keep_range_groups="both", keep_range_target="ancestor",
                         keep_range_clip=True)
-        tr = tracker_mod.KpfTracker(body, INTRINSICS, cfg, np.random.default_rng(2))
-        tr.start(q0, FrameCues(img, lut), T)
-        tr.step(FrameCues(img, lut), T)
-        r = np.linalg.norm(body.forward(seen[-1]).to(T).joint("r_wrist"), axis=1)
+        r, r0 = propagated_wrist_ranges(monkeypatch, cfg)
         spread[share] = np.abs(r - r0)
     assert np.median(spread[0.0]) > 0.01                       # measured 0.023 m
     assert np.mean(spread[1.0] < 1e-6) > 0.6                   # measured 0.79 exact

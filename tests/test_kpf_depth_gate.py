@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from _kpf_synth import INTRINSICS, camera, facing_arm_poses, painted_person, static_pose
+from _kpf_synth import INTRINSICS, camera, facing_arm_poses, propagated_wrist_ranges
 from pydantic import ValidationError
 
 from humimic.perception.trackers.kpf.config import KpfConfig
@@ -76,30 +76,11 @@ def test_tracker_gate_open_keeps_no_range_and_shut_keeps_them_all(monkeypatch):
     raised to the side, well inside 85 deg and beyond 1e-3 deg of the image plane): a gate of
     [85, 90] keeps every reachable wrist at the start pose's camera distance, [0, 1e-3] none
     (the walk's spread, as without the option)."""
-    from humimic.perception.blobs.config import DEFAULT_COLOR_MODEL
-    from humimic.perception.cues.color_models import ColorLUT, load_color_model
-    from humimic.perception.trackers.kpf import tracker as tracker_mod
-    from humimic.perception.trackers.kpf.frame_cues import FrameCues
-
-    seen: list = []
-    kpf_modes = tracker_mod.kpf.kpf_modes
-
-    def spy(particles, *a, **k):
-        seen.append(particles.copy())
-        return kpf_modes(particles, *a, **k)
-    monkeypatch.setattr(tracker_mod.kpf, "kpf_modes", spy)
-    body, T, q0 = kpf_body(), camera(), static_pose()
-    img = painted_person(body, q0, T)
-    lut = ColorLUT(load_color_model(DEFAULT_COLOR_MODEL), 6)
-    r0 = np.linalg.norm(body.forward(q0[None]).to(T).joint("r_wrist")[0])
     exact = {}
     for gate in ((85.0, 90.0), (0.0, 1e-3)):
         cfg = KpfConfig(n_particles=200, iterations=1, keep_range_share=1.0,
                         keep_range_gate_deg=gate)
-        tr = tracker_mod.KpfTracker(body, INTRINSICS, cfg, np.random.default_rng(2))
-        tr.start(q0, FrameCues(img, lut), T)
-        tr.step(FrameCues(img, lut), T)
-        r = np.linalg.norm(body.forward(seen[-1]).to(T).joint("r_wrist"), axis=1)
+        r, r0 = propagated_wrist_ranges(monkeypatch, cfg)
         exact[gate[0]] = np.mean(np.abs(r - r0) < 1e-6)
     assert exact[85.0] > 0.6, exact                  # measured 0.79, as ungated
     assert exact[0.0] < 0.05, exact                  # measured 0
