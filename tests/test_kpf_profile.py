@@ -198,3 +198,15 @@ def test_profile_arguments_that_cannot_run_exit_2(capsys, args):
     assert main(["schmidt-depth-profile", *args]) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and args[0] in err, err
+
+
+def test_schmidt_command_not_first_exits_2_in_one_line(capsys):
+    """``reproduce --seed 1 schmidt-table1``: the usage lists the Schmidt commands, which take
+    their own arguments; given after an option they exit 2 with a usage error (was a KeyError
+    traceback)."""
+    from humimic.perception.reproduce import main
+
+    with pytest.raises(SystemExit) as exc:
+        main(["--seed", "1", "schmidt-table1"])
+    assert exc.value.code == 2
+    assert "schmidt-table1 must come first" in capsys.readouterr().err

@@ -191,6 +191,9 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--archive", type=Path, default=None,
                    help="read this tracking.npz instead of running the scenario")
     args = p.parse_args(argv)
+    if args.which not in SCENARIOS:  # listed for the usage; they take their own arguments
+        p.error(f"{args.which} must come first: python -m humimic.perception.reproduce "
+                f"{args.which} [its options]")
     try:
         if args.archive is not None:
             if not args.archive.is_file():
