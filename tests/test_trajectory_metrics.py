@@ -217,3 +217,34 @@ def test_slam_relative_error_spans_one_second_at_any_camera_rate(rate):
     e = p_est - p_ref  # identity rotations: the relative error is the drift over 1 s
     steps = np.linalg.norm(e[d::d] - e[:-d:d][: len(e[d::d])], axis=1)
     assert out["rpe_rmse_m"] == pytest.approx(np.sqrt(np.mean(steps ** 2)), rel=1e-9)
+
+
+@pytest.mark.parametrize("sway_m", [1e-12, 1e-6, 1e-3])
+def test_no_scale_for_a_nearly_still_wearer(sway_m):
+    """A head swaying by less than the estimate's error (5 mm of jitter): evo's rank test
+    passes, but the least-squares scale is fitted to the noise (1 um: scale 7e-6, a Sim(3) ATE
+    of 0.7 um); the scores are None, while a walk keeps its Sim(3) scores (the test above)."""
+    from humimic.estimation.ekf.slam_record import trajectory_scores
+
+    rng = np.random.default_rng(8)
+    t = np.arange(60) / 30.0
+    p_ref = sway_m * np.column_stack([np.sin(t), np.cos(t), np.sin(2 * t)])
+    p_est = p_ref + rng.normal(0.0, 0.005, p_ref.shape)
+    _, _, s = umeyama(p_est, p_ref, with_scale=True)
+    assert s < 0.1                                  # the fit evo would report
+    out = trajectory_scores(t, p_est, np.tile([1.0, 0, 0, 0], (len(t), 1)), p_ref,
+                            np.tile(np.eye(3), (len(t), 1, 1)))
+    assert out["ate_sim3_rmse_m"] is None and out["sim3_scale"] is None
+    assert out["ate_se3_rmse_m"] == pytest.approx(0.0087, rel=0.3)  # the jitter, ~5 mm x sqrt 3
+
+
+def test_a_diverged_estimate_gets_no_alignment_and_no_traceback():
+    from humimic.estimation.ekf.slam_record import trajectory_scores
+
+    t = np.arange(90) / 30.0
+    p_ref = np.column_stack([0.5 * t, 0.0 * t, 0.0 * t])
+    p_est = p_ref.copy()
+    p_est[40:] = np.nan
+    out = trajectory_scores(t, p_est, np.tile([1.0, 0, 0, 0], (len(t), 1)), p_ref,
+                            np.tile(np.eye(3), (len(t), 1, 1)))
+    assert out["ate_se3_rmse_m"] is None and out["ate_sim3_rmse_m"] is None

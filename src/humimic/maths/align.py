@@ -42,7 +42,7 @@ def umeyama(src: np.ndarray, dst: np.ndarray, with_scale: bool = False
     cov = yc.T @ xc / len(x)  # eq. 38
     U, d, Vt = np.linalg.svd(cov)
     if with_scale and not np.any(d > np.finfo(float).eps):  # evo's rank test, at rank 0
-        raise DegenerateAlignment("the reference trajectory does not move (e.g. standing "
+        raise DegenerateAlignment("one of the trajectories does not move (e.g. standing "
                                   "still): a similarity alignment is undetermined")
     S = np.eye(3)
     if np.linalg.det(U) * np.linalg.det(Vt) < 0:  # eq. 39: a reflection, not a rotation

@@ -9,9 +9,16 @@ from __future__ import annotations
 
 from threadpoolctl import ThreadpoolController
 
-_CONTROLLER = ThreadpoolController()
+_CONTROLLER: ThreadpoolController | None = None
 
 
 def one_blas_thread():
-    """Context manager: BLAS limited to one thread inside, restored after."""
+    """Context manager: BLAS limited to one thread inside, restored after. The BLAS libraries
+    are looked up at the first call (not at import, when numpy's or scipy's might not be
+    loaded yet: the limit would silently cover nothing) and again while none is found. The
+    limit is process-wide (OpenBLAS has one setting): two threads entering and leaving it at
+    once could leave it at one thread (never the other way round)."""
+    global _CONTROLLER
+    if _CONTROLLER is None or not _CONTROLLER.select(user_api="blas").lib_controllers:
+        _CONTROLLER = ThreadpoolController()
     return _CONTROLLER.limit(limits=1, user_api="blas")
