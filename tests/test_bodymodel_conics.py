@@ -155,3 +155,22 @@ def test_dual_ellipse_matches_the_point_conic_and_the_inverted_dual_quadric():
         np.testing.assert_allclose([cx[i], cy[i]], c, atol=1e-12)
         np.testing.assert_allclose([[m00[i], m01[i]], [m01[i], m11[i]]],
                                    kappa * np.linalg.inv(C[:2, :2]), rtol=1e-9)
+
+
+def test_rotated_ellipse_points_lie_on_their_ellipses_at_their_parameter_angles():
+    """Each point, taken back into its ellipse's frame (closed form: rotate by -t), is
+    ``(a cos psi, b sin psi)``; centres, axes and angles broadcast."""
+    from humimic.bodymodel.conics import rotated_ellipse_points
+
+    rng = np.random.default_rng(5)
+    centre, ab = rng.uniform(0, 300, (4, 3, 2)), rng.uniform(1, 40, (4, 3, 2))
+    t = rng.uniform(-np.pi, np.pi, (4, 3))
+    psi = rng.uniform(0, 2 * np.pi, 9)
+    p = rotated_ellipse_points(centre, ab, np.cos(t), np.sin(t),
+                               np.stack([np.cos(psi), np.sin(psi)], -1))
+    assert p.shape == (4, 3, 9, 2)
+    d = p - centre[..., None, :]
+    u = np.cos(t)[..., None] * d[..., 0] + np.sin(t)[..., None] * d[..., 1]
+    v = -np.sin(t)[..., None] * d[..., 0] + np.cos(t)[..., None] * d[..., 1]
+    np.testing.assert_allclose(u, ab[..., :1] * np.cos(psi), atol=1e-9)
+    np.testing.assert_allclose(v, ab[..., 1:] * np.sin(psi), atol=1e-9)

@@ -44,10 +44,10 @@ def test_a_mapping_on_a_still_hand_is_named_in_the_warning(root, tmp_path, wave)
     measured 167 mm over 2.5 s; the still hand's 0.0 -- the avatar is scripted)."""
     from humimic.metrics.summary import verdict_warning
 
-    assert 80.0 <= wave["mimicry"]["R_palm"]["human_motion_rms_mm"] <= 340.0
+    assert 80.0 <= wave["mimicry"]["R_palm"]["mapped_motion_rms_mm"] <= 340.0
     assert "mimicry.R_palm" not in (verdict_warning(wave) or "")
     m = _run(root, tmp_path, "mimic_wave", "human.motion.hand=left", duration=2.0)
-    assert m["mimicry"]["R_palm"]["human_motion_rms_mm"] < 1.0
+    assert m["mimicry"]["R_palm"]["mapped_motion_rms_mm"] < 1.0
     assert "mimicry.R_palm: its human part right_hand hardly moved" in verdict_warning(m)
 
 

@@ -86,6 +86,18 @@ def ellipse_points(centre: np.ndarray, M: np.ndarray, n: int) -> np.ndarray:
     return np.stack([x, y], axis=-1)
 
 
+def rotated_ellipse_points(centre: np.ndarray, semi_axes: np.ndarray, cos_t: np.ndarray,
+                           sin_t: np.ndarray, unit: np.ndarray) -> np.ndarray:
+    """``(..., M, 2)`` points ``centre + R(t) (a cos psi, b sin psi)`` of ellipses with centres
+    ``(..., 2)``, semi-axes ``(..., 2)`` (a along the axis turned by ``t`` from +u towards +v)
+    and ``cos t``, ``sin t`` ``(...)``, at the parameter angles' ``unit (M, 2)`` =
+    ``(cos psi, sin psi)``; all but ``unit`` broadcast together."""
+    x = semi_axes[..., :1] * unit[:, 0]
+    y = semi_axes[..., 1:] * unit[:, 1]
+    c, s = cos_t[..., None], sin_t[..., None]
+    return np.stack([centre[..., :1] + c * x - s * y, centre[..., 1:] + s * x + c * y], -1)
+
+
 def contour_inverse_depth(b: np.ndarray, c: np.ndarray, x: np.ndarray) -> np.ndarray:
     """``s0 = -b^T x / c`` (Menezes, after eq. 15) for image points ``x (..., k, 2)`` on the
     conic of the quadric ``(b (..., 3), c (...))``: the inverse depth of the tangent point."""

@@ -3,7 +3,8 @@
 ``mimicry.<robot_site>``: ``rmse_mm`` between the site's displacement and the human part's true
 displacement after the mapping, ``lag_ms`` (cross-correlation peak: a lag, not a delay),
 ``jerk`` (RMS third derivative, m/s^3; ``jerk_human`` for the mapped truth),
-``human_motion_rms_mm`` (the mapped truth's RMS distance from its mean: what there was to copy;
+``mapped_motion_rms_mm`` (the mapped truth's RMS distance from its mean, after the mapping's
+scale: what there was to copy;
 a run's warning line names a site under :data:`STILL_TARGET_MM`), ``joint_limit_hits``
 (servo ticks at which an arm or torso joint target sits on the IK's limit band;
 ``joint_limit_hits_by_joint`` counts them per joint), ``clamped_fraction``;
@@ -249,7 +250,7 @@ def site_metrics(stage, i: int, ch) -> tuple[dict, dict]:
         "max_error_mm": _mm(top),
         "jerk": _num(rms_jerk(s["robot"], dt)),
         "jerk_human": _num(rms_jerk(s["true_now"], dt)),
-        "human_motion_rms_mm": _mm(rmse(s["true_now"] - np.nanmean(s["true_now"], axis=0))),
+        "mapped_motion_rms_mm": _mm(rmse(s["true_now"] - np.nanmean(s["true_now"], axis=0))),
         "joint_limit_hits": hits,
         "joint_limit_hits_by_joint": hits_by_joint,
         "clamped_fraction": float(rec.clamped[k0:rec.n, i].mean()),

@@ -56,7 +56,7 @@ def verdict_warning(metrics: dict) -> str | None:
     never, with its likely cause (``tracking.<target>.verdict``), and the perception stage's
     ``colour_warning`` and each tracker's (``trackers.<name>.colour_warning``) when they have
     one (a scene with look-alikes of the skin's colours), and each mimicry site whose human
-    part hardly moved (``mimicry.<site>.human_motion_rms_mm``); None when there is none."""
+    part hardly moved (``mimicry.<site>.mapped_motion_rms_mm``); None when there is none."""
     poor = []
     for target, s in metrics.get("tracking", {}).items():
         if isinstance(s, dict) and s.get("verdict") == "poor":
@@ -71,9 +71,9 @@ def verdict_warning(metrics: dict) -> str | None:
         if isinstance(s, dict) and s.get("colour_warning"):
             poor.append(f"{name}'s skin model: {s['colour_warning']}")
     for site, s in metrics.get("mimicry", {}).items():  # a mapping with nothing to copy
-        moved = s.get("human_motion_rms_mm") if isinstance(s, dict) else None
+        moved = s.get("mapped_motion_rms_mm") if isinstance(s, dict) else None
         if moved is not None and moved < STILL_TARGET_MM:
             poor.append(f"mimicry.{site}: its human part {s.get('target')} hardly moved "
-                        f"({moved:.1f} mm RMS): nothing to copy (is mimic.map on the moving "
-                        f"part?)")
+                        f"({moved:.1f} mm RMS, mapped): nothing to copy (is mimic.map on the "
+                        f"moving part?)")
     return f"warning: {'; '.join(poor)}" if poor else None

@@ -220,6 +220,6 @@ def from_validation_error(err: ValidationError, root: type[BaseModel], file: str
         return ScenarioError(source, key, "out of range", value, _BOUNDS[kind].format(**ctx),
                              None, line)
     message = e["msg"].removeprefix("Value error, ")
-    if isinstance(value, dict):   # a section's own check: its message names the values
-        value = None
+    if kind == "value_error" and isinstance(value, dict):  # a section's own check (a model
+        value = None                                         # validator) names its values
     return ScenarioError(source, key, message, value, None, None, line)

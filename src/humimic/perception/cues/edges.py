@@ -197,26 +197,13 @@ def normal_offsets(search_px: int) -> np.ndarray:
     return np.concatenate([[0], np.stack([-k, k], axis=1).ravel()]).astype(np.float64)
 
 
-def probe_along_normal(image: np.ndarray, points: np.ndarray, normals: np.ndarray,
-                       search_px: int) -> tuple[np.ndarray, np.ndarray]:
-    """Values of a uint8 ``image`` at the probes ``x(j) + o n(j)`` for the offsets ``o`` of
-    :func:`normal_offsets` (nearest first), for points ``(..., 2)``: ``(|o| (K,), values
-    (K, M))`` with ``M`` the number of points (probes off the image read 0)."""
-    off = normal_offsets(search_px).astype(np.float32)[:, None]
-    p = np.asarray(points, np.float32).reshape(-1, 2)
-    n = np.asarray(normals, np.float32).reshape(-1, 2)
-    # probes (K, M): the offsets outermost, so numpy loops over long contiguous rows
-    u = p[:, 0] + off * n[:, 0]
-    v = p[:, 1] + off * n[:, 1]
-    return np.abs(off[:, 0]).astype(np.float64), remap_uv(image, u, v, 0, cv2.INTER_NEAREST)
-
-
 def least_cost_along_normal(image: np.ndarray, points: np.ndarray, normals: np.ndarray,
                             search_px: int, cost_of_value: np.ndarray) -> np.ndarray:
     """Per point ``(..., 2)``, the least ``|o| + cost_of_value[image(x(j) + o n(j))]`` over
-    the probes of :func:`probe_along_normal` (a uint8 ``image``, ``cost_of_value`` (256,);
-    probes off the image read 0) -> ``points.shape[:-1]``: the probes and their values as
-    :func:`probe_along_normal` gives them, in one compiled pass with no (K, M) temporaries."""
+    the offsets ``o`` of :func:`normal_offsets` (a uint8 ``image``, ``cost_of_value`` (256,))
+    -> ``points.shape[:-1]``; the probes in float32 read as ``cv2.remap`` with
+    ``INTER_NEAREST`` reads them (half to even, off the image 0), in one compiled pass with no
+    (offsets x points) temporaries."""
     p = np.asarray(points, np.float32).reshape(-1, 2)
     n = np.asarray(normals, np.float32).reshape(-1, 2)
     off = normal_offsets(search_px).astype(np.float32)
@@ -232,7 +219,7 @@ def _least_cost(image, p, n, off, cost_of_value):
     for j in range(len(p)):
         best = np.inf
         for k in range(len(off)):
-            u = p[j, 0] + off[k] * n[j, 0]      # float32 as probe_along_normal's
+            u = p[j, 0] + off[k] * n[j, 0]      # float32, as the probes given to cv2.remap
             v = p[j, 1] + off[k] * n[j, 1]
             value = 0
             if u == u and v == v:               # cv2.remap's INTER_NEAREST: round half to

@@ -290,9 +290,9 @@ def ellipse_family(centre: np.ndarray, semi_axes: np.ndarray, angles: np.ndarray
     cos, sin = _circle(n_points)
     ab = np.repeat(np.asarray(semi_axes, float), len(angles), axis=0)          # (P*A, 2)
     th = np.tile(np.asarray(angles, float), len(semi_axes))
+    contour = conics.rotated_ellipse_points(np.asarray(centre, float), ab, np.cos(th),
+                                            np.sin(th), np.stack([cos, sin], -1))
     ct, st = np.cos(th)[:, None], np.sin(th)[:, None]
-    x, y = ab[:, :1] * cos, ab[:, 1:] * sin
-    contour = np.stack([centre[0] + ct * x - st * y, centre[1] + st * x + ct * y], -1)
     nx, ny = cos / ab[:, :1], sin / ab[:, 1:]
     normal = np.stack([ct * nx - st * ny, st * nx + ct * ny], -1)
     normal /= np.linalg.norm(normal, axis=-1, keepdims=True)

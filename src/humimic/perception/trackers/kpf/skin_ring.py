@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from humimic.bodymodel.conics import rotated_ellipse_points
 from humimic.perception.trackers.kpf.cues import CueMaps, sample
 
 #: Points on the surround ring: two arcs of +-45 deg about the minor axis (the hand's sides,
@@ -33,10 +34,7 @@ def ring_points(centre: np.ndarray, axes: np.ndarray, angle: np.ndarray, scale: 
     """``(N, E, RING_POINTS, 2)`` points (pixels) of the ellipses with centres ``(N, E, 2)``,
     semi-axes ``(N, E, 2)`` (major, minor) times ``scale`` and major-axis angles ``(N, E)``
     (rad): ``centre + R(angle) (scale a cos t, scale b sin t)``."""
-    c, s = np.cos(angle)[..., None], np.sin(angle)[..., None]
-    x = _UNIT[:, 0] * (scale * axes[..., :1])
-    y = _UNIT[:, 1] * (scale * axes[..., 1:])
-    return np.stack([centre[..., :1] + c * x - s * y, centre[..., 1:] + s * x + c * y], -1)
+    return rotated_ellipse_points(centre, scale * axes, np.cos(angle), np.sin(angle), _UNIT)
 
 
 def ring_skin(maps: CueMaps, centre: np.ndarray, axes: np.ndarray, angle: np.ndarray,
