@@ -19,6 +19,6 @@ def one_blas_thread():
     limit is process-wide (OpenBLAS has one setting): two threads entering and leaving it at
     once could leave it at one thread (never the other way round)."""
     global _CONTROLLER
-    if _CONTROLLER is None or not _CONTROLLER.select(user_api="blas").lib_controllers:
-        _CONTROLLER = ThreadpoolController()
-    return _CONTROLLER.limit(limits=1, user_api="blas")
+    if _CONTROLLER is None or not _CONTROLLER.lib_controllers:   # the census, BLAS only
+        _CONTROLLER = ThreadpoolController().select(user_api="blas")
+    return _CONTROLLER.limit(limits=1)
