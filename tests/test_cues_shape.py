@@ -228,16 +228,23 @@ def test_least_cost_along_normal_reads_the_probes_as_cv2_remap():
     nrm = np.stack([np.cos(ang), np.sin(ang)], -1)
     nrm[1] = np.round(nrm[1] * 2) / 2                   # probes on ties too
     search = 6
-    cost_of_value = np.full(256, np.inf)
-    cost_of_value[1], cost_of_value[2] = 0.7, 0.0
     off = normal_offsets(search).astype(np.float32)[:, None, None]
     p, n = pts.astype(np.float32), nrm.astype(np.float32)
     u, v = p[..., 0] + off * n[..., 0], p[..., 1] + off * n[..., 1]   # (K, 9, 30)
     read = cv2.remap(code, u.reshape(len(off), -1), v.reshape(len(off), -1),
                      cv2.INTER_NEAREST, borderMode=cv2.BORDER_CONSTANT, borderValue=0)
-    expect = (np.abs(off[:, 0, 0]).astype(np.float64)[:, None] + cost_of_value[read]).min(0)
-    got = least_cost_along_normal(code, pts, nrm, search, cost_of_value)
-    np.testing.assert_array_equal(got, expect.reshape(9, 30))
+    # eq. 4's table (least cost 0: the walk stops at the first moving edge); one whose least
+    # cost is positive (it stops later, at |o| + 0.4); one with a NaN (never stops early)
+    tables = [np.full(256, np.inf), np.full(256, 2.5), np.full(256, np.inf)]
+    tables[0][1], tables[0][2] = 0.7, 0.0
+    tables[1][1], tables[1][2] = 0.4, 1.9
+    tables[2][1], tables[2][2], tables[2][3] = 0.7, 0.0, np.nan
+    for cost_of_value in tables:
+        expect = np.fmin.reduce(np.abs(off[:, 0, 0]).astype(np.float64)[:, None]
+                                + cost_of_value[read], axis=0)
+        got = least_cost_along_normal(code, pts, nrm, search, cost_of_value)
+        np.testing.assert_array_equal(got, expect.reshape(9, 30))
+    got = least_cost_along_normal(code, pts, nrm, search, tables[0])
     assert np.isinf(got[0, 0]) and np.isfinite(got).mean() > 0.3   # measured 0.39
 
 
