@@ -156,3 +156,18 @@ def test_lut_posterior_table_equals_per_pixel_formula():
     img = rng.integers(0, 256, (7, 9, 3)).astype(np.uint8)
     q = img.astype(np.intp) >> 2
     assert np.array_equal(lut.index(img), q[..., 0] * 4096 + q[..., 1] * 64 + q[..., 2])
+
+
+def test_lut_posterior_of_an_image_is_the_table_at_each_pixels_index():
+    """The compiled image path: the posterior table at ``r' 4096 + g' 64 + b'`` per pixel
+    (6 bits), for whole images and region views of one (any strides), as float32."""
+    rng = np.random.default_rng(5)
+    pix = rng.integers(0, 256, (300, 3)).astype(np.uint8)
+    lut = ColorLUT(fit_color_model(pix.astype(float), "rgb", 2, np.random.default_rng(0)), 6)
+    img = rng.integers(0, 256, (40, 50, 3)).astype(np.uint8)
+    for view in (img, img[3:31, 7:40], img[::2, ::3], img[:1, :1], img[5:5]):
+        q = view.astype(np.intp) >> 2
+        expect = lut.post_table[q[..., 0] * 4096 + q[..., 1] * 64 + q[..., 2]]
+        got = lut.posterior(view)
+        assert got.dtype == np.float32 and got.shape == view.shape[:2]
+        np.testing.assert_array_equal(got, expect)

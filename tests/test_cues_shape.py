@@ -27,6 +27,7 @@ from humimic.perception.cues.motion import (
     motion_dt_distance,
     motion_edge_maps,
     motion_normal_distance,
+    moving_edges,
 )
 from humimic.perception.cues.templates import hand, head_and_shoulders, resample_contour
 
@@ -299,3 +300,22 @@ def test_rim_skin_distance_against_direct_pixel_sums_and_closed_forms():
         assert abs(d - (1.0 - (inside.mean() - outside.mean()))) < 1e-5
     pts, inward = hand(30).place(np.array([[80.0, 60.0, 40.0, 0.0]]))
     assert np.all(np.sum((pts[0] - [80, 60]) * inward[0], axis=1) < 0)   # normals point in
+
+
+def test_moving_edges_is_the_edges_where_the_flow_is_long_enough():
+    """Against the squared length compared in the flow's dtype (as numpy compares a float32
+    array with a Python float), lengths just either side of the threshold included."""
+    rng = np.random.default_rng(11)
+    edges = np.where(rng.random((23, 31)) < 0.4, 255, 0).astype(np.uint8)
+    for dtype in (np.float32, np.float64):
+        for min_flow in (0.5, 0.7 ** 0.5, 1.3):
+            flow = rng.normal(0, min_flow, (23, 31, 2)).astype(dtype)
+            t = dtype(min_flow**2)
+            flow[::3, :, 0], flow[::3, :, 1] = np.sqrt(t), 0      # on the threshold
+            flow[1::5, :, 0] = np.nextafter(np.sqrt(t), dtype(0))
+            flow[1::5, :, 1] = 0
+            flow[2, 2] = np.nan
+            long_enough = (flow[..., 0] * flow[..., 0] + flow[..., 1] * flow[..., 1]) >= t
+            got = moving_edges(edges, flow, min_flow)
+            np.testing.assert_array_equal(got, np.where((edges > 0) & long_enough, 255, 0))
+            assert got.dtype == np.uint8 and 0.05 < (got > 0).mean() < 0.35

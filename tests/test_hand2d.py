@@ -94,6 +94,17 @@ def test_roi_and_skin_fraction(lut):
     pts = np.array([[[10.0, 20.0], [50.0, 200.0]]])
     assert roi_of(pts, 5, W, H) == (5, 15, 56, 206)
     assert roi_of(pts - 100, 5, W, H)[:2] == (0, 0)
+    # against numpy's nanmin / nanmax over random clouds with NaN points, fractional margins
+    rng = np.random.default_rng(3)
+    for margin in (0.0, 4.5, 17.25):
+        cloud = rng.uniform(-40, 360, (100, 30, 2))
+        cloud[rng.random(cloud.shape) < 0.05] = np.nan
+        lo = np.floor(np.nanmin(cloud.reshape(-1, 2), axis=0) - margin).astype(int)
+        hi = np.ceil(np.nanmax(cloud.reshape(-1, 2), axis=0) + margin).astype(int) + 1
+        expect = (max(0, min(lo[0], W - 2)), max(0, min(lo[1], H - 2)))
+        expect += (min(W, max(hi[0], expect[0] + 2)), min(H, max(hi[1], expect[1] + 2)))
+        assert roi_of(cloud, margin, W, H) == expect
+    assert roi_of(np.full((2, 3, 2), np.nan), 5, W, H) == (0, 0, 2, 2)  # no point: a 2x2 box
     img = np.zeros((H, W, 3), np.uint8)
     img[:, :160] = SKIN  # left half skin
     left = skin_fraction(img, lut, np.array([100.0, 120.0, 30.0, 0.0]))

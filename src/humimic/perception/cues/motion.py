@@ -19,6 +19,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from humimic.maths.jit import njit
 from humimic.perception.cues.edges import (
     DT_CAP_PX,
     EdgeMaps,
@@ -52,9 +53,24 @@ class MotionEdgeMaps:
 
 
 def moving_edges(edges: np.ndarray, flow: np.ndarray, min_flow_px: float = 0.5) -> np.ndarray:
-    """The edge pixels whose flow vector is at least ``min_flow_px`` long ("nonzero norm")."""
-    speed2 = flow[..., 0] ** 2 + flow[..., 1] ** 2
-    return np.where((edges > 0) & (speed2 >= min_flow_px**2), 255, 0).astype(np.uint8)
+    """The edge pixels whose flow vector is at least ``min_flow_px`` long ("nonzero norm"):
+    uint8 0/255, the squared length in the flow's dtype against ``min_flow_px**2`` in it (as
+    numpy compares a float32 array with a Python float), in one compiled pass."""
+    flow = np.asarray(flow)
+    if flow.dtype not in (np.float32, np.float64):
+        flow = flow.astype(np.float64)
+    return _moving_edges(np.asarray(edges), flow, flow.dtype.type(min_flow_px**2))
+
+
+@njit
+def _moving_edges(edges, flow, min_speed2):
+    h, w = edges.shape
+    out = np.empty((h, w), np.uint8)
+    for y in range(h):
+        for x in range(w):
+            fx, fy = flow[y, x, 0], flow[y, x, 1]
+            out[y, x] = 255 if edges[y, x] > 0 and fx * fx + fy * fy >= min_speed2 else 0
+    return out
 
 
 def motion_edge_maps(maps: EdgeMaps, flow: np.ndarray | None, min_flow_px: float = 0.5,
