@@ -17,7 +17,11 @@ import numpy as np
 from humimic.estimation.particles import filters
 from humimic.estimation.particles.densities import Density, Dynamics
 from humimic.estimation.particles.resampling import METHODS, Method
-from humimic.estimation.particles.weights import effective_sample_size, weighted_cov
+from humimic.estimation.particles.weights import (
+    effective_sample_size,
+    weighted_cov,
+    weighted_mean,
+)
 
 Kind = Literal["sir", "condensation", "icondensation", "apf"]
 KINDS: tuple[str, ...] = ("sir", "condensation", "icondensation", "apf")
@@ -82,7 +86,7 @@ class ParticleFilter:
         """The MMSE estimate of the last step (or of the initial set)."""
         if self.last is not None:
             return self.last.mean
-        return filters.weighted_mean(self.particles, self.log_weights)
+        return weighted_mean(self.particles, self.log_weights)
 
     @property
     def cov(self) -> np.ndarray:

@@ -66,13 +66,18 @@ from typing import NamedTuple
 import numpy as np
 
 from humimic.estimation.particles.densities import Density, Dynamics, pairwise_log_density
-from humimic.estimation.particles.resampling import Method, resample_indices
+from humimic.estimation.particles.resampling import (
+    Method,
+    indices_from_weights,
+    resample_indices,
+)
 from humimic.estimation.particles.weights import (
-    effective_sample_size,
+    ess_of_weights,
     logsumexp,
+    mean_of_weights,
     normalize,
     uniform_log_weights,
-    weighted_mean,
+    weights,
 )
 
 LogLikelihood = Callable[[np.ndarray], np.ndarray]
@@ -130,10 +135,12 @@ def resample(particles: np.ndarray, log_weights: np.ndarray, rng: np.random.Gene
 
 def _finish(x: np.ndarray, lw: np.ndarray, evidence: float, ok: bool,
             rng: np.random.Generator, resample_below: float, method: Method) -> Step:
-    mean = weighted_mean(x, lw)
-    ess = effective_sample_size(lw)
-    if ok and ess < resample_below * len(x):
-        x, lw = resample(x, lw, rng, method)
+    w = weights(lw)                     # once for the mean, the ESS and the resampling
+    mean = mean_of_weights(x, w)
+    ess = ess_of_weights(w)
+    if ok and ess < resample_below * len(x):   # resample(x, lw, ...) with these weights
+        idx = indices_from_weights(w, rng, method)
+        x, lw = np.asarray(x)[idx], uniform_log_weights(len(idx))
         return Step(x, lw, mean, evidence, ess, ok, True)
     return Step(x, lw, mean, evidence, ess, ok, False)
 

@@ -78,7 +78,13 @@ def resample_indices(log_weights: np.ndarray, rng: np.random.Generator,
                      method: Method = "systematic", n: int | None = None) -> np.ndarray:
     """``n`` (default N) ancestor indices drawn with probabilities given by (unnormalised)
     ``log_weights``."""
-    w = weights(log_weights)
+    return indices_from_weights(weights(log_weights), rng, method, n)
+
+
+def indices_from_weights(w: np.ndarray, rng: np.random.Generator,
+                         method: Method = "systematic", n: int | None = None) -> np.ndarray:
+    """:func:`resample_indices` of linear weights already from
+    :func:`~humimic.estimation.particles.weights.weights` (drawing the same uniforms)."""
     n = len(w) if n is None else n
     if n == 0:
         return np.zeros(0, dtype=np.int64)

@@ -55,13 +55,22 @@ def weights(log_weights: np.ndarray) -> np.ndarray:
 
 def effective_sample_size(log_weights: np.ndarray) -> float:
     """Kish's effective sample size ``1 / sum(w_i^2)`` of the normalised weights (1..N)."""
-    w = weights(log_weights)
+    return ess_of_weights(weights(log_weights))
+
+
+def ess_of_weights(w: np.ndarray) -> float:
+    """:func:`effective_sample_size` of linear weights already from :func:`weights`."""
     return float(1.0 / np.dot(w, w))
 
 
 def weighted_mean(particles: np.ndarray, log_weights: np.ndarray) -> np.ndarray:
     """The weighted mean of particles ``(N, d)`` (the MMSE estimate, Table 1 step 7)."""
-    return weights(log_weights) @ np.asarray(particles, dtype=np.float64)
+    return mean_of_weights(particles, weights(log_weights))
+
+
+def mean_of_weights(particles: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """:func:`weighted_mean` with linear weights already from :func:`weights`."""
+    return w @ np.asarray(particles, dtype=np.float64)
 
 
 def weighted_cov(particles: np.ndarray, log_weights: np.ndarray) -> np.ndarray:
