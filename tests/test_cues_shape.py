@@ -319,3 +319,20 @@ def test_moving_edges_is_the_edges_where_the_flow_is_long_enough():
             got = moving_edges(edges, flow, min_flow)
             np.testing.assert_array_equal(got, np.where((edges > 0) & long_enough, 255, 0))
             assert got.dtype == np.uint8 and 0.05 < (got > 0).mean() < 0.35
+
+
+def test_rim_probes_are_numpys_float32_probes():
+    """The compiled probes either side of a contour, against numpy's ``contour -+ offset *
+    outward`` cast to float32 (the maps ``cv2.remap`` was given before)."""
+    from humimic.perception.cues.skin import rim_probes
+
+    rng = np.random.default_rng(12)
+    contour = rng.uniform(-20, 180, (17, 30, 2))
+    ang = rng.uniform(0, 2 * np.pi, (17, 30))
+    outward = np.stack([np.cos(ang), np.sin(ang)], -1)
+    for offset in (2.0, 0.3, 3.7):
+        step = offset * outward
+        expect = np.stack([contour - step, contour + step]).astype(np.float32)
+        u, v = rim_probes(contour.reshape(-1, 2), outward.reshape(-1, 2), offset)
+        np.testing.assert_array_equal(u, expect[..., 0].ravel())
+        np.testing.assert_array_equal(v, expect[..., 1].ravel())

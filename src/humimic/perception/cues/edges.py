@@ -188,10 +188,16 @@ def sample(image: np.ndarray, points: np.ndarray, outside: float,
            nearest: bool = False) -> np.ndarray:
     """Values of a single-channel image at points ``(..., 2)`` (u, v) in one gather (bilinear
     unless ``nearest``); points off the image get ``outside``."""
-    src = image if image.dtype in (np.uint8, np.float32) else image.astype(np.float32)
     pts = np.asarray(points)
-    out = remap_uv(src, pts[..., 0], pts[..., 1], float(outside),
-                   cv2.INTER_NEAREST if nearest else cv2.INTER_LINEAR)
+    return sample_uv(image, pts[..., 0], pts[..., 1], outside, nearest)
+
+
+def sample_uv(image: np.ndarray, u: np.ndarray, v: np.ndarray, outside: float,
+              nearest: bool = False) -> np.ndarray:
+    """:func:`sample` at points given by their coordinates ``u``, ``v`` (same shape; float32
+    arrays are used as they are) -> that shape, float64."""
+    src = image if image.dtype in (np.uint8, np.float32) else image.astype(np.float32)
+    out = remap_uv(src, u, v, float(outside), cv2.INTER_NEAREST if nearest else cv2.INTER_LINEAR)
     return out.astype(np.float64)
 
 
