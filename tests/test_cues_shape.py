@@ -24,6 +24,7 @@ from humimic.perception.cues.edges import (
 )
 from humimic.perception.cues.motion import (
     OpticalFlow,
+    edge_code,
     motion_dt_distance,
     motion_edge_maps,
     motion_normal_distance,
@@ -336,3 +337,14 @@ def test_rim_probes_are_numpys_float32_probes():
         u, v = rim_probes(contour.reshape(-1, 2), outward.reshape(-1, 2), offset)
         np.testing.assert_array_equal(u, expect[..., 0].ravel())
         np.testing.assert_array_equal(v, expect[..., 1].ravel())
+
+
+def test_edge_code_counts_edge_and_moving_edge():
+    rng = np.random.default_rng(13)
+    edges = rng.integers(0, 3, (19, 27)).astype(np.uint8) * 120        # 0, 120, 240
+    moving = np.where(rng.random((19, 27)) < 0.5, edges, 0).astype(np.uint8)
+    expect = (edges > 0).astype(np.uint8) + (moving > 0).astype(np.uint8)
+    got = edge_code(edges, moving)
+    assert got.dtype == np.uint8
+    np.testing.assert_array_equal(got, expect)
+    assert set(np.unique(got)) == {0, 1, 2}
