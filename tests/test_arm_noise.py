@@ -51,7 +51,7 @@ def test_noise_source_and_overrides():
     assert (paper.centroid_px, paper.area_rel, paper.gyro) == (10 / 3, 0.3, 0.01)
     assert paper.pitch_roll == pytest.approx(math.radians(0.5))
     ours = ArmConfig().arm_noise(s)
-    assert (ours.centroid_px, ours.area_rel) == (0.5, 0.05)
+    assert (ours.centroid_px, ours.area_rel) == (0.35, 0.035)
     assert ours.gyro == pytest.approx(gyro_std(s.wiimote, s.imu))
     oracle = ArmConfig(head_pose="oracle").arm_noise(s)
     assert oracle.gyro == pytest.approx(gyro_std(s.wiimote))
@@ -59,7 +59,7 @@ def test_noise_source_and_overrides():
     set_ = ArmConfig.model_validate({"noise": {"area_rel": 0.1, "pitch_roll_deg": 1.0}})
     n = set_.arm_noise(s)
     assert n.area_rel == 0.1 and n.pitch_roll == pytest.approx(math.radians(1.0))
-    assert n.centroid_px == 0.5
+    assert n.centroid_px == 0.35
 
 
 def test_tilt_and_yaw_split_a_composed_rotation():

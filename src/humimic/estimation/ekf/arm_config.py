@@ -37,7 +37,7 @@ class ArmNoiseConfig(Section):
 
     source: Literal["sensors", "paper"] = "sensors"
     """``sensors``: from the configured sensors (:mod:`.arm_noise`: gyro and pitch/roll from the
-    Wii remote's and head IMU's noise densities, centroid 0.5 px and area 0.05 measured on the
+    Wii remote's and head IMU's noise densities, centroid 0.35 px and area 0.035 measured on the
     simulated head camera); ``paper``: Sugiyama sec. IV-B's 10/3 px, 0.3, 0.01 rad/s, 0.5 deg.
     Measured on sugiyama_fig3_arm_forward, sugiyama_arm_mask and sugiyama_fig10_robot_control,
     seeds 0-9: position NEES ~3 with ``sensors`` (0.05-0.16 with ``paper``, the covariance ~30x

@@ -31,9 +31,9 @@ from humimic.estimation.ekf.arm import ArmNoise
 from humimic.estimation.ekf.sensor_noise import white_std
 
 #: sigma of the marker centroid (px) on the simulated head camera (module docstring).
-CENTROID_PX = 0.5
+CENTROID_PX = 0.35
 #: sigma of the marker area as a fraction of the measured area (module docstring).
-AREA_REL = 0.05
+AREA_REL = 0.035
 
 
 def gyro_std(wii, head_imu=None) -> float:
