@@ -33,7 +33,8 @@ from humimic.sensors.camera_model import Intrinsics
 
 @dataclass(frozen=True)
 class ArmNoise:
-    """Measurement standard deviations (Sugiyama Sec. IV-B) and the initial uncertainty."""
+    """Measurement standard deviations (Sugiyama Sec. IV-B) and the initial uncertainty. The
+    stage's default is from the configured sensors instead (:mod:`.arm_noise`)."""
 
     centroid_px: float = 10.0 / 3.0
     area_rel: float = 0.3
