@@ -154,3 +154,26 @@ def test_a_wrong_marker_is_gated_and_a_persistent_one_restarts():
     assert ekf.restarts == 1  # after max_rejected gated out in a row
     np.testing.assert_allclose(am.centroid(ekf.x, K)[0], uv + 80.0, atol=0.5)
     assert np.linalg.norm(ekf.v) < 0.05
+
+
+def test_initial_position_covariance_follows_the_ray():
+    """Off the optical axis the start's depth error moves x and y along the ray: the position
+    covariance is the centroid's and depth's carried through the back-projection (checked by
+    Monte Carlo of the back-projection, independent of the Jacobian)."""
+    from humimic.estimation.ekf.arm import initial_state
+
+    K = Intrinsics.from_fovy(np.radians(50.0), 368, 240)
+    noise = ArmNoise(centroid_px=0.5, area_rel=0.05)
+    uv, area = np.array([300.0, 60.0]), 300.0
+    x, P = initial_state(uv, area, np.array([1.0, 0, 0, 0]), K, SPHERE, noise)
+    z = SPHERE.depth(area, K)
+    rng = np.random.default_rng(0)
+    n = 200_000
+    u = uv[0] + noise.centroid_px * rng.normal(size=n)
+    v = uv[1] + noise.centroid_px * rng.normal(size=n)
+    zz = z + 0.5 * noise.area_rel * z * rng.normal(size=n)
+    p = (np.column_stack([(u - K.cx) / K.fx * zz, (v - K.cy) / K.fy * zz, zz])
+         @ am.R_CV_I.T)
+    np.testing.assert_allclose(x[0:3], p.mean(axis=0), atol=2e-4)
+    np.testing.assert_allclose(P[0:3, 0:3], np.cov(p.T), rtol=0.03, atol=1e-8)
+    assert abs(P[0, 2]) > 0.3 * np.sqrt(P[0, 0] * P[2, 2])  # x and depth correlated

@@ -117,6 +117,15 @@ def swing(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.eye(3) + K + (K @ K) / (1.0 + c)
 
 
+def twist_angle(R: np.ndarray, axis: np.ndarray) -> np.ndarray:
+    """Angle (rad, in [-pi, pi]) of the twist of rotation matrices ``R`` (..., 3, 3) about the
+    unit ``axis`` (..., 3) in their swing-twist decomposition ``R = R_swing R_twist`` (``R_swing``
+    about an axis orthogonal to ``axis``): ``2 atan2(v . axis, w)`` of ``R``'s quaternion."""
+    q = from_matrix(R)
+    a = 2.0 * np.arctan2(np.sum(q[..., 1:] * axis, axis=-1), q[..., 0])
+    return (a + np.pi) % (2.0 * np.pi) - np.pi
+
+
 def hemisphere_continuous(q: np.ndarray) -> np.ndarray:
     """Flip signs along axis 0 so that consecutive quaternions have a non-negative dot product."""
     q = np.array(q, float)

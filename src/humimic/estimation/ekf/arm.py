@@ -33,7 +33,8 @@ from humimic.sensors.camera_model import Intrinsics
 
 @dataclass(frozen=True)
 class ArmNoise:
-    """Measurement standard deviations (Sugiyama Sec. IV-B) and the initial uncertainty."""
+    """Measurement standard deviations (Sugiyama Sec. IV-B) and the initial uncertainty. The
+    stage's default is from the configured sensors instead (:mod:`.arm_noise`)."""
 
     centroid_px: float = 10.0 / 3.0
     area_rel: float = 0.3
@@ -81,16 +82,20 @@ class Marker:
 def initial_state(uv: np.ndarray, area_px: float, q0: np.ndarray, K: Intrinsics,
                   marker: Marker, noise: ArmNoise) -> tuple[np.ndarray, np.ndarray]:
     """State and covariance from one marker measurement (undistorted centroid, area: the depth
-    from the area) and a start orientation ``q0``, at rest with the priors' spread."""
+    from the area) and a start orientation ``q0``, at rest with the priors' spread. The
+    position's covariance is the centroid's and the depth's carried through the back-projection
+    ``p = z R_CV_I ((u - cx) / fx, (v - cy) / fy, 1)``: the depth's error lies along the ray,
+    which off the optical axis moves x and y too."""
     z = marker.depth(area_px, K)
     ray_cv = np.array([(uv[0] - K.cx) / K.fx, (uv[1] - K.cy) / K.fy, 1.0])
     x = mm.initial_state(p=z * (am.R_CV_I @ ray_cv), q=q0)
-    s_xy = noise.centroid_px * z / K.fx
+    J = am.R_CV_I @ np.column_stack([[z / K.fx, 0.0, 0.0], [0.0, z / K.fy, 0.0], ray_cv])
     s_z = 0.5 * noise.area_rel * z  # depth ~ area^-1/2
-    var = np.concatenate([[s_xy**2, s_xy**2, s_z**2], np.full(4, noise.init_quat**2),
-                          np.full(3, noise.init_vel**2), np.full(3, noise.init_rate**2),
-                          np.full(3, noise.init_acc**2), np.full(3, noise.init_bias**2)])
-    return x, np.diag(var)
+    cov = np.diag(np.concatenate([np.zeros(3), np.full(4, noise.init_quat**2),
+                                  np.full(3, noise.init_vel**2), np.full(3, noise.init_rate**2),
+                                  np.full(3, noise.init_acc**2), np.full(3, noise.init_bias**2)]))
+    cov[P, P] = (J * [noise.centroid_px**2, noise.centroid_px**2, s_z**2]) @ J.T
+    return x, cov
 
 
 class ArmEKF:

@@ -3,7 +3,11 @@
 Scores (``metrics.json`` ``arm``): the marker centre's position error in the head frame I
 (``position_rmse_m``) and its depth error (``depth_rmse_m``, along I's optical axis z), over
 every frame since the filter started, and over the frames whose marker was taken; the remote's
-orientation error; the position NEES; how often the marker was seen; the estimator's cycle time.
+orientation error, split into its tilt (seen by the accelerometer's pitch and roll) and its
+yaw about the down direction (seen by nothing: it is the start pose's, "directed to the front",
+plus the gyro's drift; ``orientation_yaw_start_deg`` is the start's); the position NEES, its
+mean and the fraction of frames inside the 95 % chi-square band; how often the marker was
+seen; the estimator's cycle time.
 The truth is the marker site (``wiimote_marker``) in the true head-camera frame (``headcam``).
 """
 
@@ -13,7 +17,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from humimic.maths.stats import finite_or_none, nees, rmse
+from humimic.estimation.ekf.arm_model import UP_W
+from humimic.maths.stats import finite_or_none, fraction_in_band, nees, rmse
 from humimic.motion import quat
 from humimic.world.frames import R_CV_I
 
@@ -73,8 +78,21 @@ def in_view(p_I: np.ndarray, K) -> np.ndarray:
     return (c[:, 2] > 0) & (u >= 0) & (u <= K.width - 1) & (v >= 0) & (v <= K.height - 1)
 
 
+def tilt_and_yaw(R_est: np.ndarray, R_true: np.ndarray, down: np.ndarray
+                 ) -> tuple[np.ndarray, np.ndarray]:
+    """The orientation error ``R_est R_true^T`` (N, 3, 3, in I) split about the true down
+    direction ``down`` (N, 3, in I): its tilt (the angle it turns ``down`` by, what the
+    accelerometer's pitch and roll see) and its yaw (the twist about ``down``, which no arm
+    measurement sees), both in degrees."""
+    R_err = R_est @ np.swapaxes(R_true, -1, -2)
+    cos = np.einsum("ni,nij,nj->n", down, R_err, down)
+    tilt = np.degrees(np.arccos(np.clip(cos, -1.0, 1.0)))
+    return tilt, np.degrees(quat.twist_angle(R_err, down))
+
+
 def arm_errors(rec: ArmRecord, gt) -> dict[str, np.ndarray]:
-    """Per-frame errors: position (N, 3) in I, orientation angle (deg), NEES, in view."""
+    """Per-frame errors: position (N, 3) in I, orientation angle, its tilt and yaw (deg),
+    NEES."""
     a = rec.arrays()
     if len(a["t"]) == 0:
         return {}
@@ -85,8 +103,12 @@ def arm_errors(rec: ArmRecord, gt) -> dict[str, np.ndarray]:
     R_est[ok] = quat.to_matrix(a["x"][ok, 3:7])
     cos = (np.einsum("nij,nij->n", R_est, R_true) - 1.0) / 2.0
     ang = np.degrees(np.arccos(np.clip(cos, -1.0, 1.0)))
-    return {"t": a["t"], "p_true": p_true, "err": err, "angle_deg": ang,
-            "nees": nees(err, a["P_p"]), "measured": a["measured"]}
+    T = gt.pose("headcam", "W")[gt.index_of(a["t"])]
+    down_I = -np.einsum("nji,j->ni", T[:, :3, :3], UP_W)
+    tilt, yaw = np.full(len(ang), np.nan), np.full(len(ang), np.nan)
+    tilt[ok], yaw[ok] = tilt_and_yaw(R_est[ok], R_true[ok], down_I[ok])
+    return {"t": a["t"], "p_true": p_true, "err": err, "angle_deg": ang, "tilt_deg": tilt,
+            "yaw_deg": yaw, "nees": nees(err, a["P_p"]), "measured": a["measured"]}
 
 
 def arm_metrics(rec: ArmRecord, gt, K, ekf) -> dict:
@@ -107,8 +129,14 @@ def arm_metrics(rec: ArmRecord, gt, K, ekf) -> dict:
         "position_rmse_measured_m": finite_or_none(rmse(e["err"][meas])),
         "depth_rmse_measured_m": finite_or_none(rmse(e["err"][meas, 2])),
         "orientation_rmse_deg": finite_or_none(rmse(e["angle_deg"][started])),
+        "orientation_tilt_rmse_deg": finite_or_none(rmse(e["tilt_deg"][started])),
+        "orientation_yaw_rmse_deg": finite_or_none(rmse(e["yaw_deg"][started])),
+        "orientation_yaw_start_deg": finite_or_none(e["yaw_deg"][started][0]
+                                                    if started.any() else np.nan),
         "nees_position_mean": finite_or_none(np.nanmean(e["nees"][started])
                                              if started.any() else np.nan),
+        "nees_position_in_band_fraction": finite_or_none(fraction_in_band(e["nees"][started],
+                                                                          3)),
         "marker_in_view_fraction": float(np.mean(visible)),
         "measured_fraction": float(np.mean(a["measured"])),
         "measured_in_view_fraction": finite_or_none(np.mean(a["measured"][visible])

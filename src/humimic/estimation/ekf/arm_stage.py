@@ -83,7 +83,8 @@ class ArmStage(Stage):
         self.K_image = world.head_rig.intrinsics("headcam")
         self.K = self.K_image.pinhole()
         self.ekf = ArmEKF(self.K, marker_from_model(world.scene.model), cfg.motion_noise(),
-                          cfg.arm_noise(), use_area=cfg.use_area, pitch_roll=cfg.pitch_roll,
+                          cfg.arm_noise(world.scenario.sensors), use_area=cfg.use_area,
+                          pitch_roll=cfg.pitch_roll,
                           gate_prob=cfg.gate_prob, max_gap=cfg.max_gap,
                           max_rejected=cfg.max_rejected, static_tol_g=cfg.static_tol_g)
         self.marker_prm = cfg.marker.params()

@@ -36,6 +36,11 @@ import numpy as np
 from humimic.sensors.inertial import orientation_noise
 
 
+def white_std(density: float, rate: float) -> float:
+    """Per-sample std of white noise of ``density`` (unit/sqrt(Hz)) sampled at ``rate`` (Hz)."""
+    return density * math.sqrt(rate)
+
+
 def white_equivalent_std(sigma, tau, rate: float):
     """Per-sample std of white noise at ``rate`` (Hz) with the low-frequency power of a
     first-order Gauss-Markov error of std ``sigma`` and correlation time ``tau`` (s):
@@ -58,7 +63,7 @@ def accel_std_W(imu, gravity: float) -> tuple[float, float, float]:
     every axis and, on the horizontal ones, gravity turned by the orientation's white
     resolution error. The slow tilt error's share is a drifting bias
     (:func:`accel_bias_drift_W`)."""
-    white = imu.accel_noise_density * math.sqrt(imu.rate)
+    white = white_std(imu.accel_noise_density, imu.rate)
     _, _, res = orientation_noise(imu)
     horizontal = math.hypot(white, abs(gravity) * res)
     return (horizontal, white, horizontal)
