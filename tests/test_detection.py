@@ -245,3 +245,42 @@ def test_small_target_found_at_once_after_phase_one(skin_lut):
         else:
             found.append(np.inf)
     assert max(found) <= 0.2 + 8 * DT  # measured 4 frames after phase one (0.2 s), all seeds
+
+
+def test_refined_hypothesis_takes_a_thin_blobs_full_resolution_moments(skin_lut):
+    """Thin hands (6-7 px across, 14 long) at sub-cell offsets from the coarse map's cells:
+    the coarse fit can only floor the width at a cell's grid^2 / 12 or smear it over two
+    columns, and its eq. 8 window is partly off the hand (fill 180-232 of 256 measured); one
+    full-resolution moment step (refine_hypotheses) lands on the moments of the drawn ellipse's
+    pixels (computed directly; measured within 0.45 px and 32 %) with a window the hand fills
+    (225-254)."""
+    from humimic.perception.blobs.hypotheses import (
+        color_sums,
+        fitted_hypotheses,
+        refine_hypotheses,
+    )
+
+    step, coarse, refined = 4, [], []
+    for cu in (162.0, 162.6, 163.0, 163.4, 163.9):
+        for axes in ((3.0, 7.0), (3.5, 7.0)):
+            img = add_noise(np.full((240, 320, 3), (90, 110, 140), np.uint8),
+                            np.random.default_rng(3), 4.0)
+            mask = np.zeros((240, 320), np.uint8)
+            draw_ellipse(img, (cu, 120.3), axes, 0)
+            draw_ellipse(mask, (cu, 120.3), axes, 0, 255)
+            v, u = np.nonzero(mask > 127)
+            mean, cov = np.array([u.mean(), v.mean()]), np.cov(np.stack([u, v]), bias=True)
+            lik = skin_lut.lookup(img[step // 2::step, step // 2::step]).astype(float)
+            mu0, C0 = fitted_hypotheses(lik / (lik + 1.0), np.array([[cu, 119.0]]), step, 6,
+                                        1.0, 30.0)
+            mu1, C1 = refine_hypotheses(img, skin_lut, mu0, C0, 16, 2.5, float(step), 1.0, 30.0)
+            np.testing.assert_allclose(mu1[0], mean, atol=1.0)
+            np.testing.assert_allclose(np.diag(C1[0]), np.diag(cov), rtol=0.6)
+            coarse.append(color_sums(img, skin_lut, mu0, C0, 16, 1.5, "posterior")[0][0])
+            refined.append(color_sums(img, skin_lut, mu1, C1, 16, 1.5, "posterior")[0][0])
+    assert min(refined) > 0.85 * 256 and min(coarse) < 0.75 * 256
+    assert np.mean(refined) > np.mean(coarse) + 20
+    blank = np.full_like(img, (90, 110, 140))  # no target colour: the hypothesis is kept
+    mu2, C2 = refine_hypotheses(blank, skin_lut, mu0, C0, 16, 2.5, float(step), 1.0, 30.0)
+    np.testing.assert_array_equal(mu2, mu0)
+    np.testing.assert_array_equal(C2, C0)

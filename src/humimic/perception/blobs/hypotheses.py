@@ -157,3 +157,37 @@ def fitted_hypotheses(coarse_post: np.ndarray, centres: np.ndarray, grid: int, r
     lam, vec = np.linalg.eigh(cov)
     lam = np.clip(lam, sigma_min**2, sigma_max**2)
     return mu, (vec * lam[:, None, :]) @ np.swapaxes(vec, 1, 2)
+
+
+def refine_hypotheses(image: np.ndarray, lut: ColorLUT, centres: np.ndarray, covs: np.ndarray,
+                      side: int, k_sigma: float, pad_px: float, sigma_min: float,
+                      sigma_max: float) -> tuple[np.ndarray, np.ndarray]:
+    """One full-resolution moment step for hypotheses fitted on the coarse colour map.
+
+    A coarse fit places a blob narrower than a grid cell on the cell's centre (up to half a
+    cell off) and can only floor its width at ``grid^2 / 12``: its eq. 8 window (+-k sigma of
+    that shape) then slides off a thin hand and the hand's colour sum stays under eq. 9's
+    threshold frame after frame. Here each hypothesis' window is widened by ``pad_px`` per axis
+    (``Sigma + pad^2 I``), sampled on a ``side x side`` grid (nearest pixel, as
+    :func:`color_sums`), and the centre and covariance become the posterior-weighted
+    (``p / (p + 1)``) mean and covariance of the sample points -- the EM tracker's own moment
+    update (Ude eqs. 4-5, one step, one blob). Axes clamped into ``[sigma_min, sigma_max]``;
+    a window with no target colour keeps its hypothesis.
+    """
+    H, W = image.shape[:2]
+    wide = covs + pad_px**2 * np.eye(2)
+    pts = window_points(centres, wide, side, k_sigma)
+    q = np.rint(pts).astype(np.intp)
+    inside = (q[..., 0] >= 0) & (q[..., 0] < W) & (q[..., 1] >= 0) & (q[..., 1] < H)
+    u, v = np.clip(q[..., 0], 0, W - 1), np.clip(q[..., 1], 0, H - 1)
+    p = lut.lookup(image[v, u]).astype(np.float64) * inside
+    wgt = p / (p + 1.0)
+    tot = wgt.sum(1)
+    ok = tot > 1.0
+    mu = np.einsum("np,npi->ni", wgt, pts) / np.maximum(tot, 1e-12)[:, None]
+    d = pts - mu[:, None, :]
+    cov = np.einsum("np,npi,npj->nij", wgt, d, d) / np.maximum(tot, 1e-12)[:, None, None]
+    lam, vec = np.linalg.eigh(cov)
+    lam = np.clip(lam, sigma_min**2, sigma_max**2)
+    cov = (vec * lam[:, None, :]) @ np.swapaxes(vec, 1, 2)
+    return np.where(ok[:, None], mu, centres), np.where(ok[:, None, None], cov, covs)
