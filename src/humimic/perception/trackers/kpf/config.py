@@ -318,6 +318,16 @@ class KpfConfig(Section):
     side seeds 0-4 76 ± 24 -> 122 ± 74 and the 18 s gestures (schmidt_side, seeds 1-4)
     85 ± 30 -> 131 ± 26; angular seeds 5-9 211 ± 30 -> 157 ± 53, another person (darker
     skin, green shirt, seeds 0-2) 178 -> 185. Off: the flips it needs cost side pointing."""
+    branch_threshold: float | None = Field(None, gt=0.0, le=100.0)
+    """Our extension: a delayed decision between each arm's kinematic flip branches
+    (:mod:`~humimic.perception.trackers.kpf.branches`): per frame the log-likelihood ratio of
+    the estimate's flips against it, summed by a CUSUM test; past this many nats the arm (its
+    particles and estimates) moves to that flip. None: off, as the paper."""
+    branch_forget: float = Field(0.9, ge=0.0, le=1.0)
+    """The CUSUM's forgetting factor per frame (1: none)."""
+    branch_skin_ring: float | None = Field(None, gt=1.0, le=4.0)
+    """The branch decision's likelihood with this ``skin_ring`` (the filter's own without it);
+    None: the filter's likelihood."""
     colour_gradients: bool = False
     """Our extension: the edge and ridge cues on the strongest colour channel's derivatives
     at each pixel instead of grey levels' (clothes as bright as the background keep their
