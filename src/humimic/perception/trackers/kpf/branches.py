@@ -28,6 +28,7 @@ from humimic import bodymodel as bm
 from humimic.perception.trackers.kpf.depth import SIDES
 from humimic.perception.trackers.kpf.flips import FLIPS, arm_flips
 from humimic.perception.trackers.kpf.likelihood import Likelihood
+from humimic.perception.trackers.kpf.refine import refine_arms
 
 
 def cusum_update(S: np.ndarray, r: np.ndarray, forget: float) -> np.ndarray:
@@ -81,20 +82,35 @@ class FlipBranches:
         return (self.lik.evaluate(q, maps, T_cam_base, floors=True).log_lik
                 + tracker._prior(q) + tracker._arm_prior(q).sum(1))
 
+    def _refined(self, tracker, q: np.ndarray, side: str, f) -> tuple[np.ndarray, float]:
+        """``q`` with arm ``side`` refined (``branch_refine_polls``) and its log-posterior."""
+        polls = self.cfg.branch_refine_polls
+        if polls > 0:
+            q, _ = refine_arms(self.body, q, f, tracker.D, self._T, polls,
+                               self.cfg.refine_step, 0.0, tracker.limits, (side,))
+        return q, float(f(q[None])[0])
+
     def step(self, tracker, mode: np.ndarray, maps, T_cam_base: np.ndarray) -> np.ndarray:
         """Update the sums with this frame's ratios at ``mode (14,)``; switch an arm whose sum
-        passed the threshold (the tracker's particles and last estimate too); the estimate."""
+        passed the threshold (the tracker's particles and last estimate too); the estimate.
+        With ``branch_refine_polls`` the ratios are between the refined estimate's arm and its
+        refined flips (each at its branch's local peak, as the particles' modes are)."""
+        self._T = T_cam_base
         c_ref = np.linalg.inv(np.asarray(T_cam_base, float))[:3, 3]
-        cand = [mode[None]]
-        for side in SIDES:
-            f = arm_flips(self.body, mode[None], side, c_ref)
-            cand += [f[k] for k in FLIPS]
-        q = np.concatenate(cand)
-        ok = np.all(np.isfinite(q), axis=1)
-        ok[ok] = tracker.limits.inside(q[ok])
-        ll = np.full(len(q), np.nan)
-        ll[ok] = self.log_post(tracker, q[ok], maps, T_cam_base)
-        r = (ll[1:] - ll[0]).reshape(len(SIDES), len(FLIPS))
+
+        def f(q):
+            return self.log_post(tracker, q, maps, T_cam_base)
+        r = np.full((len(SIDES), len(FLIPS)), np.nan)
+        best = {}
+        for a, side in enumerate(SIDES):
+            base, ll0 = self._refined(tracker, mode, side, f)
+            flips = arm_flips(self.body, base[None], side, c_ref)
+            for k, kind in enumerate(FLIPS):
+                q = flips[kind][0]
+                if not (np.all(np.isfinite(q)) and tracker.limits.inside(q[None])[0]):
+                    continue
+                best[side, k], ll = self._refined(tracker, q, side, f)
+                r[a, k] = ll - ll0
         self.S = cusum_update(self.S, r, self.cfg.branch_forget)
         self.history.append((r, self.S.copy()))
         for (side, _), k in zip(SIDES.items(), branch_switches(self.S, self.cfg.branch_threshold),
@@ -102,12 +118,13 @@ class FlipBranches:
             if k < 0:
                 continue
             kind = FLIPS[k]
-            mode = flip_arm(self.body, mode, side, kind, c_ref, tracker.limits, mode)[0]
+            _, j = SIDES[side]
+            mode = mode.copy()
+            mode[j:j + 4] = best[side, k][j:j + 4]
             tracker.mode = flip_arm(self.body, tracker.mode, side, kind, c_ref,
                                     tracker.limits, mode)[0]
             tracker.particles = flip_arm(self.body, tracker.particles, side, kind, c_ref,
                                          tracker.limits, mode)
-            _, j = SIDES[side]
             tracker.pvel = tracker.pvel.copy()
             tracker.pvel[:, j:j + 4] = 0.0
             self.S[list(SIDES).index(side)] = 0.0

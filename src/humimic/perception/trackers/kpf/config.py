@@ -325,6 +325,9 @@ class KpfConfig(Section):
     particles and estimates) moves to that flip. None: off, as the paper."""
     branch_forget: float = Field(0.9, ge=0.0, le=1.0)
     """The CUSUM's forgetting factor per frame (1: none)."""
+    branch_refine_polls: int = Field(0, ge=0, le=50)
+    """Pattern-search polls (step ``refine_step``) refining the estimate's arm and each
+    flip before their ratio (0: the flips of the estimate as they are)."""
     branch_skin_ring: float | None = Field(None, gt=1.0, le=4.0)
     """The branch decision's likelihood with this ``skin_ring`` (the filter's own without it);
     None: the filter's likelihood."""
