@@ -18,6 +18,13 @@ motion model's velocity stays a motion) and every particle's arm are replaced by
 ``k`` (:func:`flip_arm`), and the arm's sums restart at 0. The CUSUM's clamp at 0 keeps
 evidence for the current branch from piling up (a switch needs recent evidence, not a
 lifetime's); ``lam`` < 1 forgets old frames (a flip of a moving arm is another pose each frame).
+
+Measured evidence (Table 1, seed 0, ratios at the TRUE pose, flip minus truth, nats per frame,
+wrist / elbow / both flips): angular hold with ``skin_ring`` 1.5 -0.79 / -0.13 / -0.07, without
+-0.01 / -0.02 / -0.05; side hold -0.01 / 0.00 / -0.33 with or without the ring; at rest the
+"both" flip -0.72 (the others coincide with the pose or leave the limits). At the ESTIMATE the
+unrefined flips lose by 0.1-0.5 nats (the estimate sits on its branch's peak, its flips do not):
+``branch_refine_polls`` compares refined poses. Numbers: ``KpfConfig.branch_threshold``.
 """
 
 from __future__ import annotations

@@ -326,8 +326,10 @@ class KpfConfig(Section):
     ``kpf``, (1000, 3), mean wrist error mm, main -> 0.5 with ``branch_skin_ring`` 1.5 and
     ``branch_refine_polls`` 3): angular seeds 0-2 192 / 226 / 213 -> 119 / 94 / 122, but side
     108 / 89 / 67 -> 163 / 75 / 65 and the 18 s gestures (schmidt_side) seeds 1-2 67 / 122 ->
-    178 / 104 (false switches); frames per CPU second ~9.7 -> ~5.8. Threshold 1.0 with
-    forgetting 0.95: angular seed 0 250. Off: not better on all three."""
+    178 / 104 (false switches); another person (skin [0.45, 0.30, 0.22], green shirt, seed 0)
+    angular 258 -> 94, side 60 -> 63; frames per CPU second ~9.7 -> ~5.8 (under load).
+    Threshold 0.8: angular seed 0 250, side 0 85, schmidt_side 1 191; 1.0 with forgetting 0.95:
+    angular 0 250. Off: not better on all three."""
     branch_forget: float = Field(0.9, ge=0.0, le=1.0)
     """The CUSUM's forgetting factor per frame (1: none)."""
     branch_refine_polls: int = Field(0, ge=0, le=50)
