@@ -324,9 +324,11 @@ class KpfConfig(Section):
     the estimate's flips against it, summed by a CUSUM test; past this many nats the arm (its
     particles and estimates) moves to that flip. None: off, as the paper. Measured (Table 1's
     ``kpf``, (1000, 3), mean wrist error mm, main -> 0.5 with ``branch_skin_ring`` 1.5 and
-    ``branch_refine_polls`` 3): angular seeds 0-2 192 / 226 / 213 -> 119 / 94 / 122, but side
-    108 / 89 / 67 -> 163 / 75 / 65 and the 18 s gestures (schmidt_side) seeds 1-2 67 / 122 ->
-    178 / 104 (false switches); another person (skin [0.45, 0.30, 0.22], green shirt, seed 0)
+    ``branch_refine_polls`` 3): angular seeds 0-4 193 ± 28 -> 101 ± 18 (192 / 226 / 213 / 155 /
+    181 -> 119 / 94 / 122 / 83 / 88), but side seeds 0-3 108 / 89 / 67 / 45 -> 163 / 75 / 65 /
+    140 and the 18 s gestures (schmidt_side) seeds 1-3 67 / 122 / 95 -> 178 / 104 / 140 (false
+    switches: the side arm's wrist flip scores as the truth, -0.01 nats); another person
+    (skin [0.45, 0.30, 0.22], green shirt, seed 0)
     angular 258 -> 94, side 60 -> 63; frames per CPU second ~9.7 -> ~5.8 (under load).
     Threshold 0.8: angular seed 0 250, side 0 85, schmidt_side 1 191; 1.0 with forgetting 0.95:
     angular 0 250. Off: not better on all three."""
