@@ -98,8 +98,7 @@ def test_tracker_flip_jumps_replace_a_share_with_same_image_poses():
     """``flip_share``: about that share of the particles per arm get one of their flips (within
     the joint limits): arms changed in 3-D, their elbow and wrist pixels unchanged (the camera
     model's projection), everything else untouched."""
-    from humimic.perception.trackers.kpf.config import KpfConfig
-    from humimic.perception.trackers.kpf.tracker import KpfTracker
+    from humimic.perception.trackers.kpf.flips import flip_jumps
     from humimic.sensors.camera_model import Intrinsics
 
     body = kpf_body()
@@ -107,8 +106,7 @@ def test_tracker_flip_jumps_replace_a_share_with_same_image_poses():
     T = _camera()
     q = _poses(2000, seed=7)
     q[:, 3] = np.pi                                     # facing the camera
-    tr = KpfTracker(body, intr, KpfConfig(flip_share=0.2), np.random.default_rng(1))
-    out = tr._flip_jumps(q.copy(), T, 0.2)
+    out = flip_jumps(body, q.copy(), T, 0.2, body.free_limits, np.random.default_rng(1))
     assert np.all(body.free_limits.inside(out))
     np.testing.assert_array_equal(out[:, :6], q[:, :6])
     a, b = body.forward(q), body.forward(out)

@@ -116,6 +116,11 @@ def test_refine_arms_climbs_a_closed_form_wrist_objective():
         e0 = np.linalg.norm(body.forward(q0[None]).joint(f"{s}_wrist")[0] - targets[s])
         e1 = np.linalg.norm(body.forward(out[None]).joint(f"{s}_wrist")[0] - targets[s])
         assert e0 > 0.02 and e1 < 3e-4            # measured ~1e-4 m from ~0.04 m
+    right, n = refine_arms(body, q0, f, D, T, polls=30, step=0.1, depth_step_m=0.02,
+                           limits=body.free_limits, sides=("R",))
+    assert n == 1 + 30 * 10                        # one arm's polls
+    np.testing.assert_array_equal(right[10:], q0[10:])
+    np.testing.assert_array_equal(right[6:10], out[6:10])   # the right arm's first, as before
 
 
 def test_fixed_sigma_evaluation_is_eqs_9_10_with_the_floors():

@@ -96,6 +96,8 @@ def test_covered_camera_frames_are_lost_and_particles_stay_finite(run):
     ("{kind: kpf, D_arm_deg: [22, 20, 35]}", "trackers.kpf.D_arm_deg"),
     ("{kind: kpf, cues: {torso: [edge, shape]}}", "trackers.kpf.cues.torso.1"),
     ("{kind: kpf, camera: R_wide}", "trackers.kpf.camera"),
+    ("{kind: kpf, branch_threshold: 0}", "trackers.kpf.branch_threshold"),
+    ("{kind: kpf, branch_forget: 1.5}", "trackers.kpf.branch_forget"),
 ])
 def test_bad_tracker_config_exits_2_naming_the_key(tmp_path, capsys, tracker, key):
     path = tmp_path / "s.yaml"

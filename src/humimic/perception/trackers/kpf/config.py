@@ -318,6 +318,28 @@ class KpfConfig(Section):
     side seeds 0-4 76 ± 24 -> 122 ± 74 and the 18 s gestures (schmidt_side, seeds 1-4)
     85 ± 30 -> 131 ± 26; angular seeds 5-9 211 ± 30 -> 157 ± 53, another person (darker
     skin, green shirt, seeds 0-2) 178 -> 185. Off: the flips it needs cost side pointing."""
+    branch_threshold: float | None = Field(None, gt=0.0, le=100.0)
+    """Our extension: a delayed decision between each arm's kinematic flip branches
+    (:mod:`~humimic.perception.trackers.kpf.branches`): per frame the log-likelihood ratio of
+    the estimate's flips against it, summed by a CUSUM test; past this many nats the arm (its
+    particles and estimates) moves to that flip. None: off, as the paper. Measured (Table 1's
+    ``kpf``, (1000, 3), mean wrist error mm, main -> 0.5 with ``branch_skin_ring`` 1.5 and
+    ``branch_refine_polls`` 3): angular seeds 0-4 193 ± 28 -> 101 ± 18 (192 / 226 / 213 / 155 /
+    181 -> 119 / 94 / 122 / 83 / 88), but side seeds 0-3 108 / 89 / 67 / 45 -> 163 / 75 / 65 /
+    140 and the 18 s gestures (schmidt_side) seeds 1-3 67 / 122 / 95 -> 178 / 104 / 140 (false
+    switches: the side arm's wrist flip scores as the truth, -0.01 nats); another person
+    (skin [0.45, 0.30, 0.22], green shirt, seed 0)
+    angular 258 -> 94, side 60 -> 63; frames per CPU second ~9.7 -> ~5.8 (under load).
+    Threshold 0.8: angular seed 0 250, side 0 85, schmidt_side 1 191; 1.0 with forgetting 0.95:
+    angular 0 250. Off: not better on all three."""
+    branch_forget: float = Field(0.9, ge=0.0, le=1.0)
+    """The CUSUM's forgetting factor per frame (1: none)."""
+    branch_refine_polls: int = Field(0, ge=0, le=50)
+    """Pattern-search polls (step ``refine_step``) refining the estimate's arm and each
+    flip before their ratio (0: the flips of the estimate as they are)."""
+    branch_skin_ring: float | None = Field(None, gt=1.0, le=4.0)
+    """The branch decision's likelihood with this ``skin_ring`` (the filter's own without it);
+    None: the filter's likelihood."""
     colour_gradients: bool = False
     """Our extension: the edge and ridge cues on the strongest colour channel's derivatives
     at each pixel instead of grey levels' (clothes as bright as the background keep their

@@ -104,3 +104,22 @@ def flip_free_error(body: bm.BodyModel, q_est: np.ndarray, q_true: np.ndarray, s
         d.append(np.where(ok, np.linalg.norm(
             body.forward(np.where(ok[:, None], f, q_est)).joint(name) - truth, axis=1), np.inf))
     return np.min(np.stack(d), axis=0)
+
+
+def flip_jumps(body: bm.BodyModel, pred: np.ndarray, T_cam_ref: np.ndarray, share: float,
+               limits: bm.JointLimits, rng: np.random.Generator) -> np.ndarray:
+    """Kinematic jumps (``KpfConfig.flip_share``): a ``share`` of the states ``pred (N, 14)``
+    per arm replaced in place by one of their flips (drawn uniformly; kept where it exists and
+    lies within ``limits``); ``T_cam_ref`` the camera's pose (reference -> camera)."""
+    c_ref = np.linalg.inv(np.asarray(T_cam_ref, float))[:3, 3]
+    for side in SIDES:
+        pick = np.flatnonzero(rng.random(len(pred)) < share)
+        if len(pick) == 0:
+            continue
+        kind = rng.integers(0, len(FLIPS), len(pick))
+        flips = arm_flips(body, pred[pick], side, c_ref)
+        new = np.stack([flips[f] for f in FLIPS])[kind, np.arange(len(pick))]
+        ok = np.all(np.isfinite(new), axis=1)
+        ok[ok] = limits.inside(new[ok])
+        pred[pick[ok]] = new[ok]
+    return pred

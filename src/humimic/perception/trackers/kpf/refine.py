@@ -40,12 +40,15 @@ def depth_direction(body: bm.BodyModel, q: np.ndarray, side: str, T_cam_ref: np.
 
 def refine_arms(body: bm.BodyModel, q: np.ndarray, log_lik: Callable[[np.ndarray], np.ndarray],
                 D: np.ndarray, T_cam_ref: np.ndarray, polls: int, step: float,
-                depth_step_m: float, limits: bm.JointLimits) -> tuple[np.ndarray, int]:
-    """The pose ``q (14,)`` with each arm in turn moved uphill on ``log_lik`` (``(M, 14) ->
-    (M,)``) by ``polls`` pattern-search polls, ``(q, evaluations)``; never scores lower."""
+                depth_step_m: float, limits: bm.JointLimits, sides=tuple(SIDES)
+                ) -> tuple[np.ndarray, int]:
+    """The pose ``q (14,)`` with each arm of ``sides`` in turn moved uphill on ``log_lik``
+    (``(M, 14) -> (M,)``) by ``polls`` pattern-search polls, ``(q, evaluations)``; never
+    scores lower."""
     x = np.asarray(q, float).copy()
     n = 0
-    for side, (_, j) in SIDES.items():
+    for side in sides:
+        _, j = SIDES[side]
         dof = slice(j, j + 4)
         dirs, steps = list(np.eye(4)), list(step * np.asarray(D[dof], float))
         u = depth_direction(body, x, side, T_cam_ref) if depth_step_m > 0 else None

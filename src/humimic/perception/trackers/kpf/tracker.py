@@ -24,10 +24,11 @@ from humimic.estimation.particles.kernel_groups import dominant_modes
 from humimic.estimation.particles.weights import uniform_log_weights
 from humimic.maths.blas import one_blas_thread
 from humimic.perception.cues.importance import skin_blobs
+from humimic.perception.trackers.kpf.branches import FlipBranches
 from humimic.perception.trackers.kpf.cues import CueMaps
 from humimic.perception.trackers.kpf.depth import SIDES, kept_ranges, wrist_depth_move
 from humimic.perception.trackers.kpf.depth_gate import keep_range_gates
-from humimic.perception.trackers.kpf.flips import FLIPS, arm_flips
+from humimic.perception.trackers.kpf.flips import flip_jumps
 from humimic.perception.trackers.kpf.frame_cues import FrameCues
 from humimic.perception.trackers.kpf.hands import hand_blob_moves, part_centres
 from humimic.perception.trackers.kpf.likelihood import Likelihood
@@ -132,6 +133,8 @@ class KpfTracker:
         self.torso_prior: Gaussian | None = None
         self.best_prev: float | None = None
         """The last frame's best log-likelihood (``rescue_passes``)."""
+        self.branches = None if cfg.branch_threshold is None or cfg.filter != "kpf" else \
+            FlipBranches(body, intrinsics, cfg)
 
     def start(self, q0: np.ndarray, maps: CueMaps | FrameCues, T_cam_base: np.ndarray) -> None:
         """Initialise at a known pose (the paper fits the model by hand): every particle at
@@ -199,6 +202,8 @@ class KpfTracker:
             mode, iters, modes = self._condensation(maps, T_cam_base), 0, None
         else:
             mode, iters, modes = self._kpf(maps, T_cam_base)
+            if self.branches is not None:   # our extension: the arms' flip branches
+                mode = self.branches.step(self, mode, maps, T_cam_base)
         report = mode
         refined = self.cfg.refine_polls > 0 and self.cfg.filter == "kpf"
         if refined:
@@ -249,7 +254,8 @@ class KpfTracker:
             pred = self._keep_range(pred, resampled, velocity, moved, T_cam_base)
         walked = pred
         if cfg.flip_share > 0.0:   # part of the dynamics: the reweighting's prior has them
-            pred = self._flip_jumps(pred.copy(), T_cam_base, cfg.flip_share)
+            pred = flip_jumps(self.body, pred.copy(), T_cam_base, cfg.flip_share,
+                              self.limits, rng)
         prior = pred
         if cfg.depth_share > 0.0:   # a proposal: the reweighting keeps the dynamics' KDE
             pred = self._depth_moves(pred.copy(), T_cam_base, cfg.depth_share)
@@ -367,24 +373,6 @@ class KpfTracker:
         for side, pick in picks.items():
             pred[pick] = hand_blob_moves(self.body, pred[pick], side, centres, blobs.areas,
                                          self.lik.intr, T, r, rng)
-        return pred
-
-    def _flip_jumps(self, pred: np.ndarray, T_cam_base: np.ndarray, share: float
-                    ) -> np.ndarray:
-        """Kinematic jumps (:mod:`~humimic.perception.trackers.kpf.flips`): a ``share`` of the
-        particles per arm replaced by one of their flips (drawn uniformly; kept where it exists
-        and lies within the joint limits)."""
-        c_base = np.linalg.inv(np.asarray(T_cam_base, float))[:3, 3]
-        for side in SIDES:
-            pick = np.flatnonzero(self.rng.random(len(pred)) < share)
-            if len(pick) == 0:
-                continue
-            kind = self.rng.integers(0, len(FLIPS), len(pick))
-            flips = arm_flips(self.body, pred[pick], side, c_base)
-            new = np.stack([flips[f] for f in FLIPS])[kind, np.arange(len(pick))]
-            ok = np.all(np.isfinite(new), axis=1)
-            ok[ok] = self.limits.inside(new[ok])
-            pred[pick[ok]] = new[ok]
         return pred
 
     def _condensation(self, maps, T_cam_base):

@@ -1,0 +1,142 @@
+"""The kpf's delayed flip-branch decision (``kpf/branches.py``) against independent
+computations: the CUSUM with forgetting against its closed form (the largest discounted sum of
+the latest ratios, Page's max form), a switch of a static arm on the frame that closed form
+predicts, the switched arm keeping its elbow and wrist pixels (the camera model's projection)
+for the estimate and every particle."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from humimic.perception.trackers.kpf.branches import (
+    FlipBranches,
+    branch_switches,
+    cusum_update,
+    flip_arm,
+)
+from humimic.perception.trackers.kpf.config import KpfConfig
+from humimic.perception.trackers.kpf.flips import FLIPS, arm_flips
+from humimic.perception.trackers.kpf.tracker import kpf_body
+from humimic.sensors.camera_model import Intrinsics
+
+
+def _camera(x: float = 2.0, y: float = 0.1) -> np.ndarray:
+    """T_cam_base of a camera at (x, y, 1.3) looking back along -x (OpenCV axes)."""
+    R_base_cam = np.column_stack([[0, 1, 0], [0, 0, -1], [-1, 0, 0]]).astype(float)
+    T = np.eye(4)
+    T[:3, :3], T[:3, 3] = R_base_cam.T, -R_base_cam.T @ np.array([x, y, 1.3])
+    return T
+
+
+def _closed_form(r: np.ndarray, lam: float) -> float:
+    """max(0, max_k sum_{t >= k} lam^(T - t) r_t): the CUSUM recursion's value after r."""
+    T = len(r)
+    best = 0.0
+    for k in range(T):
+        best = max(best, sum(lam ** (T - 1 - t) * r[t] for t in range(k, T)))
+    return best
+
+
+def test_cusum_with_forgetting_is_the_largest_discounted_recent_sum():
+    rng = np.random.default_rng(0)
+    for lam in (1.0, 0.9, 0.5):
+        r = rng.normal(0.05, 0.4, (40, 6))
+        S = np.zeros(6)
+        for t in range(40):
+            S = cusum_update(S, r[t], lam)
+            want = [_closed_form(r[:t + 1, i], lam) for i in range(6)]
+            np.testing.assert_allclose(S, want, rtol=1e-12, atol=1e-12)
+    S = cusum_update(np.array([2.0, 2.0]), np.array([np.nan, 0.1]), 0.9)
+    np.testing.assert_allclose(S, [0.0, 1.9])          # a missing flip restarts its sum
+
+
+def test_branch_switches_pick_the_largest_sum_over_the_threshold():
+    S = np.array([[0.2, 1.4, 0.9], [0.5, 0.4, 0.3], [2.0, 3.0, 1.0]])
+    np.testing.assert_array_equal(branch_switches(S, 1.0), [1, -1, 1])
+
+
+def _arm_poses(n: int, seed: int) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    q = np.zeros((n, 14))
+    q[:, 2], q[:, 3] = 1.1, np.pi                      # standing, facing the camera
+    q[:, 6:10] = rng.uniform([-0.3, 0.1, -0.8, 0.3], [1.4, 1.4, 0.8, 1.5], (n, 4))
+    q[:, 10:14] = rng.uniform([-0.3, 0.1, -0.8, 0.3], [1.4, 1.4, 0.8, 1.5], (n, 4))
+    return kpf_body().free_limits.clamp(q)
+
+
+def test_flip_arm_keeps_the_joint_pixels_or_takes_the_fallback():
+    body = kpf_body()
+    intr = Intrinsics(320, 240, 260.0, 260.0, 159.5, 119.5)
+    T = _camera()
+    c = np.linalg.inv(T)[:3, 3]
+    q = _arm_poses(300, 4)
+    fallback = q[0].copy()
+    fallback[6:10] = [0.1, 0.2, 0.3, 0.4]
+    for kind in FLIPS:
+        out = flip_arm(body, q, "R", kind, c, body.free_limits, fallback)
+        np.testing.assert_array_equal(out[:, 10:], q[:, 10:])
+        np.testing.assert_array_equal(out[:, :6], q[:, :6])
+        raw = arm_flips(body, q, "R", c)[kind]
+        ok = np.all(np.isfinite(raw), axis=1)
+        ok[ok] = body.free_limits.inside(raw[ok])
+        assert 0.1 < ok.mean() <= 1.0
+        np.testing.assert_array_equal(out[~ok, 6:10], np.broadcast_to(fallback[6:10],
+                                                                      (np.sum(~ok), 4)))
+        a, b = body.forward(q[ok]), body.forward(out[ok])
+        for j in ("r_elbow", "r_wrist"):
+            np.testing.assert_allclose(intr.project(b.to(T).joint(j)),
+                                       intr.project(a.to(T).joint(j)), atol=1e-6)
+
+
+class _Tracker:
+    """The parts of a KpfTracker the branch decision touches; the log-posterior rewards a
+    right wrist near the camera by ``k`` nats per metre."""
+
+    def __init__(self, body, q, particles, c, k):
+        self.body, self.limits, self.c, self.k = body, body.free_limits, c, k
+        self.mode, self.particles = q.copy(), particles.copy()
+        self.pvel = np.ones_like(particles)
+
+    def _log_post(self, q, maps, T, floors=False):
+        return -self.k * np.linalg.norm(self.body.forward(q).joint("r_wrist") - self.c, axis=1)
+
+
+def test_a_static_arm_switches_on_the_frame_the_cusum_predicts():
+    body = kpf_body()
+    T = _camera()
+    c = np.linalg.inv(T)[:3, 3]
+    qs = _arm_poses(200, 9)
+    flips = arm_flips(body, qs, "R", c)
+    rng_w = {k: np.linalg.norm(body.forward(f).joint("r_wrist") - c, axis=1)
+             for k, f in flips.items()}
+    here = np.linalg.norm(body.forward(qs).joint("r_wrist") - c, axis=1)
+    gain = {k: here - rng_w[k] for k in FLIPS}          # metres nearer the camera
+    # a pose whose best flip is clearly nearer and within the limits
+    best = np.nanmax(np.column_stack([gain[k] for k in FLIPS]), axis=1)
+    valid = np.all([body.free_limits.inside(np.nan_to_num(flips[k])) for k in FLIPS], axis=0)
+    i = int(np.argmax(np.where(valid, best, -np.inf)))
+    assert best[i] > 0.1
+    q = qs[i]
+    k_nats, lam, h = 0.5, 0.9, 1.0
+    cfg = KpfConfig(branch_threshold=h, branch_forget=lam)
+    particles = q + np.random.default_rng(1).normal(0, 0.02, (50, 14)) * (np.arange(14) >= 6)
+    tr = _Tracker(body, q, particles, c, k_nats)
+    br = FlipBranches(body, None, cfg)
+    kinds = np.array([k_nats * gain[k][i] for k in FLIPS])
+    top = int(np.argmax(kinds))
+    # the closed form: S_t = r (1 - lam^t) / (1 - lam) passes h on frame t*
+    t_star = next(t for t in range(1, 100) if kinds[top] * (1 - lam ** t) / (1 - lam) > h)
+    mode = q.copy()
+    for t in range(1, t_star + 1):
+        before = mode.copy()
+        mode = br.step(tr, mode, None, T)
+        switched = not np.array_equal(mode, before)
+        assert switched == (t == t_star), t
+    want = flips[FLIPS[top]][i]
+    np.testing.assert_allclose(mode, want, atol=1e-12)
+    np.testing.assert_allclose(tr.mode, want, atol=1e-12)      # the last estimate too
+    np.testing.assert_array_equal(br.S[0], 0.0)
+    assert np.all(tr.pvel[:, 6:10] == 0.0) and np.all(tr.pvel[:, 10:] == 1.0)
+    moved = np.linalg.norm(body.forward(tr.particles).joint("r_wrist")
+                           - body.forward(particles).joint("r_wrist"), axis=1)
+    assert np.median(moved) > 0.05                        # the particles went with it
