@@ -81,7 +81,7 @@ def _scenario(near, others=True):
 
 
 def test_bad_near_keys_name_the_key():
-    with pytest.raises(ScenarioError, match=r"trackers\.icu\.near\.leave_m"):
+    with pytest.raises(ScenarioError, match=r"trackers\.icu\.near\.leave_m: .*enter_m \(2\)"):
         _scenario({"module": "tbp", "enter_m": 2.0, "leave_m": 1.5})
     from humimic.perception.trackers.icu.build import icu_stage
 

@@ -34,8 +34,9 @@ class NearModule(Section):
     @field_validator("leave_m")
     @classmethod
     def _band(cls, v, info):
-        if v < info.data.get("enter_m", 0.0):
-            raise ValueError("leave_m must be at least enter_m")
+        enter_m = info.data.get("enter_m", 0.0)
+        if v < enter_m:
+            raise ValueError(f"leave_m must be at least enter_m ({enter_m:g})")
         return v
 
 
