@@ -7,8 +7,8 @@ import numpy as np
 
 from humimic.messages import Track2D, Tracks2D
 from humimic.perception.trackers.common import HEAD_WIDTH_M, ImageTrackerStage, Overlay
-from humimic.perception.trackers.frame_cues import load_kernels
 from humimic.perception.trackers.hand2d.tracker import Hand2DTracker
+from humimic.perception.trackers.hand2d.warmup import load_kernels
 
 HAND_WIDTH_M = 0.09
 """The avatar's hand seen palm-on is 9 cm wide (``models/avatar.xml``): the true scale."""
@@ -20,7 +20,7 @@ class Hand2DStage(ImageTrackerStage):
         super().__init__(name, camera, cfg.target, HAND_WIDTH_M, gt, rlog, cfg.latency,
                          people, visibility)
         self.cfg, self.tracker, self.skin_lut = cfg, tracker, tracker.lut
-        load_kernels(None, cfg.bins)     # numba's colour-count kernel, before frame one
+        load_kernels(cfg, tracker.lut)   # numba's kernels, before frame one
 
     def metrics(self) -> dict:
         """The common scores plus ``others_near_frames``: frames where another person's face

@@ -105,6 +105,14 @@ class Hand2DTracker:
         self.bad = 0
         self.reference: np.ndarray | None = None
 
+    def start(self, state: np.ndarray, image: np.ndarray) -> None:
+        """Start tracking at ``state`` (u, v, s, theta): the particles around it (the
+        dynamics' spread), the palm's colour reference from ``image``."""
+        self.pf.initialize(self.rng, Gaussian(state, np.diag(self.dyn_sigma**2)))
+        self.reference = patch_histograms(quantize(image, self.cfg.bins), state, PALM_PATCH,
+                                          grid=6)[0]
+        self.state, self.bad = "tracking", 0
+
     # ---- per frame ---------------------------------------------------------------------------
     def step(self, image: np.ndarray) -> HandStep:
         grey = to_grey(image)
@@ -157,10 +165,7 @@ class Hand2DTracker:
         if best is None:
             return HandStep(self.state, nan, np.nan, None, None, np.nan, np.nan, det.blobs,
                             None)
-        self.pf.initialize(self.rng, Gaussian(best, np.diag(self.dyn_sigma**2)))
-        self.reference = patch_histograms(quantize(image, self.cfg.bins), best, PALM_PATCH,
-                                          grid=6)[0]
-        self.state, self.bad = "tracking", 0
+        self.start(best, image)
         d = mean_edge_distance(cues, best, self.template, self.params)
         return HandStep("tracking", best.copy(), 0.0, self.pf.particles.copy(),
                         np.exp(self.pf.log_weights), d,
