@@ -17,7 +17,7 @@ from humimic.perception.cues.histograms import (
     patch_histograms,
     quantize,
 )
-from humimic.perception.cues.motion import MotionEdgeMaps, motion_edge_maps
+from humimic.perception.cues.motion import MotionEdgeMaps, motion_edge_maps, moving_edges
 from humimic.sensors.camera_model import CameraImage, Intrinsics
 
 
@@ -86,12 +86,17 @@ def skin_and_bins(image: np.ndarray, post_table: np.ndarray, bits: int, bins: in
 
 
 def load_kernels(lut: ColorLUT | None, bins: int) -> None:
-    """Compile the cue kernels -- the strongest channel's gradient, the patches' colour
-    counts, with ``lut`` the skin posterior and colour bins -- (or load them from numba's disk
-    cache: 0.1-0.5 s) now, on a tiny frame, so that a stage's first timed frame does not pay
-    for it (every argument is converted to the one specialisation they are compiled for)."""
+    """Compile the cue kernels -- the strongest channel's gradient, the moving edges, the
+    patches' colour counts, with ``lut`` the skin posterior (of a whole image and of a strided
+    view: two specialisations) and colour bins -- (or load them from numba's disk cache:
+    0.1-0.5 s) now, on a tiny frame, so that a stage's first timed frame does not pay for it
+    (every other argument is converted to the one specialisation they are compiled for)."""
     img = np.zeros((2, 2, 3), np.uint8)
     strongest_channel_sobel(img)
+    moving_edges(np.zeros((2, 2), np.uint8), np.zeros((2, 2, 2), np.float32))   # DIS: float32
+    if lut is not None:
+        lut.posterior(img)
+        lut.posterior(np.zeros((4, 4, 3), np.uint8)[::2, ::2])
     if not 256 % bins:
         patch_histograms(quantize(img, bins), np.zeros((1, 3)), np.zeros((1, 4)), 2)
         if lut is not None:

@@ -1,7 +1,10 @@
-"""The 2-D hand tracker's warm-up loads every compiled kernel its frames call: after
+"""Warm-ups load every compiled kernel a stage's frames call: after the 2-D hand tracker's
 :func:`~humimic.perception.trackers.hand2d.warmup.load_kernels`, tracking synthetic frames adds
-no numba specialisation (run in a fresh interpreter: in this one other tests have compiled
-them already, and the check could not fail)."""
+no numba specialisation; after the shared cue warm-up
+(:func:`~humimic.perception.trackers.frame_cues.load_kernels`, ICU, TBP, GEST) the skin
+posterior of an image and of a strided view (ICU's) and the moving edges add none. Each run in
+a fresh interpreter: in this one other tests have compiled them already, and the check could
+not fail."""
 
 from __future__ import annotations
 
@@ -11,14 +14,11 @@ import textwrap
 
 import pytest
 
-_SCRIPT = textwrap.dedent("""
+_COUNTS = textwrap.dedent("""
     import sys
     import cv2, numba, numpy as np
     from humimic.perception.blobs.config import DEFAULT_COLOR_MODEL
     from humimic.perception.cues.color_models import ColorLUT, load_color_model
-    from humimic.perception.trackers.hand2d.config import Hand2DConfig
-    from humimic.perception.trackers.hand2d.tracker import Hand2DTracker
-    from humimic.perception.trackers.hand2d.warmup import load_kernels
 
     def counts():
         out = {}
@@ -28,6 +28,12 @@ _SCRIPT = textwrap.dedent("""
                     if isinstance(v, numba.core.registry.CPUDispatcher):
                         out[v.py_func.__module__ + "." + v.__name__] = len(v.signatures)
         return out
+""")
+
+_HAND2D = _COUNTS + textwrap.dedent("""
+    from humimic.perception.trackers.hand2d.config import Hand2DConfig
+    from humimic.perception.trackers.hand2d.tracker import Hand2DTracker
+    from humimic.perception.trackers.hand2d.warmup import load_kernels
 
     cfg = Hand2DConfig(kind="hand2d", rho=5.0, **{kw})
     lut = ColorLUT(load_color_model(DEFAULT_COLOR_MODEL))
@@ -53,7 +59,31 @@ _SCRIPT = textwrap.dedent("""
                                 {"cues": ("shape", "motion", "skin", "colour"),
                                  "similarity": "dt"}])
 def test_warmup_loads_every_kernel_a_frame_calls(kw):
-    out = subprocess.run([sys.executable, "-c", _SCRIPT.replace("{kw}", repr(kw))],
+    out = subprocess.run([sys.executable, "-c", _HAND2D.replace("{kw}", repr(kw))],
                          capture_output=True, text=True, timeout=600)
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert out.stdout.strip().splitlines()[-1] == "[]"
+
+
+_CUES = _COUNTS + textwrap.dedent("""
+    from humimic.perception.cues.motion import OpticalFlow, moving_edges
+    from humimic.perception.trackers.frame_cues import load_kernels
+
+    lut = ColorLUT(load_color_model(DEFAULT_COLOR_MODEL))
+    load_kernels(lut, 8)
+    before = counts()
+    img = np.random.default_rng(0).integers(0, 256, (48, 64, 3), np.uint8)
+    lut.posterior(img)
+    lut.posterior(img[::2, ::2])                      # ICU's skin search
+    flow = OpticalFlow()(img, np.roll(img, 1, axis=1))
+    moving_edges(np.ascontiguousarray(img[..., 0]), flow)
+    after = counts()
+    print(sorted(k for k in after if after[k] > before.get(k, 0)))
+""")
+
+
+def test_cue_warmup_loads_the_posterior_and_moving_edges():
+    out = subprocess.run([sys.executable, "-c", _CUES], capture_output=True, text=True,
+                         timeout=600)
     assert out.returncode == 0, out.stderr[-2000:]
     assert out.stdout.strip().splitlines()[-1] == "[]"
