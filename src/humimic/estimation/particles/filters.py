@@ -129,7 +129,14 @@ def update(log_weights: np.ndarray, log_increment: np.ndarray) -> tuple[np.ndarr
 def resample(particles: np.ndarray, log_weights: np.ndarray, rng: np.random.Generator,
              method: Method = "systematic") -> tuple[np.ndarray, np.ndarray]:
     """Equally weighted set drawn from the weighted one (Table 1 step 8)."""
-    idx = resample_indices(log_weights, rng, method)
+    return resample_weights(particles, weights(log_weights), rng, method)
+
+
+def resample_weights(particles: np.ndarray, w: np.ndarray, rng: np.random.Generator,
+                     method: Method = "systematic") -> tuple[np.ndarray, np.ndarray]:
+    """:func:`resample` with linear weights already from
+    :func:`~humimic.estimation.particles.weights.weights` (the same draws)."""
+    idx = indices_from_weights(w, rng, method)
     return np.asarray(particles)[idx], uniform_log_weights(len(idx))
 
 
@@ -138,9 +145,8 @@ def _finish(x: np.ndarray, lw: np.ndarray, evidence: float, ok: bool,
     w = weights(lw)                     # once for the mean, the ESS and the resampling
     mean = mean_of_weights(x, w)
     ess = ess_of_weights(w)
-    if ok and ess < resample_below * len(x):   # resample(x, lw, ...) with these weights
-        idx = indices_from_weights(w, rng, method)
-        x, lw = np.asarray(x)[idx], uniform_log_weights(len(idx))
+    if ok and ess < resample_below * len(x):
+        x, lw = resample_weights(x, w, rng, method)
         return Step(x, lw, mean, evidence, ess, ok, True)
     return Step(x, lw, mean, evidence, ess, ok, False)
 

@@ -14,6 +14,7 @@ import math
 import cv2
 import numpy as np
 
+from humimic.perception.blobs.em_blobs import clamp_covariances
 from humimic.perception.cues.color_models import ColorLUT
 
 
@@ -187,7 +188,5 @@ def refine_hypotheses(image: np.ndarray, lut: ColorLUT, centres: np.ndarray, cov
     mu = np.einsum("np,npi->ni", wgt, pts) / np.maximum(tot, 1e-12)[:, None]
     d = pts - mu[:, None, :]
     cov = np.einsum("np,npi,npj->nij", wgt, d, d) / np.maximum(tot, 1e-12)[:, None, None]
-    lam, vec = np.linalg.eigh(cov)
-    lam = np.clip(lam, sigma_min**2, sigma_max**2)
-    cov = (vec * lam[:, None, :]) @ np.swapaxes(vec, 1, 2)
+    cov = clamp_covariances(cov, sigma_min**2, sigma_max**2)
     return np.where(ok[:, None], mu, centres), np.where(ok[:, None, None], cov, covs)
