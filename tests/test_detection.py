@@ -252,7 +252,8 @@ def test_refined_hypothesis_takes_a_thin_blobs_full_resolution_moments(skin_lut)
     the coarse fit can only floor the width at a cell's grid^2 / 12 or smear it over two
     columns, and its eq. 8 window is partly off the hand (fill 180-232 of 256 measured); one
     full-resolution moment step (refine_hypotheses) lands on the moments of the drawn ellipse's
-    pixels (computed directly; measured within 0.45 px and 32 %) with a window the hand fills
+    pixels (computed directly; measured within 0.54 px and 47 %: the 16 x 16 samples sit ~2 px
+    apart, 3-4 across the hand) with a window the hand fills
     (225-254)."""
     from humimic.perception.blobs.hypotheses import (
         color_sums,
