@@ -79,7 +79,7 @@ def test_flip_arm_keeps_the_joint_pixels_or_takes_the_fallback():
         raw = arm_flips(body, q, "R", c)[kind]
         ok = np.all(np.isfinite(raw), axis=1)
         ok[ok] = body.free_limits.inside(raw[ok])
-        assert 0.1 < ok.mean() <= 1.0
+        assert 0.1 < ok.mean() < 1.0   # measured 0.32 / 0.84 / 0.97: the fallback is taken
         np.testing.assert_array_equal(out[~ok, 6:10], np.broadcast_to(fallback[6:10],
                                                                       (np.sum(~ok), 4)))
         a, b = body.forward(q[ok]), body.forward(out[ok])
