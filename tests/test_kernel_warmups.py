@@ -87,3 +87,26 @@ def test_cue_warmup_loads_the_posterior_and_moving_edges():
                          timeout=600)
     assert out.returncode == 0, out.stderr[-2000:]
     assert out.stdout.strip().splitlines()[-1] == "[]"
+
+
+_POSTERIOR = _COUNTS + textwrap.dedent("""
+    from humimic.perception.cues.color_models import load_posterior_kernels
+
+    lut = ColorLUT(load_color_model(DEFAULT_COLOR_MODEL))
+    load_posterior_kernels()
+    before = counts()
+    img = np.random.default_rng(0).integers(0, 256, (48, 64, 3), np.uint8)
+    lut.posterior(img)
+    lut.posterior(img[10:30, 5:40])                   # zncc's colour-masked crop
+    after = counts()
+    print(sorted(k for k in after if after[k] > before.get(k, 0)))
+""")
+
+
+def test_posterior_warmup_covers_images_and_crops():
+    """Ude's perception core (stereo ``color_mask``) and its worker process load the
+    posterior's kernel with :func:`load_posterior_kernels`."""
+    out = subprocess.run([sys.executable, "-c", _POSTERIOR], capture_output=True, text=True,
+                         timeout=600)
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert out.stdout.strip().splitlines()[-1] == "[]"

@@ -44,6 +44,7 @@ from humimic.perception.blobs.identity import (
 )
 from humimic.perception.blobs.record import STATE_CODE
 from humimic.perception.blobs.stereo import StereoParams, StereoRig
+from humimic.perception.cues.color_models import load_posterior_kernels
 from humimic.scenario.base import pass_through
 
 #: Identities are re-decided, and a target may be measured, once its blobs have been tracked
@@ -121,6 +122,8 @@ class PerceptionCore:
         self.locked: list[dict[int, tuple[str, int]]] = [{}, {}]
         """Per eye, slot -> (name, age when last sure): names EM cannot have swapped since."""
         self.color_mask = cfg.stereo.color_mask
+        if self.color_mask:   # the colour-masked crops' kernel, before the first match
+            load_posterior_kernels()
         self.match_std = cfg.match_std if cfg.covariance == "following" else None
         self.C_px = np.eye(2) * cfg.pixel_std**2
         self.ident: list[dict[int, str]] = [{}, {}]

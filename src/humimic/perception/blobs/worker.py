@@ -156,7 +156,10 @@ class ProcessWorker:
 # ---- the child ---------------------------------------------------------------------------------
 def _serve(recv: Connection, send: Connection, shm_fd: int) -> None:
     import humimic.perception.blobs.core  # noqa: F401  (imports everything a core unpickles)
+    from humimic.perception.cues.color_models import load_posterior_kernels
     from humimic.sensors.camera_model import CameraImage
+
+    load_posterior_kernels()   # numba's, loaded here too: a core unpickled does not load them
 
     try:
         send.send_bytes(pickle.dumps(("ready",)))

@@ -320,3 +320,13 @@ def _posterior_image(image: np.ndarray, post_table: np.ndarray, bits: int) -> np
             out[y, x] = post_table[lut_index(image[y, x, 0], image[y, x, 1], image[y, x, 2],
                                              bits)]
     return out
+
+
+def load_posterior_kernels() -> None:
+    """Compile (or load from numba's disk cache) :func:`_posterior_image` for whole images
+    and for views with other strides (a region of an image: two specialisations), on a tiny
+    image, so that a stage's first frame -- or the first frame that needs it, as Ude's stereo
+    matching of colour-masked crops -- does not pay for it."""
+    table = np.zeros(8, np.float32)                       # a 1-bit table, as post_table
+    _posterior_image(np.zeros((2, 2, 3), np.uint8), table, 1)
+    _posterior_image(np.zeros((4, 4, 3), np.uint8)[::2, ::2], table, 1)

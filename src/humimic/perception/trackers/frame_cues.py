@@ -9,7 +9,7 @@ import cv2
 import numpy as np
 
 from humimic.maths.jit import njit
-from humimic.perception.cues.color_models import ColorLUT, lut_index
+from humimic.perception.cues.color_models import ColorLUT, load_posterior_kernels, lut_index
 from humimic.perception.cues.edges import edge_maps, strongest_channel_sobel
 from humimic.perception.cues.histograms import (
     QuantizedImage,
@@ -87,16 +87,15 @@ def skin_and_bins(image: np.ndarray, post_table: np.ndarray, bits: int, bins: in
 
 def load_kernels(lut: ColorLUT | None, bins: int) -> None:
     """Compile the cue kernels -- the strongest channel's gradient, the moving edges, the
-    patches' colour counts, with ``lut`` the skin posterior (of a whole image and of a strided
-    view: two specialisations) and colour bins -- (or load them from numba's disk cache:
+    patches' colour counts, the skin posterior (of a whole image and of a strided view:
+    :func:`~humimic.perception.cues.color_models.load_posterior_kernels`), with ``lut`` the
+    skin posterior and colour bins in one pass -- (or load them from numba's disk cache:
     0.1-0.5 s) now, on a tiny frame, so that a stage's first timed frame does not pay for it
     (every other argument is converted to the one specialisation they are compiled for)."""
     img = np.zeros((2, 2, 3), np.uint8)
     strongest_channel_sobel(img)
     moving_edges(np.zeros((2, 2), np.uint8), np.zeros((2, 2, 2), np.float32))   # DIS: float32
-    if lut is not None:
-        lut.posterior(img)
-        lut.posterior(np.zeros((4, 4, 3), np.uint8)[::2, ::2])
+    load_posterior_kernels()
     if not 256 % bins:
         patch_histograms(quantize(img, bins), np.zeros((1, 3)), np.zeros((1, 4)), 2)
         if lut is not None:

@@ -25,7 +25,7 @@ class IcuStage(ImageTrackerStage):
         super().__init__(name, camera, "head", HEAD_WIDTH_M, gt, rlog, cfg.latency, people,
                          visibility)
         self.tracker, self.identity, self.skin_lut = tracker, identity, tracker.skin
-        load_kernels(tracker.skin, cfg.bins)   # numba's cue kernels, before frame one
+        load_kernels(None, cfg.bins)     # numba's cue kernels, before frame one
         self.near, self.fx_px = cfg.near, fx_px
         self.module = "init"
         self.last_good, self.distance = -np.inf, np.inf
