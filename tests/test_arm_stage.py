@@ -91,7 +91,7 @@ def test_depth_with_the_arm_stretched_forward(tmp_path, seed):
     assert 1.5 < m["nees_position_mean"] < 6.0
     assert m["nees_position_in_band_fraction"] > 0.9  # measured 0.98, 0.98 (paper's: 0.09)
     # the orientation's error is its yaw, which nothing measures: the start's
-    assert m["orientation_tilt_rmse_deg"] < 0.5  # measured 0.12, 0.13 deg
+    assert m["orientation_tilt_rmse_deg"] < 0.35  # measured 0.12, 0.13 deg
     assert abs(m["orientation_yaw_start_deg"]) > 5.0 * m["orientation_tilt_rmse_deg"]
     assert (tmp_path / "arm_position.png").is_file()
 
