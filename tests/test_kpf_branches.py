@@ -140,3 +140,34 @@ def test_a_static_arm_switches_on_the_frame_the_cusum_predicts():
     moved = np.linalg.norm(body.forward(tr.particles).joint("r_wrist")
                            - body.forward(particles).joint("r_wrist"), axis=1)
     assert np.median(moved) > 0.05                        # the particles went with it
+
+
+def test_refined_ratios_compare_each_branchs_local_peak():
+    """With ``branch_refine_polls`` the estimate's arm and each flip are moved uphill first.
+    Without, a ratio is the flip's log-posterior minus the estimate's (computed here); with,
+    it differs, and lies within what refinement can reach: the log-posterior here (minus
+    ``k`` times the wrist's distance to the camera) is at most 0 and refinement never scores
+    lower, so ``lp(flip) <= r <= -lp(estimate)``."""
+    body = kpf_body()
+    T = _camera()
+    c = np.linalg.inv(T)[:3, 3]
+    q = _arm_poses(40, 9)[3]
+    tr = _Tracker(body, q, q[None].repeat(5, 0), c, 0.5)
+    tr.D = np.full(14, 0.05)
+
+    def lp(x):
+        return float(tr._log_post(np.atleast_2d(x), None, T)[0])
+
+    flat = FlipBranches(body, None, KpfConfig(branch_threshold=50.0))
+    flat.step(tr, q.copy(), None, T)
+    refined = FlipBranches(body, None, KpfConfig(branch_threshold=50.0, branch_refine_polls=3))
+    refined.step(tr, q.copy(), None, T)
+    r0, r1 = flat.history[-1][0][0], refined.history[-1][0][0]       # the right arm's row
+    np.testing.assert_array_equal(np.isnan(r1), np.isnan(r0))
+    flips = arm_flips(body, q[None], "R", c)
+    assert np.isfinite(r0).sum() >= 2
+    for k, kind in enumerate(FLIPS):
+        if np.isnan(r0[k]):
+            continue
+        np.testing.assert_allclose(r0[k], lp(flips[kind][0]) - lp(q), atol=1e-12)
+        assert lp(flips[kind][0]) <= r1[k] <= -lp(q) and abs(r1[k] - r0[k]) > 1e-6

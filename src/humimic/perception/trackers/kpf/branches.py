@@ -89,11 +89,12 @@ class FlipBranches:
         return (self.lik.evaluate(q, maps, T_cam_base, floors=True).log_lik
                 + tracker._prior(q) + tracker._arm_prior(q).sum(1))
 
-    def _refined(self, tracker, q: np.ndarray, side: str, f) -> tuple[np.ndarray, float]:
+    def _refined(self, tracker, q: np.ndarray, side: str, f, T_cam_base: np.ndarray
+                 ) -> tuple[np.ndarray, float]:
         """``q`` with arm ``side`` refined (``branch_refine_polls``) and its log-posterior."""
         polls = self.cfg.branch_refine_polls
         if polls > 0:
-            q, _ = refine_arms(self.body, q, f, tracker.D, self._T, polls,
+            q, _ = refine_arms(self.body, q, f, tracker.D, T_cam_base, polls,
                                self.cfg.refine_step, 0.0, tracker.limits, (side,))
         return q, float(f(q[None])[0])
 
@@ -102,7 +103,6 @@ class FlipBranches:
         passed the threshold (the tracker's particles and last estimate too); the estimate.
         With ``branch_refine_polls`` the ratios are between the refined estimate's arm and its
         refined flips (each at its branch's local peak, as the particles' modes are)."""
-        self._T = T_cam_base
         c_ref = np.linalg.inv(np.asarray(T_cam_base, float))[:3, 3]
 
         def f(q):
@@ -110,13 +110,13 @@ class FlipBranches:
         r = np.full((len(SIDES), len(FLIPS)), np.nan)
         best = {}
         for a, side in enumerate(SIDES):
-            base, ll0 = self._refined(tracker, mode, side, f)
+            base, ll0 = self._refined(tracker, mode, side, f, T_cam_base)
             flips = arm_flips(self.body, base[None], side, c_ref)
             for k, kind in enumerate(FLIPS):
                 q = flips[kind][0]
                 if not (np.all(np.isfinite(q)) and tracker.limits.inside(q[None])[0]):
                     continue
-                best[side, k], ll = self._refined(tracker, q, side, f)
+                best[side, k], ll = self._refined(tracker, q, side, f, T_cam_base)
                 r[a, k] = ll - ll0
         self.S = cusum_update(self.S, r, self.cfg.branch_forget)
         self.history.append((r, self.S.copy()))
