@@ -50,3 +50,14 @@ def test_hemisphere_continuity():
     fixed = quat.hemisphere_continuous(flipped)
     assert np.all(np.sum(fixed[1:] * fixed[:-1], axis=1) > 0)
     np.testing.assert_allclose(np.abs(fixed), np.abs(q))
+
+
+def test_rotation_angle_is_scipys_magnitude():
+    """The angle of rotation matrices (the arm's, SLAM's and mimicry's orientation error)
+    against scipy's rotation-vector magnitude, near 0 and near pi included."""
+    R = Rotation.random(500, random_state=4)
+    small = Rotation.from_rotvec(np.array([[1e-3, 0, 0], [0, 0, 3.1], [0, np.pi, 0]]))
+    for r in (R, small):
+        np.testing.assert_allclose(quat.rotation_angle(r.as_matrix()), r.magnitude(),
+                                   atol=2e-7)
+    assert quat.rotation_angle(np.eye(3)) == 0.0

@@ -19,6 +19,7 @@ import numpy as np
 from scipy.signal import correlate, savgol_filter
 
 from humimic.maths.stats import rms_of, rmse, sum_squares
+from humimic.motion.quat import rotation_angle
 
 
 def xcorr_lag(reference: np.ndarray, signal: np.ndarray, dt: float,
@@ -150,12 +151,6 @@ def budget_from_sums(sums: dict[str, float]) -> tuple[dict[str, float], dict[str
         shares = {name: sums[f"dot:{name}"] / ms for name in TERMS}
     top = sums["max"]
     return rms, shares, (top if top != -np.inf else float("nan"))
-
-
-def rotation_angle(R: np.ndarray) -> np.ndarray:
-    """Angle (rad) of rotation matrices ``(..., 3, 3)``."""
-    tr = np.trace(R, axis1=-2, axis2=-1)
-    return np.arccos(np.clip((tr - 1.0) / 2.0, -1.0, 1.0))
 
 
 def head_motion(p: np.ndarray, R: np.ndarray) -> tuple[float, float]:

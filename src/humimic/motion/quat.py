@@ -117,6 +117,13 @@ def swing(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.eye(3) + K + (K @ K) / (1.0 + c)
 
 
+def rotation_angle(R: np.ndarray) -> np.ndarray:
+    """Angle (rad, in [0, pi]) of rotation matrices ``R`` (..., 3, 3):
+    ``arccos((trace R - 1) / 2)``."""
+    tr = np.trace(R, axis1=-2, axis2=-1)
+    return np.arccos(np.clip((tr - 1.0) / 2.0, -1.0, 1.0))
+
+
 def twist_angle(R: np.ndarray, axis: np.ndarray) -> np.ndarray:
     """Angle (rad, in [-pi, pi]) of the twist of rotation matrices ``R`` (..., 3, 3) about the
     unit ``axis`` (..., 3) in their swing-twist decomposition ``R = R_swing R_twist`` (``R_swing``

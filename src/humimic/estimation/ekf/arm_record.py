@@ -101,8 +101,7 @@ def arm_errors(rec: ArmRecord, gt) -> dict[str, np.ndarray]:
     R_est = np.full_like(R_true, np.nan)
     ok = np.all(np.isfinite(a["x"][:, 3:7]), axis=1)
     R_est[ok] = quat.to_matrix(a["x"][ok, 3:7])
-    cos = (np.einsum("nij,nij->n", R_est, R_true) - 1.0) / 2.0
-    ang = np.degrees(np.arccos(np.clip(cos, -1.0, 1.0)))
+    ang = np.degrees(quat.rotation_angle(R_est @ np.swapaxes(R_true, -1, -2)))
     T = gt.pose("headcam", "W")[gt.index_of(a["t"])]
     down_I = -np.einsum("nji,j->ni", T[:, :3, :3], UP_W)
     tilt, yaw = np.full(len(ang), np.nan), np.full(len(ang), np.nan)

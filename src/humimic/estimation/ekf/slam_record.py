@@ -67,9 +67,8 @@ def pose_errors(p: np.ndarray, q: np.ndarray, p_true: np.ndarray, R_true: np.nda
     """Per-frame position error (m, W), heading error and whole-rotation error (rad)."""
     R = quat.to_matrix(q)
     dR = np.einsum("nji,njk->nik", R_true, R)
-    angle = np.arccos(np.clip((np.trace(dR, axis1=1, axis2=2) - 1.0) / 2.0, -1.0, 1.0))
     return {"position": p - p_true, "heading": wrap(heading(R) - heading(R_true)),
-            "rotation": angle}
+            "rotation": quat.rotation_angle(dR)}
 
 
 def trajectory_scores(t: np.ndarray, p: np.ndarray, q: np.ndarray, p_true: np.ndarray,
