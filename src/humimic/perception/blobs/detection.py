@@ -89,10 +89,11 @@ class DetectionParams:
     at 2 px the hand hanging 1.2 m away (8 px, thinner across) is never found."""
     refine_fit: bool = False
     """Colour-fitted hypotheses take one full-resolution moment step before they are scored
-    (:func:`~humimic.perception.blobs.hypotheses.refine_hypotheses`, the window widened by one
-    grid cell): a coarse fit of a blob narrower than a cell sits on the cell's centre and its
-    thin window slides off the blob. Off by default (see ``perception.detection.refine_fit``
-    for what was measured: small hands found, but ude_hidden_target seed 1 got worse)."""
+    (:func:`~humimic.perception.blobs.hypotheses.refine_hypotheses`: the shape widened by
+    one grid cell, the window by one more sigma): a coarse fit of a blob narrower than a cell
+    sits on the cell's centre and its thin window slides off the blob. Off by default (see
+    ``perception.detection.refine_fit`` for what was measured: small hands found, but
+    ude_hidden_target seed 1 got worse)."""
     proposal_grid_px: int = 4
     """Smallest spacing (px) of the coarse colour map the 'color' proposal draws from."""
     proposal_cells: int = 80
