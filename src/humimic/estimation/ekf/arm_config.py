@@ -42,7 +42,11 @@ class ArmNoiseConfig(Section):
     Measured on sugiyama_fig3_arm_forward, sugiyama_arm_mask and sugiyama_fig10_robot_control,
     seeds 0-9: position NEES 1.8-2.9 with 89-99 % of frames in the 95 % band with ``sensors``
     (0.10-0.11, 11-14 % with ``paper``, the covariance ~30x too large); position RMSE 8.8 /
-    17.8 / 4.1 mm against the paper's noise's 10.7 / 45.0 / 8.7 (the area trusted)."""
+    17.8 / 4.1 mm against the paper's noise's 10.7 / 45.0 / 8.7 (the area trusted). The head's
+    share assumes its IMU (``slam.mode`` fusion or inertial): with ``slam.mode: camera`` the
+    head's tilt error is not modelled (sugiyama_fig3_arm_forward seed 0: orientation tilt RMSE
+    2.9 deg against 0.40 with fusion, the same 2.9 with ``paper``; modelled 0.59 deg), so set
+    ``pitch_roll_deg`` there."""
     jerk: float = Field(mm.SIGMA_JERK, gt=0.0, le=1e4)
     """sigma of the jerk (m/s^3): 15, as the movement model (eq. 10's correspondence)."""
     angular_acc: float = Field(mm.SIGMA_ALPHA, gt=0.0, le=1e4)
