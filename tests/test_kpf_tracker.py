@@ -142,3 +142,39 @@ def test_table1_arguments_that_select_no_run_exit_2(tmp_path, capsys, args, key)
     err = capsys.readouterr().err.strip()
     assert code == 2 and len(err.splitlines()) == 1 and key in err, err
     assert not (tmp_path / "sweep").exists()
+
+
+def test_flip_branches_run_inside_the_tracker():
+    """``branch_threshold`` inside the tracker (its measured setting, threshold 0.5 and the
+    ring 1.5, with one refinement poll instead of 3 and 100 particles: a short run): every
+    published frame adds one (ratios, sums) pair per arm and flip kind, the sums the CUSUM of
+    the ratios (recomputed here from the history; a row restarts only after passing the
+    threshold, a switch), and the estimates stay finite."""
+    from humimic.perception.trackers.kpf.branches import cusum_update
+
+    sc = load_scenario(SCENARIOS_DIR / "schmidt_side.yaml",
+                       ['output.rerun="off"', "output.plots=false",
+                        "trackers.kpf.n_particles=100", "trackers.kpf.iterations=1",
+                        "trackers.kpf.branch_threshold=0.5", "trackers.kpf.branch_skin_ring=1.5",
+                        "trackers.kpf.branch_refine_polls=1"], duration=1.2)
+    rngs = Rngs(sc.seed)
+    world = World(sc, rngs)
+    rlog = RerunLog(world.scene, "off", None, "test")
+    probe = Poses()
+    stages = [*build_stages(sc, world, rngs, rlog), probe]
+    try:
+        simulate(world, stages, rlog, progress=False)
+        kpf = next(s for s in stages if s.name == "kpf")
+    finally:
+        for stage in stages:
+            stage.close()
+        world.close()
+    hist = kpf.tracker.branches.history
+    msgs = [m.value for m in probe.msgs if m.value.tracker == "kpf"]
+    assert len(hist) == len(msgs) >= 6                 # every published frame
+    S = np.zeros((2, 3))
+    for r, S_t in hist:
+        S = cusum_update(S, r, 0.9)
+        S[np.all(S_t == 0.0, axis=1) & np.any(S > 0.5, axis=1)] = 0.0   # a switch resets
+        np.testing.assert_allclose(S_t, S, atol=1e-12)
+    assert all(np.all(np.isfinite(m.state)) for m in msgs)
