@@ -34,13 +34,11 @@ class Poses(Stage):
         bus.subscribe("poses", lambda topic, msg: self.msgs.append(msg))
 
 
-@pytest.fixture(scope="module")
-def run():
+def run_side(sets: list[str], duration: float):
+    """``schmidt_side`` without outputs and with ``sets``: its metrics, the poses published
+    and the kpf stage."""
     sc = load_scenario(SCENARIOS_DIR / "schmidt_side.yaml",
-                       ['output.rerun="off"', "output.plots=false",
-                        "trackers.kpf.n_particles=150", "trackers.kpf.iterations=2",
-                        'cameras.covered=[{camera: left, start: 1.25, end: 1.6}]'],
-                       duration=2.0)
+                       ['output.rerun="off"', "output.plots=false", *sets], duration=duration)
     rngs = Rngs(sc.seed)
     world = World(sc, rngs)
     rlog = RerunLog(world.scene, "off", None, "test")
@@ -57,6 +55,12 @@ def run():
             stage.close()
         world.close()
     return metrics, probe.msgs, kpf
+
+
+@pytest.fixture(scope="module")
+def run():
+    return run_side(["trackers.kpf.n_particles=150", "trackers.kpf.iterations=2",
+                     'cameras.covered=[{camera: left, start: 1.25, end: 1.6}]'], 2.0)
 
 
 def test_poses_published_per_frame_and_scored(run):
@@ -152,25 +156,12 @@ def test_flip_branches_run_inside_the_tracker():
     threshold, a switch), and the estimates stay finite."""
     from humimic.perception.trackers.kpf.branches import cusum_update
 
-    sc = load_scenario(SCENARIOS_DIR / "schmidt_side.yaml",
-                       ['output.rerun="off"', "output.plots=false",
-                        "trackers.kpf.n_particles=100", "trackers.kpf.iterations=1",
-                        "trackers.kpf.branch_threshold=0.5", "trackers.kpf.branch_skin_ring=1.5",
-                        "trackers.kpf.branch_refine_polls=1"], duration=1.2)
-    rngs = Rngs(sc.seed)
-    world = World(sc, rngs)
-    rlog = RerunLog(world.scene, "off", None, "test")
-    probe = Poses()
-    stages = [*build_stages(sc, world, rngs, rlog), probe]
-    try:
-        simulate(world, stages, rlog, progress=False)
-        kpf = next(s for s in stages if s.name == "kpf")
-    finally:
-        for stage in stages:
-            stage.close()
-        world.close()
+    _, published, kpf = run_side(["trackers.kpf.n_particles=100", "trackers.kpf.iterations=1",
+                                  "trackers.kpf.branch_threshold=0.5",
+                                  "trackers.kpf.branch_skin_ring=1.5",
+                                  "trackers.kpf.branch_refine_polls=1"], 1.2)
     hist = kpf.tracker.branches.history
-    msgs = [m.value for m in probe.msgs if m.value.tracker == "kpf"]
+    msgs = [m.value for m in published if m.value.tracker == "kpf"]
     assert len(hist) == len(msgs) >= 6                 # every published frame
     S = np.zeros((2, 3))
     for r, S_t in hist:
