@@ -265,7 +265,7 @@ def test_load_kernels_loads_those_a_tracking_step_calls():
                 proposal.walk_tables, ellipsoid.flipped_rotation_sum,
                 histograms.patch_bhattacharyya, histograms.patch_counts_kernel,
                 components.measure_blobs, frame_cues.skin_and_bins,
-                edges.strongest_channel_sobel)
+                edges._strongest)
     lut = ColorLUT(load_color_model(DEFAULT_COLOR_MODEL), 6)
     load_kernels(lut, GestConfig().bins)
     loaded = [len(k.signatures) for k in kernels_]
