@@ -14,7 +14,6 @@ timed apart: they run only until the hand is found and after a loss).
 # ruff: noqa: I001  -- select_gl_backend() runs before mujoco is imported (headless GL)
 from __future__ import annotations
 
-import argparse
 import sys
 import time
 from pathlib import Path
@@ -25,12 +24,11 @@ select_gl_backend()  # before anything imports mujoco
 
 import mujoco
 import numpy as np
-from rich.console import Console
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from _harness import Row, per_call, row  # noqa: E402
-from run_all import print_table  # noqa: E402
+from run_all import tracker_main  # noqa: E402
 
 from humimic.paths import SCENARIOS_DIR  # noqa: E402
 from humimic.perception.blobs.config import DEFAULT_COLOR_MODEL  # noqa: E402
@@ -146,15 +144,7 @@ def _search(tracker, img, g):
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--repeats", type=int, default=7)
-    ap.add_argument("--quick", action="store_true", help="3 repeats")
-    ap.add_argument("--clock", choices=("wall", "cpu"), default="wall",
-                    help="cpu: process CPU time (a shared, loaded machine)")
-    args = ap.parse_args(argv)
-    rows = bench(3 if args.quick else args.repeats, args.clock)
-    print_table(Console(), rows, [], "hand2d tracker: per-frame cost (no rendering)")
-    return 0
+    return tracker_main(bench, "hand2d tracker: per-frame cost (no rendering)", __doc__, argv)
 
 
 if __name__ == "__main__":

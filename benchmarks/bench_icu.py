@@ -14,7 +14,6 @@ tutor's face ~47 px at 2.5 m, the other person walking in).
 # ruff: noqa: I001  -- select_gl_backend() runs before mujoco is imported (headless GL)
 from __future__ import annotations
 
-import argparse
 import sys
 from pathlib import Path
 
@@ -23,13 +22,12 @@ from humimic import select_gl_backend
 select_gl_backend()  # before anything imports mujoco
 
 import numpy as np
-from rich.console import Console
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from _harness import Row, per_call, row  # noqa: E402
 from bench_hand2d import render  # noqa: E402
-from run_all import print_table  # noqa: E402
+from run_all import tracker_main  # noqa: E402
 
 from humimic.perception.blobs.config import DEFAULT_COLOR_MODEL  # noqa: E402
 from humimic.perception.cues.color_models import ColorLUT, load_color_model  # noqa: E402
@@ -112,15 +110,7 @@ def bench(repeats: int, clock: str = "wall") -> list[Row]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--repeats", type=int, default=7)
-    ap.add_argument("--quick", action="store_true", help="3 repeats")
-    ap.add_argument("--clock", choices=("wall", "cpu"), default="wall",
-                    help="cpu: process CPU time (a shared, loaded machine)")
-    args = ap.parse_args(argv)
-    rows = bench(3 if args.quick else args.repeats, args.clock)
-    print_table(Console(), rows, [], "ICU tracker: per-frame cost (no rendering)")
-    return 0
+    return tracker_main(bench, "ICU tracker: per-frame cost (no rendering)", __doc__, argv)
 
 
 if __name__ == "__main__":

@@ -136,6 +136,19 @@ def print_table(console: Console, rows: list[Row], peers: list[Peer], title: str
         console.print(f"[dim]{i:>2}.[/dim] {n}", highlight=False)
 
 
+def tracker_main(bench, title: str, doc: str, argv: list[str] | None = None) -> int:
+    """The command line of a per-tracker benchmark (``bench(repeats, clock) -> rows``): repeats,
+    ``--quick``, ``--clock``; prints the rows as one table."""
+    ap = argparse.ArgumentParser(description=doc.split("\n")[0])
+    ap.add_argument("--repeats", type=int, default=7)
+    ap.add_argument("--quick", action="store_true", help="3 repeats")
+    ap.add_argument("--clock", choices=("wall", "cpu"), default="wall",
+                    help="cpu: process CPU time (a shared, loaded machine)")
+    args = ap.parse_args(argv)
+    print_table(Console(), bench(3 if args.quick else args.repeats, args.clock), [], title)
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--repeats", type=int, default=7, help="repeats per benchmark (default 7)")
