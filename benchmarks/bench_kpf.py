@@ -13,7 +13,7 @@ first tracks a frame untimed (warm-up: the compiled kernels' loading -- or compi
 empty numba cache -- and the caches are not counted).
 
     PYTHONPATH=src MUJOCO_GL=egl python benchmarks/bench_kpf.py [--frames N] [--repeats R]
-        [--opencv-threads N] [--same-seed]
+        [--opencv-threads N] [--same-seed] [--only NAME] [--config P,I]
 """
 
 from __future__ import annotations
@@ -51,7 +51,13 @@ def main() -> None:
                    help="every repeat with seed 0 (the same work), and the rate of each "
                    "frame's least CPU time over the repeats (other processes' interference "
                    "-- cache, memory bandwidth, hyper-threads -- only ever adds time)")
+    p.add_argument("--only", default=None,
+                   help="one tracker of schmidt_table1.yaml (kpf, kpf_paper, condensation)")
+    p.add_argument("--config", action="append", default=None, metavar="P,I",
+                   help="(particles, iterations) to run (repeatable; default 150,2 and 1000,3)")
     args = p.parse_args()
+    configs = [(150, 2), (1000, 3)] if args.config is None else [
+        tuple(int(x) for x in c.split(",")) for c in args.config]
     if args.opencv_threads is not None:
         cv2.setNumThreads(args.opencv_threads)
     seq = render_sequence("kpf", HUMAN, args.frames / 7.5, cameras="left", rate=7.5)
@@ -70,7 +76,11 @@ def main() -> None:
     print(f"kpf tracker, {len(frames) - 1} frames of 320 x 240, median of {args.repeats} "
           "repeats (frames per second, cue maps + filter, rendering excluded)")
     variants = load_scenario(SCENARIOS_DIR / "schmidt_table1.yaml").trackers
-    for (n, it) in ((150, 2), (1000, 3)):
+    if args.only is not None:
+        if args.only not in variants:
+            p.error(f"--only: no tracker {args.only!r} (one of {', '.join(variants)})")
+        variants = {args.only: variants[args.only]}
+    for (n, it) in configs:
         for name, base in variants.items():
             cfg = base.model_copy(update={"n_particles": n, "iterations": it})
             rates, cpu_rates, per_frame = [], [], []

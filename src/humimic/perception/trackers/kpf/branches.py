@@ -85,7 +85,7 @@ class FlipBranches:
         with ``branch_skin_ring`` its likelihood with that ring (the tracker's colours)."""
         if self.lik is None:
             return tracker._log_post(q, maps, T_cam_base, floors=True)
-        self.lik.references, self.lik.stacked = tracker.lik.references, tracker.lik.stacked
+        self.lik.share_references(tracker.lik.references)
         return (self.lik.evaluate(q, maps, T_cam_base, floors=True).log_lik
                 + tracker._prior(q) + tracker._arm_prior(q).sum(1))
 

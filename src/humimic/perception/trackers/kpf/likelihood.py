@@ -2,9 +2,9 @@
 
 Every particle's body model is projected (:func:`humimic.bodymodel.limb_view.limb_view`, the
 compiled subset of :func:`~humimic.bodymodel.project` the cues need), the feature points of all
-limbs are sampled from the frame's :class:`~humimic.perception.trackers.kpf.cues.CueMaps` in one
-compiled pass per cue (:mod:`~humimic.perception.trackers.kpf.limb_cues`), each limb's response
-becomes a cost ``e``, and
+limbs are sampled from the frame's :class:`~humimic.perception.trackers.kpf.cues.CueMaps` and
+each limb's response becomes a cost ``e`` in one compiled pass for all cues
+(:func:`~humimic.perception.trackers.kpf.cue_costs.cue_costs`), and
 
     log p(y | x) = sum_l 1/N_l sum_{c in cues(l)} -e_{c,l}^2 / (2 sigma_c^2)        (eqs. 9-10)
 
@@ -21,9 +21,8 @@ import numpy as np
 
 from humimic import bodymodel as bm
 from humimic.bodymodel.limb_view import limb_view
-from humimic.maths.arrays import stack
 from humimic.perception.trackers.kpf import cues as C
-from humimic.perception.trackers.kpf import limb_cues as K
+from humimic.perception.trackers.kpf.cue_costs import cue_costs, eq10_terms
 from humimic.perception.trackers.kpf.frame_cues import FrameCues, sample_box
 from humimic.perception.trackers.kpf.skin_ring import ring_log_term, ring_pad, ring_skin
 
@@ -81,28 +80,23 @@ class Likelihood:
         lay = body.layout
         self.limbs = [self.parts[i] for i in lay.cone_idx]
         """The cone parts, in the order of the limb features."""
-        self.limb_cols = np.asarray(lay.cone_idx, int)
-        self.need = {c for p in self.limbs for c in self.use[p]}
-        self.colour_sets = {}
-        """Band count -> (limb positions, part names) of the limbs with the colour cue."""
-        for j, p in enumerate(self.limbs):
-            if "colour" in self.use[p]:
-                js, names = self.colour_sets.setdefault(self.bands[p], ([], []))
-                js.append(j)
-                names.append(p)
-        self.colour_sets = {b: (np.array(js, np.intp), names)
-                            for b, (js, names) in self.colour_sets.items()}
-        self.cue_limbs = {c: np.array([j for j, p in enumerate(self.limbs) if c in self.use[p]],
-                                      np.intp) for c in ("edge", "ridge")}
-        """Cue -> positions (among the limbs) of the limbs it is configured on."""
-        self.cue_cols = {c: self.limb_cols[js] for c, js in self.cue_limbs.items()}
-        self.colour_cols = {b: self.limb_cols[js] for b, (js, _) in self.colour_sets.items()}
-        self.stacked: dict[int, np.ndarray] = {}
-        """Band count -> (J, B, 3) the references of its limbs, once all are adapted."""
+        self.limb_cue = np.array([[c in self.use[p] for c in ("edge", "ridge")]
+                                  for p in self.limbs], np.bool_).reshape(-1, 2)
+        """(cones, 2) the edge / ridge cue is configured on the cone."""
+        self.limb_bands = np.array([self.bands[p] if "colour" in self.use[p] else 0
+                                    for p in self.limbs], np.intp)
+        """(cones,) the cone's colour bands (0: no colour cue)."""
+        self.colour_limbs = [(j, p) for j, p in enumerate(self.limbs) if self.limb_bands[j]]
+        """(position among the cones, part name) of the limbs with the colour cue."""
+        self.refs = np.zeros((len(self.limbs), max(self.limb_bands, default=0), 3))
+        """(cones, B_max, 3) :attr:`references` laid out for the cost pass."""
+        self.has_ref = np.zeros(len(self.limbs), np.bool_)
         ell = [self.parts[i] for i in lay.ellipsoid_idx]
         self.skin_js = np.array([j for j, p in enumerate(ell) if "skin" in self.use[p]], int)
         """Positions (among the ellipsoids) of the parts with the skin cue."""
-        self.skin_cols = np.asarray(lay.ellipsoid_idx, int)[self.skin_js]
+        self.ell_skin = np.isin(np.arange(len(ell)), self.skin_js)
+        """(ellipsoids,) the skin cue is configured on the ellipsoid."""
+        self.balance_planes = np.stack([self.balance[c] for c in CUE_NAMES])
         self.hand_js = np.array([j for j in self.skin_js if limb_type(ell[j]) == "hand"], int)
         """Positions (among the ellipsoids) of the hands with the skin cue (``skin_ring``)."""
 
@@ -113,7 +107,6 @@ class Likelihood:
         ``floors``: the sigmas are the configured floors whatever ``sigma_from_spread`` (one
         objective for any batch, e.g. a local search's few candidates)."""
         cfg = self.cfg
-        n = len(q)
         view = limb_view(self.body, self.body.forward(q), self.intr, T_cam_base)
         ellipses = view.ellipses
         ring = cfg.skin_ring if len(self.hand_js) else None
@@ -121,38 +114,15 @@ class Likelihood:
             lo, hi = sample_box(view, ellipses)
             pad = 0.0 if ring is None else ring_pad(ellipses[1][:, self.hand_js], ring)
             maps = maps.covering(lo - pad, hi + pad)
-        planes = np.full((len(CUE_NAMES), n, len(self.parts)), np.nan)
+        planes, got = cue_costs(maps, view, self.limb_cue, self.limb_bands, self.refs,
+                                self.has_ref, self.ell_skin, len(self.parts), cfg.edge_points,
+                                cfg.ridge_points, BAND_SHRINK)
         cost = dict(zip(CUE_NAMES, planes, strict=True))
-        ok = view.valid[:, view.cone_idx] & view.generators
-        for c, fn, m in (("edge", K.edge_responses, cfg.edge_points),
-                         ("ridge", K.ridge_responses, cfg.ridge_points)):
-            js = self.cue_limbs[c]
-            if len(js):
-                f = fn(maps, view.sides_uv, view.axis_uv, js, m)
-                cost[c][:, self.cue_cols[c]] = 1.0 - np.where(ok[:, js], f, 0.0)
-        colours = {}
-        if self.colour_sets:
-            for b, (js, names) in self.colour_sets.items():
-                got = K.band_colours(maps, view.sides_uv, js, b, BAND_SHRINK)   # (N, J, B, 3)
-                for k, p in enumerate(names):
-                    colours[p] = got[:, k]
-                if b in self.stacked:
-                    f = C.colour_response(got, self.stacked[b])              # (N, J)
-                else:   # a limb before its first adaptation: no colour term
-                    f = np.column_stack([
-                        C.colour_response(got[:, k:k + 1], self.references[p][None])[:, 0]
-                        if p in self.references else np.zeros(n)
-                        for k, p in enumerate(names)])
-                cost["colour"][:, self.colour_cols[b]] = np.where(ok[:, js], f, 1.0)
-        if len(self.skin_js):
-            centre, axes, angle = ellipses
-            j = self.skin_js
-            f = K.skin_fractions(maps, centre[:, j], axes[:, j], angle[:, j])
-            ok = view.valid[:, view.ellipsoid_idx[j]]
-            cost["skin"][:, self.skin_cols] = 1.0 - np.where(ok, f, 0.0)
-        terms = self.combine(cost, floors)
+        colours = {p: got[:, j, :self.bands[p]] for j, p in self.colour_limbs}
+        terms = self._terms(planes, cost, floors)
         if ring is not None:   # our extension: the hands' skin surround (kpf/skin_ring.py)
             j = self.hand_js
+            centre, axes, angle = ellipses
             s = ring_skin(maps, centre[:, j], axes[:, j], angle[:, j], ring)
             s = np.where(view.valid[:, view.ellipsoid_idx[j]], s, 0.0)
             terms[:, np.asarray(view.ellipsoid_idx)[j]] += ring_log_term(s, self.floor["skin"])
@@ -175,13 +145,12 @@ class Likelihood:
     def combine(self, cost: dict[str, np.ndarray], floors: bool = False) -> np.ndarray:
         """Schmidt eqs. 9-10 per part ``l``: ``1/N_l sum_c -e^2 / (2 sigma_c^2)``, ``(N, parts)``
         (their sum over parts is the pose's log-likelihood; ``floors``: :meth:`sigmas`')."""
+        return self._terms(np.stack([cost[c] for c in CUE_NAMES]), cost, floors)
+
+    def _terms(self, planes: np.ndarray, cost: dict[str, np.ndarray], floors: bool
+               ) -> np.ndarray:
         sig = self.sigmas(cost, floors)
-        total = 0.0
-        for c, e in cost.items():
-            if self.any_used[c]:
-                e = np.where(self.used[c], e, 0.0)
-                total = total - (e * e) * (self.balance[c] / (2.0 * sig[c] ** 2))
-        return np.asarray(total)
+        return eq10_terms(planes, self.balance_planes, [sig[c] for c in CUE_NAMES])
 
     def adapt(self, colours: dict[str, np.ndarray]) -> None:
         """Schmidt eq. 7 from the best mode's band colours ``{part: (B, 3)}``:
@@ -190,6 +159,12 @@ class Likelihood:
         for p, c in colours.items():
             ref = self.references.get(p)
             self.references[p] = c.copy() if ref is None else a * c + (1 - a) * ref
-        self.stacked = {b: stack([self.references[p] for p in names])
-                        for b, (_, names) in self.colour_sets.items()
-                        if all(p in self.references for p in names)}
+        self.share_references(self.references)
+
+    def share_references(self, references: dict[str, np.ndarray]) -> None:
+        """Use ``references`` (another likelihood's :attr:`references`, or our own)."""
+        self.references = references
+        for j, p in self.colour_limbs:
+            self.has_ref[j] = p in references
+            if self.has_ref[j]:
+                self.refs[j, :self.bands[p]] = references[p]

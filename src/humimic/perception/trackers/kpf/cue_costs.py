@@ -1,0 +1,221 @@
+"""All of Schmidt et al.'s cue costs of N particles' limbs in one compiled pass, and eq. 10's
+balanced sum of their Gaussians, compiled.
+
+:mod:`~humimic.perception.trackers.kpf.limb_cues` has one kernel per cue; the likelihood then
+turned each kernel's responses into costs with numpy (masks of invalid limbs, the colour
+distance of eq. 6, scatter into ``(N, parts)`` planes) and summed eq. 10 over the cues with
+more numpy: at the paper's 150 particles numpy's per-call overhead of those dozens of small
+operations cost as much as the kernels. :func:`cue_costs` does it all in one loop over
+particles and parts, reading the maps through the same scalar arithmetic as ``limb_cues``'
+kernels, in the same order (so the costs are bit-identical to theirs), and :func:`eq10_terms`
+sums eq. 10. Costs (0 perfect):
+
+* edge (eqs. 1-2), ridge (eqs. 3-4), skin (eq. 8): ``1 - f`` of the response ``f``, 1 where
+  the limb is invalid (behind the camera, no contour generators; for skin: the ellipsoid);
+* colour (eqs. 5-6): the mean over the limb's bands of ``||C_t - C_ref||``, 0 before the
+  limb's first adaptation (no reference), 1 where the limb is invalid;
+* NaN where the cue is not configured on the part.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from humimic.maths.jit import njit
+from humimic.perception.trackers.kpf.cues import _DISC, _QUAD_GRID, RIDGE_WIDTH_PX
+from humimic.perception.trackers.kpf.limb_cues import _axis_angle, _pixel
+
+#: Cost planes' order (``likelihood.CUE_NAMES``).
+EDGE, RIDGE, COLOUR, SKIN = 0, 1, 2, 3
+
+
+@njit
+def _edge(sides, axis, n, j, grad, u0, v0, m_e):
+    """``limb_cues._edge_kernel``'s response of limb ``j`` of particle ``n``."""
+    half = m_e // 2
+    a = _axis_angle(axis, n, j)
+    c, s = np.cos(a), np.sin(a)
+    acc = 0.0
+    for side in range(2):
+        bu, bv = sides[n, j, side, 0, 0], sides[n, j, side, 0, 1]
+        tu, tv = sides[n, j, side, 1, 0], sides[n, j, side, 1, 1]
+        for k in range(half):
+            f = (k + 0.5) / half
+            u, v = bu * (1.0 - f) + tu * f, bv * (1.0 - f) + tv * f
+            acc += abs(_pixel(grad, u, v, u0, v0, 1) * c - _pixel(grad, u, v, u0, v0, 0) * s)
+    return acc / (2 * half)
+
+
+@njit
+def _ridge(sides, axis, n, j, ridge, shapes, rows, u0, v0, m_r):
+    """``limb_cues._ridge_kernel``'s response of limb ``j`` of particle ``n``."""
+    levels = shapes.shape[0]
+    au, av = axis[n, j, 0, 0], axis[n, j, 0, 1]
+    du, dv = axis[n, j, 1, 0] - au, axis[n, j, 1, 1] - av
+    a = np.arctan2(dv, du)
+    length = max(np.hypot(du, dv), 1e-12)
+    cu, cv = dv / length, -du / length                  # across the axis
+    w0 = abs((sides[n, j, 0, 0, 0] - sides[n, j, 1, 0, 0]) * cu
+             + (sides[n, j, 0, 0, 1] - sides[n, j, 1, 0, 1]) * cv)
+    w1 = abs((sides[n, j, 0, 1, 0] - sides[n, j, 1, 1, 0]) * cu
+             + (sides[n, j, 0, 1, 1] - sides[n, j, 1, 1, 1]) * cv)
+    width = 0.0
+    for k in range(m_r):
+        f = (k + 0.5) / m_r
+        width += w0 * (1.0 - f) + w1 * f
+    width /= m_r
+    if not width >= 1e-3:                               # fmax: NaN -> 1e-3
+        width = 1e-3
+    mu = int(min(max(np.rint(np.log2(width / RIDGE_WIDTH_PX)), 0.0), levels - 1.0))
+    scale = 0.5 ** mu
+    h_mu, w_mu, r0 = shapes[mu, 0], shapes[mu, 1], rows[mu]
+    c2, s2 = np.cos(2.0 * a), np.sin(2.0 * a)
+    acc = 0.0
+    for k in range(m_r):
+        f = (k + 0.5) / m_r
+        x = np.rint((au * (1.0 - f) + (au + du) * f) * scale) - u0 * scale
+        y = np.rint((av * (1.0 - f) + (av + dv) * f) * scale) - v0 * scale
+        if not (x >= 0.0 and y >= 0.0 and x < w_mu and y < h_mu):
+            continue                                    # off the level (or NaN): 0
+        xi, yi = int(x), int(y) + r0
+        t = float(ridge[yi, xi, 2])
+        p = ridge[yi, xi, 0] * c2 + ridge[yi, xi, 1] * s2
+        acc += abs(t - p) - abs(t + p)
+    return acc / m_r
+
+
+@njit
+def _bands(sides, n, j, bands, keep, rgb, u0, v0, grid, out):
+    """``limb_cues._band_kernel``: the mean RGB of limb ``j``'s ``bands`` quadrilaterals into
+    ``out (bands, 3)``."""
+    corner, p = np.empty((4, 2)), np.empty((2, 2))
+    m = grid.shape[0]
+    for b in range(bands):
+        for e in range(2):                              # slice ends b, b + 1 along the limb
+            f = (b + e) / bands
+            for side in range(2):
+                for d in range(2):
+                    p[side, d] = (sides[n, j, side, 0, d] * (1.0 - f)
+                                  + sides[n, j, side, 1, d] * f)
+            for d in range(2):
+                mid = 0.5 * (p[0, d] + p[1, d])
+                corner[e, d] = mid + keep * (p[0, d] - mid)       # side 1: 0 base, 1 top
+                corner[3 - e, d] = mid + keep * (p[1, d] - mid)   # side 2: 2 top, 3 base
+        acc = np.zeros(3)
+        for g in range(m):
+            al, ac = grid[g, 0], grid[g, 1]
+            wts = ((1 - al) * (1 - ac), al * (1 - ac), al * ac, (1 - al) * ac)
+            u = v = 0.0
+            for c in range(4):
+                u += wts[c] * corner[c, 0]
+                v += wts[c] * corner[c, 1]
+            for ch in range(3):
+                acc[ch] += _pixel(rgb, u, v, u0, v0, ch)
+        for ch in range(3):
+            out[b, ch] = acc[ch] / m
+
+
+@njit
+def _skin(centre, axes, angle, n, e, skin, u0, v0, disc):
+    """``limb_cues._skin_kernel``: the skin fraction of ellipse ``e`` of particle ``n``."""
+    c, s = np.cos(angle[n, e]), np.sin(angle[n, e])
+    acc = 0.0
+    for k in range(disc.shape[0]):
+        x, y = disc[k, 0] * axes[n, e, 0], disc[k, 1] * axes[n, e, 1]
+        acc += _pixel(skin, centre[n, e, 0] + c * x - s * y, centre[n, e, 1] + s * x + c * y,
+                      u0, v0, 0)
+    return acc / disc.shape[0]
+
+
+@njit
+def _costs_kernel(sides, axis, generators, valid, cone_idx, ell_idx, centre, axes, angle,
+                  limb_cue, limb_bands, refs, has_ref, ell_skin, grad, ridge, shapes, rows,
+                  rgb, skin, u0, v0, m_e, m_r, keep, grid, disc, n_parts):
+    n_p, n_c, n_e = sides.shape[0], sides.shape[1], centre.shape[1]
+    cost = np.full((4, n_p, n_parts), np.nan)
+    colours = np.zeros((n_p, n_c, refs.shape[1], 3))
+    for n in range(n_p):
+        for j in range(n_c):
+            col = cone_idx[j]
+            ok = valid[n, col] and generators[n, j]
+            if limb_cue[j, EDGE]:
+                f = _edge(sides, axis, n, j, grad, u0, v0, m_e) if ok else 0.0
+                cost[EDGE, n, col] = 1.0 - f
+            if limb_cue[j, RIDGE]:
+                f = _ridge(sides, axis, n, j, ridge, shapes, rows, u0, v0, m_r) if ok else 0.0
+                cost[RIDGE, n, col] = 1.0 - f
+            b = limb_bands[j]
+            if b > 0:                                   # band colours even where invalid
+                _bands(sides, n, j, b, keep, rgb, u0, v0, grid, colours[n, j])
+                if not ok:
+                    cost[COLOUR, n, col] = 1.0
+                elif has_ref[j]:                        # Schmidt eq. 6
+                    acc = 0.0
+                    for k in range(b):
+                        r = colours[n, j, k, 0] - refs[j, k, 0]
+                        g = colours[n, j, k, 1] - refs[j, k, 1]
+                        bl = colours[n, j, k, 2] - refs[j, k, 2]
+                        acc += np.sqrt(r * r + g * g + bl * bl)
+                    cost[COLOUR, n, col] = acc / b
+                else:                                   # before the first adaptation
+                    cost[COLOUR, n, col] = 0.0
+        for e in range(n_e):
+            if ell_skin[e]:
+                col = ell_idx[e]
+                f = _skin(centre, axes, angle, n, e, skin, u0, v0, disc) if valid[n, col] \
+                    else 0.0
+                cost[SKIN, n, col] = 1.0 - f
+    return cost, colours
+
+
+def cue_costs(maps, view, limb_cue: np.ndarray, limb_bands: np.ndarray, refs: np.ndarray,
+              has_ref: np.ndarray, ell_skin: np.ndarray, n_parts: int, m_e: int, m_r: int,
+              shrink: float) -> tuple[np.ndarray, np.ndarray]:
+    """Schmidt eqs. 1-8 as costs of every configured (cue, part) of the particles of ``view``
+    (a :class:`~humimic.bodymodel.limb_view.LimbView`) on ``maps``
+    (:class:`~humimic.perception.trackers.kpf.cues.CueMaps`): ``(cost (4, N, n_parts),
+    colours (N, cones, B_max, 3))``, the cost planes in :data:`EDGE`, :data:`RIDGE`,
+    :data:`COLOUR`, :data:`SKIN` order (NaN where the cue is not configured), the cones'
+    mean band colours (zeros past their ``limb_bands`` and on cones without the colour cue).
+    Per cone (position among ``view.cone_idx``): ``limb_cue (cones, 2)`` bool edge / ridge,
+    ``limb_bands (cones,)`` colour bands (0: no colour cue), ``refs (cones, B_max, 3)`` the
+    adapted reference colours where ``has_ref (cones,)``; per ellipsoid ``ell_skin`` bool;
+    ``m_e`` (even), ``m_r`` the edge and ridge points, ``shrink`` the bands' shrink towards
+    the axis."""
+    u0, v0 = maps.origin
+    skin = maps.skin[..., None] if maps.skin.ndim == 2 else maps.skin
+    centre, axes, angle = view.ellipses
+    return _costs_kernel(
+        view.sides_uv, view.axis_uv, view.generators, view.valid,
+        np.ascontiguousarray(view.cone_idx, np.intp),
+        np.ascontiguousarray(view.ellipsoid_idx, np.intp), centre, axes, angle, limb_cue,
+        limb_bands, refs, has_ref, ell_skin, maps.gradient, maps.ridge,
+        np.ascontiguousarray(maps.level_shapes, np.intp),
+        np.ascontiguousarray(maps.level_rows, np.intp), maps.rgb, skin, float(u0), float(v0),
+        int(m_e), int(m_r), 1.0 - float(shrink), _QUAD_GRID, _DISC, int(n_parts))
+
+
+@njit
+def _eq10_kernel(cost, coef, used, any_used):
+    n_c, n_p, n_parts = cost.shape
+    out = np.empty((n_p, n_parts))
+    for n in range(n_p):
+        for p in range(n_parts):
+            total = 0.0
+            for c in range(n_c):
+                if any_used[c]:
+                    e = cost[c, n, p] if used[c, p] else 0.0
+                    total = total - (e * e) * coef[c, p]
+            out[n, p] = total
+    return out
+
+
+def eq10_terms(cost: np.ndarray, balance: np.ndarray, sigma: np.ndarray) -> np.ndarray:
+    """Schmidt eqs. 9-10 per part ``l``: ``1/N_l sum_c -e_{c,l}^2 / (2 sigma_c^2)``,
+    ``(N, parts)``, of costs ``cost (cues, N, parts)`` (read only where ``balance (cues,
+    parts)``, eq. 10's ``1/N_l`` where the cue is used on the part and 0 elsewhere, is not 0)
+    with ``sigma (cues,)``; summed over the cues in their order (as numpy would)."""
+    balance = np.asarray(balance, float)
+    coef = np.stack([balance[c] / (2.0 * float(sigma[c]) ** 2) for c in range(len(balance))])
+    used = balance != 0.0
+    return _eq10_kernel(np.ascontiguousarray(cost, float), coef, used, used.any(axis=1))
