@@ -1,0 +1,150 @@
+"""A/B speed of the kpf tracker in two source trees (e.g. main's and a branch's), interleaved.
+
+On a machine shared with other work a single benchmark's rate drifts with the load by more
+than a change's gain; comparing two trees run one after the other in alternating order (A B,
+B A, A B, ...), each run in a fresh subprocess importing its tree (``PYTHONPATH``), puts both
+under the same load. Every run tracks the same rendered frames (rendered once, by tree A's
+code, and handed to the runs in a pickle) with the same seed, and reports the rate per second
+of its thread's CPU time (OpenCV on this thread: ``cv2.setNumThreads(1)``, so every operation
+is counted), the kernels loaded before timing (:func:`~humimic.perception.trackers.kpf.warmup.
+load_kernels`). Printed: each tree's median rate over the rounds (and quartiles) and the ratio
+B / A of the medians and the median of the per-round ratios.
+
+    MUJOCO_GL=egl python benchmarks/bench_kpf_ab.py /work/main/src /work/wt-kpf-speed/src \\
+        [--rounds R] [--config P,I] [--only NAME] [--frames N] [--repeats K]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import pickle
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+
+
+def _env(tree: str) -> dict:
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join([str(Path(tree).resolve()), str(HERE)])
+    env.setdefault("MUJOCO_GL", "egl")
+    return env
+
+
+def prepare(path: str, frames: int) -> None:
+    """Render the frames and the tracker's start (as ``bench_kpf``) into a pickle."""
+    from _frames import render_sequence
+    from bench_kpf import HUMAN
+
+    from humimic import bodymodel as bm
+    from humimic.paths import SCENARIOS_DIR
+    from humimic.perception.trackers.common import skin_model_lut
+    from humimic.rngs import Rngs
+    from humimic.scenario import load_scenario
+    from humimic.sensors.camera_model import invert_transform
+    from humimic.world.world import World
+
+    seq = render_sequence("kpf", HUMAN, frames / 7.5, cameras="left", rate=7.5)
+    cam = seq.cameras[0]
+    scenario = load_scenario(SCENARIOS_DIR / "schmidt_side.yaml", duration=0.2)
+    world = World(scenario, Rngs(0))
+    try:
+        q0 = bm.truth_state(world, 0, "base")
+        lut = skin_model_lut(scenario, world, [cam], "bench")
+    finally:
+        world.close()
+    data = {"frames": [(img, invert_transform(m.T_base_cam)) for img, m in
+                       zip(seq.images[cam], seq.models[cam], strict=True)],
+            "intrinsics": seq.models[cam][0].intrinsics, "q0": q0, "lut": lut}
+    with open(path, "wb") as f:
+        pickle.dump(data, f)
+
+
+def child(path: str, config: tuple[int, int], name: str, repeats: int) -> None:
+    """Track the pickled frames ``repeats`` times; print the thread-CPU rates (JSON)."""
+    import cv2
+
+    from humimic.paths import SCENARIOS_DIR
+    from humimic.perception.trackers.kpf.frame_cues import FrameCues
+    from humimic.perception.trackers.kpf.tracker import KpfTracker, kpf_body
+    from humimic.perception.trackers.kpf.warmup import load_kernels
+    from humimic.scenario import load_scenario
+
+    cv2.setNumThreads(1)
+    with open(path, "rb") as f:
+        data = pickle.load(f)
+    frames, intr, q0, lut = data["frames"], data["intrinsics"], data["q0"], data["lut"]
+    n, it = config
+    base = load_scenario(SCENARIOS_DIR / "schmidt_table1.yaml").trackers[name]
+    cfg = base.model_copy(update={"n_particles": n, "iterations": it})
+    body = kpf_body()
+    load_kernels(body, intr, cfg, frames[0][0], lut, frames[0][1], q0)
+    kw = {"colour_gradients": cfg.colour_gradients}
+    rates = []
+    for _ in range(repeats):
+        tr = KpfTracker(body, intr, cfg, np.random.default_rng(0))
+        tr.start(q0, FrameCues(frames[0][0], lut, **kw), frames[0][1])
+        c0 = time.thread_time()
+        for img, T in frames[1:]:
+            tr.step(FrameCues(img, lut, **kw), T)
+        rates.append((len(frames) - 1) / (time.thread_time() - c0))
+    print(json.dumps(rates))
+
+
+def main() -> None:
+    p = argparse.ArgumentParser()
+    p.add_argument("trees", nargs="*", help="two source trees (directories holding humimic/)")
+    p.add_argument("--rounds", type=int, default=10)
+    p.add_argument("--config", default="150,2", metavar="P,I")
+    p.add_argument("--only", default="kpf", help="tracker of schmidt_table1.yaml")
+    p.add_argument("--frames", type=int, default=20)
+    p.add_argument("--repeats", type=int, default=5, help="runs of the frames per round")
+    p.add_argument("--prepare", help=argparse.SUPPRESS)
+    p.add_argument("--child", help=argparse.SUPPRESS)
+    args = p.parse_args()
+    config = tuple(int(x) for x in args.config.split(","))
+    if args.prepare:
+        return prepare(args.prepare, args.frames)
+    if args.child:
+        return child(args.child, config, args.only, args.repeats)
+    if len(args.trees) != 2:
+        p.error("give two source trees")
+    me = [sys.executable, str(Path(__file__).resolve())]
+    with tempfile.TemporaryDirectory() as tmp:
+        data = str(Path(tmp) / "frames.pkl")
+        subprocess.run(me + ["--prepare", data, "--frames", str(args.frames)], check=True,
+                       env=_env(args.trees[0]))
+        hz: dict[int, list[float]] = {0: [], 1: []}
+        ratios = []
+        for r in range(args.rounds):
+            got = {}
+            for k in ((0, 1) if r % 2 == 0 else (1, 0)):
+                out = subprocess.run(me + ["--child", data, "--config", args.config, "--only",
+                                           args.only, "--repeats", str(args.repeats)],
+                                     check=True, env=_env(args.trees[k]), capture_output=True,
+                                     text=True).stdout
+                got[k] = statistics.median(json.loads(out.strip().splitlines()[-1]))
+                hz[k].append(got[k])
+            ratios.append(got[1] / got[0])
+            print(f"round {r + 1:3d}: A {got[0]:7.1f} Hz  B {got[1]:7.1f} Hz  "
+                  f"B/A {ratios[-1]:.3f}", flush=True)
+    print(f"{args.only} at {config}, {args.rounds} rounds, thread CPU time (frames per s):")
+    for k, tree in enumerate(args.trees):
+        q1, q3 = np.percentile(hz[k], [25, 75])
+        print(f"  {'AB'[k]} {tree}: median {statistics.median(hz[k]):.1f} Hz "
+              f"(q1-q3 {q1:.1f}-{q3:.1f})")
+    q1, q3 = np.percentile(ratios, [25, 75])
+    print(f"  B / A: {statistics.median(hz[1]) / statistics.median(hz[0]):.3f} (medians), "
+          f"{statistics.median(ratios):.3f} per round (q1-q3 {q1:.3f}-{q3:.3f})")
+
+
+if __name__ == "__main__":
+    main()
