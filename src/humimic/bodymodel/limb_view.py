@@ -23,7 +23,6 @@ import numpy as np
 from humimic.bodymodel.geometry_kernels import ellipse_axes, ellipsoid_ellipse
 from humimic.bodymodel.model import BodyModel, Pose
 from humimic.bodymodel.projection import Z_MIN
-from humimic.maths.arrays import stack
 from humimic.maths.jit import njit
 from humimic.sensors.camera_model import Intrinsics
 
@@ -52,12 +51,11 @@ class LimbView:
 
 @njit
 def _view_kernel(R_seg, p_seg, segment, p_sp, R_sp, aligned, T, ci, shape, ei, semi, K,
-                 z_min):
+                 z_min, sides, axis):
+    """Fills ``sides (n, nc, 2, 2, 2)``, ``axis (n, nc, 2, 2)`` (normalised x, y)."""
     n, P, nc, ne = R_seg.shape[0], len(segment), len(ci), len(ei)
     valid = np.zeros((n, P), np.bool_)
     exists = np.zeros((n, nc), np.bool_)
-    sides = np.empty((n, nc, 2, 2, 2))          # normalised x, y
-    axis = np.empty((n, nc, 2, 2))
     ell = np.empty((n, ne, 5))                   # centre u, v (px), major, minor, angle
     R, Rr, t, tc = np.empty((3, 3)), np.empty((3, 3)), np.empty(3), np.empty(3)
     for s in range(n):
@@ -87,7 +85,7 @@ def _view_kernel(R_seg, p_seg, segment, p_sp, R_sp, aligned, T, ci, shape, ei, s
             for j in range(ne):
                 if ei[j] == i:
                     _ellipsoid(s, j, R, t, semi[j], z_min, valid[s], i, K, ell)
-    return valid, exists, sides, axis, ell
+    return valid, exists, ell
 
 
 @njit
@@ -149,15 +147,20 @@ def limb_view(body: BodyModel, pose: Pose, intr: Intrinsics, T_cam_ref: np.ndarr
     """The limb-feature and ellipse fields of ``project(body, pose, intr, T_cam_ref)``."""
     lay = body.layout
     K = np.asarray(intr.K, float)
-    valid, exists, sides, axis, ell = _view_kernel(
+    n, nc = len(pose.R), len(lay.cone_idx)
+    xy = np.empty(n * nc * 12)                  # sides then axis ends: one distort pass
+    cut = n * nc * 8
+    valid, exists, ell = _view_kernel(
         np.ascontiguousarray(pose.R, float), np.ascontiguousarray(pose.p, float),
         np.ascontiguousarray(lay.segment, np.intp), np.ascontiguousarray(lay.p_seg_part, float),
         np.ascontiguousarray(lay.R_seg_part, float), bool(lay.aligned),
         np.ascontiguousarray(T_cam_ref, float), np.ascontiguousarray(lay.cone_idx, np.intp),
         np.ascontiguousarray(lay.cone_shape, float),
         np.ascontiguousarray(lay.ellipsoid_idx, np.intp),
-        np.ascontiguousarray(lay.semi_axes, float), K, float(Z_MIN))
-    sides_uv = stack(intr.distort(sides[..., 0], sides[..., 1]), axis=-1)
-    axis_uv = stack(intr.distort(axis[..., 0], axis[..., 1]), axis=-1)
-    return LimbView(valid, lay.cone_idx, lay.ellipsoid_idx, exists, sides_uv, axis_uv,
+        np.ascontiguousarray(lay.semi_axes, float), K, float(Z_MIN),
+        xy[:cut].reshape(n, nc, 2, 2, 2), xy[cut:].reshape(n, nc, 2, 2))
+    uv = np.empty_like(xy)
+    uv[0::2], uv[1::2] = intr.distort(xy[0::2], xy[1::2])
+    return LimbView(valid, lay.cone_idx, lay.ellipsoid_idx, exists,
+                    uv[:cut].reshape(n, nc, 2, 2, 2), uv[cut:].reshape(n, nc, 2, 2),
                     (ell[..., :2], ell[..., 2:4], ell[..., 4]))

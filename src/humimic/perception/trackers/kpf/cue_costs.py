@@ -30,6 +30,17 @@ EDGE, RIDGE, COLOUR, SKIN = 0, 1, 2, 3
 
 
 @njit
+def _at(img, u, v, u0, v0):
+    """The pixel ``(row, column)`` :func:`~humimic.perception.trackers.kpf.limb_cues._pixel`
+    reads at ``(u, v)``; row -1 off the image or at NaN (its channels all read 0 there)."""
+    x = np.rint(u) - u0
+    y = np.rint(v) - v0
+    if not (x >= 0.0 and y >= 0.0 and x < img.shape[1] and y < img.shape[0]):   # NaN: False
+        return -1, 0
+    return int(y), int(x)
+
+
+@njit
 def _edge(sides, axis, n, j, grad, u0, v0, m_e):
     """``limb_cues._edge_kernel``'s response of limb ``j`` of particle ``n``."""
     half = m_e // 2
@@ -41,8 +52,11 @@ def _edge(sides, axis, n, j, grad, u0, v0, m_e):
         tu, tv = sides[n, j, side, 1, 0], sides[n, j, side, 1, 1]
         for k in range(half):
             f = (k + 0.5) / half
-            u, v = bu * (1.0 - f) + tu * f, bv * (1.0 - f) + tv * f
-            acc += abs(_pixel(grad, u, v, u0, v0, 1) * c - _pixel(grad, u, v, u0, v0, 0) * s)
+            y, x = _at(grad, bu * (1.0 - f) + tu * f, bv * (1.0 - f) + tv * f, u0, v0)
+            if y < 0:
+                acc += abs(0.0 * c - 0.0 * s)
+            else:
+                acc += abs(float(grad[y, x, 1]) * c - float(grad[y, x, 0]) * s)
     return acc / (2 * half)
 
 
@@ -85,10 +99,9 @@ def _ridge(sides, axis, n, j, ridge, shapes, rows, u0, v0, m_r):
 
 
 @njit
-def _bands(sides, n, j, bands, keep, rgb, u0, v0, grid, out):
+def _bands(sides, n, j, bands, keep, rgb, u0, v0, grid, out, corner, p):
     """``limb_cues._band_kernel``: the mean RGB of limb ``j``'s ``bands`` quadrilaterals into
-    ``out (bands, 3)``."""
-    corner, p = np.empty((4, 2)), np.empty((2, 2))
+    ``out (bands, 3)`` (``corner (4, 2)``, ``p (2, 2)`` scratch)."""
     m = grid.shape[0]
     for b in range(bands):
         for e in range(2):                              # slice ends b, b + 1 along the limb
@@ -101,18 +114,22 @@ def _bands(sides, n, j, bands, keep, rgb, u0, v0, grid, out):
                 mid = 0.5 * (p[0, d] + p[1, d])
                 corner[e, d] = mid + keep * (p[0, d] - mid)       # side 1: 0 base, 1 top
                 corner[3 - e, d] = mid + keep * (p[1, d] - mid)   # side 2: 2 top, 3 base
-        acc = np.zeros(3)
-        for g in range(m):
-            al, ac = grid[g, 0], grid[g, 1]
+        r = g = bl = 0.0
+        for k in range(m):
+            al, ac = grid[k, 0], grid[k, 1]
             wts = ((1 - al) * (1 - ac), al * (1 - ac), al * ac, (1 - al) * ac)
             u = v = 0.0
             for c in range(4):
                 u += wts[c] * corner[c, 0]
                 v += wts[c] * corner[c, 1]
-            for ch in range(3):
-                acc[ch] += _pixel(rgb, u, v, u0, v0, ch)
-        for ch in range(3):
-            out[b, ch] = acc[ch] / m
+            y, x = _at(rgb, u, v, u0, v0)
+            if y < 0:
+                r, g, bl = r + 0.0, g + 0.0, bl + 0.0
+            else:
+                r += float(rgb[y, x, 0])
+                g += float(rgb[y, x, 1])
+                bl += float(rgb[y, x, 2])
+        out[b, 0], out[b, 1], out[b, 2] = r / m, g / m, bl / m
 
 
 @njit
@@ -134,6 +151,7 @@ def _costs_kernel(sides, axis, generators, valid, cone_idx, ell_idx, centre, axe
     n_p, n_c, n_e = sides.shape[0], sides.shape[1], centre.shape[1]
     cost = np.full((4, n_p, n_parts), np.nan)
     colours = np.zeros((n_p, n_c, refs.shape[1], 3))
+    corner, scratch = np.empty((4, 2)), np.empty((2, 2))
     for n in range(n_p):
         for j in range(n_c):
             col = cone_idx[j]
@@ -146,7 +164,7 @@ def _costs_kernel(sides, axis, generators, valid, cone_idx, ell_idx, centre, axe
                 cost[RIDGE, n, col] = 1.0 - f
             b = limb_bands[j]
             if b > 0:                                   # band colours even where invalid
-                _bands(sides, n, j, b, keep, rgb, u0, v0, grid, colours[n, j])
+                _bands(sides, n, j, b, keep, rgb, u0, v0, grid, colours[n, j], corner, scratch)
                 if not ok:
                     cost[COLOUR, n, col] = 1.0
                 elif has_ref[j]:                        # Schmidt eq. 6

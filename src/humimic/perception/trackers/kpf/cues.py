@@ -139,6 +139,76 @@ def _strongest(planes):
     return out
 
 
+def _strongest_norm(*planes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`strongest_channel` of the derivative ``planes`` and the norm of the selected
+    derivatives, ``sqrt(p0^2 + p1^2 + ...)`` in float32 (``(k, H, W)``, ``(H, W)``)."""
+    if planes[0].ndim == 2:
+        planes = tuple(p[..., None] for p in planes)
+    return _strongest_mag(tuple(np.ascontiguousarray(p, np.float32) for p in planes))
+
+
+@njit
+def _strongest_mag(planes):
+    """:func:`_strongest`, with the selected channel's norm (its squared sum is the one
+    compared, in the same order)."""
+    h, w, nc = planes[0].shape
+    out = np.empty((len(planes), h, w), np.float32)
+    mag = np.empty((h, w), np.float32)
+    for y in range(h):
+        for x in range(w):
+            best, top = 0, np.float32(-1.0)
+            for c in range(nc):
+                m = planes[0][y, x, c] * planes[0][y, x, c]
+                for k in range(1, len(planes)):
+                    m += planes[k][y, x, c] * planes[k][y, x, c]
+                if m > top:
+                    best, top = c, m
+            for k in range(len(planes)):
+                out[k, y, x] = planes[k][y, x, best]
+            mag[y, x] = np.sqrt(top)
+    return out, mag
+
+
+def _tanh_scaled(mag: np.ndarray, k: float) -> np.ndarray:
+    """``tanh(mag / k)`` (numpy's float32 tanh: the value :func:`_norm_factor` computes)."""
+    t = np.divide(mag, k, dtype=np.float32)
+    return np.tanh(t, out=t)
+
+
+@njit
+def _at_least(x, lo):
+    """``np.maximum(x, lo)`` of scalars (NaN stays NaN)."""
+    return lo if x < lo else x
+
+
+@njit
+def _edge_planes(sel, mag, t, out):
+    """``out (H, W, 2)`` = the derivatives ``sel (2, H, W)`` times :func:`_norm_factor`
+    ``t / max(mag, 1e-6)`` (float32, as numpy's operations)."""
+    eps = np.float32(1e-6)
+    for y in range(mag.shape[0]):
+        for x in range(mag.shape[1]):
+            f = t[y, x] / _at_least(mag[y, x], eps)
+            out[y, x, 0] = sel[0, y, x] * f
+            out[y, x, 1] = sel[1, y, x] * f
+
+
+@njit
+def _ridge_planes(sel, mag, t, out):
+    """``out (H, W, 4)`` = ``(uu - vv) / 2``, ``uv``, ``(uu + vv) / 2``, 0 of the second
+    derivatives ``sel (3, H, W)`` times :func:`_norm_factor` (float32, as numpy's
+    ``0.5 * (uu - vv) * f``, ...)."""
+    eps, half = np.float32(1e-6), np.float32(0.5)
+    for y in range(mag.shape[0]):
+        for x in range(mag.shape[1]):
+            f = t[y, x] / _at_least(mag[y, x], eps)
+            uu, uv, vv = sel[0, y, x], sel[1, y, x], sel[2, y, x]
+            out[y, x, 0] = half * (uu - vv) * f
+            out[y, x, 1] = uv * f
+            out[y, x, 2] = half * (uu + vv) * f
+            out[y, x, 3] = 0.0
+
+
 def cue_maps(image: np.ndarray, skin_lut: ColorLUT, levels: int = 3, k_edge: float = 0.15,
              k_ridge: float = 0.05, region: tuple[int, int, int, int] | None = None,
              colour_gradients: bool = False) -> CueMaps:
@@ -159,15 +229,10 @@ def cue_maps(image: np.ndarray, skin_lut: ColorLUT, levels: int = 3, k_edge: flo
     else:
         grey = cv2.cvtColor(image, cv2.COLOR_RGB2GRAY).astype(np.float32) / 255.0
     g = cv2.GaussianBlur(grey, (5, 5), 1.0)
-    gu, gv = strongest_channel(cv2.Sobel(g, cv2.CV_32F, 1, 0, ksize=3, scale=1.0 / 8.0),
+    sel, mag = _strongest_norm(cv2.Sobel(g, cv2.CV_32F, 1, 0, ksize=3, scale=1.0 / 8.0),
                                cv2.Sobel(g, cv2.CV_32F, 0, 1, ksize=3, scale=1.0 / 8.0))
-    # not cv2.magnitude: with IPP (OpenCV's wheels) its result depends on the arrays'
-    # address modulo 64 (~1 ulp on a third of the pixels), so the same frame gave other
-    # maps in another process; numpy's float32 ufuncs are exact per element
-    mag = gu * gu
-    mag += gv * gv
-    f = _norm_factor(np.sqrt(mag, out=mag), k_edge)
-    gradient = cv2.merge([gu * f, gv * f])
+    gradient = np.empty(mag.shape + (2,), np.float32)
+    _edge_planes(sel, mag, _tanh_scaled(mag, k_edge), gradient)
     pyramid = [g]
     for _ in range(1, levels):
         pyramid.append(cv2.pyrDown(pyramid[-1]))
@@ -175,15 +240,10 @@ def cue_maps(image: np.ndarray, skin_lut: ColorLUT, levels: int = 3, k_edge: flo
     rows = np.concatenate([[0], np.cumsum(shapes[:-1, 0] + 1)])
     ridge = np.zeros((int(np.sum(shapes[:, 0] + 1)), shapes[0, 1], 4), np.float32)
     for lv, (h, w), r in zip(pyramid, shapes, rows, strict=True):
-        uu, uv, vv = strongest_channel(cv2.Sobel(lv, cv2.CV_32F, 2, 0, ksize=3, scale=0.25),
-                                       cv2.Sobel(lv, cv2.CV_32F, 1, 1, ksize=3, scale=0.25),
-                                       cv2.Sobel(lv, cv2.CV_32F, 0, 2, ksize=3, scale=0.25))
-        f = _norm_factor(np.sqrt(uu * uu + uv * uv + vv * vv), k_ridge)
-        planes = [0.5 * (uu - vv) * f, uv * f, 0.5 * (uu + vv) * f, np.zeros_like(f)]
-        if w == ridge.shape[1]:
-            cv2.merge(planes, ridge[r:r + h])           # the full-width level written in place
-        else:
-            ridge[r:r + h, :w] = cv2.merge(planes)
+        sel, mag = _strongest_norm(cv2.Sobel(lv, cv2.CV_32F, 2, 0, ksize=3, scale=0.25),
+                                   cv2.Sobel(lv, cv2.CV_32F, 1, 1, ksize=3, scale=0.25),
+                                   cv2.Sobel(lv, cv2.CV_32F, 0, 2, ksize=3, scale=0.25))
+        _ridge_planes(sel, mag, _tanh_scaled(mag, k_ridge), ridge[r:r + h, :w])
     skin = (skin_lut.posterior(image) > 0.5).astype(np.float32)
     return CueMaps(gradient, ridge, shapes, rows, image.astype(np.float32) / 255.0, skin,
                    origin)

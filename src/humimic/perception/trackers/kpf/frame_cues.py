@@ -16,6 +16,7 @@ import math
 import numpy as np
 
 from humimic.bodymodel.projection import BodyView
+from humimic.maths.jit import njit
 from humimic.perception.cues.color_models import ColorLUT
 from humimic.perception.trackers.kpf.cues import CueMaps, cue_maps
 
@@ -32,15 +33,38 @@ def sample_box(view: BodyView, ellipses=None) -> tuple[np.ndarray, np.ndarray]:
     axis points interpolate them), the skin points within the image ellipses' major radius
     of their centres (``ellipses`` as :meth:`BodyView.ellipses_px`, computed if None)."""
     centre, axes, _ = view.ellipses_px() if ellipses is None else ellipses
-    r = np.maximum.reduce(axes, axis=-1)
+    lo, hi = _box_kernel(view.sides_uv.reshape(-1, 2), view.axis_uv.reshape(-1, 2),
+                         centre.reshape(-1, 2), axes.reshape(-1, 2))
+    return lo, hi
+
+
+@njit
+def _extend(x, first, a, b):
+    """The range ``[a, b]`` extended to ``x`` if finite (``first``: none yet)."""
+    if not np.isfinite(x):
+        return first, a, b
+    if first:
+        return False, x, x
+    return False, min(a, x), max(b, x)
+
+
+@njit
+def _box_kernel(sides, axis, centre, axes):
+    """:func:`sample_box`'s loop: the extremes of the finite coordinates of the points and of
+    the ellipse centres +- their larger semi-axis (0 where there are none)."""
     lo, hi = np.zeros(2), np.zeros(2)
-    for k in range(2):   # 1-D reductions (numpy is slow over a short last axis)
-        c = centre[..., k]
-        pts = np.concatenate([view.sides_uv[..., k].ravel(), view.axis_uv[..., k].ravel(),
-                              (c - r).ravel(), (c + r).ravel()])
-        pts = pts[np.isfinite(pts)]          # invalid parts (NaN, degenerate conics) sample 0
-        if len(pts):
-            lo[k], hi[k] = np.minimum.reduce(pts), np.maximum.reduce(pts)
+    for k in range(2):
+        first, a, b = True, 0.0, 0.0
+        for i in range(sides.shape[0]):
+            first, a, b = _extend(sides[i, k], first, a, b)
+        for i in range(axis.shape[0]):
+            first, a, b = _extend(axis[i, k], first, a, b)
+        for i in range(centre.shape[0]):
+            r0, r1 = axes[i, 0], axes[i, 1]
+            r = np.nan if np.isnan(r0) or np.isnan(r1) else max(r0, r1)   # np.maximum
+            first, a, b = _extend(centre[i, k] - r, first, a, b)
+            first, a, b = _extend(centre[i, k] + r, first, a, b)
+        lo[k], hi[k] = a, b
     return lo, hi
 
 
