@@ -109,6 +109,9 @@ def epanechnikov_inplace(r2: np.ndarray, d: int) -> np.ndarray:
 
 
 def _bandwidth(h, d: int) -> np.ndarray:
+    """``h`` (a scalar or per-dimension bandwidths) as ``(d,)`` floats (read, not written)."""
+    if type(h) is np.ndarray and h.dtype == np.float64 and h.shape == (d,):
+        return h             # already so (the common case: no broadcast_to's overhead)
     return np.broadcast_to(np.asarray(h, float), (d,))
 
 

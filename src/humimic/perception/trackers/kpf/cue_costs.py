@@ -228,12 +228,18 @@ def _eq10_kernel(cost, coef, used, any_used):
     return out
 
 
-def eq10_terms(cost: np.ndarray, balance: np.ndarray, sigma: np.ndarray) -> np.ndarray:
-    """Schmidt eqs. 9-10 per part ``l``: ``1/N_l sum_c -e_{c,l}^2 / (2 sigma_c^2)``,
-    ``(N, parts)``, of costs ``cost (cues, N, parts)`` (read only where ``balance (cues,
-    parts)``, eq. 10's ``1/N_l`` where the cue is used on the part and 0 elsewhere, is not 0)
-    with ``sigma (cues,)``; summed over the cues in their order (as numpy would)."""
+def eq10_coefficients(balance: np.ndarray, sigma) -> tuple[np.ndarray, np.ndarray]:
+    """Eq. 10's per (cue, part) factors ``1/N_l / (2 sigma_c^2)`` of ``balance (cues, parts)``
+    (``1/N_l`` where the cue is used on the part, 0 elsewhere) and ``sigma (cues,)``, and the
+    (cue, part) pairs used: :func:`eq10_terms`' ``coef``, ``used``."""
     balance = np.asarray(balance, float)
     coef = np.stack([balance[c] / (2.0 * float(sigma[c]) ** 2) for c in range(len(balance))])
-    used = balance != 0.0
+    return coef, balance != 0.0
+
+
+def eq10_terms(cost: np.ndarray, coef: np.ndarray, used: np.ndarray) -> np.ndarray:
+    """Schmidt eqs. 9-10 per part ``l``: ``1/N_l sum_c -e_{c,l}^2 / (2 sigma_c^2)``,
+    ``(N, parts)``, of costs ``cost (cues, N, parts)`` read where ``used (cues, parts)``,
+    ``coef`` from :func:`eq10_coefficients`; summed over the cues in their order (a cue used
+    on no part left out), as ``sum_c`` in numpy would."""
     return _eq10_kernel(np.ascontiguousarray(cost, float), coef, used, used.any(axis=1))

@@ -85,8 +85,10 @@ class FrameCues:
         u0 = min(max(math.floor((lu - MARGIN_PX) / a) * a, 0), max(w - a, 0) // a * a)
         v0 = min(max(math.floor((lv - MARGIN_PX) / a) * a, 0), max(h - a, 0) // a * a)
         # + 4: a point's nearest level-2 pixel may lie up to half a pixel (2 px) beyond it
-        u1 = min(max(math.ceil(hu + MARGIN_PX + 4), u0 + a), w)
-        v1 = min(max(math.ceil(hv + MARGIN_PX + 4), v0 + a), h)
+        # the far edges rounded up to multiples of ALIGN_PX too: a little slack, so fewer
+        # later evaluations reach outside and recompute the maps
+        u1 = min(max(-(-math.ceil(hu + MARGIN_PX + 4) // a) * a, u0 + a), w)
+        v1 = min(max(-(-math.ceil(hv + MARGIN_PX + 4) // a) * a, v0 + a), h)
         if self.region is not None:
             r = self.region
             if r[0] <= u0 and r[1] <= v0 and u1 <= r[2] and v1 <= r[3]:

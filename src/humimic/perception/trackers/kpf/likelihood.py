@@ -22,7 +22,7 @@ import numpy as np
 from humimic import bodymodel as bm
 from humimic.bodymodel.limb_view import limb_view
 from humimic.perception.trackers.kpf import cues as C
-from humimic.perception.trackers.kpf.cue_costs import cue_costs, eq10_terms
+from humimic.perception.trackers.kpf.cue_costs import cue_costs, eq10_coefficients, eq10_terms
 from humimic.perception.trackers.kpf.frame_cues import FrameCues, sample_box
 from humimic.perception.trackers.kpf.skin_ring import ring_log_term, ring_pad, ring_skin
 
@@ -97,6 +97,8 @@ class Likelihood:
         self.ell_skin = np.isin(np.arange(len(ell)), self.skin_js)
         """(ellipsoids,) the skin cue is configured on the ellipsoid."""
         self.balance_planes = np.stack([self.balance[c] for c in CUE_NAMES])
+        self._coef: dict[tuple, tuple[np.ndarray, np.ndarray]] = {}
+        """Sigmas -> :func:`~humimic.perception.trackers.kpf.cue_costs.eq10_coefficients`."""
         self.hand_js = np.array([j for j in self.skin_js if limb_type(ell[j]) == "hand"], int)
         """Positions (among the ellipsoids) of the hands with the skin cue (``skin_ring``)."""
 
@@ -150,7 +152,12 @@ class Likelihood:
     def _terms(self, planes: np.ndarray, cost: dict[str, np.ndarray], floors: bool
                ) -> np.ndarray:
         sig = self.sigmas(cost, floors)
-        return eq10_terms(planes, self.balance_planes, [sig[c] for c in CUE_NAMES])
+        key = tuple(sig[c] for c in CUE_NAMES)
+        if key not in self._coef:
+            if len(self._coef) > 64:     # sigmas from the spread: new ones every evaluation
+                self._coef.clear()
+            self._coef[key] = eq10_coefficients(self.balance_planes, key)
+        return eq10_terms(planes, *self._coef[key])
 
     def adapt(self, colours: dict[str, np.ndarray]) -> None:
         """Schmidt eq. 7 from the best mode's band colours ``{part: (B, 3)}``:
