@@ -7,8 +7,10 @@ under the same load. Every run tracks the same rendered frames (rendered once, b
 code, and handed to the runs in a pickle) with the same seed, and reports the rate per second
 of its thread's CPU time (OpenCV on this thread: ``cv2.setNumThreads(1)``, so every operation
 is counted), the kernels loaded before timing (:func:`~humimic.perception.trackers.kpf.warmup.
-load_kernels`). Printed: each tree's median rate over the rounds (and quartiles) and the ratio
-B / A of the medians and the median of the per-round ratios.
+load_kernels`). Per run two rates: ``median`` (of the repeats' rates) and ``floor`` (of each
+frame's least CPU time over the repeats: other processes' interference only ever adds time).
+Printed: each tree's median over the rounds (and quartiles) and the ratio B / A of the medians
+and the median of the per-round ratios.
 
     MUJOCO_GL=egl python benchmarks/bench_kpf_ab.py /work/main/src /work/wt-kpf-speed/src \\
         [--rounds R] [--config P,I] [--only NAME] [--frames N] [--repeats K]
@@ -30,6 +32,8 @@ from pathlib import Path
 import numpy as np
 
 HERE = Path(__file__).resolve().parent
+#: The rates a run reports (:func:`child`).
+STATS = ("median", "floor")
 
 
 def _env(tree: str) -> dict:
@@ -88,15 +92,18 @@ def child(path: str, config: tuple[int, int], name: str, repeats: int) -> None:
     body = kpf_body()
     load_kernels(body, intr, cfg, frames[0][0], lut, frames[0][1], q0)
     kw = {"colour_gradients": cfg.colour_gradients}
-    rates = []
+    cpu = []
     for _ in range(repeats):
         tr = KpfTracker(body, intr, cfg, np.random.default_rng(0))
         tr.start(q0, FrameCues(frames[0][0], lut, **kw), frames[0][1])
-        c0 = time.thread_time()
+        cpu.append([])
         for img, T in frames[1:]:
+            c0 = time.thread_time()
             tr.step(FrameCues(img, lut, **kw), T)
-        rates.append((len(frames) - 1) / (time.thread_time() - c0))
-    print(json.dumps(rates))
+            cpu[-1].append(time.thread_time() - c0)
+    n_f = len(frames) - 1
+    print(json.dumps({"median": statistics.median(n_f / np.sum(cpu, axis=1)),
+                      "floor": n_f / float(np.min(cpu, axis=0).sum())}))
 
 
 def main() -> None:
@@ -122,28 +129,32 @@ def main() -> None:
         data = str(Path(tmp) / "frames.pkl")
         subprocess.run(me + ["--prepare", data, "--frames", str(args.frames)], check=True,
                        env=_env(args.trees[0]))
-        hz: dict[int, list[float]] = {0: [], 1: []}
-        ratios = []
+        hz = {s: {0: [], 1: []} for s in STATS}
         for r in range(args.rounds):
-            got = {}
             for k in ((0, 1) if r % 2 == 0 else (1, 0)):
                 out = subprocess.run(me + ["--child", data, "--config", args.config, "--only",
                                            args.only, "--repeats", str(args.repeats)],
                                      check=True, env=_env(args.trees[k]), capture_output=True,
                                      text=True).stdout
-                got[k] = statistics.median(json.loads(out.strip().splitlines()[-1]))
-                hz[k].append(got[k])
-            ratios.append(got[1] / got[0])
-            print(f"round {r + 1:3d}: A {got[0]:7.1f} Hz  B {got[1]:7.1f} Hz  "
-                  f"B/A {ratios[-1]:.3f}", flush=True)
-    print(f"{args.only} at {config}, {args.rounds} rounds, thread CPU time (frames per s):")
-    for k, tree in enumerate(args.trees):
-        q1, q3 = np.percentile(hz[k], [25, 75])
-        print(f"  {'AB'[k]} {tree}: median {statistics.median(hz[k]):.1f} Hz "
-              f"(q1-q3 {q1:.1f}-{q3:.1f})")
-    q1, q3 = np.percentile(ratios, [25, 75])
-    print(f"  B / A: {statistics.median(hz[1]) / statistics.median(hz[0]):.3f} (medians), "
-          f"{statistics.median(ratios):.3f} per round (q1-q3 {q1:.3f}-{q3:.3f})")
+                got = json.loads(out.strip().splitlines()[-1])
+                for s in STATS:
+                    hz[s][k].append(got[s])
+            print(f"round {r + 1:3d}: " + "  ".join(
+                f"{s} A {hz[s][0][-1]:6.1f} B {hz[s][1][-1]:6.1f} Hz" for s in STATS),
+                flush=True)
+    print(f"{args.only} at {config}, {args.rounds} rounds x {args.repeats} runs, frames per "
+          "second of thread CPU time (median: of a run's total; floor: of each frame's least "
+          "time over a round's runs):")
+    for s in STATS:
+        for k, tree in enumerate(args.trees):
+            q1, q3 = np.percentile(hz[s][k], [25, 75])
+            print(f"  {s:6s} {'AB'[k]} {tree}: {statistics.median(hz[s][k]):.1f} Hz "
+                  f"(rounds' q1-q3 {q1:.1f}-{q3:.1f})")
+        ratios = np.array(hz[s][1]) / np.array(hz[s][0])
+        q1, q3 = np.percentile(ratios, [25, 75])
+        print(f"  {s:6s} B / A: {statistics.median(hz[s][1]) / statistics.median(hz[s][0]):.3f}"
+              f" (of the medians), per round {statistics.median(ratios):.3f} "
+              f"(q1-q3 {q1:.3f}-{q3:.3f})")
 
 
 if __name__ == "__main__":
