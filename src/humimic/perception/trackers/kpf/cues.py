@@ -1,7 +1,8 @@
 """Schmidt, Fritsch & Kwolek's image cues (sec. 4), computed once per frame as maps and sampled
 at every particle's feature points in one numpy pass. (The likelihood reads the same responses
-through :mod:`~humimic.perception.trackers.kpf.limb_cues`, compiled loops over the projected
-limbs; the functions here state the maths and are the reference those are tested against.)
+through :mod:`~humimic.perception.trackers.kpf.cue_costs`, one compiled loop over the projected
+limbs, equal to :mod:`~humimic.perception.trackers.kpf.limb_cues`' kernels; the functions here
+state the maths and are the reference those are tested against.)
 
 * edge (eqs. 1-2): first derivatives with a non-linear normalisation
   (``g / |g| tanh(|g| / k)``: weak texture edges smoothed away, strong edges saturated at 1);

@@ -1,6 +1,8 @@
 """Schmidt et al.'s limb cues (sec. 4) read straight off a projected body model, compiled.
 
-The likelihood's hot path: the same responses as the feature points of
+One kernel per cue; the likelihood now reads all cues in one pass
+(:mod:`~humimic.perception.trackers.kpf.cue_costs`, the same arithmetic, tested bit for bit
+against these). The same responses as the feature points of
 :mod:`humimic.bodymodel.features` (``limb_edges``, ``limb_ridges``, ``limb_bands``) sampled
 by :mod:`humimic.perception.trackers.kpf.cues` (``edge_response``, ``ridge_response``,
 ``band_colours``, ``skin_response``; they state the maths and are the reference these kernels
