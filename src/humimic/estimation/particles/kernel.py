@@ -19,17 +19,20 @@ from humimic.estimation.particles.resampling import resample_indices
 from humimic.estimation.particles.weights import weights
 
 
-def sq_distances(x: np.ndarray, s: np.ndarray, h: np.ndarray, dtype=np.float64) -> np.ndarray:
+def sq_distances(x: np.ndarray, s: np.ndarray, h: np.ndarray, dtype=np.float64,
+                 clip: bool = True) -> np.ndarray:
     """``(M, N)`` squared scaled distances ``||(x_m - s_n) / h||^2``: one matrix product of the
     augmented rows ``[a, 1, |a|^2] . [-2 b, |b|^2, 1]`` (one ``(M, N)`` array allocated: fresh
     large arrays cost more than the arithmetic), in ``dtype`` (``float32``: half the memory
     traffic; both point sets are first centred on ``s``'s mean, so ``|a|^2`` and ``|b|^2`` stay
-    of the order of the spread and the cancellation error near a distance of 1 is ~1e-6)."""
+    of the order of the spread and the cancellation error near a distance of 1 is ~1e-6).
+    ``clip=False``: the few that round below 0 are left so (:func:`clip_negative`), for a
+    caller that only compares them with a positive bound or clips them itself."""
     c = s.mean(axis=0) if len(s) else 0.0
-    return _sq_scaled((x - c) / h, (s - c) / h, dtype)
+    return _sq_scaled((x - c) / h, (s - c) / h, dtype, clip)
 
 
-def _sq_scaled(a: np.ndarray, b: np.ndarray, dtype) -> np.ndarray:
+def _sq_scaled(a: np.ndarray, b: np.ndarray, dtype, clip: bool = True) -> np.ndarray:
     """``(..., M, N)`` ``||a_m - b_n||^2`` of centred, scaled points ``a (..., M, d)``,
     ``b (..., N, d)`` (:func:`sq_distances`; leading axes batched)."""
     d = a.shape[-1]
@@ -37,7 +40,21 @@ def _sq_scaled(a: np.ndarray, b: np.ndarray, dtype) -> np.ndarray:
     A[..., :d], A[..., d], A[..., d + 1] = a, 1.0, np.einsum("...j,...j->...", a, a)
     B[..., :d], B[..., d], B[..., d + 1] = -2.0 * b, np.einsum("...j,...j->...", b, b), 1.0
     d2 = A @ np.swapaxes(B, -1, -2)
-    return np.maximum(d2, 0.0, out=d2)
+    return clip_negative(d2) if clip else d2
+
+
+def clip_negative(x: np.ndarray) -> np.ndarray:
+    """``x`` with its negative entries set to 0, in place (squared distances from the
+    augmented product of :func:`_sq_scaled` may round below 0)."""
+    return np.maximum(x, 0.0, out=x)
+
+
+def epanechnikov_profile(r2: np.ndarray) -> np.ndarray:
+    """The Epanechnikov profile ``max(1 - r2, 0)`` of squared distances ``r2``, in place and
+    unnormalised, the same whether ``r2`` was :func:`clip_negative`-d or not (``1 - r2``
+    clipped to ``[0, 1]``: one pass fewer than clipping ``r2`` first)."""
+    np.subtract(1.0, r2, out=r2)
+    return np.clip(r2, 0.0, 1.0, out=r2)
 
 
 def unique_rows(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -101,9 +118,9 @@ def epanechnikov(r2: np.ndarray, d: int) -> np.ndarray:
 
 
 def epanechnikov_inplace(r2: np.ndarray, d: int) -> np.ndarray:
-    """:func:`epanechnikov` overwriting the float array ``r2`` (no temporaries)."""
-    np.subtract(1.0, r2, out=r2)
-    np.maximum(r2, 0.0, out=r2)
+    """:func:`epanechnikov` overwriting the float array ``r2`` (no temporaries; ``r2`` need
+    not be clipped at 0, :func:`epanechnikov_profile`)."""
+    epanechnikov_profile(r2)
     r2 *= (d + 2) / (2.0 * epanechnikov_norm(d))
     return r2
 
@@ -142,7 +159,7 @@ def _kernel_sums(x: np.ndarray, src: np.ndarray, W: np.ndarray, h, dtype) -> np.
     """``(M, S)`` ``sum_n K_h(x_m - src_n) W[n, s]`` (eq. 11 per weight column)."""
     d = x.shape[1]
     h = _bandwidth(h, d)
-    r2 = sq_distances(x, src, h, dtype)
+    r2 = sq_distances(x, src, h, dtype, clip=False)
     return (epanechnikov_inplace(r2, d) @ W.astype(dtype)).astype(float) / np.prod(h)
 
 
@@ -166,7 +183,7 @@ def mean_shift(particles: np.ndarray, w: np.ndarray, h: np.ndarray, dtype=np.flo
         wsum = np.bincount(inverse[keep], weights=w[keep], minlength=len(first))
         nz = np.flatnonzero(wsum > 0.0)
         src, wk = at[nz], wsum[nz]
-    inside = sq_distances(at, src, h, dtype)                             # (M, K)
+    inside = sq_distances(at, src, h, dtype, clip=False)   # (M, K); only compared with 1
     np.less_equal(inside, 1.0, out=inside, casting="unsafe")            # 1.0 inside, in place
     c = wk @ src / wk.sum()
     sums = inside @ np.column_stack([wk[:, None] * ((src - c) / h), wk]).astype(dtype)
@@ -217,7 +234,7 @@ def dominant_mode(particles: np.ndarray, w: np.ndarray, h: np.ndarray, window: n
     non-negligible weight are candidates for the peak (the others' KDE value is no larger)."""
     keep = heavy(w)
     peak = int(keep[np.argmax(kde(particles[keep], particles, w, h, dtype))])
-    near = sq_distances(particles[peak:peak + 1], particles, window)[0] <= 1.0
+    near = sq_distances(particles[peak:peak + 1], particles, window, clip=False)[0] <= 1.0
     wn = w * near
     if wn.sum() <= 0.0:
         return particles[peak].copy(), peak

@@ -19,6 +19,7 @@ from humimic.estimation.particles.kernel import (
     _sq_scaled,
     dominant_mode,
     epanechnikov,
+    epanechnikov_profile,
     kernel_log_weights,
     mean_shift,
 )
@@ -60,7 +61,7 @@ def mean_shift_groups(particles: np.ndarray, W: np.ndarray, h: np.ndarray,
     total = Wz.sum(axis=1, keepdims=True)                              # (G, 1, 1)
     c = (Wz * X).sum(axis=1, keepdims=True) / np.where(total > 0.0, total, 1.0)
     a = (X - c) / H
-    inside = _sq_scaled(a, a, dtype)                                   # (G, N, N)
+    inside = _sq_scaled(a, a, dtype, clip=False)          # (G, N, N); only compared with 1
     np.less_equal(inside, 1.0, out=inside, casting="unsafe")
     sums = inside @ np.concatenate([Wz * a, Wz], axis=-1).astype(dtype)
     num, den = sums[..., :-1].astype(float), sums[..., -1:].astype(float)
@@ -86,9 +87,8 @@ def kernel_log_weights_groups(log_lik: np.ndarray, shifted: np.ndarray, prior: n
     X, H = _group_coords(shifted, groups, h)
     S, _ = _group_coords(np.concatenate([ref_p, ref_q]), groups, h)
     c = S.mean(axis=1, keepdims=True)
-    k2 = _sq_scaled((X - c) / H, (S - c) / H, dtype)                   # (G, N, K)
-    np.subtract(1.0, k2, out=k2)                       # the Epanechnikov profile; each
-    np.maximum(k2, 0.0, out=k2)                        # group's constant applied below
+    k2 = _sq_scaled((X - c) / H, (S - c) / H, dtype, clip=False)      # (G, N, K)
+    epanechnikov_profile(k2)                           # each group's constant applied below
     Wpq = np.zeros((len(S[0]), 2), dtype)
     Wpq[:len(ref_p), 0], Wpq[len(ref_p):, 1] = 1.0 / len(ref_p), 1.0 / len(ref_q)
     pq = (k2 @ Wpq).astype(float)                                      # (G, N, 2)
@@ -116,9 +116,8 @@ def dominant_modes(particles: np.ndarray, W: np.ndarray, h: np.ndarray, window: 
     heavy = W > NEGLIGIBLE * W.max(axis=0)
     Wz = np.where(heavy, W, 0.0).T[:, :, None]                         # (G, N, 1)
     c = X.mean(axis=1, keepdims=True)
-    k2 = _sq_scaled((X - c) / H, (X - c) / H, dtype)                   # (G, N, N)
-    np.subtract(1.0, k2, out=k2)                   # the Epanechnikov profile: a positive
-    np.maximum(k2, 0.0, out=k2)                    # constant per group does not move a peak
+    k2 = _sq_scaled((X - c) / H, (X - c) / H, dtype, clip=False)      # (G, N, N)
+    epanechnikov_profile(k2)           # a positive constant per group does not move a peak
     density = np.where(heavy.T, (k2 @ Wz.astype(dtype))[..., 0], -np.inf)   # (G, N)
     peak = np.argmax(density, axis=1)
     for k, g in enumerate(groups):
