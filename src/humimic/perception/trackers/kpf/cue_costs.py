@@ -23,27 +23,28 @@ import numpy as np
 
 from humimic.maths.jit import njit
 from humimic.perception.trackers.kpf.cues import _DISC, _QUAD_GRID, RIDGE_WIDTH_PX
-from humimic.perception.trackers.kpf.limb_cues import _axis_angle, _pixel
+from humimic.perception.trackers.kpf.limb_cues import _axis_angle
 
 #: Cost planes' order (``likelihood.CUE_NAMES``).
 EDGE, RIDGE, COLOUR, SKIN = 0, 1, 2, 3
 
 
 @njit
-def _at(img, u, v, u0, v0):
-    """The pixel ``(row, column)`` :func:`~humimic.perception.trackers.kpf.limb_cues._pixel`
-    reads at ``(u, v)``; row -1 off the image or at NaN (its channels all read 0 there)."""
-    x = np.rint(u) - u0
-    y = np.rint(v) - v0
-    if not (x >= 0.0 and y >= 0.0 and x < img.shape[1] and y < img.shape[0]):   # NaN: False
-        return -1, 0
-    return int(y), int(x)
+def _fractions(m):
+    """``(m, 2)``: ``f = (k + 1/2) / m`` and ``1 - f``, the points' places along a segment."""
+    out = np.empty((m, 2))
+    for k in range(m):
+        out[k, 0] = (k + 0.5) / m
+        out[k, 1] = 1.0 - out[k, 0]
+    return out
 
 
 @njit
-def _edge(sides, axis, n, j, grad, u0, v0, m_e):
-    """``limb_cues._edge_kernel``'s response of limb ``j`` of particle ``n``."""
-    half = m_e // 2
+def _edge(sides, axis, n, j, grad, u0, v0, fe):
+    """``limb_cues._edge_kernel``'s response of limb ``j`` of particle ``n`` (``fe``:
+    :func:`_fractions` of ``M_E / 2``)."""
+    half = fe.shape[0]
+    w, h = float(grad.shape[1]), float(grad.shape[0])
     a = _axis_angle(axis, n, j)
     c, s = np.cos(a), np.sin(a)
     acc = 0.0
@@ -51,19 +52,22 @@ def _edge(sides, axis, n, j, grad, u0, v0, m_e):
         bu, bv = sides[n, j, side, 0, 0], sides[n, j, side, 0, 1]
         tu, tv = sides[n, j, side, 1, 0], sides[n, j, side, 1, 1]
         for k in range(half):
-            f = (k + 0.5) / half
-            y, x = _at(grad, bu * (1.0 - f) + tu * f, bv * (1.0 - f) + tv * f, u0, v0)
-            if y < 0:
+            f, g = fe[k, 0], fe[k, 1]
+            x = np.rint(bu * g + tu * f) - u0            # limb_cues._pixel, inlined
+            y = np.rint(bv * g + tv * f) - v0
+            if x >= 0.0 and y >= 0.0 and x < w and y < h:     # NaN: False
+                yi, xi = int(y), int(x)
+                acc += abs(float(grad[yi, xi, 1]) * c - float(grad[yi, xi, 0]) * s)
+            else:                                        # off the maps: both read 0
                 acc += abs(0.0 * c - 0.0 * s)
-            else:
-                acc += abs(float(grad[y, x, 1]) * c - float(grad[y, x, 0]) * s)
     return acc / (2 * half)
 
 
 @njit
-def _ridge(sides, axis, n, j, ridge, shapes, rows, u0, v0, m_r):
-    """``limb_cues._ridge_kernel``'s response of limb ``j`` of particle ``n``."""
-    levels = shapes.shape[0]
+def _ridge(sides, axis, n, j, ridge, shapes, rows, u0, v0, fr):
+    """``limb_cues._ridge_kernel``'s response of limb ``j`` of particle ``n`` (``fr``:
+    :func:`_fractions` of ``M_R``)."""
+    levels, m_r = shapes.shape[0], fr.shape[0]
     au, av = axis[n, j, 0, 0], axis[n, j, 0, 1]
     du, dv = axis[n, j, 1, 0] - au, axis[n, j, 1, 1] - av
     a = np.arctan2(dv, du)
@@ -75,20 +79,21 @@ def _ridge(sides, axis, n, j, ridge, shapes, rows, u0, v0, m_r):
              + (sides[n, j, 0, 1, 1] - sides[n, j, 1, 1, 1]) * cv)
     width = 0.0
     for k in range(m_r):
-        f = (k + 0.5) / m_r
-        width += w0 * (1.0 - f) + w1 * f
+        width += w0 * fr[k, 1] + w1 * fr[k, 0]
     width /= m_r
     if not width >= 1e-3:                               # fmax: NaN -> 1e-3
         width = 1e-3
     mu = int(min(max(np.rint(np.log2(width / RIDGE_WIDTH_PX)), 0.0), levels - 1.0))
     scale = 0.5 ** mu
-    h_mu, w_mu, r0 = shapes[mu, 0], shapes[mu, 1], rows[mu]
+    h_mu, w_mu, r0 = float(shapes[mu, 0]), float(shapes[mu, 1]), rows[mu]
     c2, s2 = np.cos(2.0 * a), np.sin(2.0 * a)
+    tu, tv = au + du, av + dv
+    ou, ov = u0 * scale, v0 * scale
     acc = 0.0
     for k in range(m_r):
-        f = (k + 0.5) / m_r
-        x = np.rint((au * (1.0 - f) + (au + du) * f) * scale) - u0 * scale
-        y = np.rint((av * (1.0 - f) + (av + dv) * f) * scale) - v0 * scale
+        f, g = fr[k, 0], fr[k, 1]
+        x = np.rint((au * g + tu * f) * scale) - ou
+        y = np.rint((av * g + tv * f) * scale) - ov
         if not (x >= 0.0 and y >= 0.0 and x < w_mu and y < h_mu):
             continue                                    # off the level (or NaN): 0
         xi, yi = int(x), int(y) + r0
@@ -99,10 +104,12 @@ def _ridge(sides, axis, n, j, ridge, shapes, rows, u0, v0, m_r):
 
 
 @njit
-def _bands(sides, n, j, bands, keep, rgb, u0, v0, grid, out, corner, p):
+def _bands(sides, n, j, bands, keep, rgb, u0, v0, wts, out, corner, p):
     """``limb_cues._band_kernel``: the mean RGB of limb ``j``'s ``bands`` quadrilaterals into
-    ``out (bands, 3)`` (``corner (4, 2)``, ``p (2, 2)`` scratch)."""
-    m = grid.shape[0]
+    ``out (bands, 3)`` (``wts (M_C, 4)`` the grid's bilinear weights; ``corner (4, 2)``,
+    ``p (2, 2)`` scratch)."""
+    m = wts.shape[0]
+    w, h = float(rgb.shape[1]), float(rgb.shape[0])
     for b in range(bands):
         for e in range(2):                              # slice ends b, b + 1 along the limb
             f = (b + e) / bands
@@ -116,19 +123,19 @@ def _bands(sides, n, j, bands, keep, rgb, u0, v0, grid, out, corner, p):
                 corner[3 - e, d] = mid + keep * (p[1, d] - mid)   # side 2: 2 top, 3 base
         r = g = bl = 0.0
         for k in range(m):
-            al, ac = grid[k, 0], grid[k, 1]
-            wts = ((1 - al) * (1 - ac), al * (1 - ac), al * ac, (1 - al) * ac)
             u = v = 0.0
             for c in range(4):
-                u += wts[c] * corner[c, 0]
-                v += wts[c] * corner[c, 1]
-            y, x = _at(rgb, u, v, u0, v0)
-            if y < 0:
-                r, g, bl = r + 0.0, g + 0.0, bl + 0.0
+                u += wts[k, c] * corner[c, 0]
+                v += wts[k, c] * corner[c, 1]
+            x = np.rint(u) - u0
+            y = np.rint(v) - v0
+            if x >= 0.0 and y >= 0.0 and x < w and y < h:
+                yi, xi = int(y), int(x)
+                r += float(rgb[yi, xi, 0])
+                g += float(rgb[yi, xi, 1])
+                bl += float(rgb[yi, xi, 2])
             else:
-                r += float(rgb[y, x, 0])
-                g += float(rgb[y, x, 1])
-                bl += float(rgb[y, x, 2])
+                r, g, bl = r + 0.0, g + 0.0, bl + 0.0
         out[b, 0], out[b, 1], out[b, 2] = r / m, g / m, bl / m
 
 
@@ -136,11 +143,16 @@ def _bands(sides, n, j, bands, keep, rgb, u0, v0, grid, out, corner, p):
 def _skin(centre, axes, angle, n, e, skin, u0, v0, disc):
     """``limb_cues._skin_kernel``: the skin fraction of ellipse ``e`` of particle ``n``."""
     c, s = np.cos(angle[n, e]), np.sin(angle[n, e])
+    w, h = float(skin.shape[1]), float(skin.shape[0])
     acc = 0.0
     for k in range(disc.shape[0]):
         x, y = disc[k, 0] * axes[n, e, 0], disc[k, 1] * axes[n, e, 1]
-        acc += _pixel(skin, centre[n, e, 0] + c * x - s * y, centre[n, e, 1] + s * x + c * y,
-                      u0, v0, 0)
+        px = np.rint(centre[n, e, 0] + c * x - s * y) - u0
+        py = np.rint(centre[n, e, 1] + s * x + c * y) - v0
+        if px >= 0.0 and py >= 0.0 and px < w and py < h:
+            acc += float(skin[int(py), int(px), 0])
+        else:
+            acc += 0.0
     return acc / disc.shape[0]
 
 
@@ -152,19 +164,25 @@ def _costs_kernel(sides, axis, generators, valid, cone_idx, ell_idx, centre, axe
     cost = np.full((4, n_p, n_parts), np.nan)
     colours = np.zeros((n_p, n_c, refs.shape[1], 3))
     corner, scratch = np.empty((4, 2)), np.empty((2, 2))
+    fe, fr = _fractions(m_e // 2), _fractions(m_r)
+    wts = np.empty((grid.shape[0], 4))
+    for k in range(grid.shape[0]):
+        al, ac = grid[k, 0], grid[k, 1]
+        wts[k, 0], wts[k, 1] = (1 - al) * (1 - ac), al * (1 - ac)
+        wts[k, 2], wts[k, 3] = al * ac, (1 - al) * ac
     for n in range(n_p):
         for j in range(n_c):
             col = cone_idx[j]
             ok = valid[n, col] and generators[n, j]
             if limb_cue[j, EDGE]:
-                f = _edge(sides, axis, n, j, grad, u0, v0, m_e) if ok else 0.0
+                f = _edge(sides, axis, n, j, grad, u0, v0, fe) if ok else 0.0
                 cost[EDGE, n, col] = 1.0 - f
             if limb_cue[j, RIDGE]:
-                f = _ridge(sides, axis, n, j, ridge, shapes, rows, u0, v0, m_r) if ok else 0.0
+                f = _ridge(sides, axis, n, j, ridge, shapes, rows, u0, v0, fr) if ok else 0.0
                 cost[RIDGE, n, col] = 1.0 - f
             b = limb_bands[j]
             if b > 0:                                   # band colours even where invalid
-                _bands(sides, n, j, b, keep, rgb, u0, v0, grid, colours[n, j], corner, scratch)
+                _bands(sides, n, j, b, keep, rgb, u0, v0, wts, colours[n, j], corner, scratch)
                 if not ok:
                     cost[COLOUR, n, col] = 1.0
                 elif has_ref[j]:                        # Schmidt eq. 6
