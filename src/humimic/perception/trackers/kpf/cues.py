@@ -225,8 +225,9 @@ def cue_maps(image: np.ndarray, skin_lut: ColorLUT, levels: int = 3, k_edge: flo
     if region is not None:
         u0, v0, u1, v1 = region
         image, origin = image[v0:v1, u0:u1], (u0, v0)
+    rgb = image.astype(np.float32) / 255.0
     if colour_gradients:
-        grey = image.astype(np.float32) / 255.0
+        grey = rgb                                   # read only: the RGB map too
     else:
         grey = cv2.cvtColor(image, cv2.COLOR_RGB2GRAY).astype(np.float32) / 255.0
     g = cv2.GaussianBlur(grey, (5, 5), 1.0)
@@ -246,8 +247,7 @@ def cue_maps(image: np.ndarray, skin_lut: ColorLUT, levels: int = 3, k_edge: flo
                                    cv2.Sobel(lv, cv2.CV_32F, 0, 2, ksize=3, scale=0.25))
         _ridge_planes(sel, mag, _tanh_scaled(mag, k_ridge), ridge[r:r + h, :w])
     skin = (skin_lut.posterior(image) > 0.5).astype(np.float32)
-    return CueMaps(gradient, ridge, shapes, rows, image.astype(np.float32) / 255.0, skin,
-                   origin)
+    return CueMaps(gradient, ridge, shapes, rows, rgb, skin, origin)
 
 
 def edge_response(maps: CueMaps, uv: np.ndarray, angle: np.ndarray) -> np.ndarray:
