@@ -256,3 +256,19 @@ def test_unique_rows_match_numpy_unique():
         _, first_np, _ = np.unique(q, axis=0, return_index=True, return_inverse=True)
         assert sorted(first) == sorted(first_np)          # the first occurrence of each row
         assert np.array_equal(q[first][inverse], q)
+
+
+def test_unique_rows_falls_back_where_keys_collide_or_rows_hold_nan(monkeypatch):
+    """Distinct rows sharing a key (every key equal: a zero projection) and NaN rows (never
+    equal to themselves) fail the exact check: the result is ``np.unique(axis=0)``'s."""
+    rng = np.random.default_rng(3)
+    q = rng.normal(size=(4, 3))[rng.integers(0, 4, 30)]
+    q_nan = q.copy()
+    q_nan[5, 1] = np.nan
+    for rows, key in ((q, np.zeros(64)), (q_nan, kpf._KEY)):
+        monkeypatch.setattr(kpf, "_KEY", key)
+        first, inverse = kpf.unique_rows(rows)
+        _, first_np, inverse_np = np.unique(rows, axis=0, return_index=True,
+                                            return_inverse=True)
+        assert np.array_equal(first, first_np)
+        assert np.array_equal(inverse, inverse_np.reshape(-1))

@@ -8,6 +8,7 @@ import numpy as np
 from _kpf_synth import INTRINSICS, camera, painted_person, static_pose
 
 from humimic.bodymodel import forward_kernel, limb_view
+from humimic.estimation.particles import kernel
 from humimic.perception.blobs.config import DEFAULT_COLOR_MODEL
 from humimic.perception.cues.color_models import ColorLUT, load_color_model
 from humimic.perception.trackers.kpf import cue_costs, cues, frame_cues
@@ -20,7 +21,8 @@ from humimic.perception.trackers.kpf.warmup import load_kernels
 def test_load_kernels_loads_those_a_tracking_step_calls():
     kernels = (limb_view._view_kernel, forward_kernel._forward_kernel,
                cue_costs._costs_kernel, cue_costs._eq10_kernel, frame_cues._box_kernel,
-               cues._strongest_mag, cues._edge_planes, cues._ridge_planes)
+               cues._strongest_mag, cues._edge_planes, cues._ridge_planes,
+               kernel._key_runs)
     body, T, q0 = kpf_body(), camera(), static_pose()
     img = painted_person(body, q0, T)
     lut = ColorLUT(load_color_model(DEFAULT_COLOR_MODEL), 6)

@@ -17,6 +17,7 @@ import numpy as np
 
 from humimic.estimation.particles.resampling import resample_indices
 from humimic.estimation.particles.weights import weights
+from humimic.maths.jit import njit
 
 
 def sq_distances(x: np.ndarray, s: np.ndarray, h: np.ndarray, dtype=np.float64,
@@ -63,19 +64,38 @@ def unique_rows(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     checked exactly (falls back to ``np.unique(axis=0)`` if two distinct rows share a key)."""
     key = q @ _KEY[: q.shape[1]] if q.shape[1] <= len(_KEY) else q.sum(1)
     # np.unique(key, return_index=True, return_inverse=True) without its Python overhead:
-    # a stable sort, the first of each run of equal keys
+    # a stable sort, the first of each run of equal keys (compiled, with the exact check)
     order = np.argsort(key, kind="stable")
-    sorted_key = key[order]
-    new = np.empty(len(key), bool)
-    new[:1] = True
-    np.not_equal(sorted_key[1:], sorted_key[:-1], out=new[1:])
-    first = order[new]
-    inverse = np.empty(len(key), np.intp)
-    inverse[order] = np.cumsum(new) - 1
-    if not np.array_equal(q[first][inverse], q):
+    first, inverse, exact = _key_runs(np.ascontiguousarray(q, float),
+                                      np.ascontiguousarray(key, float), order)
+    if not exact:
         _, first, inverse = np.unique(q, axis=0, return_index=True, return_inverse=True)
         inverse = inverse.reshape(-1)
     return first, inverse
+
+
+@njit
+def _key_runs(q, key, order):
+    """:func:`unique_rows`' runs of equal keys in the sorted ``order``: ``first`` (the first
+    row of each run, in run order), ``inverse`` (each row's run), and whether every row equals
+    its run's first row exactly (NaN never does)."""
+    n = len(order)
+    inverse = np.empty(n, np.intp)
+    first = np.empty(n, np.intp)
+    runs = 0
+    for i in range(n):
+        r = order[i]
+        if i == 0 or key[r] != key[order[i - 1]]:
+            first[runs] = r
+            runs += 1
+        inverse[r] = runs - 1
+    exact = True
+    for r in range(n):
+        f = first[inverse[r]]
+        for c in range(q.shape[1]):
+            if q[r, c] != q[f, c]:
+                exact = False
+    return first[:runs].copy(), inverse, exact
 
 
 _KEY = np.random.default_rng(20071).normal(size=64)
