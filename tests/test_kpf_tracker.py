@@ -102,6 +102,11 @@ def test_covered_camera_frames_are_lost_and_particles_stay_finite(run):
     ("{kind: kpf, camera: R_wide}", "trackers.kpf.camera"),
     ("{kind: kpf, branch_threshold: 0}", "trackers.kpf.branch_threshold"),
     ("{kind: kpf, branch_forget: 1.5}", "trackers.kpf.branch_forget"),
+    ("{kind: kpf, split_arms: true}", "split_arms needs partitioned"),
+    ("{kind: kpf, partitioned: true, split_resample: arms}", "trackers.kpf.split_resample"),
+    ("{kind: kpf, D_rate: 0}", "trackers.kpf.D_rate"),
+    ("{kind: kpf, D_torso_m: 0, split_arms: true}", "trackers.kpf.D_torso_m"),
+    ("{kind: kpf, motion_nois: 0.2}", "trackers.kpf.motion_nois"),
 ])
 def test_bad_tracker_config_exits_2_naming_the_key(tmp_path, capsys, tracker, key):
     path = tmp_path / "s.yaml"

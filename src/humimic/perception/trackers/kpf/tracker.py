@@ -24,6 +24,7 @@ from humimic.estimation.particles.kernel_groups import dominant_modes
 from humimic.estimation.particles.weights import uniform_log_weights
 from humimic.maths.blas import one_blas_thread
 from humimic.perception.cues.importance import skin_blobs
+from humimic.perception.trackers.kpf import split as sp
 from humimic.perception.trackers.kpf.branches import FlipBranches
 from humimic.perception.trackers.kpf.cues import CueMaps
 from humimic.perception.trackers.kpf.depth import SIDES, kept_ranges, wrist_depth_move
@@ -126,6 +127,9 @@ class KpfTracker:
         self.lik = Likelihood(body, intrinsics, cfg)
         self.D = np.asarray(cfg.D(frame_rate), float)
         self.limits = body.free_limits
+        self.groups = (sp.split_groups(bm.DOF_NAMES) if cfg.split_arms else GROUPS) \
+            if cfg.partitioned else [np.arange(len(self.D))]
+        self.split = cfg.split_resample if cfg.split_arms else None
         self.particles: np.ndarray | None = None
         self.w = np.zeros(0)
         self.mode = self.mode_prev = None
@@ -148,7 +152,7 @@ class KpfTracker:
                                    + [np.radians(c.torso_prior_deg) ** 2] * 3))
         self.particles = np.repeat(self.mode[None], n, axis=0)
         self.w = np.full(n, 1.0 / n)
-        self.W = np.full((n, len(GROUPS)), 1.0 / n)
+        self.W = np.full((n, max(len(self.groups), 3)), 1.0 / n)
         self.lik.adapt({p: c[0] for p, c in
                         self.lik.evaluate(self.mode[None], maps, T_cam_base).colours.items()})
 
@@ -188,6 +192,12 @@ class KpfTracker:
                                     t[:, side[0]].sum(1) + arm[:, 0],
                                     t[:, side[1]].sum(1) + arm[:, 1]])
         return distinct(f)
+
+    def _split_log_lik(self, maps, T_cam_base):
+        """``(N, 5)`` (``split_arms``): :func:`.split.split_log_lik`."""
+        cols = sp.split_part_columns(self.lik.parts)
+        return distinct(lambda q: sp.split_log_lik(self.lik.evaluate(q, maps, T_cam_base).terms,
+                                                cols, self._prior(q), self._arm_prior(q)))
 
     def step(self, maps: CueMaps | FrameCues, T_cam_base: np.ndarray) -> FrameResult:
         """Track one frame (BLAS on one thread: the N x N products are small, and threads
@@ -229,15 +239,14 @@ class KpfTracker:
 
     def _kpf(self, maps, T_cam_base):
         cfg, rng = self.cfg, self.rng
-        groups = GROUPS if cfg.partitioned else [np.arange(len(self.D))]
+        groups = self.groups
+        idx = sp.resample_indices(self.W, groups, self.split, rng)
+        resampled = kpf.partitioned_take(self.particles, idx, groups)
         if cfg.particle_velocity:   # each particle's own, carried through the resampling
-            idx = kpf.partitioned_resample_indices(self.W, groups, rng)
-            resampled = kpf.partitioned_take(self.particles, idx, groups)
             velocity = kpf.partitioned_take(self.pvel, idx, groups)
             if not cfg.torso_velocity:
                 velocity[:, GROUPS[0]] = 0.0
         else:
-            resampled = kpf.partitioned_resample(self.particles, self.W, groups, rng)
             velocity = motion_velocity(self.mode, self.mode_prev, cfg.torso_velocity)
         if cfg.observed_velocity_px is not None:
             velocity = observable_arm_velocity(self.body, self.lik.intr, self.mode, velocity,
@@ -261,7 +270,8 @@ class KpfTracker:
             pred = self._depth_moves(pred.copy(), T_cam_base, cfg.depth_share)
         if cfg.hand_share > 0.0:    # a proposal too
             pred = self._hand_moves(pred.copy(), maps, T_cam_base, cfg.hand_share)
-        lik = (self._group_log_lik if cfg.partitioned else self._log_lik)(maps, T_cam_base)
+        lik = (self._log_lik if not cfg.partitioned else self._split_log_lik if cfg.split_arms
+               else self._group_log_lik)(maps, T_cam_base)
         parts, W, ll, iters = kpf.kpf_modes(pred, lik, self.D, cfg.iterations, cfg.tol,
                                             cfg.shrink, cfg.reweight == "kernel", groups,
                                             cfg.kde_stride, prior, KERNEL_DTYPE)
@@ -272,7 +282,8 @@ class KpfTracker:
             # D, and mean shift
             if self.best_prev is None or best >= self.best_prev - cfg.rescue_drop:
                 break
-            again = kpf.partitioned_resample(parts, W, groups, rng)
+            again = kpf.partitioned_take(parts, sp.resample_indices(W, groups, self.split, rng),
+                                         groups)
             again = self.limits.clamp(again + rng.uniform(-1.0, 1.0, again.shape) * self.D)
             if cfg.rescue_depth_share > 0.0:
                 again = self._depth_moves(again, T_cam_base, cfg.rescue_depth_share)
@@ -383,5 +394,5 @@ class KpfTracker:
                                  self._log_lik(maps, T_cam_base), self.rng)
         # the weighted set before resampling is gone: keep the resampled, equally weighted one
         self.particles, self.w = step.particles, np.full(n, 1.0 / n)
-        self.W = np.repeat(self.w[:, None], len(GROUPS), axis=1)
+        self.W = np.repeat(self.w[:, None], max(len(self.groups), 3), axis=1)
         return self.limits.clamp(step.mean)
