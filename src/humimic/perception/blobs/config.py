@@ -54,7 +54,7 @@ class DetectionConfig(Section):
     p / (p + 1), the pixel's probability of having the target's colour (robust to shading)."""
     proposal: Literal["uniform", "color"] = "color"
     """uniform: the paper's; color: half the centres drawn from a coarse colour map."""
-    refine_fit: bool = False
+    refine_fit: bool = True
     """Our extension, off by default: the colour-drawn hypotheses' shapes, fitted on the coarse
     colour map, take one full-resolution moment step before eq. 8 scores them. A hand narrower
     than a map cell (the hanging hand, 5-8 px in the wide 320x240 eyes) got a coarse fit half a
