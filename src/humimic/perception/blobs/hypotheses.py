@@ -230,11 +230,23 @@ def own_blob(labels: np.ndarray, centres: np.ndarray, grid: int) -> np.ndarray:
 
 def blob_gate(labels: np.ndarray, own: np.ndarray, grid: int) -> Allowed:
     """``allowed`` for :func:`color_sums` / :func:`refine_hypotheses`: hypothesis ``l`` sees the
-    pixels of its own blob ``own[l]`` and of no blob (label 0: a target thinner than a cell may
-    fall between the map's samples), not those of the other blobs -- a hand beside the head is
-    refined and scored alone. ``own[l] < 0``: no gate for that hypothesis."""
+    pixels of its own blob ``own[l]`` and of the cells in no blob (label 0: a target thinner
+    than a cell may fall between the map's samples) that border no other blob (a blob's rim
+    pixels lie in the unlabelled cells around it), not those of the other blobs -- a hand
+    beside the head is refined and scored alone. ``own[l] < 0``: no gate for that hypothesis."""
+    lab = labels.astype(np.float32)
+    kernel = np.ones((3, 3), np.uint8)
+    big = np.float32(labels.max() + 1)
+    nb_max = cv2.dilate(lab, kernel, borderType=cv2.BORDER_REPLICATE)  # 8-neighbourhood
+    nb_min = -cv2.dilate(-np.where(labels > 0, lab, big), kernel,
+                         borderType=cv2.BORDER_REPLICATE)  # smallest blob label, big if none
+
     def allowed(points: np.ndarray) -> np.ndarray:
-        lab = cell_labels(labels, points, grid)
+        h, w = labels.shape
+        i = np.clip(np.floor(points[..., 1] / grid).astype(np.intp), 0, h - 1)
+        j = np.clip(np.floor(points[..., 0] / grid).astype(np.intp), 0, w - 1)
         o = own[:, None]
-        return (o < 0) | (lab == 0) | (lab == o)
+        lab_p, hi, lo = labels[i, j], nb_max[i, j], nb_min[i, j]
+        free = (lab_p == 0) & ((hi == 0) | ((lo == o) & (hi == o)))
+        return (o < 0) | (lab_p == o) & (o > 0) | free
     return allowed
