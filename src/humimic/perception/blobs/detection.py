@@ -94,9 +94,11 @@ class DetectionParams:
     """Colour-fitted hypotheses take one full-resolution moment step before they are scored
     (:func:`~humimic.perception.blobs.hypotheses.refine_hypotheses`: the shape widened by
     one grid cell, the window by one more sigma): a coarse fit of a blob narrower than a cell
-    sits on the cell's centre and its thin window slides off the blob. Off by default (see
-    ``perception.detection.refine_fit`` for what was measured: small hands found, but
-    ude_hidden_target seed 1 got worse)."""
+    sits on the cell's centre and its thin window slides off the blob. The step and the
+    eq. 8 sums of these hypotheses see only their own blob of the coarse colour map
+    (:func:`~humimic.perception.blobs.hypotheses.blob_gate`): ungated, the widened window
+    took in the head or hand beside it and the hypotheses drifted and merged. See
+    ``perception.detection.refine_fit`` for what was measured."""
     proposal_grid_px: int = 4
     """Smallest spacing (px) of the coarse colour map the 'color' proposal draws from."""
     proposal_cells: int = 80
