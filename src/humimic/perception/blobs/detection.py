@@ -14,16 +14,16 @@ importance sampling: uniform search alone finds a 10-pixel hand in a 320x240 ima
 not the 0.5 s we need), and those colour-drawn hypotheses take the shape of the colour blob
 around them (``fit_shapes``), refined by one full-resolution moment step that, like their eq. 8
 sum, sees only their own blob of the colour map (``refine_fit``); ``E f`` is averaged over the
-uniform draws only (the paper's random hypotheses), ``max f`` over all; eq. 8 sums ``p / (p +
-1)`` by default (``score``); a hypothesis must also have at least ``min_inlier_fraction`` of
-its window more likely target-coloured than uniform, so a target absent during phase one
-(threshold learnt from background only) does not make clutter pass; hypotheses are not drawn on
-tracked blobs (``gate_mahalanobis``), a new blob settles for ``settle_frames`` before another
-target of its colour may be acquired, and two blobs on one object (``merge_mahalanobis``) lose
-the weaker. Several targets of one colour (head and hands: skin) form a group that searches for
-one missing member per frame with one threshold; they are found one by one and which blob is
-which target is not decided here (the first missing member is named;
-:mod:`humimic.perception.blobs.identity` names them).
+uniform draws only (the paper's random hypotheses), ``max f`` over all; eq. 8 sums
+``p / (p + 1)`` by default (``score``); a hypothesis must also have at least
+``min_inlier_fraction`` of its window more likely target-coloured than uniform, so a target
+absent during phase one (threshold learnt from background only) does not make clutter pass;
+hypotheses are not drawn on tracked blobs (``gate_mahalanobis``), a new blob settles for
+``settle_frames`` before another target of its colour may be acquired, and two blobs on one
+object (``merge_mahalanobis``) lose the weaker. Several targets of one colour (head and hands:
+skin) form a group that searches for one missing member per frame with one threshold; they are
+found one by one and which blob is which target is not decided here (the first missing member
+is named; :mod:`humimic.perception.blobs.identity` names them).
 
 All randomness comes from the ``numpy.random.Generator`` passed in.
 """
