@@ -30,7 +30,7 @@ def test_non_default_values_are_passed_through():
     cfg = PerceptionConfig(
         roi_side=33, roi_k_sigma=2.5, em_iterations=9, em_tol_px=0.25,
         detection=DetectionConfig(period=1.5, lam=0.5, restart_phase=1, hypotheses=40,
-                                  score="density", proposal="uniform", refine_fit=True,
+                                  score="density", proposal="uniform", refine_fit=False,
                                   sigma_min_px=2.0, sigma_max_px=20.0, min_fill=0.2, lost_frames=7,
                                   backoff_s=1.0, backoff_every=5),
         stereo=StereoConfig(template_half=5, prefilter_sigma=0.0, fine_steps=2,

@@ -35,9 +35,12 @@ POOR_RATE = 0.5
 FALSE_RATE = 0.1
 """A target more of whose blob reports than this are false is flagged too."""
 SMALL_PX = 10.0
-"""A target smaller than this (median diameter, px) is named too small to be detected
-(measured: ude_wave_tracking's left hand, 8 px in the wide cameras at 320x240, is never
-detected; Ude's threshold (eq. 9) is a fraction of the largest blobs' colour sums)."""
+"""A poorly detected target smaller than this (median diameter, px) is named too small to be
+detected (Ude's threshold (eq. 9) is a fraction of the largest blobs' colour sums). Measured
+in ude_wave_tracking (wide cameras, 320x240): with ``perception.detection.refine_fit`` (on by
+default) the hanging hand is found at 7-8 px (1.2-1.5 m; without it, the right hand hanging
+at 8 px never was), at 5 px (2.0 m) never; a poorly detected target under 10 px is most
+likely too small."""
 
 
 def eye_visibility(vis, t: np.ndarray, cams: tuple[str, str], target: str):

@@ -12,17 +12,18 @@ Deviations, all switchable: hypothesis centres are drawn by default from a mixtu
 paper's uniform distribution and the colour probability on a coarse grid (``proposal='color'``,
 importance sampling: uniform search alone finds a 10-pixel hand in a 320x240 image in seconds,
 not the 0.5 s we need), and those colour-drawn hypotheses take the shape of the colour blob
-around them (``fit_shapes``); ``E f`` is averaged over the uniform draws only (the paper's random
-hypotheses), ``max f`` over all; eq. 8 sums ``p / (p + 1)`` by default (``score``); a
-hypothesis must also have at least ``min_inlier_fraction``
-of its window more likely target-coloured than uniform, so a target absent during phase one
-(threshold learnt from background only) does not make clutter pass; hypotheses are not drawn
-on tracked blobs (``gate_mahalanobis``), a new blob settles for ``settle_frames`` before another
-target of its colour may be acquired, and two blobs on one object (``merge_mahalanobis``) lose
-the weaker. Several targets of one colour (head and hands: skin) form a group that searches for
-one missing member per frame with one threshold; they are found one by one and which blob is
-which target is not decided here (the first missing member is named;
-:mod:`humimic.perception.blobs.identity` names them).
+around them (``fit_shapes``), refined by one full-resolution moment step that, like their eq. 8
+sum, sees only their own blob of the colour map (``refine_fit``); ``E f`` is averaged over the
+uniform draws only (the paper's random hypotheses), ``max f`` over all; eq. 8 sums
+``p / (p + 1)`` by default (``score``); a hypothesis must also have at least
+``min_inlier_fraction`` of its window more likely target-coloured than uniform, so a target
+absent during phase one (threshold learnt from background only) does not make clutter pass;
+hypotheses are not drawn on tracked blobs (``gate_mahalanobis``), a new blob settles for
+``settle_frames`` before another target of its colour may be acquired, and two blobs on one
+object (``merge_mahalanobis``) lose the weaker. Several targets of one colour (head and hands:
+skin) form a group that searches for one missing member per frame with one threshold; they are
+found one by one and which blob is which target is not decided here (the first missing member
+is named; :mod:`humimic.perception.blobs.identity` names them).
 
 All randomness comes from the ``numpy.random.Generator`` passed in.
 """
@@ -37,9 +38,12 @@ import numpy as np
 from humimic.perception.blobs.em_blobs import BlobTracker, EMParams
 from humimic.perception.blobs.hypotheses import (  # noqa: F401  (re-exported)
     _grid_points,
+    blob_gate,
+    coarse_blobs,
     color_sums,
     detection_threshold,
     fitted_hypotheses,
+    own_blob,
     propose_centres,
     random_hypotheses,
     refine_hypotheses,
@@ -87,13 +91,15 @@ class DetectionParams:
     than the prior (a hand ~9 px across at 2 m: sigma ~2.2 px) is hypothesised at its own size
     instead of in a window it cannot fill. 1 px: the EM tracker's own floor (``min_var_px2``);
     at 2 px the hand hanging 1.2 m away (8 px, thinner across) is never found."""
-    refine_fit: bool = False
+    refine_fit: bool = True
     """Colour-fitted hypotheses take one full-resolution moment step before they are scored
     (:func:`~humimic.perception.blobs.hypotheses.refine_hypotheses`: the shape widened by
     one grid cell, the window by one more sigma): a coarse fit of a blob narrower than a cell
-    sits on the cell's centre and its thin window slides off the blob. Off by default (see
-    ``perception.detection.refine_fit`` for what was measured: small hands found, but
-    ude_hidden_target seed 1 got worse)."""
+    sits on the cell's centre and its thin window slides off the blob. The step and the
+    eq. 8 sums of these hypotheses see only their own blob of the coarse colour map
+    (:func:`~humimic.perception.blobs.hypotheses.blob_gate`): ungated, the widened window
+    took in the head or hand beside it and the hypotheses drifted and merged. See
+    ``perception.detection.refine_fit`` for what was measured."""
     proposal_grid_px: int = 4
     """Smallest spacing (px) of the coarse colour map the 'color' proposal draws from."""
     proposal_cells: int = 80
@@ -281,23 +287,32 @@ class DetectingTracker:
             step = max(p.proposal_grid_px, -(-W // p.proposal_cells))
             if p.proposal == "color":
                 lik = g.lut.lookup(image[step // 2::step, step // 2::step]).astype(np.float64)
-                lik.ravel()[~self._gate(_grid_points(H, W, step))] = 0.0
+                near = ~self._gate(_grid_points(H, W, step)).reshape(lik.shape)
+                tracked = near & (lik >= 1.0)  # cells of tracked blobs (posterior >= 1/2)
+                lik[near] = 0.0
             centres, uniform = propose_centres(self.rng, p.hypotheses, (H, W), lik, step)
             keep = self._gate(centres)
             centres, uniform = centres[keep], uniform[keep]
             covs = random_hypotheses(self.rng, centres, p.sigma_min_px, p.sigma_max_px)
+            gate = None
             if p.fit_shapes and lik is not None and (~uniform).any():
                 fit = ~uniform  # colour-drawn centres: hypotheses shaped like the blob there
+                post = lik / (lik + 1.0)
+                labels = coarse_blobs(post)
+                own = np.where(fit, own_blob(labels, centres, step), -1)  # before the fit
                 centres[fit], covs[fit] = fitted_hypotheses(
-                    lik / (lik + 1.0), centres[fit], step, p.fit_radius_cells,
-                    min(p.fit_sigma_min_px, p.sigma_min_px), p.sigma_max_px)
-                if p.refine_fit:
+                    post, centres[fit], step, p.fit_radius_cells,
+                    min(p.fit_sigma_min_px, p.sigma_min_px), p.sigma_max_px, labels)
+                if p.refine_fit:  # each refined hypothesis sees its own colour blob only
+                    labels[tracked] = labels.max() + 1  # tracked blobs: another blob
+                    gate = blob_gate(labels, own, step)
                     centres[fit], covs[fit] = refine_hypotheses(
                         image, g.lut, centres[fit], covs[fit], p.window_side,
                         p.window_k_sigma + 1.0, float(step),
-                        min(p.fit_sigma_min_px, p.sigma_min_px), p.sigma_max_px)
+                        min(p.fit_sigma_min_px, p.sigma_min_px), p.sigma_max_px,
+                        blob_gate(labels, own[fit], step))
             f, inlier = color_sums(image, g.lut, centres, covs, p.window_side, p.window_k_sigma,
-                                   p.score)
+                                   p.score, gate)
             if g.phase == 1:  # Ude phase one: sample E f (random hypotheses) and max f
                 g.f_sum += float(f[uniform].sum())
                 g.f_count += int(uniform.sum())

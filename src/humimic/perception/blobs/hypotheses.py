@@ -10,12 +10,16 @@ from __future__ import annotations
 
 import functools
 import math
+from collections.abc import Callable
 
 import cv2
 import numpy as np
 
 from humimic.perception.blobs.em_blobs import clamp_covariances
 from humimic.perception.cues.color_models import ColorLUT
+
+Allowed = Callable[[np.ndarray], np.ndarray]
+"""``allowed(points (n, P, 2) px) -> (n, P) bool``: which window points a hypothesis may see."""
 
 
 def random_hypotheses(rng: np.random.Generator, centres: np.ndarray, sigma_min: float,
@@ -65,18 +69,21 @@ def _unit_grid(side: int, k_sigma: float) -> np.ndarray:
 
 
 def color_sums(image: np.ndarray, lut: ColorLUT, centres: np.ndarray, covs: np.ndarray,
-               side: int, k_sigma: float, score: str = "density"
-               ) -> tuple[np.ndarray, np.ndarray]:
+               side: int, k_sigma: float, score: str = "density",
+               allowed: Allowed | None = None) -> tuple[np.ndarray, np.ndarray]:
     """``f(Theta_l) = sum_u p(I_u | Theta_l)`` over each warped window (nearest pixel; points off
     the image count 0), and the fraction of window points with ``p > 1`` (uniform).  # Ude eq. 8
 
     ``score='posterior'`` sums ``p / (p + 1)`` instead: each pixel's probability of having the
     target's colour rather than the uniform outlier's, in [0, 1), so f counts target-coloured
-    pixels however peaked the colour density is.
+    pixels however peaked the colour density is. ``allowed(points (n, P, 2)) -> (n, P) bool``
+    masks window points out (they count 0, as off the image): see :func:`blob_gate`.
     """
     H, W = image.shape[:2]
     pts = np.rint(window_points(centres, covs, side, k_sigma)).astype(np.intp)
     inside = (pts[..., 0] >= 0) & (pts[..., 0] < W) & (pts[..., 1] >= 0) & (pts[..., 1] < H)
+    if allowed is not None:
+        inside &= allowed(pts)
     u = np.clip(pts[..., 0], 0, W - 1)
     v = np.clip(pts[..., 1], 0, H - 1)
     if image.flags.c_contiguous:  # image[v, u], 4x faster as a flat take
@@ -121,7 +128,8 @@ def propose_centres(rng: np.random.Generator, n: int, image_shape: tuple[int, in
 
 
 def fitted_hypotheses(coarse_post: np.ndarray, centres: np.ndarray, grid: int, radius_cells: int,
-                      sigma_min: float, sigma_max: float) -> tuple[np.ndarray, np.ndarray]:
+                      sigma_min: float, sigma_max: float, labels: np.ndarray | None = None
+                      ) -> tuple[np.ndarray, np.ndarray]:
     """Centres and covariances fitted to the colour map around proposed centres (px).
 
     ``coarse_post`` is the target-colour probability (in [0, 1]) on a grid of spacing ``grid``
@@ -131,10 +139,12 @@ def fitted_hypotheses(coarse_post: np.ndarray, centres: np.ndarray, grid: int, r
     blob there, its axes clamped into ``[sigma_min, sigma_max]``. Only the cells of the blob the
     centre fell in count (the 8-connected component of cells with probability >= 1/2; a centre
     outside every blob takes the whole neighbourhood): a small hand next to the head is fitted
-    alone, not as a smear over both.
+    alone, not as a smear over both. ``labels``: :func:`coarse_blobs` of ``coarse_post``, if
+    the caller has them already.
     """
     h, w = coarse_post.shape
-    _, labels = cv2.connectedComponents((coarse_post >= 0.5).astype(np.uint8), connectivity=8)
+    if labels is None:
+        labels = coarse_blobs(coarse_post)
     off = np.arange(-radius_cells, radius_cells + 1)
     ci = np.clip(np.floor(centres[:, 1] / grid).astype(int), 0, h - 1)
     cj = np.clip(np.floor(centres[:, 0] / grid).astype(int), 0, w - 1)
@@ -142,7 +152,7 @@ def fitted_hypotheses(coarse_post: np.ndarray, centres: np.ndarray, grid: int, r
                                  cj[:, None, None] + off[None, None, :])
     inside = (ii >= 0) & (ii < h) & (jj >= 0) & (jj < w)
     ii_c, jj_c = np.clip(ii, 0, h - 1), np.clip(jj, 0, w - 1)
-    own = labels[ci, cj]
+    own = own_blob(labels, centres, grid)
     same = (labels[ii_c, jj_c] == own[:, None, None]) | (own == 0)[:, None, None]
     wgt = np.where(inside & same, coarse_post[ii_c, jj_c], 0.0)
     wgt = wgt.reshape(len(centres), -1)
@@ -162,7 +172,8 @@ def fitted_hypotheses(coarse_post: np.ndarray, centres: np.ndarray, grid: int, r
 
 def refine_hypotheses(image: np.ndarray, lut: ColorLUT, centres: np.ndarray, covs: np.ndarray,
                       side: int, k_sigma: float, pad_px: float, sigma_min: float,
-                      sigma_max: float) -> tuple[np.ndarray, np.ndarray]:
+                      sigma_max: float, allowed: Allowed | None = None
+                      ) -> tuple[np.ndarray, np.ndarray]:
     """One full-resolution moment step for hypotheses fitted on the coarse colour map.
 
     A coarse fit places a blob narrower than a grid cell on the cell's centre (up to half a
@@ -173,13 +184,17 @@ def refine_hypotheses(image: np.ndarray, lut: ColorLUT, centres: np.ndarray, cov
     :func:`color_sums`), and the centre and covariance become the posterior-weighted
     (``p / (p + 1)``) mean and covariance of the sample points -- the EM tracker's own moment
     update (Ude eqs. 4-5, one step, one blob). Axes clamped into ``[sigma_min, sigma_max]``;
-    a window with no target colour keeps its hypothesis.
+    a window with no target colour keeps its hypothesis. ``allowed`` (as in
+    :func:`color_sums`) masks points out: with :func:`blob_gate` the widened window of a hand
+    does not take in the head beside it.
     """
     H, W = image.shape[:2]
     wide = covs + pad_px**2 * np.eye(2)
     pts = window_points(centres, wide, side, k_sigma)
     q = np.rint(pts).astype(np.intp)
     inside = (q[..., 0] >= 0) & (q[..., 0] < W) & (q[..., 1] >= 0) & (q[..., 1] < H)
+    if allowed is not None:
+        inside &= allowed(q)
     u, v = np.clip(q[..., 0], 0, W - 1), np.clip(q[..., 1], 0, H - 1)
     p = lut.lookup(image[v, u]).astype(np.float64) * inside
     wgt = p / (p + 1.0)
@@ -190,3 +205,48 @@ def refine_hypotheses(image: np.ndarray, lut: ColorLUT, centres: np.ndarray, cov
     cov = np.einsum("np,npi,npj->nij", wgt, d, d) / np.maximum(tot, 1e-12)[:, None, None]
     cov = clamp_covariances(cov, sigma_min**2, sigma_max**2)
     return np.where(ok[:, None], mu, centres), np.where(ok[:, None, None], cov, covs)
+
+
+def coarse_blobs(coarse_post: np.ndarray) -> np.ndarray:
+    """Blob labels ``(h, w)`` int of the coarse colour map: the 8-connected components of its
+    cells with target-colour probability >= 1/2 numbered from 1, 0 elsewhere."""
+    _, labels = cv2.connectedComponents((coarse_post >= 0.5).astype(np.uint8), connectivity=8)
+    return labels
+
+
+def cell_labels(labels: np.ndarray, points: np.ndarray, grid: int) -> np.ndarray:
+    """The blob label of the coarse cell holding each point ``(..., 2)`` (u, v px; cell
+    ``(i, j)`` covers ``[j grid, (j + 1) grid) x [i grid, (i + 1) grid)``, clamped to the map)."""
+    h, w = labels.shape
+    i = np.clip(np.floor(points[..., 1] / grid).astype(np.intp), 0, h - 1)
+    j = np.clip(np.floor(points[..., 0] / grid).astype(np.intp), 0, w - 1)
+    return labels[i, j]
+
+
+def own_blob(labels: np.ndarray, centres: np.ndarray, grid: int) -> np.ndarray:
+    """The blob label owning each hypothesis centre ``(n, 2)`` (0: in no blob)."""
+    return cell_labels(labels, centres, grid)
+
+
+def blob_gate(labels: np.ndarray, own: np.ndarray, grid: int) -> Allowed:
+    """``allowed`` for :func:`color_sums` / :func:`refine_hypotheses`: hypothesis ``l`` sees the
+    pixels of its own blob ``own[l]`` and of the cells in no blob (label 0: a target thinner
+    than a cell may fall between the map's samples) that border no other blob (a blob's rim
+    pixels lie in the unlabelled cells around it), not those of the other blobs -- a hand
+    beside the head is refined and scored alone. ``own[l] < 0``: no gate for that hypothesis."""
+    lab = labels.astype(np.float32)
+    kernel = np.ones((3, 3), np.uint8)
+    big = np.float32(labels.max() + 1)
+    nb_max = cv2.dilate(lab, kernel, borderType=cv2.BORDER_REPLICATE)  # 8-neighbourhood
+    nb_min = -cv2.dilate(-np.where(labels > 0, lab, big), kernel,
+                         borderType=cv2.BORDER_REPLICATE)  # smallest blob label, big if none
+
+    def allowed(points: np.ndarray) -> np.ndarray:
+        h, w = labels.shape
+        i = np.clip(np.floor(points[..., 1] / grid).astype(np.intp), 0, h - 1)
+        j = np.clip(np.floor(points[..., 0] / grid).astype(np.intp), 0, w - 1)
+        o = own[:, None]
+        lab_p, hi, lo = labels[i, j], nb_max[i, j], nb_min[i, j]
+        free = (lab_p == 0) & ((hi == 0) | ((lo == o) & (hi == o)))
+        return (o < 0) | (lab_p == o) & (o > 0) | free
+    return allowed
