@@ -180,9 +180,12 @@ def test_particle_filter_class_runs_every_kind():
         rng = np.random.default_rng(5)
         for z in ZS:
             pf.step(_loglik(z), rng, importance=GaussianMixture([[z, 1.0]], [[0.2, 1.0]]))
-        assert abs(pf.mean[0] - KF_MEANS[-1, 0]) < 0.05, kind
-        assert abs(pf.log_likelihood - KF_LOGLIK) < 1.5, kind
-        assert 1.0 <= pf.ess <= 400.0 and pf.cov.shape == (2, 2)
+        # measured 2026-11-29 over the four kinds: |mean - KF| 0.003-0.007, |loglik - KF|
+        # 0.003-0.14
+        assert abs(pf.mean[0] - KF_MEANS[-1, 0]) < 0.02, kind
+        assert abs(pf.log_likelihood - KF_LOGLIK) < 0.4, kind
+        w = np.exp(pf.log_weights)
+        assert pf.ess == pytest.approx(1.0 / np.sum(w**2), rel=1e-9) and pf.cov.shape == (2, 2)
     with pytest.raises(ValueError, match="allowed"):
         ParticleFilter("kalman", DYN, PRIOR, 10)
     with pytest.raises(ValueError, match="> 0"):
