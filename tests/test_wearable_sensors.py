@@ -78,7 +78,8 @@ def test_imu_orientation_is_the_true_frame_I_in_W_plus_the_errors(wearable):
     ypr_err = (Rotation.from_matrix(o.R).as_euler(EULER)
                - Rotation.from_matrix(R_true).as_euler(EULER))
     np.testing.assert_allclose(ypr_err, o.errors, atol=1e-9)
-    assert np.degrees(np.abs(o.errors[:, 0])).max() < 5.0  # 1 deg RMS
+    # 1 deg RMS; over this 1 s on seed 4 at most 0.59 deg (measured 2026-11-29)
+    assert np.degrees(np.abs(o.errors[:, 0])).max() < 1.5
 
 
 def test_sensor_rates_and_headcam_frames(wearable):
