@@ -163,7 +163,8 @@ def test_tracks_loses_and_reacquires(lut, filt):
     states = [tr.step(_frame(rng, ())).state for _ in range(cfg.lost_frames + 1)]
     assert states[-1] == "lost" and np.all(np.isfinite(tr.pf.particles))
     s = tr.step(_frame(rng, ((200.0, 100.0, 30.0, 0.0),)))
-    assert s.state == "tracking" and np.hypot(s.mean[0] - 200, s.mean[1] - 100) < 3.0
+    # measured 0.79 px (2026-11-29)
+    assert s.state == "tracking" and np.hypot(s.mean[0] - 200, s.mean[1] - 100) < 2.0
 
 
 def _scenario(**tracker):
@@ -263,7 +264,7 @@ def test_keeps_the_tutors_hand_past_another_persons_skin(lut):
             wrong += min(np.hypot(*(s.mean[:2] - other_hand[:2])),
                          np.hypot(*(s.mean[:2] - face[:2]))) < 15.0
     assert len(errs) >= 27 and wrong == 0
-    assert np.median(errs) < 4.0 and max(errs) < 9.0
+    assert np.median(errs) < 2.5 and max(errs) < 9.0  # seed 5 on 2026-11-29: 0.86, 3.35 px
 
 
 def test_hand_people_scenario_stays_on_the_tutor(tmp_path):
@@ -316,4 +317,5 @@ def test_waits_for_motion_before_choosing_between_hands(lut):
     still, waving = (220.0, 80.0, 30.0, 0.0), (90.0, 130.0, 30.0, 0.3)
     assert tr.step(_frame(rng, (still, waving))).state == "init"
     s = tr.step(_frame(rng, (still, (waving[0] + 6.0, *waving[1:]))))
-    assert s.state == "tracking" and np.hypot(s.mean[0] - 96.0, s.mean[1] - 130.0) < 4.0
+    # measured 0.78 px (2026-11-29)
+    assert s.state == "tracking" and np.hypot(s.mean[0] - 96.0, s.mean[1] - 130.0) < 2.0
