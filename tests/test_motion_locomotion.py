@@ -122,9 +122,10 @@ def test_jump_in_flight_the_worn_accelerometers_read_free_fall(scene):
     flight = z > 0.02
     assert flight.sum() > 200
     f = gt.specific_force("head_imu")[flight]
-    assert np.linalg.norm(f, axis=1).max() < 0.3  # 9.81 m/s^2 standing
+    # 9.81 m/s^2 standing; measured 0.042 m/s^2 in flight, both sensors (2026-11-29)
+    assert np.linalg.norm(f, axis=1).max() < 0.12
     f_wii = gt.specific_force("wiimote")[flight]
-    assert np.linalg.norm(f_wii, axis=1).max() < 0.3
+    assert np.linalg.norm(f_wii, axis=1).max() < 0.12
     # the head rises by the jump's height
     y = gt.position("headcam", "W")[:, 1]
     assert y.max() - y[0] == pytest.approx(0.2, abs=0.005)
@@ -146,4 +147,5 @@ def test_jump_crouch_keeps_the_soles_on_the_floor(scene):
             corners = d.geom_xpos[g.id] + (np.array([[sx, sy, -g.size[2]]
                                                      for sx in (-1, 1) for sy in (-1, 1)])
                                            * [g.size[0], g.size[1], 1]) @ R.T
-            assert np.abs(corners[:, 2]).max() < 0.012, corners[:, 2]
+            # on the floor to rounding: measured <= 6e-17 m (the bound was 12 mm)
+            assert np.abs(corners[:, 2]).max() < 1e-9, corners[:, 2]
