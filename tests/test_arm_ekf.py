@@ -152,7 +152,7 @@ def test_a_wrong_marker_is_gated_and_a_persistent_one_restarts():
     for k in range(1, ekf.max_rejected + 1):
         ekf.on_marker(1.0 + k / 30, uv + 80.0, area, R_WI)
     assert ekf.restarts == 1  # after max_rejected gated out in a row
-    np.testing.assert_allclose(am.centroid(ekf.x, K)[0], uv + 80.0, atol=0.5)
+    np.testing.assert_allclose(am.centroid(ekf.x, K)[0], uv + 80.0, atol=1e-6)  # measured 0
     assert np.linalg.norm(ekf.v) < 1e-12  # restarted at rest: measured exactly 0 (was < 0.05)
 
 
