@@ -125,7 +125,7 @@ def test_skin_blobs_centroids_and_filters():
     order = np.argsort(b.centers[:, 0])
     for k, (u, v) in zip(order, [(100, 80), (220, 150)], strict=True):
         assert np.hypot(*(b.centers[k] - [u, v])) < 1.0
-    assert b.areas[order[0]] == pytest.approx(np.pi * 12**2, rel=0.15)
+    assert b.areas[order[0]] == pytest.approx(np.pi * 12**2, rel=0.005)  # measured 0.09 % off
 
 
 def test_colour_likelihood_from_counts_is_calchist_and_comparehist():
