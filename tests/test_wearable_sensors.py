@@ -107,4 +107,4 @@ def test_sensor_rates_and_headcam_frames(wearable):
     assert isinstance(imu, InertialReading) and imu.R_W_sensor.shape == (3, 3)
     assert got["wiimote"][5].value.R_W_sensor is None
     # the accelerometer of a person starting to walk reads about +g along I's up (y)
-    assert imu.accel[1] == pytest.approx(9.81, abs=1.5)
+    assert imu.accel[1] == pytest.approx(9.81, abs=0.6)  # measured 9.51 m/s^2
