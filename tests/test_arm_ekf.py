@@ -148,7 +148,8 @@ def test_a_wrong_marker_is_gated_and_a_persistent_one_restarts():
         ekf.on_marker(k / 30, uv, area, R_WI)
     p_before = ekf.p.copy()
     assert np.isnan(ekf.on_marker(1.0, uv + 80.0, area, R_WI))  # 14 cm off: rejected
-    np.testing.assert_allclose(ekf.p, p_before, atol=2e-3)  # predicted over 1/30 s only
+    # predicted over 1/30 s only: measured 0.11 mm (2026-11-29; the bound was 2 mm)
+    np.testing.assert_allclose(ekf.p, p_before, atol=3e-4)
     for k in range(1, ekf.max_rejected + 1):
         ekf.on_marker(1.0 + k / 30, uv + 80.0, area, R_WI)
     assert ekf.restarts == 1  # after max_rejected gated out in a row
