@@ -192,7 +192,8 @@ def test_templates_place_scale_rotate_and_have_unit_normals():
     w, ht = np.ptp(h.points, axis=0)
     assert np.isclose(ht / w, 0.08 / 0.045, rtol=0.02)
     hs = head_and_shoulders(40)
-    assert hs.points[:, 1].min() == pytest.approx(-0.65, abs=0.05)  # crown above the centre
+    # crown above the centre: measured -0.640 with 40 points (the bound was 0.05)
+    assert hs.points[:, 1].min() == pytest.approx(-0.65, abs=0.025)
 
 
 def _moving_scene():
