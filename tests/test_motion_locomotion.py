@@ -58,7 +58,8 @@ def test_walking_bobs_the_head_at_the_step_frequency(walk):
     y = y - np.polyval(np.polyfit(t[sel], y, 2), t[sel])
     spectrum = np.abs(np.fft.rfft(y * np.hanning(len(y)), n=8 * len(y)))
     freqs = np.fft.rfftfreq(8 * len(y), 1 / RATE)
-    assert freqs[np.argmax(spectrum)] == pytest.approx(cfg.step_frequency, abs=0.15)
+    # within one bin of the zero-padded spectrum (0.0625 Hz): measured 2.0012 Hz (was 0.15)
+    assert freqs[np.argmax(spectrum)] == pytest.approx(cfg.step_frequency, abs=0.07)
     # 4 cm peak to peak at full activity, a little less at ~0.8 m/s
     assert 0.02 < np.ptp(y) < 0.045
     # vertical acceleration of a walking head: a few m/s^2
@@ -128,7 +129,7 @@ def test_jump_in_flight_the_worn_accelerometers_read_free_fall(scene):
     assert np.linalg.norm(f_wii, axis=1).max() < 0.12
     # the head rises by the jump's height
     y = gt.position("headcam", "W")[:, 1]
-    assert y.max() - y[0] == pytest.approx(0.2, abs=0.005)
+    assert y.max() - y[0] == pytest.approx(0.2, abs=5e-6)  # measured 1.2e-6 short (was 5 mm)
 
 
 def test_jump_crouch_keeps_the_soles_on_the_floor(scene):
