@@ -39,7 +39,7 @@ def test_out_of_plane_cosine_is_a_short_segments_image_length_on_the_optical_axi
     px = np.linalg.norm(INTRINSICS.project(b) - INTRINSICS.project(a), axis=1)
     assert INTRINSICS.fx == INTRINSICS.fy
     np.testing.assert_allclose(np.cos(out_of_plane_angle(a, b, np.zeros(3))),
-                               px * z / (INTRINSICS.fx * L), atol=1e-3)
+                               px * z / (INTRINSICS.fx * L), atol=3e-9)  # measured 8.6e-10
 
 
 def test_hold_share_is_whole_below_lo_none_above_hi_half_in_the_middle():
