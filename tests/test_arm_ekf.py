@@ -176,5 +176,6 @@ def test_initial_position_covariance_follows_the_ray():
     p = (np.column_stack([(u - K.cx) / K.fx * zz, (v - K.cy) / K.fy * zz, zz])
          @ am.R_CV_I.T)
     np.testing.assert_allclose(x[0:3], p.mean(axis=0), atol=2e-4)
-    np.testing.assert_allclose(P[0:3, 0:3], np.cov(p.T), rtol=0.03, atol=1e-8)
+    # measured within 0.23 % (200 000 samples: ~0.3 % standard error; the bound was 3 %)
+    np.testing.assert_allclose(P[0:3, 0:3], np.cov(p.T), rtol=0.01, atol=1e-8)
     assert abs(P[0, 2]) > 0.3 * np.sqrt(P[0, 0] * P[2, 2])  # x and depth correlated
