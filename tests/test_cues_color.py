@@ -111,7 +111,8 @@ def test_importance_functions_eq8_eq9_eq12():
                                    blobs.log_density(x)), rtol=1e-9)
     with3 = detection_proposal(centers, (6.0, 6.0), sizes=[30, 40, 50], sigma_s=3.0)
     s = with3.sample(3000, np.random.default_rng(0))
-    assert s.shape == (3000, 3) and abs(s[:, 2].mean() - 40.0) < 1.0
+    # measured 40.02; 0.5 is ~3 standard errors of the mean of 3000 (was 1.0)
+    assert s.shape == (3000, 3) and abs(s[:, 2].mean() - 40.0) < 0.5
 
 
 def test_skin_blobs_centroids_and_filters():
