@@ -174,7 +174,8 @@ def test_eq2_and_eq3_agree_on_a_circle_and_peak_at_the_true_state():
 def test_templates_place_scale_rotate_and_have_unit_normals():
     for t in (head_and_shoulders(15), hand(30)):
         seg = np.linalg.norm(np.diff(t.points, axis=0), axis=1)
-        assert seg.std() / seg.mean() < 0.35  # roughly uniform along the contour
+        # roughly uniform along the contour: measured 0.070 and 0.003 (the bound was 0.35)
+        assert seg.std() / seg.mean() < 0.2
         np.testing.assert_allclose(np.linalg.norm(t.normals, axis=1), 1.0, atol=1e-9)
         p, n = t.place(np.array([[100.0, 50.0, 20.0, np.pi / 2]]))
         R = np.array([[0.0, -1.0], [1.0, 0.0]])
