@@ -62,7 +62,8 @@ def test_kept_ranges_leave_the_gated_off_rows_alone():
                       np.random.default_rng(0), {"R": gate, "L": np.zeros(1)})
     assert np.array_equal(out[gate == 0.0], q[gate == 0.0])
     assert np.array_equal(out[:, 10:], q[:, 10:])      # the left arm's gate shut everywhere
-    assert np.mean(np.any(out[gate == 1.0] != q[gate == 1.0], axis=1)) > 0.5
+    # measured: every gated particle moved (the bound was half)
+    assert np.mean(np.any(out[gate == 1.0] != q[gate == 1.0], axis=1)) > 0.9
 
 
 @pytest.mark.parametrize("gate", [(30.0, 10.0), (10.0, 10.0), (-5.0, 20.0), (10.0, 95.0)])
