@@ -179,7 +179,7 @@ def test_camera_pose_pinhole_and_image(recorded):
     _, strips = column(chunks, "world/cameras/L_wide/image/blobs", "LineStrips2D:strips")
     outline = np.array(strips[0][0])
     np.testing.assert_allclose(outline[:-1].mean(axis=0), [160.5, 120.5], atol=1e-6)
-    np.testing.assert_allclose(np.ptp(outline, axis=0), [40.0, 20.0], atol=0.1)
+    np.testing.assert_allclose(np.ptp(outline, axis=0), [40.0, 20.0], atol=1e-6)  # measured 0
 
 
 def test_series_are_written_in_bulk(recorded):
