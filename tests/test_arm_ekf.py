@@ -148,12 +148,13 @@ def test_a_wrong_marker_is_gated_and_a_persistent_one_restarts():
         ekf.on_marker(k / 30, uv, area, R_WI)
     p_before = ekf.p.copy()
     assert np.isnan(ekf.on_marker(1.0, uv + 80.0, area, R_WI))  # 14 cm off: rejected
-    np.testing.assert_allclose(ekf.p, p_before, atol=2e-3)  # predicted over 1/30 s only
+    # predicted over 1/30 s only: measured 0.11 mm (2026-11-29; the bound was 2 mm)
+    np.testing.assert_allclose(ekf.p, p_before, atol=3e-4)
     for k in range(1, ekf.max_rejected + 1):
         ekf.on_marker(1.0 + k / 30, uv + 80.0, area, R_WI)
     assert ekf.restarts == 1  # after max_rejected gated out in a row
-    np.testing.assert_allclose(am.centroid(ekf.x, K)[0], uv + 80.0, atol=0.5)
-    assert np.linalg.norm(ekf.v) < 0.05
+    np.testing.assert_allclose(am.centroid(ekf.x, K)[0], uv + 80.0, atol=1e-6)  # measured 0
+    assert np.linalg.norm(ekf.v) < 1e-12  # restarted at rest: measured exactly 0 (was < 0.05)
 
 
 def test_initial_position_covariance_follows_the_ray():
@@ -175,5 +176,6 @@ def test_initial_position_covariance_follows_the_ray():
     p = (np.column_stack([(u - K.cx) / K.fx * zz, (v - K.cy) / K.fy * zz, zz])
          @ am.R_CV_I.T)
     np.testing.assert_allclose(x[0:3], p.mean(axis=0), atol=2e-4)
-    np.testing.assert_allclose(P[0:3, 0:3], np.cov(p.T), rtol=0.03, atol=1e-8)
+    # measured within 0.23 % (200 000 samples: ~0.3 % standard error; the bound was 3 %)
+    np.testing.assert_allclose(P[0:3, 0:3], np.cov(p.T), rtol=0.01, atol=1e-8)
     assert abs(P[0, 2]) > 0.3 * np.sqrt(P[0, 0] * P[2, 2])  # x and depth correlated

@@ -108,7 +108,7 @@ def test_sphere_area_matches_a_ray_cast_silhouette_and_jacobian():
         rays /= np.linalg.norm(rays, axis=-1, keepdims=True)
         tc = rays @ c  # distance along the ray to the closest approach
         hit = (c @ c - tc * tc) <= r * r
-        assert area == pytest.approx(hit.sum() * step * step, rel=2e-3)
+        assert area == pytest.approx(hit.sum() * step * step, rel=1e-4)  # measured 3.3e-5
         Hn = numeric_jacobian(lambda y: am.sphere_area(y, K, r)[0], x)
         np.testing.assert_allclose(full(H, am.COLS_P), Hn, rtol=1e-5, atol=1e-6)
 

@@ -81,7 +81,7 @@ def test_depth_with_the_arm_stretched_forward(tmp_path, seed):
     scenario = load_scenario(SCENARIOS_DIR / "sugiyama_fig3_arm_forward.yaml", duration=5.0,
                              overrides=["slam=null", "arm.head_pose=oracle"], seed=seed)
     m = run_one(scenario, tmp_path, rerun="off", progress=False)["arm"]
-    assert m["measured_in_view_fraction"] > 0.95  # measured 0.99
+    assert m["measured_in_view_fraction"] > 0.98  # measured 0.993, 0.993
     assert m["false_marker_frames"] == 0
     assert m["depth_rmse_m"] < 0.02  # measured 0.0083, 0.0082 m (paper's noise: 0.010)
     assert m["position_rmse_m"] < 0.02  # measured 0.0089, 0.0088 m (paper's noise: 0.011)
@@ -89,10 +89,11 @@ def test_depth_with_the_arm_stretched_forward(tmp_path, seed):
     assert m["static_pitch_roll_updates"] > 100  # measured 259
     # position NEES (3 dof): measured 2.99, 2.94 (0.09 with the paper's noise)
     assert 1.5 < m["nees_position_mean"] < 6.0
-    assert m["nees_position_in_band_fraction"] > 0.9  # measured 0.98, 0.98 (paper's: 0.09)
+    assert m["nees_position_in_band_fraction"] > 0.95  # measured 0.98, 0.98 (paper's: 0.09)
     # the orientation's error is its yaw, which nothing measures: the start's
     assert m["orientation_tilt_rmse_deg"] < 0.35  # measured 0.12, 0.13 deg
-    assert abs(m["orientation_yaw_start_deg"]) > 5.0 * m["orientation_tilt_rmse_deg"]
+    # measured 15.5 deg: 125x, 117x the tilt
+    assert abs(m["orientation_yaw_start_deg"]) > 40.0 * m["orientation_tilt_rmse_deg"]
     assert (tmp_path / "arm_position.png").is_file()
 
 

@@ -99,8 +99,8 @@ def test_fit_hs_model_across_hue_wrap():
     hsv = np.stack([hue * 360.0, sat, np.full(3000, 0.7)], -1).astype(np.float32)[None]
     rgb = cv2.cvtColor(hsv, cv2.COLOR_HSV2RGB)[0]
     model = fit_color_model(rgb, "hs", 1, np.random.default_rng(0))
-    assert min(model.means[0, 0], 1 - model.means[0, 0]) < 0.003
-    assert model.covs[0, 0, 0] == pytest.approx(0.015**2, rel=0.1)
+    assert min(model.means[0, 0], 1 - model.means[0, 0]) < 1e-3  # measured 3.1e-4 (was 0.003)
+    assert model.covs[0, 0, 0] == pytest.approx(0.015**2, rel=0.04)  # measured 1.5 % off
     assert model.likelihood(np.array([[0.7, 0.14, 0.14]])) > 1.0  # red is likely, any intensity
     assert model.likelihood(np.array([[0.35, 0.07, 0.07]])) > 1.0
     assert model.likelihood(np.array([[0.14, 0.7, 0.14]])) < 1e-6  # green is not

@@ -96,10 +96,10 @@ def test_the_robot_follows_a_step_to_the_left(tmp_path):
     assert 2.5 < c["move"]["execution_s_mean"] < 6.0  # measured 4.1 s (1 m at <= 0.4 m/s)
     assert 1.0 < c["move"]["path_lag_s"] < 4.0  # measured 2.4 s
     assert c["count"]["head"] == 1  # tilt 18 deg down at the start, then still
-    assert c["head"]["angle_error_after_deg_mean"] < 1.5  # measured 0.47 deg
+    assert c["head"]["angle_error_after_deg_mean"] < 1.0  # measured 0.47, 0.33 deg (11-29)
     assert c["arm"]["finished"] >= 1
-    assert c["arm"]["palm_error_after_m_mean"] < 0.07  # measured 0.023 m
-    assert m["arm"]["depth_rmse_m"] < 0.008  # measured 0.0029 m
+    assert c["arm"]["palm_error_after_m_mean"] < 0.07  # measured 0.023, 0.028 m (11-29)
+    assert m["arm"]["depth_rmse_m"] < 0.007  # measured 0.0029, 0.0024 m (11-29)
     assert (tmp_path / "commands.png").is_file()
 
 

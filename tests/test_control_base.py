@@ -37,10 +37,11 @@ def test_base_drives_to_its_target_at_most_at_0_4_m_per_s(planar):
     speeds, poses = _run(planar, ctl, 10.0)
     assert speeds.max() <= 0.4 * 1.005  # the actuators lag the command by ~0.05 s
     assert speeds.max() > 0.39  # and it does reach the cruise speed
-    np.testing.assert_allclose(poses[-1], [2.0, -1.0, np.radians(30)], atol=0.02)
+    # it settles on the target: measured 2026-11-29 1.2e-9 m, 2.3e-10 rad off after 10 s
+    np.testing.assert_allclose(poses[-1], [2.0, -1.0, np.radians(30)], rtol=0, atol=4e-9)
     assert ctl.arrived
-    # the robot's body goes along: its pelvis moved 2.24 m
-    assert np.linalg.norm(planar.T_world_base_now()[:2, 3] - [2.0, -1.0]) < 0.03
+    # the robot's body goes along: its pelvis moved 2.24 m (measured 1.4e-9 m off)
+    assert np.linalg.norm(planar.T_world_base_now()[:2, 3] - [2.0, -1.0]) < 4e-9
     w = planar.data.warning
     assert not any(w[i].number for i in range(len(w)))
 

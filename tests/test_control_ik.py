@@ -80,10 +80,11 @@ def test_reaches_a_target_and_keeps_the_head_still(model):
     d2 = mujoco.MjData(model)
     d2.qpos[:] = ik.q
     mujoco.mj_kinematics(model, d2)
-    assert np.linalg.norm(d2.site("R_palm").xpos - target) < 1e-3
-    assert np.linalg.norm(d2.site("eye_center").xpos - head0) < 1e-3
+    # measured 2026-11-29: palm 3.2e-5 m off, head moved 1.2e-6 m and turned 9.9e-6 deg
+    assert np.linalg.norm(d2.site("R_palm").xpos - target) < 1e-4
+    assert np.linalg.norm(d2.site("eye_center").xpos - head0) < 4e-6
     R = d2.site("eye_center").xmat.reshape(3, 3)
-    assert np.degrees(np.arccos(np.clip((np.trace(R0.T @ R) - 1) / 2, -1, 1))) < 0.2
+    assert np.degrees(np.arccos(np.clip((np.trace(R0.T @ R) - 1) / 2, -1, 1))) < 3e-5
 
 
 def test_speed_limit_on_a_target_jump(model):

@@ -111,7 +111,8 @@ def test_importance_functions_eq8_eq9_eq12():
                                    blobs.log_density(x)), rtol=1e-9)
     with3 = detection_proposal(centers, (6.0, 6.0), sizes=[30, 40, 50], sigma_s=3.0)
     s = with3.sample(3000, np.random.default_rng(0))
-    assert s.shape == (3000, 3) and abs(s[:, 2].mean() - 40.0) < 1.0
+    # measured 40.02; 0.5 is ~3 standard errors of the mean of 3000 (was 1.0)
+    assert s.shape == (3000, 3) and abs(s[:, 2].mean() - 40.0) < 0.5
 
 
 def test_skin_blobs_centroids_and_filters():
@@ -125,7 +126,7 @@ def test_skin_blobs_centroids_and_filters():
     order = np.argsort(b.centers[:, 0])
     for k, (u, v) in zip(order, [(100, 80), (220, 150)], strict=True):
         assert np.hypot(*(b.centers[k] - [u, v])) < 1.0
-    assert b.areas[order[0]] == pytest.approx(np.pi * 12**2, rel=0.15)
+    assert b.areas[order[0]] == pytest.approx(np.pi * 12**2, rel=0.005)  # measured 0.09 % off
 
 
 def test_colour_likelihood_from_counts_is_calchist_and_comparehist():

@@ -100,7 +100,8 @@ def test_distance_transform_is_the_brute_force_nearest_edge_distance():
     dt = distance_transform(edges, cap=1e9)
     pts = np.stack([rng.integers(0, 160, (20, 15)), rng.integers(0, 120, (20, 15))], -1)
     brute = _brute_nearest(edges, pts.astype(float))
-    np.testing.assert_allclose(dt_distance(dt, pts, cap=1e9), brute.mean(axis=1), atol=1e-3)
+    # float32 distances: measured 2.4e-7 px off (the bound was 1e-3)
+    np.testing.assert_allclose(dt_distance(dt, pts, cap=1e9), brute.mean(axis=1), atol=1e-5)
     # between pixels the bilinear DT stays within half a diagonal of the true distance
     frac = rng.uniform([0, 0], [159, 119], (20, 15, 2))
     per_point = dt_distance(dt, frac[:, :, None, :], cap=1e9, reduce="sum")
@@ -163,8 +164,9 @@ def test_eq2_and_eq3_agree_on_a_circle_and_peak_at_the_true_state():
     p, n = circle.place(states)
     d_normal = normal_edge_distance(maps.edges, p, n, 15)
     d_dt = dt_distance(maps.dt, p)
-    np.testing.assert_allclose(d_normal, [10, 5, 0, 5], atol=1.3)
-    np.testing.assert_allclose(d_dt, d_normal, atol=1.0)
+    # measured 2026-11-29: [9.67, 4.67, 0, 4.87]; the DT within 0.13 px of it
+    np.testing.assert_allclose(d_normal, [10, 5, 0, 5], atol=0.7)
+    np.testing.assert_allclose(d_dt, d_normal, atol=0.35)
     ll = shape_log_likelihood(d_dt, sigma=1.5)
     assert np.argmax(ll) == 2 and ll[2] <= 0.0
 
@@ -172,7 +174,8 @@ def test_eq2_and_eq3_agree_on_a_circle_and_peak_at_the_true_state():
 def test_templates_place_scale_rotate_and_have_unit_normals():
     for t in (head_and_shoulders(15), hand(30)):
         seg = np.linalg.norm(np.diff(t.points, axis=0), axis=1)
-        assert seg.std() / seg.mean() < 0.35  # roughly uniform along the contour
+        # roughly uniform along the contour: measured 0.070 and 0.003 (the bound was 0.35)
+        assert seg.std() / seg.mean() < 0.2
         np.testing.assert_allclose(np.linalg.norm(t.normals, axis=1), 1.0, atol=1e-9)
         p, n = t.place(np.array([[100.0, 50.0, 20.0, np.pi / 2]]))
         R = np.array([[0.0, -1.0], [1.0, 0.0]])
@@ -191,7 +194,8 @@ def test_templates_place_scale_rotate_and_have_unit_normals():
     w, ht = np.ptp(h.points, axis=0)
     assert np.isclose(ht / w, 0.08 / 0.045, rtol=0.02)
     hs = head_and_shoulders(40)
-    assert hs.points[:, 1].min() == pytest.approx(-0.65, abs=0.05)  # crown above the centre
+    # crown above the centre: measured -0.640 with 40 points (the bound was 0.05)
+    assert hs.points[:, 1].min() == pytest.approx(-0.65, abs=0.025)
 
 
 def _moving_scene():

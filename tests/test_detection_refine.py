@@ -103,7 +103,7 @@ def test_refined_hand_beside_the_head_keeps_to_the_hand(skin_lut, du):
     v, u = np.nonzero(hand)
     mean = np.array([u.mean(), v.mean()])
     mu, C, _ = _fit_and_refine(img, skin_lut, (u_hand, 104.0), gated=True)
-    assert np.linalg.norm(mu - mean) < 0.8
+    assert np.linalg.norm(mu - mean) < 0.6  # measured 0.11-0.26 px (2026-11-29)
     assert np.sqrt(C[0, 0]) < 2.0 * u.std()
     mu_raw, _, _ = _fit_and_refine(img, skin_lut, (u_hand, 104.0), gated=False)
     assert mean[0] - mu_raw[0] > 2.0  # the ungated step absorbs head pixels (the control)

@@ -198,7 +198,8 @@ def test_black_frame_and_hs_model():
         colour = tuple(int(gain * c) for c in (200, 40, 40))
         draw_ellipse(img, (100.0 + f, 100.0), (9, 9), 0, colour)
         fr = tr.update(add_noise(img, rng, 3.0))
-        assert np.linalg.norm(fr.centres[0] - (100.0 + f, 100.0)) < 1.0
+        # measured 0.0002-0.27 px over the four gains (2026-11-29)
+        assert np.linalg.norm(fr.centres[0] - (100.0 + f, 100.0)) < 0.6
     fr = tr.update(np.zeros((240, 320, 3), np.uint8))  # all black: nothing, no NaN
     assert np.all(np.isfinite(fr.centres)) and np.all(np.isfinite(fr.covs))
     assert fr.support_px[0] < 1.0 and np.isfinite(fr.fill).all()

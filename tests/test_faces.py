@@ -95,8 +95,9 @@ def test_detection_rate_of_rendered_faces_at_24_px_and_more():
                           seed=3)
     n = sum(tab.trials.values())
     assert n >= 70
-    assert tab.overall() >= 0.9, (tab.hits, tab.trials)
-    assert tab.false_detections <= 0.1 * n
+    # measured 2026-11-29: 0.975 of 80 found (2 missed), 1 false detection
+    assert tab.overall() >= 0.94, (tab.hits, tab.trials)
+    assert tab.false_detections <= 3
 
 
 def test_identity_in_a_scenario():
@@ -216,7 +217,7 @@ def test_recognition_of_rendered_faces(tmp_path, monkeypatch):
     known = {n: test[n].crops for n in names[:4]}
     X = np.concatenate(list(known.values()))
     true = np.repeat(np.arange(4), [len(v) for v in known.values()])
-    assert np.mean(np.argmin(model.distances(X), axis=1) == true) >= 0.9
+    assert np.mean(np.argmin(model.distances(X), axis=1) == true) >= 0.95  # measured 1.0
     roc = training.roc(model, known, {n: test[n].crops for n in names[4:]})
-    assert roc.at_far(0.1)[0] >= 0.8
-    assert np.mean(model.classify(X)[0] == true) >= 0.85
+    assert roc.at_far(0.1)[0] >= 0.8  # measured 0.92 (2026-11-29)
+    assert np.mean(model.classify(X)[0] == true) >= 0.85  # measured 0.93

@@ -163,7 +163,8 @@ def test_tracks_loses_and_reacquires(lut, filt):
     states = [tr.step(_frame(rng, ())).state for _ in range(cfg.lost_frames + 1)]
     assert states[-1] == "lost" and np.all(np.isfinite(tr.pf.particles))
     s = tr.step(_frame(rng, ((200.0, 100.0, 30.0, 0.0),)))
-    assert s.state == "tracking" and np.hypot(s.mean[0] - 200, s.mean[1] - 100) < 3.0
+    # measured 0.79 px (2026-11-29)
+    assert s.state == "tracking" and np.hypot(s.mean[0] - 200, s.mean[1] - 100) < 2.0
 
 
 def _scenario(**tracker):
@@ -200,7 +201,8 @@ def test_fig5_scenario_tracks_the_hand_in_clutter(tmp_path):
     """Menezes Fig. 5, shortened to 1.5 s: the waving hand in front of the cluttered room
     (hand ~35 px wide). Measured with the skin cue: 1.5 s: 11 % lost (mostly the start),
     centre error median 0.81 px, RMSE 2.9 px; 4 s: 10 %, 0.91 / 2.4 px. Without it (the
-    paper's shape + motion) in today's busier room: 16 %, 1.7 / 4.5 px; 4 s: 21 %."""
+    paper's shape + motion) in today's busier room: 16 %, 1.7 / 4.5 px; 4 s: 21 %. On
+    2026-11-29 (1.5 s): none lost, acquired on the first frame, 0.76 / 0.89 px."""
     from humimic.paths import SCENARIOS_DIR
     from humimic.run import run_one
     from humimic.scenario import load_scenario
@@ -209,8 +211,8 @@ def test_fig5_scenario_tracks_the_hand_in_clutter(tmp_path):
                        duration=1.5)
     m = run_one(sc, tmp_path, rerun="save", progress=False)["trackers"]["hand"]
     assert m["frames"] == 90 and m["visible_frames"] == 90
-    assert m["lost_fraction"] <= 0.25 and m["center_median_px"] < 2.0
-    assert m["center_rmse_px"] < 7.0 and m["acquire_s"] < 0.4
+    assert m["lost_fraction"] <= 0.05 and m["center_median_px"] < 2.0
+    assert m["center_rmse_px"] < 2.5 and m["acquire_s"] < 0.05
 
     from rerun.chunk import RrdReader
 
@@ -238,7 +240,7 @@ def test_hand_people_scenario_tracks_a_dark_skinned_tutor(tmp_path):
     assert m["visible_frames"] >= 100
     assert m["identity_switches"] == 0 and m["wrong_person_frames"] == 0
     assert m["lost_fraction"] <= 0.05 and m["center_median_px"] < 2.0
-    assert m["center_rmse_px"] < 4.0
+    assert m["center_rmse_px"] < 3.0  # measured 1.6, 1.19 px (2026-11-29)
 
 
 def test_keeps_the_tutors_hand_past_another_persons_skin(lut):
@@ -263,7 +265,7 @@ def test_keeps_the_tutors_hand_past_another_persons_skin(lut):
             wrong += min(np.hypot(*(s.mean[:2] - other_hand[:2])),
                          np.hypot(*(s.mean[:2] - face[:2]))) < 15.0
     assert len(errs) >= 27 and wrong == 0
-    assert np.median(errs) < 4.0 and max(errs) < 9.0
+    assert np.median(errs) < 2.5 and max(errs) < 9.0  # seed 5 on 2026-11-29: 0.86, 3.35 px
 
 
 def test_hand_people_scenario_stays_on_the_tutor(tmp_path):
@@ -279,9 +281,10 @@ def test_hand_people_scenario_stays_on_the_tutor(tmp_path):
                        duration=2.3)
     run = run_one(sc, tmp_path, rerun="off", progress=False)
     m = run["trackers"]["hand"]
-    assert m["others_near_frames"] >= 10  # the distraction was there
+    assert m["others_near_frames"] >= 40  # the distraction was there (measured 97 frames)
     assert m["identity_switches"] == 0 and m["wrong_person_frames"] == 0
-    assert m["lost_fraction"] < 0.2 and m["center_median_px"] < 3.0
+    # on 2026-11-29: none lost, median 0.84 px
+    assert m["lost_fraction"] < 0.05 and m["center_median_px"] < 2.0
 
 
 
@@ -301,7 +304,7 @@ def test_hand_people_scenario_tracks_in_dim_light(tmp_path):
                        duration=1.5)
     m = run_one(sc, tmp_path, rerun="off", progress=False)["trackers"]["hand"]
     assert m["visible_frames"] == 90 and m["wrong_person_frames"] == 0
-    assert m["lost_fraction"] <= 0.1 and m["center_median_px"] < 2.5
+    assert m["lost_fraction"] <= 0.05 and m["center_median_px"] < 2.5  # measured 0, 0.90 px
     assert m["center_rmse_px"] < 5.0
 
 
@@ -316,4 +319,5 @@ def test_waits_for_motion_before_choosing_between_hands(lut):
     still, waving = (220.0, 80.0, 30.0, 0.0), (90.0, 130.0, 30.0, 0.3)
     assert tr.step(_frame(rng, (still, waving))).state == "init"
     s = tr.step(_frame(rng, (still, (waving[0] + 6.0, *waving[1:]))))
-    assert s.state == "tracking" and np.hypot(s.mean[0] - 96.0, s.mean[1] - 130.0) < 4.0
+    # measured 0.78 px (2026-11-29)
+    assert s.state == "tracking" and np.hypot(s.mean[0] - 96.0, s.mean[1] - 130.0) < 2.0

@@ -72,7 +72,8 @@ def test_mean_shift_points_up_the_kde_gradient(cloud):
         g = optimize.approx_fprime(s[n], lambda x: kpf.kde(x[None], s, w, h)[0], 1e-7)
         v = (shifted[n] - s[n]) / h ** 2
         cos = v @ g / (np.linalg.norm(v) * np.linalg.norm(g))
-        assert cos > 0.999, (n, cos)
+        # within 2e-6 rad of the numerical gradient (measured <= 5e-7; the bound was 2.6 deg)
+        assert cos > 1.0 - 2e-12, (n, cos)
 
 
 def test_mean_shift_iterations_reach_the_kde_maximum(cloud):
@@ -92,7 +93,7 @@ def test_mean_shift_iterations_reach_the_kde_maximum(cloud):
 def test_dominant_mode_is_the_heavier_cluster(cloud):
     s, w, h = cloud
     mode, peak = kpf.dominant_mode(s, w, h, 0.25 * h * 4)
-    assert np.linalg.norm(mode - [0, 0]) < 0.2
+    assert np.linalg.norm(mode - [0, 0]) < 0.08  # measured 0.036
     assert np.argmax(kpf.kde(s, s, w, h)) == peak
 
 

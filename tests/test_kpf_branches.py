@@ -139,7 +139,7 @@ def test_a_static_arm_switches_on_the_frame_the_cusum_predicts():
     assert np.all(tr.pvel[:, 6:10] == 0.0) and np.all(tr.pvel[:, 10:] == 1.0)
     moved = np.linalg.norm(body.forward(tr.particles).joint("r_wrist")
                            - body.forward(particles).joint("r_wrist"), axis=1)
-    assert np.median(moved) > 0.05                        # the particles went with it
+    assert np.median(moved) > 0.5                # the particles went with it (measured 1.02 m)
 
 
 def test_refined_ratios_compare_each_branchs_local_peak():

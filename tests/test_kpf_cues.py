@@ -47,7 +47,7 @@ def test_edge_cue_peaks_on_the_boundary_at_the_limb_angle(lut):
     on = C.edge_response(maps, along(a, width / 2), np.array([[a]]))[0, 0]
     off = C.edge_response(maps, along(a, width / 2 + 8), np.array([[a]]))[0, 0]
     crossed = C.edge_response(maps, along(a, width / 2), np.array([[a + np.pi / 2]]))[0, 0]
-    assert on > 0.8 and off < 0.1 and crossed < 0.2
+    assert on > 0.8 and off < 0.1 and crossed < 0.15   # measured 0.88, 0.0, 0.054
     # eq. 1 is the gradient's component across the limb: OpenCV's Sobel says the same
     g = cv2.GaussianBlur(cv2.cvtColor(bar_image(a, width), cv2.COLOR_RGB2GRAY)
                          .astype(np.float32) / 255, (5, 5), 1.0)
@@ -55,10 +55,11 @@ def test_edge_cue_peaks_on_the_boundary_at_the_limb_angle(lut):
     p = np.rint(along(a, width / 2)[0, 0]).astype(int)
     across = np.abs(gy[p[:, 1], p[:, 0]] * np.cos(a) - gx[p[:, 1], p[:, 0]] * np.sin(a))
     mag = np.hypot(gx, gy)[p[:, 1], p[:, 0]]
+    # float32 maps: measured 4e-8 (the bound was 1e-3)
     assert np.allclose(across / mag, np.abs(
         maps.grad[1].ravel()[p[:, 1] * W + p[:, 0]] * np.cos(a)
         - maps.grad[0].ravel()[p[:, 1] * W + p[:, 0]] * np.sin(a))
-        / np.hypot(maps.grad[0], maps.grad[1]).ravel()[p[:, 1] * W + p[:, 0]], atol=1e-3)
+        / np.hypot(maps.grad[0], maps.grad[1]).ravel()[p[:, 1] * W + p[:, 0]], atol=1e-6)
 
 
 @pytest.mark.parametrize("width", [4.0, 8.0, 16.0])
@@ -69,7 +70,7 @@ def test_ridge_cue_on_the_axis_at_the_width_level(lut, width):
     on = C.ridge_response(maps, along(a, 0.0, 30), w, np.array([[a]]))[0, 0]
     beside = C.ridge_response(maps, along(a, width * 1.5 + 4, 30), w, np.array([[a]]))[0, 0]
     crossed = C.ridge_response(maps, along(a, 0.0, 30), w, np.array([[a + np.pi / 2]]))[0, 0]
-    assert on > 0.5 and beside < 0.2 and crossed < -0.3
+    assert on > 0.5 and beside < 0.2 and crossed < -0.5  # measured 1.10-1.11, 0.0, -1.10-1.11
     assert C.ridge_level(np.array([width]), 3)[0] == int(np.clip(np.rint(np.log2(width / 4)),
                                                                   0, 2))
 

@@ -69,7 +69,7 @@ def test_keep_wrist_range_puts_the_wrist_at_the_reference_distance_on_its_own_ra
     T = camera()
     out = keep_wrist_range(body, q, ref, "R", T)
     moved = np.any(out != q, axis=1)
-    assert moved.mean() > 0.5
+    assert moved.mean() > 0.75  # measured 0.91 (was 0.5)
     a, b, r = (body.forward(x).to(T).joint("r_wrist") for x in (q, out, ref))
     cos = np.sum(a * b, 1) / np.linalg.norm(a, axis=1) / np.linalg.norm(b, axis=1)
     assert np.all(cos[moved] > 1 - 1e-10)

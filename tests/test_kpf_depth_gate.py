@@ -39,7 +39,7 @@ def test_out_of_plane_cosine_is_a_short_segments_image_length_on_the_optical_axi
     px = np.linalg.norm(INTRINSICS.project(b) - INTRINSICS.project(a), axis=1)
     assert INTRINSICS.fx == INTRINSICS.fy
     np.testing.assert_allclose(np.cos(out_of_plane_angle(a, b, np.zeros(3))),
-                               px * z / (INTRINSICS.fx * L), atol=1e-3)
+                               px * z / (INTRINSICS.fx * L), atol=3e-9)  # measured 8.6e-10
 
 
 def test_hold_share_is_whole_below_lo_none_above_hi_half_in_the_middle():
@@ -62,7 +62,8 @@ def test_kept_ranges_leave_the_gated_off_rows_alone():
                       np.random.default_rng(0), {"R": gate, "L": np.zeros(1)})
     assert np.array_equal(out[gate == 0.0], q[gate == 0.0])
     assert np.array_equal(out[:, 10:], q[:, 10:])      # the left arm's gate shut everywhere
-    assert np.mean(np.any(out[gate == 1.0] != q[gate == 1.0], axis=1)) > 0.5
+    # measured: every gated particle moved (the bound was half)
+    assert np.mean(np.any(out[gate == 1.0] != q[gate == 1.0], axis=1)) > 0.9
 
 
 @pytest.mark.parametrize("gate", [(30.0, 10.0), (10.0, 10.0), (-5.0, 20.0), (10.0, 95.0)])

@@ -77,7 +77,7 @@ def test_flipping_twice_returns_the_pose_and_forgives_the_flip():
     assert np.max(err) < 1e-9
     moved = np.linalg.norm(body.forward(once).joint("r_wrist")
                            - body.forward(q).joint("r_wrist"), axis=1)
-    assert np.median(moved) > 0.01                      # a flip does move the wrist in 3-D
+    assert np.median(moved) > 0.1                       # a flip moves the wrist (0.24 m)
 
 
 def test_ray_split_is_pythagorean_and_on_axis_is_the_camera_z():
@@ -114,7 +114,7 @@ def test_tracker_flip_jumps_replace_a_share_with_same_image_poses():
         changed = np.any(out[:, arm] != q[:, arm], axis=1)
         assert 0.05 < changed.mean() < 0.2, changed.mean()
         moved = np.linalg.norm(b.joint(f"{side}_wrist") - a.joint(f"{side}_wrist"), axis=1)
-        assert np.median(moved[changed]) > 0.01
+        assert np.median(moved[changed]) > 0.15         # measured 0.42, 0.46 m (was 0.01)
         for j in ("elbow", "wrist"):                   # the same pixels
             np.testing.assert_allclose(intr.project(b.to(T).joint(f"{side}_{j}")[changed]),
                                        intr.project(a.to(T).joint(f"{side}_{j}")[changed]),

@@ -50,8 +50,9 @@ def test_the_narrow_eye_sees_the_whole_upper_body(gesture):
     # outline 5.6 px from the image's left edge (nearer than ~4.3 m it leaves the image)
     assert u0 > 2 and v0 > 2 and u1 < 318 and v1 < 238, (u0, v0, u1, v1)
     _, torso_wide = _outline_extent(SCENARIOS_DIR / "schmidt_table1.yaml", gesture)
-    # f / distance: 753 / 4.4 against 134 / 2.0 -> 2.6x (measured torso 75 against 28.5 px)
-    assert torso / torso_wide == pytest.approx(2.6, abs=0.3)
+    # f / distance: 753 / 4.4 against 134 / 2.0 -> 2.6x (measured torso 75 against 28.5 px:
+    # 2.633 on 2026-11-29, both gestures)
+    assert torso / torso_wide == pytest.approx(2.6, abs=0.1)
 
 
 def test_kpf_tracks_side_pointing_through_the_narrow_eye(tmp_path):
@@ -59,14 +60,15 @@ def test_kpf_tracks_side_pointing_through_the_narrow_eye(tmp_path):
     34 frames at 7.5 Hz; ~8 s of CPU). Measured 39.7 mm (25 across the camera ray, 24 along
     it, flip-free 39). Whole 7.5 s runs over seeds 0-4: 37-143 mm (across the ray 15-29): a
     single run moves by tens of mm with rounding-level changes (which depth flip it sits in),
-    the error across the ray much less."""
+    the error across the ray much less. On 2026-11-29: 45.5 mm (13 across the ray, 40 along
+    it, flip-free 25)."""
     sc = load_scenario(FOVEAL, ["trackers.kpf.n_particles=1000", "trackers.kpf.iterations=3"],
                        seed=0, duration=4.5)
     sc.trackers = {"kpf": sc.trackers["kpf"]}
     k = run_one(sc, tmp_path, rerun="off", progress=False)["trackers"]["kpf"]
     assert k["frames"] == 34 and k["lost_fraction"] < 0.1
-    assert k["wrist_lateral_mm"] < 50.0
-    assert k["wrist_flip_free_mm"] < 80.0
+    assert k["wrist_lateral_mm"] < 35.0
+    assert k["wrist_flip_free_mm"] < 70.0
     assert k["wrist_error_mm"] < 100.0
 
 

@@ -30,7 +30,7 @@ def test_ray_points_reproject_to_their_pixels_at_their_ranges():
     ranges = rng.uniform(0.5, 4.0, 50)
     P = ray_points(intr, T, uv, ranges)
     P_cam = P @ T[:3, :3].T + T[:3, 3]
-    np.testing.assert_allclose(intr.project(P_cam), uv, atol=1e-3)
+    np.testing.assert_allclose(intr.project(P_cam), uv, atol=1e-9)  # measured 6e-14 (was 1e-3)
     np.testing.assert_allclose(np.linalg.norm(P_cam, axis=1), ranges, atol=1e-12)
 
 
@@ -75,7 +75,7 @@ def test_arm_turn_keeps_the_elbow_and_takes_the_hand_to_its_target_direction():
     target = S + (H - S) + turn                      # a nearby direction from the shoulder
     out = arm_turn_to(body, q, "R", H, target, pose)
     moved = np.any(out != q, axis=1)
-    assert moved.mean() > 0.5
+    assert moved.mean() > 0.9                                   # measured 1.0 (was 0.5)
     np.testing.assert_array_equal(out[:, 9], q[:, 9])          # elbow flexion kept
     p1 = body.forward(out)
     H1 = part_centres(body, p1, "r_hand")[moved]

@@ -60,7 +60,7 @@ def test_arm_image_jacobian_zeros_and_a_small_step():
     p = [body.forward(x[None]) for x in (q, q2)]
     uv = [np.concatenate([INTRINSICS.project(pp.joint(f"r_{j}") @ T[:3, :3].T + T[:3, 3])[0]
                           for j in ("elbow", "wrist")]) for pp in p]
-    assert np.allclose(J @ dq, uv[1] - uv[0], atol=1e-3)
+    assert np.allclose(J @ dq, uv[1] - uv[0], atol=4e-5)  # second order: measured 1.2e-5 px
 
 
 def test_a_straight_arms_humeral_rotation_velocity_is_dropped():

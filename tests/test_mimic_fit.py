@@ -4,7 +4,9 @@ The issue's goal: a 0.35 m-amplitude wave at 1.0 m mimicked with clamped fractio
 RMSE against the (scaled) target <= 20 mm, oracle and tracked. Measured when the thresholds
 were set (seed 0): oracle 5.6 mm, clamped 0, no joint on a limit band, scale 1.04 -> 1.01;
 tracked (mimicry from 0.5 s, the hand then 0.16 m off the wave's centre) 13.8 mm, clamped 0,
-scale 1.04 -> 0.71. Before (ready pose with the arm 0.35 rad from its adduction stop, scale 1):
+scale 1.04 -> 0.71. Re-measured 2026-11-29: oracle 5.6-5.7 mm (relative, mirrored, left), no tick
+clamped and no joint-limit hit; tracked 14.3 mm, none clamped; the tests hold these, tighter
+than the issue's goal. Before (ready pose with the arm 0.35 rad from its adduction stop, scale 1):
 oracle 17.9 mm kinematic IK error and 26 % of ticks clamped.
 """
 
@@ -40,19 +42,19 @@ def test_a_large_wave_fits_without_clamping(root, tmp_path, mapping):
     site = "R_palm" if not mapping else "L_palm"
     s = m[site]
     assert s["status"] == "ok"
-    assert s["clamped_fraction"] <= 0.02        # measured 0 (relative)
-    assert s["rmse_mm"] <= 20.0                 # measured 5.6 mm (relative)
+    assert s["clamped_fraction"] == 0.0         # measured 0 (all three)
+    assert s["rmse_mm"] <= 15.0                 # measured 5.6-5.7 mm
     assert s["scale_initial"] == pytest.approx(AUTO_SCALE, abs=2e-3)
     assert 0.8 <= s["scale"] <= s["scale_initial"]
-    assert s["joint_limit_hits"] <= 0.05 * s["ticks"]  # measured 0
+    assert s["joint_limit_hits"] == 0           # measured 0
 
 
 def test_a_large_tracked_wave_fits_without_clamping(root, tmp_path):
     m = _run(root, tmp_path, "mimic_tracked_wave", BIG_WAVE, duration=6.0, fast=FAST[1:])
     palm = m["mimicry"]["R_palm"]
     assert palm["status"] == "ok", palm
-    assert palm["clamped_fraction"] <= 0.02     # measured 0
-    assert palm["rmse_mm"] <= 20.0              # measured 13.8 mm
+    assert palm["clamped_fraction"] == 0.0      # measured 0
+    assert palm["rmse_mm"] <= 20.0              # measured 13.8, 14.3 mm
     assert 0.5 <= palm["scale"] < palm["scale_initial"]
 
 

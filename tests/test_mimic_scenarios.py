@@ -2,10 +2,11 @@
 2-3x margin (measured 2026-11-23, in brackets): oracle wave at 1.2 m RMSE <= 10 mm [4.5] and
 lag <= 15 ms [7.7, about half the 16.7 ms frame period: the paper's hold interpolation];
 extrapolation's lag |lag| <= 1 ms [0.34]; the head still within 0.4 mm and 0.05 deg [0.15 mm,
-0.016 deg] (gaze: 0.12 mm, 0.012 deg [0.039, 0.0042]); gaze keeps the head within 10 % of the
-wide image's width of its centre [6 %, at the start]. The paper's goals (RMSE <= 25 mm, lag
-<= 50 ms) are in the benchmark report (``benchmarks/bench_control.py --scenarios``). Small
-images (the oracle does not look at them) keep these runs fast.
+0.016 deg; 0.30 mm, 0.029 deg on 2026-11-29] (gaze: 0.12 mm, 0.012 deg [0.039, 0.0042]); gaze
+keeps the head within 10 % of the wide image's width of its centre [6 %, at the start]. The
+paper's goals (RMSE <= 25 mm, lag <= 50 ms) are in the benchmark report
+(``benchmarks/bench_control.py --scenarios``). Small images (the oracle does not look at them)
+keep these runs fast.
 """
 
 from __future__ import annotations
@@ -47,7 +48,7 @@ def test_a_mapping_on_a_still_hand_is_named_in_the_warning(root, tmp_path, wave)
     assert 80.0 <= wave["mimicry"]["R_palm"]["mapped_motion_rms_mm"] <= 340.0
     assert "mimicry.R_palm" not in (verdict_warning(wave) or "")
     m = _run(root, tmp_path, "mimic_wave", "human.motion.hand=left", duration=2.0)
-    assert m["mimicry"]["R_palm"]["mapped_motion_rms_mm"] < 1.0
+    assert m["mimicry"]["R_palm"]["mapped_motion_rms_mm"] < 1e-6  # measured 0.0
     assert "mimicry.R_palm: its human part right_hand hardly moved" in verdict_warning(m)
 
 
@@ -120,7 +121,7 @@ def test_a_target_never_seen_leaves_the_robot_holding_its_pose(root, tmp_path):
     palm = m["R_palm"]
     assert palm["status"] == "never_detected"
     assert "right_hand" in palm["reason"] and "image" in palm["reason"]
-    assert palm["held_pose"] and palm["robot_max_displacement_mm"] < 2.0
+    assert palm["held_pose"] and palm["robot_max_displacement_mm"] < 1e-6  # measured 0.0
 
 
 def test_a_start_after_the_run_reports_not_started(root, tmp_path):

@@ -62,15 +62,15 @@ def test_static_hand_wide_filter_smooths_depth(static_hand):
     t = static_hand[0]["tracking"]["right_hand"]
     raw, filt = t["raw_std_mm"], t["filtered_std_mm"]
     # base x is the depth. measured (seed 1, calibrated R): raw 0.67 mm, filtered 0.35 mm
-    # (filtered/raw 0.53; the paper's Table 3: 0.48)
-    assert filt[0] <= 0.9
+    # (filtered/raw 0.53; the paper's Table 3: 0.48); on 2026-11-29 raw 0.44, filtered 0.25 mm
+    assert filt[0] <= 0.7
     assert filt[0] <= 0.65 * raw[0]
     assert t["detection_rate_from_first"] == 1.0 and t["scored_estimates"] > 300
     for key in ("vel", "acc"):  # true value 0: the means are well inside their spread
         for mean, std in zip(t[f"{key}_bias_mm_s" if key == "vel" else "acc_bias_mm_s2"],
                              t[f"{key}_std_mm_s" if key == "vel" else "acc_std_mm_s2"],
                              strict=True):
-            assert abs(mean) <= 0.25 * std  # measured <= 0.04 std
+            assert abs(mean) <= 0.1 * std  # measured <= 0.04 std (<= 0.008 on 2026-11-29)
 
 
 def test_table2_propagated_matches_empirical_covariance(static_hand):
@@ -101,8 +101,8 @@ def test_wave_detection_rate_and_filtered_rmse():
                                   "human.shirt=[0.82, 0.70, 0.56]"], duration=4.5)[0]
     hand, head = m["tracking"]["right_hand"], m["tracking"]["head"]
     # the very dark skin's model takes few of the scene's pixels (measured 0.045 look-alike
-    # pixels per skin pixel): no colour warning
-    assert m["perception"]["skin_look_alike"] <= 0.15 and "colour_warning" not in m["perception"]
+    # pixels per skin pixel; 0.011 on 2026-11-29): no colour warning
+    assert m["perception"]["skin_look_alike"] <= 0.04 and "colour_warning" not in m["perception"]
     # over the frames the hand is visible, after detection's phase one (the first detection
     # and the blob's settling take ~10 frames): measured 0.958; from the first on: 1.0
     assert hand["visible_fraction"] == 1.0 and hand["detection_rate"] >= 0.93
@@ -261,4 +261,4 @@ def test_dark_skin_hand_found_among_clutter_posts():
     assert hand["detection_rate"] >= 0.8 and hand["detection_rate_from_first"] >= 0.95, hand
     assert hand["false_detection_rate"] <= 0.02  # measured 0 (without the cut: 71 % false)
     assert hand["raw_rmse_mm"] <= 40.0  # measured 18 mm
-    assert m["perception"]["skin_look_alike"] <= 0.3  # measured 0.03 (uncut 2.0)
+    assert m["perception"]["skin_look_alike"] <= 0.1  # measured 0.03, 0.035 (uncut 2.0)

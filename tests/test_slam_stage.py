@@ -73,7 +73,8 @@ def test_sensor_needs_follow_the_mode(tmp_path, capsys):
 @pytest.mark.slow
 def test_fig8_fusion_scores_and_head_pose(tmp_path):
     """The first 2.5 s of the jump scenario: the SLAM publishes a head pose for every IMU
-    sample and frame, and stays within centimetres (measured 1.4 cm ATE, 0.12 deg heading)."""
+    sample and frame, and stays within centimetres (measured 1.4 cm ATE, 0.12 deg heading;
+    2.5 cm, 0.10 deg on 2026-11-29)."""
     from humimic.pipeline import simulation
 
     scenario = load_scenario(SCENARIOS_DIR / "sugiyama_fig8.yaml", duration=2.5)
@@ -92,7 +93,7 @@ def test_fig8_fusion_scores_and_head_pose(tmp_path):
         simulation.Bus.publish = orig
     s = metrics["slam"]
     assert s["frames"] == 75 and s["frames_without_features"] == 0
-    assert s["ate_rmse_m"] < 0.04 and s["heading_rmse_deg"] < 0.4, s
+    assert s["ate_rmse_m"] < 0.04 and s["heading_rmse_deg"] < 0.25, s
     assert s["features_per_frame"] > 12
     assert len(seen) == 75 + 450  # every frame and every IMU sample (30 + 180 Hz)
     last = seen[-1].value
@@ -139,11 +140,12 @@ def test_fig8_jump_is_consistent_and_true_to_scale(tmp_path):
     for 3 dof measured 1.4, every frame in the 95 % band -- 16.8 and 0.18 when the
     orientation sensor's slow tilt error was fused as white noise) and the jump's height is
     not shortened (Sim(3) scale measured 0.994; 1.032 with the paper's 0.5 m/s^2
-    accelerometer noise, which lagged the take-off and landing)."""
+    accelerometer noise, which lagged the take-off and landing). On 2026-11-29: NEES 1.39, all
+    frames in the band, scale 0.994, ATE 1.7 cm."""
     scenario = load_scenario(SCENARIOS_DIR / "sugiyama_fig8.yaml").model_copy(
         update={"seed": 1})
     s = run_one(scenario, tmp_path, rerun="off", progress=False)["slam"]
-    assert s["position_nees_mean"] < 6.0, s
-    assert s["position_nees_in_band_fraction"] > 0.8, s
+    assert s["position_nees_mean"] < 3.5, s
+    assert s["position_nees_in_band_fraction"] > 0.95, s
     assert abs(s["sim3_scale"] - 1.0) < 0.015, s
     assert s["ate_rmse_m"] < 0.035, s

@@ -70,8 +70,9 @@ def test_stereo_candidate_matches_opencv_and_numerical_eq17():
     J = np.column_stack([(tri(u0 + e) - tri(u0 - e)) / 2e-3 for e in np.eye(4) * 1e-3])
     S = np.diag([20.0 ** 2 / 12, 30.0 ** 2 / 12] * 2)
     # the pixel->normalised Jacobian is the pinhole one in stereo_candidates: compare loosely
-    np.testing.assert_allclose(cov[k], J @ S @ J.T, rtol=0.15, atol=1e-7)
-    np.testing.assert_allclose(cen[k], J @ (0.25 * np.eye(4)) @ J.T, rtol=0.15, atol=1e-8)
+    # (measured within 0.6 % on 2026-11-29; the bound was 15 %)
+    np.testing.assert_allclose(cov[k], J @ S @ J.T, rtol=0.02, atol=1e-7)
+    np.testing.assert_allclose(cen[k], J @ (0.25 * np.eye(4)) @ J.T, rtol=0.02, atol=1e-8)
 
 
 def test_stereo_rejects_blobs_of_the_wrong_size_and_unmatched_pairs():

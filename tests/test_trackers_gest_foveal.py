@@ -123,7 +123,7 @@ def test_far_reach_position_error(tmp_path, monkeypatch, budget):
                         if budget else "trackers.gest.foveal_cue_radius_px=null"], duration=2.5)
     m = run_one(sc, tmp_path, rerun="off", progress=False)["trackers"]["gest"]
     assert m["tracked_in_view_fraction"] >= 0.95
-    assert m["foveal_tracked_fraction"] >= 0.9
+    assert m["foveal_tracked_fraction"] >= 0.96  # measured 0.987 (74 of 75 frames)
     assert m["position_rmse_mm"] < 20.0
     assert blocks["L_wide"] == {1}
     assert blocks["L_foveal"] == ({1} if budget is None else {3})
@@ -143,7 +143,8 @@ def test_near_reach_position_error(tmp_path):
     sc = load_scenario(SCENARIOS_DIR / "menezes_gest_far.yaml",
                        ["output.plots=false", "human.distance=0.9"], seed=6, duration=3.2)
     m = run_one(sc, tmp_path, rerun="off", progress=False)["trackers"]["gest"]
-    assert m["tracked_in_view_fraction"] >= 0.9
+    # measured 2026-11-29: tracked on 95 of 96 frames (0.990), 6.1 mm RMS
+    assert m["tracked_in_view_fraction"] >= 0.97
     assert m["position_rmse_mm"] < 10.0
 
 

@@ -296,7 +296,7 @@ def test_reach_scenario_position_error(tmp_path, skin):
     sc = load_scenario(SCENARIOS_DIR / "menezes_gest_reach.yaml", sets, duration=1.5)
     m = run_one(sc, tmp_path, rerun="off", progress=False)["trackers"]["gest"]
     assert m["tracked_in_view_fraction"] >= 0.95
-    assert m["position_rmse_mm"] < 20.0
+    assert m["position_rmse_mm"] < 15.0  # measured 6.3, 6.3 mm (default, dark; 2026-11-29)
 
 
 @pytest.mark.parametrize("bad", [{"gate_m": 0.0}, {"proposal": "inertia"},

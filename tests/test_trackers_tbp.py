@@ -163,7 +163,8 @@ def test_tbp_follows_fig13s_arms_in_clutter():
     wrist_mm = 1e3 * np.sqrt(np.mean(np.sum(np.square(wrist), axis=1)))
     assert joints < 35.0, joints
     assert wrist_mm < 250.0, wrist_mm
-    assert per_dof[ARM_NAMES.index("R_SAA")] < 20.0, per_dof
+    # seed 0 on 2026-11-29: joints 14.5 deg, wrist 98 mm, R_SAA 0.93 deg, L_SAA 1.9 deg
+    assert per_dof[ARM_NAMES.index("R_SAA")] < 3.0, per_dof
     assert per_dof[ARM_NAMES.index("L_SAA")] < 5.0, per_dof
 
 
@@ -230,7 +231,7 @@ def test_tbp_finds_an_arm_already_waving_when_it_starts():
             uv = frame.camera.project_base(np.stack(hands))
             px.append(np.linalg.norm(uv[0] - uv[1]))
     hand_px = float(np.sqrt(np.mean(np.square(px))))
-    assert hand_px < 4.0, hand_px
+    assert hand_px < 2.0, hand_px  # measured 1.4, 0.74 px (2026-11-29)
 
 
 def _tracked_frames(sets: list[str], duration: float, n: int):

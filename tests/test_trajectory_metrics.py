@@ -235,7 +235,8 @@ def test_no_scale_for_a_nearly_still_wearer(sway_m):
     out = trajectory_scores(t, p_est, np.tile([1.0, 0, 0, 0], (len(t), 1)), p_ref,
                             np.tile(np.eye(3), (len(t), 1, 1)))
     assert out["ate_sim3_rmse_m"] is None and out["sim3_scale"] is None
-    assert out["ate_se3_rmse_m"] == pytest.approx(0.0087, rel=0.3)  # the jitter, ~5 mm x sqrt 3
+    # the jitter, ~5 mm x sqrt 3: measured 4-6 % above (2026-11-29)
+    assert out["ate_se3_rmse_m"] == pytest.approx(0.0087, rel=0.15)
 
 
 def test_a_diverged_estimate_gets_no_alignment_and_no_traceback():

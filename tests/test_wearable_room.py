@@ -82,8 +82,8 @@ def test_screen_corners_are_sharp_corners_where_they_project(walk):
     found = cv2.goodFeaturesToTrack(grey, 500, 0.01, 5).reshape(-1, 2)
     found = cv2.cornerSubPix(grey, found.astype(np.float32), (3, 3), (-1, -1),
                              (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_COUNT, 30, 0.01))
-    for p in uv:
-        assert np.min(np.linalg.norm(found - p, axis=1)) < 1.0, p
+    for p in uv:  # measured 0.15-0.25 px (2026-11-29; the bound was 1 px)
+        assert np.min(np.linalg.norm(found - p, axis=1)) < 0.6, p
 
 
 def test_wii_marker_is_red_and_as_large_as_its_size_says(walk):
@@ -98,7 +98,7 @@ def test_wii_marker_is_red_and_as_large_as_its_size_says(walk):
     big = 1 + np.argmax(stats[1:, cv2.CC_STAT_AREA])
     p_marker = walk.gt.p_world("wiimote_marker")[k]
     uv = _project(walk, k, p_marker)
-    assert np.linalg.norm(centroids[big] - uv) < 1.5
+    assert np.linalg.norm(centroids[big] - uv) < 0.4  # measured 0.13 px (was 1.5)
     T = walk.gt.pose("headcam")[k]
     depth = (p_marker - T[:3, 3]) @ T[:3, 2]
     f = walk.head_rig.intrinsics("headcam").fx

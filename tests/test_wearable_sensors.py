@@ -78,7 +78,8 @@ def test_imu_orientation_is_the_true_frame_I_in_W_plus_the_errors(wearable):
     ypr_err = (Rotation.from_matrix(o.R).as_euler(EULER)
                - Rotation.from_matrix(R_true).as_euler(EULER))
     np.testing.assert_allclose(ypr_err, o.errors, atol=1e-9)
-    assert np.degrees(np.abs(o.errors[:, 0])).max() < 5.0  # 1 deg RMS
+    # 1 deg RMS; over this 1 s on seed 4 at most 0.59 deg (measured 2026-11-29)
+    assert np.degrees(np.abs(o.errors[:, 0])).max() < 1.5
 
 
 def test_sensor_rates_and_headcam_frames(wearable):
@@ -106,4 +107,4 @@ def test_sensor_rates_and_headcam_frames(wearable):
     assert isinstance(imu, InertialReading) and imu.R_W_sensor.shape == (3, 3)
     assert got["wiimote"][5].value.R_W_sensor is None
     # the accelerometer of a person starting to walk reads about +g along I's up (y)
-    assert imu.accel[1] == pytest.approx(9.81, abs=1.5)
+    assert imu.accel[1] == pytest.approx(9.81, abs=0.6)  # measured 9.51 m/s^2
