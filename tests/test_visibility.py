@@ -62,6 +62,10 @@ def test_sample_lookup_and_causes():
     assert cause(0.0, 0.05, 20.0) == "occluded"
     assert cause(1.0, 1.0, 8.2) == "too small: 8 px"
     assert cause(1.0, 1.0, 20.0) == "colour model mismatch"
+    # blobs in both eyes whose name perception was not sure of: not a colour or size problem
+    assert cause(1.0, 1.0, 20.0, unsure_share=0.97) == (
+        "identity unsure: tracked in both eyes, name not sure on 97 % of the missed frames")
+    assert cause(1.0, 1.0, 8.2, unsure_share=0.3) == "too small: 8 px"
 
 
 def test_warning_line_names_poor_targets():
