@@ -187,6 +187,33 @@ def test_scores_against_visibility_on_a_synthetic_record():
     assert s["median_unoccluded"] == 1.0
 
 
+def test_a_target_tracked_in_both_eyes_but_never_named_surely_is_identity_unsure():
+    """Ten visible frames; both eyes track the target's blob on it in every one, but its name
+    is never sure (unconfirmed, so unmeasured): the verdict names the identity, not the colour
+    model (which found the blob)."""
+    from humimic.metrics.visibility import visibility_scores
+    from humimic.perception.blobs.record import PerceptionRecord
+    from humimic.sensors.camera_model import Intrinsics
+
+    intr = Intrinsics(320, 240, 200.0, 200.0, 159.5, 119.5)
+    rec = PerceptionRecord(["head"], ("L", "R"), (intr, intr))
+    T = np.stack([np.eye(4), np.eye(4)])
+    T[1, 0, 3] = 0.07
+    p_true = np.tile([0.1, 0.0, 1.0], (10, 1))
+    uv = np.array([[179.5, 119.5], [165.5, 119.5]])
+    for f in range(10):
+        rec.append(f / 10, T, np.array([2]), np.array([[True, True]]), np.array([False]),
+                   uv[None], np.tile(4.0 * np.eye(2), (1, 2, 1, 1)), np.array([False]),
+                   ["identity_unsure"], np.zeros((1, 3)), np.tile(np.eye(3), (1, 1, 1)),
+                   np.zeros((1, 2, 2)), np.zeros(1))
+    px = np.full((10, 2, 1), 150.0)
+    va = VisibilityArrays(["L", "R"], ["head"], np.arange(10) / 10, px, px)
+    s = visibility_scores(rec.arrays(), 0, "head", va, p_true, warmup_s=0.0)
+    assert s["detection_rate"] == 0.0 and s["false_detection_rate"] == 0.0
+    assert s["verdict"] == "poor" and s["cause"] == (
+        "identity unsure: tracked in both eyes, name not sure on 100 % of the missed frames")
+
+
 def test_label_counts_match_mujocos_segmentation(hidden_world):
     """The rig's counts straight from the id colours against MuJoCo's own segmentation image
     (Renderer's id -> (object id, type) conversion) counted per target: whole scene and
