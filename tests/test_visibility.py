@@ -214,6 +214,35 @@ def test_a_target_tracked_in_both_eyes_but_never_named_surely_is_identity_unsure
         "identity unsure: tracked in both eyes, name not sure on 100 % of the missed frames")
 
 
+def test_a_run_that_ends_in_detection_phase_one_is_unscored_not_poor():
+    """A run shorter than detection's phase one (``--duration 0.5`` of a scenario whose
+    detection learns its threshold for 1 s) had no frame to judge: its targets are
+    ``unscored`` and the warning line says why (before: ``poor``, "never visible (likely
+    cause: colour model mismatch)" for a target in plain view)."""
+    from humimic.metrics.visibility import visibility_scores
+    from humimic.perception.blobs.record import PerceptionRecord
+    from humimic.sensors.camera_model import Intrinsics
+
+    intr = Intrinsics(320, 240, 200.0, 200.0, 159.5, 119.5)
+    rec = PerceptionRecord(["head"], ("L", "R"), (intr, intr))
+    T = np.stack([np.eye(4), np.eye(4)])
+    T[1, 0, 3] = 0.07
+    for f in range(5):
+        rec.append(f / 10, T, np.array([0]), np.array([[False, False]]), np.array([False]),
+                   np.zeros((1, 2, 2)), np.tile(np.eye(2), (1, 2, 1, 1)), np.array([False]),
+                   ["not_seen"], np.zeros((1, 3)), np.tile(np.eye(3), (1, 1, 1)),
+                   np.zeros((1, 2, 2)), np.zeros(1))
+    px = np.full((5, 2, 1), 150.0)
+    va = VisibilityArrays(["L", "R"], ["head"], np.arange(5) / 10, px, px)
+    s = visibility_scores(rec.arrays(), 0, "head", va, np.tile([0.1, 0.0, 1.0], (5, 1)),
+                          warmup_s=1.0)
+    assert s["visible_fraction"] == 1.0 and s["detection_rate"] is None
+    assert s["verdict"] == "unscored"
+    assert s["cause"] == "the run ended in detection's phase one, its first 1 s"
+    assert verdict_warning({"tracking": {"head": s}}) == (
+        "warning: head not scored (the run ended in detection's phase one, its first 1 s)")
+
+
 def test_label_counts_match_mujocos_segmentation(hidden_world):
     """The rig's counts straight from the id colours against MuJoCo's own segmentation image
     (Renderer's id -> (object id, type) conversion) counted per target: whole scene and

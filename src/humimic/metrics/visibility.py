@@ -14,7 +14,9 @@
   or the blob is on something else (the target's true position lies outside the blob's
   :data:`OFF_TARGET_SIGMA`-sigma ellipse); ``false_detections``: frames with one;
 * ``median_size_px``, ``median_unoccluded``: over the frames the target is in view of both eyes;
-* ``verdict`` (``ok`` / ``poor``) and ``cause``: a target detected on less than
+* ``verdict`` (``ok`` / ``poor``, or ``unscored`` for a run that ended in detection's phase one,
+  the tracker blind by design: ``--duration`` under ``perception.detection.period``) and
+  ``cause``: a target detected on less than
   :data:`POOR_RATE` of its visible frames, or never, is ``poor``, with its likely cause:
   ``out of view``, ``occluded``, ``identity unsure: ...`` (blobs tracked in both eyes, their
   name not sure), ``too small: N px`` or ``colour model mismatch``; so is one
@@ -123,6 +125,8 @@ def visibility_scores(pa, i: int, target: str, vis, p_true: np.ndarray, warmup_s
     why = (f"false detections: {100 * false_rate:.0f} % of reports"
            if false_rate > FALSE_RATE else cause(visible_fraction, med_unocc, med_size,
                                                  unsure_share))
+    if not after.any():  # nothing to judge: not a poor detection
+        poor, why = False, f"the run ended in detection's phase one, its first {warmup_s:g} s"
     return {
         "visible_fraction": visible_fraction,
         "visible_frames": int(visible.sum()),
@@ -131,6 +135,6 @@ def visibility_scores(pa, i: int, target: str, vis, p_true: np.ndarray, warmup_s
         "false_detections": int(false.any(axis=1).sum()),
         "median_size_px": med_size,
         "median_unoccluded": med_unocc,
-        "verdict": "poor" if poor else "ok",
-        "cause": why if poor else None,
+        "verdict": "unscored" if not after.any() else "poor" if poor else "ok",
+        "cause": why if poor or not after.any() else None,
     }
