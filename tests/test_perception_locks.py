@@ -10,7 +10,7 @@ from _synth_vision import stereo_head
 from test_perception_identity import TARGETS, TRUTH, TURNED, blobs_seen
 
 from humimic.perception.blobs.config import PerceptionConfig
-from humimic.perception.blobs.core import PerceptionCore
+from humimic.perception.blobs.core import RECHECK_FRAMES, PerceptionCore
 from humimic.perception.blobs.detection import TargetReport, TargetState
 from humimic.perception.blobs.em_blobs import rois_overlap
 from humimic.perception.cues.color_models import ColorLUT, fit_color_model
@@ -142,6 +142,6 @@ def test_a_name_left_unsure_is_decided_again_when_its_evidence_firms_up():
     s.frames(10, small_head, hidden=one_hand)
     assert s.names(0) == {HEAD: "head", RIGHT: "right_hand", LEFT: None}
     assert "head" not in s.sure() and "right_hand" in s.sure()  # or it is the left hand
-    s.frames(2, TRUTH, hidden=one_hand)
+    s.frames(RECHECK_FRAMES, TRUTH, hidden=one_hand)
     assert {"head", "right_hand"} <= s.sure()
     assert s.names(0) == {HEAD: "head", RIGHT: "right_hand", LEFT: None}
