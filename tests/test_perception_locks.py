@@ -10,7 +10,7 @@ from _synth_vision import stereo_head
 from test_perception_identity import TARGETS, TRUTH, TURNED, blobs_seen
 
 from humimic.perception.blobs.config import PerceptionConfig
-from humimic.perception.blobs.core import PerceptionCore
+from humimic.perception.blobs.core import RECHECK_FRAMES, PerceptionCore
 from humimic.perception.blobs.detection import TargetReport, TargetState
 from humimic.perception.blobs.em_blobs import rois_overlap
 from humimic.perception.cues.color_models import ColorLUT, fit_color_model
@@ -128,3 +128,20 @@ def test_a_person_judged_turned_faces_the_robot_again_once_lost():
     s.frames(8, slots=(HEAD, LEFT, RIGHT))
     assert s.names(0) == {HEAD: "head", RIGHT: "left_hand", LEFT: "right_hand"}
     assert s.sure() == set(TARGETS)
+
+
+def test_a_name_left_unsure_is_decided_again_when_its_evidence_firms_up():
+    """Identities are decided when the set of blobs changes; a margin that the size evidence of
+    that moment left at 0 (a far head read at 0.040 m, between the head's least and the hands'
+    largest sigma radius: it may be a hand) is re-decided on the following frames, so once the
+    head reads its true size it is sure and measured, though no blob came or went (before, it
+    stayed unsure, and unmeasured, until something else changed)."""
+    s = Scripted()
+    one_hand = (("left_hand",), ("left_hand",))
+    small_head = dict(TRUTH, head=(TRUTH["head"][0], 0.040))
+    s.frames(10, small_head, hidden=one_hand)
+    assert s.names(0) == {HEAD: "head", RIGHT: "right_hand", LEFT: None}
+    assert "head" not in s.sure() and "right_hand" in s.sure()  # or it is the left hand
+    s.frames(RECHECK_FRAMES, TRUTH, hidden=one_hand)
+    assert {"head", "right_hand"} <= s.sure()
+    assert s.names(0) == {HEAD: "head", RIGHT: "right_hand", LEFT: None}

@@ -62,6 +62,10 @@ def test_sample_lookup_and_causes():
     assert cause(0.0, 0.05, 20.0) == "occluded"
     assert cause(1.0, 1.0, 8.2) == "too small: 8 px"
     assert cause(1.0, 1.0, 20.0) == "colour model mismatch"
+    # blobs in both eyes whose name perception was not sure of: not a colour or size problem
+    assert cause(1.0, 1.0, 20.0, unsure_share=0.97) == (
+        "identity unsure: tracked in both eyes, name not sure on 97 % of the missed frames")
+    assert cause(1.0, 1.0, 8.2, unsure_share=0.3) == "too small: 8 px"
 
 
 def test_warning_line_names_poor_targets():
@@ -181,6 +185,62 @@ def test_scores_against_visibility_on_a_synthetic_record():
     # 6 of 16 reports false: more than FALSE_RATE, so the target is flagged all the same
     assert s["verdict"] == "poor" and s["cause"] == "false detections: 38 % of reports"
     assert s["median_unoccluded"] == 1.0
+
+
+def test_a_target_tracked_in_both_eyes_but_never_named_surely_is_identity_unsure():
+    """Ten visible frames; both eyes track the target's blob on it in every one, but its name
+    is never sure (unconfirmed, so unmeasured): the verdict names the identity, not the colour
+    model (which found the blob)."""
+    from humimic.metrics.visibility import visibility_scores
+    from humimic.perception.blobs.record import PerceptionRecord
+    from humimic.sensors.camera_model import Intrinsics
+
+    intr = Intrinsics(320, 240, 200.0, 200.0, 159.5, 119.5)
+    rec = PerceptionRecord(["head"], ("L", "R"), (intr, intr))
+    T = np.stack([np.eye(4), np.eye(4)])
+    T[1, 0, 3] = 0.07
+    p_true = np.tile([0.1, 0.0, 1.0], (10, 1))
+    uv = np.array([[179.5, 119.5], [165.5, 119.5]])
+    for f in range(10):
+        rec.append(f / 10, T, np.array([2]), np.array([[True, True]]), np.array([False]),
+                   uv[None], np.tile(4.0 * np.eye(2), (1, 2, 1, 1)), np.array([False]),
+                   ["identity_unsure"], np.zeros((1, 3)), np.tile(np.eye(3), (1, 1, 1)),
+                   np.zeros((1, 2, 2)), np.zeros(1))
+    px = np.full((10, 2, 1), 150.0)
+    va = VisibilityArrays(["L", "R"], ["head"], np.arange(10) / 10, px, px)
+    s = visibility_scores(rec.arrays(), 0, "head", va, p_true, warmup_s=0.0)
+    assert s["detection_rate"] == 0.0 and s["false_detection_rate"] == 0.0
+    assert s["verdict"] == "poor" and s["cause"] == (
+        "identity unsure: tracked in both eyes, name not sure on 100 % of the missed frames")
+
+
+def test_a_run_that_ends_in_detection_phase_one_is_unscored_not_poor():
+    """A run shorter than detection's phase one (``--duration 0.5`` of a scenario whose
+    detection learns its threshold for 1 s) had no frame to judge: its targets are
+    ``unscored`` and the warning line says why (before: ``poor``, "never visible (likely
+    cause: colour model mismatch)" for a target in plain view)."""
+    from humimic.metrics.visibility import visibility_scores
+    from humimic.perception.blobs.record import PerceptionRecord
+    from humimic.sensors.camera_model import Intrinsics
+
+    intr = Intrinsics(320, 240, 200.0, 200.0, 159.5, 119.5)
+    rec = PerceptionRecord(["head"], ("L", "R"), (intr, intr))
+    T = np.stack([np.eye(4), np.eye(4)])
+    T[1, 0, 3] = 0.07
+    for f in range(5):
+        rec.append(f / 10, T, np.array([0]), np.array([[False, False]]), np.array([False]),
+                   np.zeros((1, 2, 2)), np.tile(np.eye(2), (1, 2, 1, 1)), np.array([False]),
+                   ["not_seen"], np.zeros((1, 3)), np.tile(np.eye(3), (1, 1, 1)),
+                   np.zeros((1, 2, 2)), np.zeros(1))
+    px = np.full((5, 2, 1), 150.0)
+    va = VisibilityArrays(["L", "R"], ["head"], np.arange(5) / 10, px, px)
+    s = visibility_scores(rec.arrays(), 0, "head", va, np.tile([0.1, 0.0, 1.0], (5, 1)),
+                          warmup_s=1.0)
+    assert s["visible_fraction"] == 1.0 and s["detection_rate"] is None
+    assert s["verdict"] == "unscored"
+    assert s["cause"] == "the run ended in detection's phase one, its first 1 s"
+    assert verdict_warning({"tracking": {"head": s}}) == (
+        "warning: head not scored (the run ended in detection's phase one, its first 1 s)")
 
 
 def test_label_counts_match_mujocos_segmentation(hidden_world):

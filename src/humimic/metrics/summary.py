@@ -64,6 +64,8 @@ def verdict_warning(metrics: dict) -> str | None:
             seen = ("never visible" if rate is None else "never detected" if rate == 0.0
                     else f"detected on {rate:.0%} of visible frames")
             poor.append(f"{target} {seen} (likely cause: {s.get('cause')})")
+        elif isinstance(s, dict) and s.get("verdict") == "unscored":
+            poor.append(f"{target} not scored ({s.get('cause')})")
     colour = metrics.get("perception", {}).get("colour_warning")
     if colour:
         poor.append(colour)

@@ -14,9 +14,12 @@
   or the blob is on something else (the target's true position lies outside the blob's
   :data:`OFF_TARGET_SIGMA`-sigma ellipse); ``false_detections``: frames with one;
 * ``median_size_px``, ``median_unoccluded``: over the frames the target is in view of both eyes;
-* ``verdict`` (``ok`` / ``poor``) and ``cause``: a target detected on less than
+* ``verdict`` (``ok`` / ``poor``, or ``unscored`` for a run that ended in detection's phase one,
+  the tracker blind by design: ``--duration`` under ``perception.detection.period``) and
+  ``cause``: a target detected on less than
   :data:`POOR_RATE` of its visible frames, or never, is ``poor``, with its likely cause:
-  ``out of view``, ``occluded``, ``too small: N px`` or ``colour model mismatch``; so is one
+  ``out of view``, ``occluded``, ``identity unsure: ...`` (blobs tracked in both eyes, their
+  name not sure), ``too small: N px`` or ``colour model mismatch``; so is one
   with more than :data:`FALSE_RATE` of its reports false (``false detections: N %``).
 """
 
@@ -43,6 +46,13 @@ at 8 px never was), at 5 px (2.0 m) never; a poorly detected target under 10 px 
 likely too small."""
 
 
+UNSURE_SHARE = 0.5
+"""A poorly detected target whose missed visible frames had both eyes' blobs named but unsure
+at least this often is named ``identity unsure`` (not a colour or size problem: e.g. a head
+2.2 m away whose blob reads a sigma radius between a head's least and a hand's largest, which
+the identity rules cannot name; before, ``colour model mismatch``)."""
+
+
 def eye_visibility(vis, t: np.ndarray, cams: tuple[str, str], target: str):
     """``(visible, hidden, in_view, unoccluded, size)``, each ``(F, 2)``: per perception frame
     (photon times ``t``) and eye."""
@@ -65,12 +75,18 @@ def off_target(centre: np.ndarray, cov: np.ndarray, uv_true: np.ndarray,
 
 
 def cause(visible_fraction: float, median_unoccluded: float | None,
-          median_size: float | None) -> str:
-    """The likely reason a target was detected on few of its visible frames."""
+          median_size: float | None, unsure_share: float = 0.0) -> str:
+    """The likely reason a target was detected on few of its visible frames;
+    ``unsure_share``: of its visible frames without a measurement, the share in which both
+    eyes tracked a blob of that name but perception was not sure of the name (its identity
+    margin not met), so did not measure it."""
     if median_unoccluded is None:
         return "out of view"
     if visible_fraction == 0.0:
         return "occluded"
+    if unsure_share >= UNSURE_SHARE:
+        return (f"identity unsure: tracked in both eyes, name not sure on "
+                f"{100 * unsure_share:.0f} % of the missed frames")
     if median_size is not None and median_size < SMALL_PX:
         return f"too small: {median_size:.0f} px"
     return "colour model mismatch"
@@ -103,8 +119,14 @@ def visibility_scores(pa, i: int, target: str, vis, p_true: np.ndarray, warmup_s
     visible_fraction = float(visible.mean()) if len(visible) else 0.0
     false_rate = float(false.sum() / seen.sum()) if seen.any() else 0.0
     poor = rate is None or rate < POOR_RATE or false_rate > FALSE_RATE
+    missed = scored & ~ok
+    unsure = missed & pa.seen[:, i].all(axis=1) & ~pa.confirmed[:, i]
+    unsure_share = float(unsure.sum() / missed.sum()) if missed.any() else 0.0
     why = (f"false detections: {100 * false_rate:.0f} % of reports"
-           if false_rate > FALSE_RATE else cause(visible_fraction, med_unocc, med_size))
+           if false_rate > FALSE_RATE else cause(visible_fraction, med_unocc, med_size,
+                                                 unsure_share))
+    if not after.any():  # nothing to judge: not a poor detection
+        poor, why = False, f"the run ended in detection's phase one, its first {warmup_s:g} s"
     return {
         "visible_fraction": visible_fraction,
         "visible_frames": int(visible.sum()),
@@ -113,6 +135,6 @@ def visibility_scores(pa, i: int, target: str, vis, p_true: np.ndarray, warmup_s
         "false_detections": int(false.any(axis=1).sum()),
         "median_size_px": med_size,
         "median_unoccluded": med_unocc,
-        "verdict": "poor" if poor else "ok",
-        "cause": why if poor else None,
+        "verdict": "unscored" if not after.any() else "poor" if poor else "ok",
+        "cause": why if poor or not after.any() else None,
     }

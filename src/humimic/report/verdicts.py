@@ -50,6 +50,9 @@ def _worst(*statuses: str) -> str:
 
 
 def _tracking_verdicts(target: str, s: dict) -> list[Verdict]:
+    if s.get("verdict") == "unscored":  # the run ended while detection was still blind
+        return [Verdict(f"{target}: detection rate", f"not scored ({s.get('cause')})", "info",
+                        "")]
     rate = s.get("detection_rate")
     never = rate is None or s.get("time_to_first_detection_s") is None
     value = "never detected" if never else f"{rate:.3f}"
