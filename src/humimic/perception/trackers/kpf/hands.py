@@ -13,8 +13,9 @@ ray, towards the blob in the image, its depth kept to first order (moves that ke
 hand's range and re-solved the elbow, or put the hand exactly on the ray at the sphere
 crossing nearer the old hand, added depth changes the likelihood cannot judge: measured
 worse). The reweighting keeps the dynamics' KDE as the prior (the moved particles are a
-proposal, as the depth moves). Measured on the Table-1 frames (README, ``i14-side2``): no
-image lag on the fast rise any more, but the depth left free drifts more; off in Table 1.
+proposal, as the depth moves). Measured on the Table-1 frames (``docs/schmidt_kpf_notes.md``,
+``i14-side2``): no image lag on the fast rise any more, but the depth left free drifts more;
+off in Table 1.
 """
 
 from __future__ import annotations
