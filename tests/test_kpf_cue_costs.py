@@ -1,6 +1,6 @@
 """The one-pass compiled cue costs (:mod:`humimic.perception.trackers.kpf.cue_costs`) and the
 fused cue-map normalisation against the implementation they replaced, bit for bit: the costs
-of the per-cue kernels of :mod:`~humimic.perception.trackers.kpf.limb_cues` (themselves tested
+of the per-cue kernels of ``_kpf_limb_cues`` (the likelihood's before; themselves tested
 against the feature-point numpy path in ``test_kpf_limb_cues.py``) masked, scattered and
 combined with numpy as the likelihood did (:func:`reference`), eq. 10 as numpy's sum over the
 cues, the maps' normalisation with ``strongest_channel`` and ``_norm_factor``
@@ -11,6 +11,7 @@ type, none on some, before and after the colour references are adapted."""
 
 from __future__ import annotations
 
+import _kpf_limb_cues as K
 import cv2
 import numpy as np
 import pytest
@@ -20,7 +21,6 @@ from humimic.bodymodel.limb_view import limb_view
 from humimic.perception.blobs.config import DEFAULT_COLOR_MODEL
 from humimic.perception.cues.color_models import ColorLUT, load_color_model
 from humimic.perception.trackers.kpf import cues as C
-from humimic.perception.trackers.kpf import limb_cues as K
 from humimic.perception.trackers.kpf.config import KpfConfig
 from humimic.perception.trackers.kpf.cue_costs import eq10_coefficients, eq10_terms
 from humimic.perception.trackers.kpf.frame_cues import FrameCues, sample_box

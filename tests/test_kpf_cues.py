@@ -197,18 +197,27 @@ def test_colour_gradients_find_an_edge_grey_levels_miss(lut):
 
 
 def test_strongest_channel_is_the_argmax_of_the_squared_sums():
-    """The compiled selection against numpy's argmax (the first channel on ties), float32
-    squared sums: the values of the chosen channel, copied exactly."""
+    """The selection (numpy's and the compiled one the maps use) against a per-pixel loop in
+    Python floats (the first channel on ties): the values of the
+    chosen channel, copied exactly, and the compiled one's norm."""
     rng = np.random.default_rng(5)
     planes = [rng.normal(size=(23, 31, 3)).astype(np.float32) for _ in range(3)]
     for p in planes:
         p[:4, :, 1] = p[:4, :, 0]                  # ties between channels 0 and 1
         p[4:6, :, 2] = p[4:6, :, 0]                # ... and 0 and 2
     for k in (2, 3):
-        mag = sum(p.astype(np.float32) ** 2 for p in planes[:k])
-        best = np.argmax(mag, axis=-1)[..., None]
-        want = [np.take_along_axis(p, best, -1)[..., 0] for p in planes[:k]]
+        want = np.empty((k, 23, 31), np.float32)
+        norm = np.empty((23, 31), np.float32)
+        for y in range(23):
+            for x in range(31):
+                sq = [sum(float(planes[i][y, x, c]) ** 2 for i in range(k)) for c in range(3)]
+                c = sq.index(max(sq))              # the first on ties
+                want[:, y, x] = [planes[i][y, x, c] for i in range(k)]
+                norm[y, x] = np.sqrt(sq[c])
         got = C.strongest_channel(*planes[:k])
         assert all(np.array_equal(g, w) for g, w in zip(got, want, strict=True))
+        sel, mag = C._strongest_norm(*planes[:k])
+        assert np.array_equal(sel, want)
+        assert np.allclose(mag, norm, rtol=1e-6, atol=0)
     grey = rng.normal(size=(5, 7)).astype(np.float32)
     assert C.strongest_channel(grey, grey)[0] is grey

@@ -8,6 +8,7 @@ the camera: NaN ends), maps of a region (an origin) of a textured image, all pyr
 
 from __future__ import annotations
 
+import _kpf_limb_cues as K
 import cv2
 import numpy as np
 import pytest
@@ -16,7 +17,6 @@ from humimic import bodymodel as bm
 from humimic.perception.blobs.config import DEFAULT_COLOR_MODEL
 from humimic.perception.cues.color_models import ColorLUT, load_color_model
 from humimic.perception.trackers.kpf import cues as C
-from humimic.perception.trackers.kpf import limb_cues as K
 from humimic.perception.trackers.kpf.tracker import kpf_body
 from humimic.sensors.camera_model import Intrinsics
 

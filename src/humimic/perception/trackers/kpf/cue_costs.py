@@ -1,12 +1,13 @@
 """All of Schmidt et al.'s cue costs of N particles' limbs in one compiled pass, and eq. 10's
 balanced sum of their Gaussians, compiled.
 
-:mod:`~humimic.perception.trackers.kpf.limb_cues` has one kernel per cue; the likelihood then
-turned each kernel's responses into costs with numpy (masks of invalid limbs, the colour
-distance of eq. 6, scatter into ``(N, parts)`` planes) and summed eq. 10 over the cues with
-more numpy: at the paper's 150 particles numpy's per-call overhead of those dozens of small
-operations cost as much as the kernels. :func:`cue_costs` does it all in one loop over
-particles and parts, reading the maps through the same scalar arithmetic as ``limb_cues``'
+:mod:`humimic.perception.trackers.kpf.cues` states each cue's maths in numpy on feature points;
+the likelihood first read them with one compiled kernel per cue (kept as the tests' reference,
+``tests/_kpf_limb_cues.py``), then turned each kernel's responses into costs with numpy (masks
+of invalid limbs, the colour distance of eq. 6, scatter into ``(N, parts)`` planes) and summed
+eq. 10 over the cues with more numpy: at the paper's 150 particles numpy's per-call overhead of
+those dozens of small operations cost as much as the kernels. :func:`cue_costs` does it all in
+one loop over particles and parts, reading the maps through the same scalar arithmetic as those
 kernels, in the same order (so the costs are bit-identical to theirs), and :func:`eq10_terms`
 sums eq. 10. Costs (0 perfect):
 
@@ -23,10 +24,15 @@ import numpy as np
 
 from humimic.maths.jit import njit
 from humimic.perception.trackers.kpf.cues import _DISC, _QUAD_GRID, RIDGE_WIDTH_PX
-from humimic.perception.trackers.kpf.limb_cues import _axis_angle
 
 #: Cost planes' order (``likelihood.CUE_NAMES``).
 EDGE, RIDGE, COLOUR, SKIN = 0, 1, 2, 3
+
+
+@njit
+def _axis_angle(axis, n, j):
+    """The image angle of limb ``j``'s axis of particle ``n`` (``axis (N, Pc, 2 ends, 2)``)."""
+    return np.arctan2(axis[n, j, 1, 1] - axis[n, j, 0, 1], axis[n, j, 1, 0] - axis[n, j, 0, 0])
 
 
 @njit

@@ -1,8 +1,8 @@
 """Schmidt, Fritsch & Kwolek's image cues (sec. 4), computed once per frame as maps and sampled
 at every particle's feature points in one numpy pass. (The likelihood reads the same responses
 through :mod:`~humimic.perception.trackers.kpf.cue_costs`, one compiled loop over the projected
-limbs, equal to :mod:`~humimic.perception.trackers.kpf.limb_cues`' kernels; the functions here
-state the maths and are the reference those are tested against.)
+limbs; the functions here state the maths and are the reference it is tested against, through
+the per-cue kernels of ``tests/_kpf_limb_cues.py``.)
 
 * edge (eqs. 1-2): first derivatives with a non-linear normalisation
   (``g / |g| tanh(|g| / k)``: weak texture edges smoothed away, strong edges saturated at 1);
@@ -114,30 +114,17 @@ def strongest_channel(*planes: np.ndarray) -> list[np.ndarray]:
     """Per pixel, the channel whose derivatives ``planes`` (each ``(H, W, 3)``) have the
     largest squared sum (the first on ties): ``(H, W)`` each. The colour gradient of Dalal &
     Triggs' HOG (the channel of the largest norm): an edge between two colours of equal
-    brightness has none in grey. ``(H, W)`` planes are returned as they are."""
+    brightness has none in grey. ``(H, W)`` planes are returned as they are. The maths in
+    numpy (float32 squared sums in the planes' order); the maps use the compiled
+    :func:`_strongest_norm`, tested against this."""
     if planes[0].ndim == 2:
         return list(planes)
-    return list(_strongest(tuple(np.ascontiguousarray(p, np.float32) for p in planes)))
-
-
-@njit
-def _strongest(planes):
-    """:func:`strongest_channel`'s loop: the squared sums in float32 in the planes' order (as
-    numpy's ``p0 * p0 + p1 * p1 + ...``), the first channel on ties, values copied."""
-    h, w, nc = planes[0].shape
-    out = np.empty((len(planes), h, w), np.float32)
-    for y in range(h):
-        for x in range(w):
-            best, top = 0, np.float32(-1.0)
-            for c in range(nc):
-                m = planes[0][y, x, c] * planes[0][y, x, c]
-                for k in range(1, len(planes)):
-                    m += planes[k][y, x, c] * planes[k][y, x, c]
-                if m > top:
-                    best, top = c, m
-            for k in range(len(planes)):
-                out[k, y, x] = planes[k][y, x, best]
-    return out
+    planes = [np.asarray(p, np.float32) for p in planes]
+    mag = planes[0] * planes[0]
+    for p in planes[1:]:
+        mag += p * p
+    best = np.argmax(mag, axis=-1)[..., None]
+    return [np.take_along_axis(p, best, -1)[..., 0] for p in planes]
 
 
 def _strongest_norm(*planes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -150,8 +137,8 @@ def _strongest_norm(*planes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 @njit
 def _strongest_mag(planes):
-    """:func:`_strongest`, with the selected channel's norm (its squared sum is the one
-    compared, in the same order)."""
+    """:func:`strongest_channel`'s selection compiled, with the selected channel's norm (its
+    squared sum is the one compared, in the same order; the first channel on ties)."""
     h, w, nc = planes[0].shape
     out = np.empty((len(planes), h, w), np.float32)
     mag = np.empty((h, w), np.float32)

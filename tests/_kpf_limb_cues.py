@@ -1,18 +1,17 @@
-"""Schmidt et al.'s limb cues (sec. 4) read straight off a projected body model, compiled.
-
-One kernel per cue; the likelihood now reads all cues in one pass
-(:mod:`~humimic.perception.trackers.kpf.cue_costs`, the same arithmetic, tested bit for bit
-against these). The same responses as the feature points of
-:mod:`humimic.bodymodel.features` (``limb_edges``, ``limb_ridges``, ``limb_bands``) sampled
-by :mod:`humimic.perception.trackers.kpf.cues` (``edge_response``, ``ridge_response``,
-``band_colours``, ``skin_response``; they state the maths and are the reference these kernels
-are tested against), fused into one loop per particle and limb: no feature-point arrays, no
-``cv2.remap`` map, and numpy's per-call overhead (which dominated at the paper's 150
-particles) paid once per cue instead of once per operation. Points are placed as there
-(equally spaced by ``(k + 1/2) / M`` along the contour generators / the image axis; the
-colour bands' 3 x 3 bilinear grid; the skin ellipse's centre and two rings) and read at their
-nearest pixel (``np.rint``, half to even; 0 off the maps and at NaN points). Sums are in
-float64 (the numpy path sums float32), so responses agree to ~1e-6.
+"""Test reference: Schmidt et al.'s limb cues (sec. 4) read straight off a projected body model,
+one compiled kernel per cue -- the likelihood's implementation before the one-pass
+:mod:`~humimic.perception.trackers.kpf.cue_costs` (the same arithmetic; ``test_kpf_cue_costs``
+compares the two bit for bit, ``test_kpf_limb_cues`` these kernels with the numpy path). The
+same responses as the feature points of :mod:`humimic.bodymodel.features` (``limb_edges``,
+``limb_ridges``, ``limb_bands``) sampled by :mod:`humimic.perception.trackers.kpf.cues`
+(``edge_response``, ``ridge_response``, ``band_colours``, ``skin_response``; they state the
+maths and are the reference these kernels are tested against), fused into one loop per particle
+and limb: no feature-point arrays, no ``cv2.remap`` map, and numpy's per-call overhead (which
+dominated at the paper's 150 particles) paid once per cue instead of once per operation. Points
+are placed as there (equally spaced by ``(k + 1/2) / M`` along the contour generators / the
+image axis; the colour bands' 3 x 3 bilinear grid; the skin ellipse's centre and two rings) and
+read at their nearest pixel (``np.rint``, half to even; 0 off the maps and at NaN points). Sums
+are in float64 (the numpy path sums float32), so responses agree to ~1e-6.
 
 Inputs are :class:`~humimic.bodymodel.projection.BodyView` fields: ``sides`` = ``sides_uv``
 ``(N, Pc, 2 sides, 2 ends, 2)``, ``axis`` = ``axis_uv`` ``(N, Pc, 2 ends, 2)``; ``limbs``
@@ -24,6 +23,7 @@ from __future__ import annotations
 import numpy as np
 
 from humimic.maths.jit import njit
+from humimic.perception.trackers.kpf.cue_costs import _axis_angle
 from humimic.perception.trackers.kpf.cues import _DISC, _QUAD_GRID, RIDGE_WIDTH_PX, CueMaps
 
 
@@ -35,11 +35,6 @@ def _pixel(img, u, v, u0, v0, ch):
     if not (x >= 0.0 and y >= 0.0 and x < img.shape[1] and y < img.shape[0]):   # NaN: False
         return 0.0
     return float(img[int(y), int(x), ch])
-
-
-@njit
-def _axis_angle(axis, n, j):
-    return np.arctan2(axis[n, j, 1, 1] - axis[n, j, 0, 1], axis[n, j, 1, 0] - axis[n, j, 0, 0])
 
 
 @njit
