@@ -41,6 +41,23 @@ HUMAN = {"distance": 2.0, "motion": {"kind": "point", "hand": "right", "gestures
                                      "move": 1.5, "hold": 2.0, "rest": 1.0}}
 
 
+def bench_frames(n_frames: int) -> dict:
+    """The bench's ``frames`` ((image, T_cam_base) at 7.5 Hz of :data:`HUMAN` pointing, left
+    wide eye), their ``intrinsics``, the tracker's start ``q0`` (the truth) and skin ``lut``."""
+    seq = render_sequence("kpf", HUMAN, n_frames / 7.5, cameras="left", rate=7.5)
+    cam = seq.cameras[0]
+    scenario = load_scenario(SCENARIOS_DIR / "schmidt_side.yaml", duration=0.2)
+    world = World(scenario, Rngs(0))
+    try:
+        q0 = bm.truth_state(world, 0, "base")
+        lut = skin_model_lut(scenario, world, [cam], "bench")
+    finally:
+        world.close()
+    return {"frames": [(img, invert_transform(m.T_base_cam)) for img, m in
+                       zip(seq.images[cam], seq.models[cam], strict=True)],
+            "intrinsics": seq.models[cam][0].intrinsics, "q0": q0, "lut": lut}
+
+
 def main() -> None:
     p = argparse.ArgumentParser()
     p.add_argument("--frames", type=int, default=20)
@@ -60,19 +77,9 @@ def main() -> None:
         tuple(int(x) for x in c.split(",")) for c in args.config]
     if args.opencv_threads is not None:
         cv2.setNumThreads(args.opencv_threads)
-    seq = render_sequence("kpf", HUMAN, args.frames / 7.5, cameras="left", rate=7.5)
-    cam = seq.cameras[0]
-    scenario = load_scenario(SCENARIOS_DIR / "schmidt_side.yaml", duration=0.2)
-    world = World(scenario, Rngs(0))
-    try:
-        q0 = bm.truth_state(world, 0, "base")
-        lut = skin_model_lut(scenario, world, [cam], "bench")
-    finally:
-        world.close()
     body = kpf_body()
-    frames = [(img, invert_transform(m.T_base_cam)) for img, m in
-              zip(seq.images[cam], seq.models[cam], strict=True)]
-    intr = seq.models[cam][0].intrinsics
+    data = bench_frames(args.frames)
+    frames, intr, q0, lut = data["frames"], data["intrinsics"], data["q0"], data["lut"]
     print(f"kpf tracker, {len(frames) - 1} frames of 320 x 240, median of {args.repeats} "
           "repeats (frames per second, cue maps + filter, rendering excluded)")
     variants = load_scenario(SCENARIOS_DIR / "schmidt_table1.yaml").trackers

@@ -45,29 +45,9 @@ def _env(tree: str) -> dict:
 
 def prepare(path: str, frames: int) -> None:
     """Render the frames and the tracker's start (as ``bench_kpf``) into a pickle."""
-    from _frames import render_sequence
-    from bench_kpf import HUMAN
+    from bench_kpf import bench_frames
 
-    from humimic import bodymodel as bm
-    from humimic.paths import SCENARIOS_DIR
-    from humimic.perception.trackers.common import skin_model_lut
-    from humimic.rngs import Rngs
-    from humimic.scenario import load_scenario
-    from humimic.sensors.camera_model import invert_transform
-    from humimic.world.world import World
-
-    seq = render_sequence("kpf", HUMAN, frames / 7.5, cameras="left", rate=7.5)
-    cam = seq.cameras[0]
-    scenario = load_scenario(SCENARIOS_DIR / "schmidt_side.yaml", duration=0.2)
-    world = World(scenario, Rngs(0))
-    try:
-        q0 = bm.truth_state(world, 0, "base")
-        lut = skin_model_lut(scenario, world, [cam], "bench")
-    finally:
-        world.close()
-    data = {"frames": [(img, invert_transform(m.T_base_cam)) for img, m in
-                       zip(seq.images[cam], seq.models[cam], strict=True)],
-            "intrinsics": seq.models[cam][0].intrinsics, "q0": q0, "lut": lut}
+    data = bench_frames(frames)
     with open(path, "wb") as f:
         pickle.dump(data, f)
 
