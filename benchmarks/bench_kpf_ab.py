@@ -12,7 +12,7 @@ frame's least CPU time over the repeats: other processes' interference only ever
 Printed: each tree's median over the rounds (and quartiles) and the ratio B / A of the medians
 and the median of the per-round ratios.
 
-    MUJOCO_GL=egl python benchmarks/bench_kpf_ab.py ../main/src src \\
+    MUJOCO_GL=egl python benchmarks/bench_kpf_ab.py BASELINE_CHECKOUT/src src \\
         [--rounds R] [--config P,I] [--only NAME] [--frames N] [--repeats K]
 """
 
