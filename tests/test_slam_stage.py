@@ -23,6 +23,7 @@ cameras: {enabled: false}
 sensors:
   head_camera: {enabled: true}
 slam: {}
+output: {plots: false}
 """
 
 
