@@ -108,6 +108,10 @@ def test_covered_camera_frames_are_lost_and_particles_stay_finite(run):
     ("{kind: kpf, branch_forget: 1.5}", "trackers.kpf.branch_forget"),
     ("{kind: kpf, split_arms: true}", "split_arms needs partitioned"),
     ("{kind: kpf, partitioned: true, split_resample: arms}", "trackers.kpf.split_resample"),
+    ("{kind: kpf, branch_skin_ring: 1.5}", "branch_skin_ring = 1.5 has no effect without "
+                                           "branch_threshold"),
+    ("{kind: kpf, keep_range_target: motion}", "keep_range_target = 'motion' has no effect"),
+    ("{kind: kpf, refine_step: 0.2}", "without refine_polls or branch_refine_polls"),
     ("{kind: kpf, D_rate: 0}", "trackers.kpf.D_rate"),
     ("{kind: kpf, D_torso_m: 0, split_arms: true}", "trackers.kpf.D_torso_m"),
     ("{kind: kpf, motion_nois: 0.2}", "trackers.kpf.motion_nois"),
@@ -178,3 +182,36 @@ def test_flip_branches_run_inside_the_tracker():
         S[np.all(S_t == 0.0, axis=1) & np.any(S > 0.5, axis=1)] = 0.0   # a switch resets
         np.testing.assert_allclose(S_t, S, atol=1e-12)
     assert all(np.all(np.isfinite(m.state)) for m in msgs)
+
+
+
+def test_every_needed_option_exists_and_is_accepted_once_switched_on():
+    """Each dependent option of ``NEEDS`` and the options it needs are real fields; moved
+    from its default it is idle alone and accepted as soon as the first option it needs is
+    on."""
+    from humimic.perception.trackers.kpf.config import NEEDS, KpfConfig, idle_options
+
+    moved = {"split_resample": "arm", "twist_sd_deg": 5.0, "torso_prior_deg": 2.0,
+             "rescue_drop": 1.0, "rescue_depth_share": 0.1, "depth_extent_m": 0.1,
+             "hand_radius_px": 10.0, "hand_min_area_px": 8.0, "refine_step": 0.2,
+             "refine_depth_m": 0.02, "refine_feedback": False, "branch_forget": 0.5,
+             "branch_refine_polls": 2, "branch_skin_ring": 1.5, "observed_walk_floor": 0.5,
+             "observed_walk_groups": "motion", "particle_velocity_innovation": True,
+             "particle_velocity_decay": 0.5, "keep_range_groups": "motion",
+             "keep_range_target": "motion", "keep_range_clip": False,
+             "keep_range_gate_deg": (10.0, 40.0)}
+    switch_on = {"split_arms": {"split_arms": True, "partitioned": True},
+                 "twist_range_deg": {"twist_range_deg": (-90.0, 70.0)},
+                 "torso_prior_m": {"torso_prior_m": 0.03},
+                 "branch_threshold": {"branch_threshold": 0.5},
+                 "observed_walk_px": {"observed_walk_px": 10.0},
+                 "particle_velocity": {"particle_velocity": True}}
+    assert set(moved) == set(NEEDS)
+    fields = KpfConfig.model_fields
+    for key, needs in NEEDS.items():
+        assert all(n in fields for n in needs), key
+        assert moved[key] != fields[key].get_default(call_default_factory=True), key
+        idle = KpfConfig.model_construct(**{key: moved[key]})
+        assert idle_options(idle) == [(key, needs)], key
+        on = KpfConfig(**switch_on.get(needs[0], {needs[0]: 1}), **{key: moved[key]})
+        assert idle_options(on) == [], key

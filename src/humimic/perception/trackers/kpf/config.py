@@ -40,6 +40,34 @@ class KpfSigma(Section):
     skin: float = Field(0.3, gt=0.0, le=10.0)
 
 
+NEEDS: dict[str, tuple[str, ...]] = {
+    "split_resample": ("split_arms",), "twist_sd_deg": ("twist_range_deg",),
+    "torso_prior_deg": ("torso_prior_m",),
+    "rescue_drop": ("rescue_passes",), "rescue_depth_share": ("rescue_passes",),
+    "depth_extent_m": ("depth_share", "rescue_depth_share"),
+    "hand_radius_px": ("hand_share",), "hand_min_area_px": ("hand_share",),
+    "refine_step": ("refine_polls", "branch_refine_polls"),
+    "refine_depth_m": ("refine_polls",), "refine_feedback": ("refine_polls",),
+    **{k: ("branch_threshold",) for k in ("branch_forget", "branch_refine_polls",
+                                          "branch_skin_ring")},
+    **{k: ("observed_walk_px",) for k in ("observed_walk_floor", "observed_walk_groups")},
+    **{k: ("particle_velocity",) for k in ("particle_velocity_innovation",
+                                           "particle_velocity_decay")},
+    **{f"keep_range_{k}": ("keep_range_share",) for k in ("groups", "target", "clip",
+                                                          "gate_deg")},
+}
+"""Our options that act only with another on: option -> the options that switch it on."""
+
+
+def idle_options(cfg: KpfDynamics) -> list[tuple[str, tuple[str, ...]]]:
+    """The options of ``cfg`` moved from their defaults while none of the options they need
+    (:data:`NEEDS`) is on, with those options: settings that would silently do nothing."""
+    fields = type(cfg).model_fields
+    return [(key, on) for key, on in NEEDS.items()
+            if getattr(cfg, key) != fields[key].get_default(call_default_factory=True)
+            and not any(getattr(cfg, k) for k in on)]
+
+
 class KpfConfig(KpfDynamics):
     """Kernel particle filter 14-DOF upper-body tracker (Schmidt sec. 5.2)."""
 
@@ -219,6 +247,9 @@ class KpfConfig(KpfDynamics):
         if self.split_arms and not self.partitioned:
             raise ValueError("split_arms needs partitioned: true (it splits the partitioned "
                              "arms into shoulder and elbow groups)")
+        for key, on in idle_options(self)[:1]:
+            raise ValueError(f"{key} = {getattr(self, key)!r} has no effect without "
+                             f"{' or '.join(on)} (set {on[0]} or leave {key} out)")
         if self.twist_range_deg is not None and not (
                 -180.0 <= self.twist_range_deg[0] < self.twist_range_deg[1] <= 180.0):
             raise ValueError("twist_range_deg must be [low, high] with -180 <= low < high <= "
