@@ -16,6 +16,7 @@ from humimic.perception.blobs.detection import (
     random_hypotheses,
     window_points,
 )
+from humimic.perception.blobs.hypotheses import propose_centres
 from humimic.perception.cues.color_models import ColorLUT, fit_color_model
 
 DT = 1.0 / 60.0
@@ -287,3 +288,23 @@ def test_refined_hypothesis_takes_a_thin_blobs_full_resolution_moments(skin_lut)
     mu2, C2 = refine_hypotheses(blank, skin_lut, mu0, C0, 16, 2.5, float(step), 1.0, 30.0)
     np.testing.assert_array_equal(mu2, mu0)
     np.testing.assert_array_equal(C2, C0)
+
+
+def test_colour_drawn_centres_fall_in_the_cell_they_were_drawn_from():
+    """A colour-drawn centre lies in the cell whose sample drew it (the cell
+    :func:`fitted_hypotheses` then reads, ``floor(centre / grid)``), uniformly spread over it;
+    the cells are drawn in proportion to the map (a binomial test against the map's odds)."""
+    from scipy import stats
+
+    grid, n = 8, 4000
+    lik = np.zeros((30, 40))
+    lik[12, 20], lik[3, 5] = 3.0, 1.0
+    centres, uniform = propose_centres(np.random.default_rng(0), n, (240, 320), lik, grid)
+    drawn = centres[~uniform]
+    cells = np.floor(drawn / grid).astype(int)
+    in_a = np.all(cells == (20, 12), axis=1)
+    assert np.all(in_a | np.all(cells == (5, 3), axis=1))
+    assert stats.binomtest(int(in_a.sum()), len(drawn), 0.75).pvalue > 1e-3
+    offsets = drawn[in_a] - (20 * grid, 12 * grid)
+    for axis in range(2):
+        assert stats.kstest(offsets[:, axis] / grid, "uniform").pvalue > 1e-3

@@ -107,8 +107,9 @@ def detection_threshold(mean_f: float, max_f: float, lam: float) -> float:
 def propose_centres(rng: np.random.Generator, n: int, image_shape: tuple[int, int],
                     coarse_lik: np.ndarray | None, grid: int) -> tuple[np.ndarray, np.ndarray]:
     """``n`` centres (px): uniform, or half uniform and half from ``coarse_lik`` (a colour
-    probability map sampled every ``grid`` px), jittered within the grid cell. Also returns
-    which centres are uniform draws (the paper's random hypotheses)."""
+    probability map sampled at the centres of ``grid``-px cells, cell ``(i, j)`` covering
+    ``[j grid, (j + 1) grid) x [i grid, (i + 1) grid)``), uniform within the drawn cell. Also
+    returns which centres are uniform draws (the paper's random hypotheses)."""
     H, W = image_shape
     out = rng.uniform((0.0, 0.0), (W - 1.0, H - 1.0), size=(n, 2))
     uniform = np.ones(n, bool)
@@ -122,8 +123,8 @@ def propose_centres(rng: np.random.Generator, n: int, image_shape: tuple[int, in
     idx = np.minimum(np.searchsorted(c, rng.uniform(0.0, c[-1], size=m), side="right"),
                      c.size - 1)
     iy, ix = np.divmod(idx, coarse_lik.shape[1])
-    jitter = rng.uniform(-0.5 * grid, 0.5 * grid, size=(m, 2))
-    out[:m] = np.clip(np.stack([ix, iy], -1) * grid + jitter, 0.0, (W - 1.0, H - 1.0))
+    within = rng.uniform(0.0, grid, size=(m, 2))  # the cell :func:`fitted_hypotheses` reads
+    out[:m] = np.clip(np.stack([ix, iy], -1) * grid + within, 0.0, (W - 1.0, H - 1.0))
     return out, uniform
 
 
