@@ -112,6 +112,15 @@ class StereoConfig(Section):
     colour, so the background around a blob (at another depth, so shifted differently between
     the eyes) turns black and only the blob, its outline and shading, is matched. False: the
     paper's plain box template (background clutter can pull the match)."""
+    mask_closing: int = Field(1, ge=0, le=5)
+    """Our extension: the colour mask's probability image is closed (dilated, then eroded) by a
+    square of this half-width (px) before it multiplies the image, so that holes the pixel
+    noise punches into a blob's mask are filled alike in both eyes. A shirt of nearly the skin's
+    colour ([0.76, 0.60, 0.45]) left the skin's colour table cut in the bins both share (the
+    background cut, ``background_odds``), and 12-25 % of the head's and hands' pixels dropped
+    out, differently in each eye; the template matched that speckle (ude_wave_tracking seed 3:
+    depth error std 1.5 -> 13-17 mm, measured in docs/ude_perception_notes.md). 0: the plain
+    per-pixel mask."""
 
 
 class TargetColor(Section):

@@ -77,6 +77,11 @@ class StereoParams:
     offsets of d / fine_steps within +-d of the best sample and a parabola through the best
     three gives the sub-pixel match (a parabola on the coarse samples alone is biased towards
     them: 'pixel locking')."""
+    mask_closing: int = 1
+    """With colour masks, the probability image is closed by a square of this half-width (px)
+    before it multiplies the image (:func:`~humimic.perception.blobs.zncc.closed_posterior`):
+    holes the pixel noise punched into a blob's mask (a shirt of nearly its colour) are filled
+    in both eyes alike. 0: the plain per-pixel mask."""
     min_target_fraction: float = 0.1
     """With colour masks (``template_luts``), a template less target-coloured than this (mean
     probability) fails with reason 'few_target_pixels'."""
@@ -278,9 +283,9 @@ class StereoRig:
             + kd[:, :, None] * t[:, 0, None, None]
         mx, my = ir.distort((qx - ir.cx) / ir.fx, (qy - ir.cy) / ir.fy)
         masks = [None if luts is None else luts[i] for i, *_ in jobs]
-        src_l = [Prefiltered(img_l, p.prefilter_sigma, dr, lut)
+        src_l = [Prefiltered(img_l, p.prefilter_sigma, dr, lut, p.mask_closing)
                  for dr, lut in zip(d.tolist(), masks, strict=True)]
-        src_r = [Prefiltered(img_r, p.prefilter_sigma, dr, lut)
+        src_r = [Prefiltered(img_r, p.prefilter_sigma, dr, lut, p.mask_closing)
                  for dr, lut in zip(d.tolist(), masks, strict=True)]
         strips = _read(src_r, mx, my)
         # templates: ideal left pixels around each left point, columns along its epipolar dir.
