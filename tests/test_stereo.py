@@ -238,3 +238,53 @@ def test_closed_mask_matches_a_speckled_blob():
     # measured (seeds 11-14): RMS 6.1-9.4 mm closed, 12.4-18.7 mm per-pixel (ratio 0.50-0.58)
     assert np.sqrt(np.mean(closed**2)) < 0.75 * np.sqrt(np.mean(speckled**2))
     assert np.sqrt(np.mean(closed**2)) < 0.02
+
+
+def test_small_blob_scale_against_eigenvalues():
+    """max(1, ref / sigma_blob), sigma_blob the mean of the shape's two standard deviations
+    (numpy's eigenvalues): blobs at least ``ref`` wide keep the calibrated noise."""
+    from humimic.perception.blobs.triangulation import small_blob_scale
+
+    rng = np.random.default_rng(4)
+    A = rng.normal(size=(50, 2, 2)) * rng.uniform(0.5, 8, (50, 1, 1))
+    covs = A @ np.swapaxes(A, 1, 2) + 0.1 * np.eye(2)
+    sig = np.sqrt(np.linalg.eigvalsh(covs)).mean(1)
+    np.testing.assert_allclose(small_blob_scale(covs, 5.0), np.maximum(1.0, 5.0 / sig),
+                               rtol=1e-9)
+    assert np.all(small_blob_scale(covs, None) == 1.0)
+    assert small_blob_scale(np.diag([4.0, 1.0]), 5.0)[0] == pytest.approx(5.0 / 1.5)
+    assert small_blob_scale(np.diag([49.0, 36.0]), 5.0)[0] == 1.0
+
+
+def test_following_covariance_takes_a_match_noise_per_target():
+    from humimic.perception.blobs.triangulation import following_covariance
+
+    t = np.array([[1.0, 0.0], [0.6, 0.8]])
+    Cl = np.eye(2) * 0.09
+    both = following_covariance(Cl, np.array([0.04, 0.1]), t)
+    for r, s in enumerate((0.04, 0.1)):
+        np.testing.assert_array_equal(both[r], following_covariance(Cl, s, t[r:r + 1])[0])
+
+
+def test_core_grows_the_noise_of_small_blobs(monkeypatch):
+    """PerceptionCore hands the stereo stage pixel_std and match_std grown by
+    small_blob_scale of each target's left blob (the farther, smaller blob: a larger R)."""
+    from test_perception_locks import Scripted
+
+    from humimic.perception.blobs.triangulation import small_blob_scale
+
+    calls = []
+
+    def spy(self, il, ir, uv_l, cov_l, uv_r, cov_r, C_l, C_r, luts=None, match_std=None):
+        calls.append((np.array(cov_l), np.array(C_l), np.array(match_std)))
+        return [type("M", (), {"ok": False, "reason": "spy", "score": 0.0})()] * len(uv_l)
+
+    monkeypatch.setattr(StereoRig, "match_many", spy)
+    s = Scripted(pixel_std=0.3, match_std=0.05)
+    s.frames(12)
+    assert calls
+    cov_l, C_l, ms = calls[-1]
+    k = small_blob_scale(cov_l, 5.0)
+    assert np.any(k > 1.0)  # the synthetic blobs include ones under 5 px
+    np.testing.assert_allclose(C_l, 0.09 * k[:, None, None] ** 2 * np.eye(2))
+    np.testing.assert_allclose(ms, 0.05 * k)

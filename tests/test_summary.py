@@ -23,3 +23,23 @@ def test_every_family_shows_its_scores():
     assert rows["lag_ms.end_to_end"] == "21.5"
     assert not any(k.startswith("trackers.icu.reacquire_s") for k in rows)  # lists stay out
     assert not any(k.startswith("faults") for k in rows)
+
+
+def test_measurements_inconsistent_with_their_covariance_are_warned():
+    """A target whose debiased raw NEES falls in the 95 % band on under 75 % of frames (a
+    skin-like shirt: 43-47 %) is named; the default wave's 90-100 % is not."""
+    from humimic.metrics.summary import verdict_warning
+
+    def m(band, frames=300, verdict="ok"):
+        return {"tracking": {"right_hand": {
+            "verdict": verdict, "measured_frames": frames, "detection_rate": 0.9,
+            "cause": "occluded", "raw_nees_pos3_debiased_in_band": band,
+            "filtered_nees_pos3_in_band": 0.23}}}
+
+    assert verdict_warning(m(0.90)) is None
+    assert verdict_warning(m(0.47)) == (
+        "warning: right_hand's 3-D measurements scatter beyond the covariance perception "
+        "reports (debiased NEES in the 95 % band on 47% of frames, filtered 23%)")
+    assert verdict_warning(m(0.47, frames=10)) is None  # too few frames to judge
+    assert verdict_warning(m(None)) is None
+    assert "scatter" not in verdict_warning(m(0.47, verdict="poor"))  # named as poor already

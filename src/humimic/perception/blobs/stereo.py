@@ -43,6 +43,7 @@ from humimic.perception.blobs.triangulation import (  # noqa: F401  (re-exported
     dlt_jacobian,
     following_covariance,
     joint_covariance,
+    small_blob_scale,
     triangulate_dlt,
 )
 from humimic.perception.blobs.zncc import Prefiltered, zncc_strips, zncc_windows
@@ -223,7 +224,7 @@ class StereoRig:
         around the blob turns black (clutter at other depths cannot pull the match) while the
         blob's outline, its strongest cue, stays sharp. ``match_std`` (px): use the
         template-following error model (:func:`following_covariance`, with ``cov_uv_left``)
-        instead of independent left and right covariances.
+        instead of independent left and right covariances (a scalar, or one per target).
         """
         p = self.params
         hh = int(p.template_half)
@@ -350,7 +351,9 @@ class StereoRig:
         else:  # the raw-pixel direction of the epipolar line at each match
             q1 = qr[good] + t[good]
             u1, v1 = ir.distort((q1[:, 0] - ir.cx) / ir.fx, (q1[:, 1] - ir.cy) / ir.fy)
-            C = following_covariance(np.zeros((2, 2)) if cl is None else cl, match_std,
+            ms = np.asarray(match_std, float)
+            C = following_covariance(np.zeros((2, 2)) if cl is None else cl,
+                                     ms[rows] if ms.ndim else ms,
                                      np.stack([u1 - ur, v1 - vr], 1))
         P, R = self._triangulate_normalised(xl_a, xr_a, C)
         depth_l = P @ self.P_left[2, :3] + self.P_left[2, 3]
