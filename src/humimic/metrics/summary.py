@@ -16,12 +16,14 @@ SECTIONS = {"tracking": 3, "trackers": 4, "slam": 3, "arm": 3, "commands": 3, "m
             "latency_ms": 3, "lag_ms": 3}
 
 
-#: A target whose raw 3-D measurements, their mean error removed, fall inside the 95 % chi^2
-#: band of the covariance R perception reported on fewer of its frames than this is named in
-#: the run's warning (:func:`inconsistent_measurements`). Measured (debiased fraction): the
-#: default ude_wave_tracking 0.90-1.00, mimic_tracked_wave 0.83-0.97; a shirt of nearly the
-#: skin's colour ([0.76, 0.60, 0.45], seed 3) 0.43-0.47, whose filtered RMSE doubled unflagged.
-CONSISTENT_IN_BAND = 0.75
+#: A target whose raw 3-D measurements, their mean error removed, fall above the 95 % chi^2
+#: band of the covariance R perception reported on more of its frames than this (0.025 when
+#: consistent) is named in the run's warning (:func:`inconsistent_measurements`). Measured
+#: (fraction above): the default ude_wave_tracking (seed 3) 0-0.022, mimic_tracked_wave (seed
+#: 7) 0.012-0.026, ude_table3_static_hand 0.038; a shirt of nearly the skin's colour ([0.76,
+#: 0.60, 0.45], ude_wave_tracking seed 3) 0.53-0.57 (0.38-0.46 with the closed colour mask),
+#: whose filtered RMSE doubled with no warning.
+CONSISTENT_ABOVE_BAND = 0.2
 #: ... over at least this many measured frames.
 CONSISTENT_MIN_FRAMES = 30
 
@@ -63,17 +65,18 @@ def print_summary(metrics: dict, out_dir: str | Path, console: Console | None = 
 
 def inconsistent_measurements(target: str, s: dict) -> str | None:
     """A warning clause for a ``tracking.<target>`` section whose measurements scatter beyond
-    their reported covariance R (``raw_nees_pos3_debiased_in_band`` under
-    :data:`CONSISTENT_IN_BAND` over at least :data:`CONSISTENT_MIN_FRAMES` measured frames): its
-    errors are larger than perception believes and the filter is over-confident; else None."""
-    band = s.get("raw_nees_pos3_debiased_in_band")
-    if band is None or (s.get("measured_frames") or 0) < CONSISTENT_MIN_FRAMES \
-            or band >= CONSISTENT_IN_BAND:
+    their reported covariance R (``raw_nees_pos3_debiased_above_band`` over
+    :data:`CONSISTENT_ABOVE_BAND`, on at least :data:`CONSISTENT_MIN_FRAMES` measured frames):
+    its errors are larger than perception believes and the filter is over-confident; else
+    None."""
+    above = s.get("raw_nees_pos3_debiased_above_band")
+    if above is None or (s.get("measured_frames") or 0) < CONSISTENT_MIN_FRAMES \
+            or above <= CONSISTENT_ABOVE_BAND:
         return None
     filt = s.get("filtered_nees_pos3_in_band")
-    also = "" if filt is None else f", filtered {filt:.0%}"
+    also = "" if filt is None else f"; filtered NEES in the band on {filt:.0%}"
     return (f"{target}'s 3-D measurements scatter beyond the covariance perception reports "
-            f"(debiased NEES in the 95 % band on {band:.0%} of frames{also})")
+            f"(debiased NEES above the 95 % band on {above:.0%} of frames{also})")
 
 
 def verdict_warning(metrics: dict) -> str | None:
