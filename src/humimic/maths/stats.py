@@ -95,7 +95,9 @@ def fraction_in_band(values, dof: int, level: float = 0.95) -> float:
 
 def fraction_above_band(values, dof: int, level: float = 0.95) -> float:
     """Fraction of the finite per-sample NEES ``values`` above the single-sample band's upper
-    end (errors larger than their covariance allows; a consistent estimator: ``(1 - level)/2``)."""
+    end (errors larger than their covariance allows; a consistent estimator: ``(1 - level)/2``):
+    the one-sided half of the chi-square NEES test (Bar-Shalom, Li & Kirubarajan, *Estimation
+    with Applications to Tracking and Navigation*, 2001, sec. 5.4.2)."""
     v = np.asarray(values, dtype=float)
     v = v[np.isfinite(v)]
     if len(v) == 0:
