@@ -241,18 +241,23 @@ def test_closed_mask_matches_a_speckled_blob():
 
 
 def test_small_blob_scale_against_eigenvalues():
-    """max(1, ref / sigma_blob), sigma_blob the mean of the shape's two standard deviations
-    (numpy's eigenvalues): blobs at least ``ref`` wide keep the calibrated noise."""
+    """max(1, ref / max(sigma_blob, floor)), sigma_blob the mean of the shape's two standard
+    deviations (numpy's eigenvalues): blobs at least ``ref`` wide keep the calibrated noise,
+    blobs under the floor grow it no further."""
     from humimic.perception.blobs.triangulation import small_blob_scale
 
     rng = np.random.default_rng(4)
     A = rng.normal(size=(50, 2, 2)) * rng.uniform(0.5, 8, (50, 1, 1))
     covs = A @ np.swapaxes(A, 1, 2) + 0.1 * np.eye(2)
     sig = np.sqrt(np.linalg.eigvalsh(covs)).mean(1)
-    np.testing.assert_allclose(small_blob_scale(covs, 5.0), np.maximum(1.0, 5.0 / sig),
-                               rtol=1e-9)
+    np.testing.assert_allclose(small_blob_scale(covs, 5.0, 0.1),
+                               np.maximum(1.0, 5.0 / np.maximum(sig, 0.1)), rtol=1e-9)
+    np.testing.assert_allclose(small_blob_scale(covs, 5.0),
+                               np.maximum(1.0, 5.0 / np.maximum(sig, 2.5)), rtol=1e-9)
     assert np.all(small_blob_scale(covs, None) == 1.0)
-    assert small_blob_scale(np.diag([4.0, 1.0]), 5.0)[0] == pytest.approx(5.0 / 1.5)
+    assert small_blob_scale(np.diag([9.0, 4.0]), 5.0)[0] == pytest.approx(2.0)  # sigma 2.5
+    assert small_blob_scale(np.diag([4.0, 1.0]), 5.0)[0] == pytest.approx(2.0)  # floored
+    assert small_blob_scale(np.diag([4.0, 1.0]), 5.0, 1.0)[0] == pytest.approx(5.0 / 1.5)
     assert small_blob_scale(np.diag([49.0, 36.0]), 5.0)[0] == 1.0
 
 

@@ -209,8 +209,9 @@ class PerceptionConfig(Section):
     noise_ref_sigma_px: float | None = Field(5.0, gt=0.0, le=100.0)
     """Our extension: ``pixel_std`` and ``match_std`` hold for blobs at least this wide (the mean
     of a blob's two standard deviations, px) and grow as ``noise_ref_sigma_px / sigma_blob``
-    for smaller ones (:func:`~humimic.perception.blobs.triangulation.small_blob_scale`): a
-    blob's outline is sampled by fewer pixels the smaller (the farther) it is. Measured
+    for smaller ones, down to 2.5 px (``SMALL_BLOB_FLOOR_PX``; at most twice the noise)
+    (:func:`~humimic.perception.blobs.triangulation.small_blob_scale`): a blob's outline is
+    sampled by fewer pixels the smaller (the farther) it is. Measured
     (mimic_tracked_wave seed 7, skin [0.45, 0.30, 0.22], 1.8 m): with fixed noises the waving
     hand's filtered NEES was in the 95 % band on 73 % of frames, the stereo error 1.5-2x the
     R it reported. None: the calibrated noises for every blob."""
