@@ -292,3 +292,41 @@ def test_background_odds_leaves_the_default_person_alone(cache_dir):
         world.close()
     assert odds.digest != plain.digest and not odds.cached
     np.testing.assert_array_equal(odds.lut.table, plain.lut.table)
+
+
+def test_lost_fraction_counts_class_pixels_the_table_does_not_take():
+    from humimic.perception.cues.auto_colors import lost_fraction
+
+    table = np.zeros(1 << 18, np.float32)
+    skin = np.array([[200, 150, 120]] * 6 + [[40, 40, 200]] * 2, np.uint8)
+    table[(50 << 12) | (37 << 6) | 30] = 5.0  # the first colour's 6-bit bin
+    assert lost_fraction(table, 6, skin) == 2 / 8
+    table[(10 << 12) | (10 << 6) | 50] = 1.0  # density 1: not above the outlier's
+    assert lost_fraction(table, 6, skin) == 2 / 8
+    assert lost_fraction(table, 6, skin[:0]) is None
+
+
+def test_skin_lost_to_a_skin_like_shirt_is_measured_and_warned(cache_dir):
+    """The share of the skin's own pixels the cut table no longer takes, against one counted
+    on independent renders (another noise draw): ~0 for the default person, 0.17 for a shirt
+    of nearly the skin's colour (whose look-alike ratio, 0.13, stays under its warning: the
+    cut hid the look-alikes by dropping skin); the run's warning names it."""
+    from humimic.perception.cues.auto_colors import LOST_WARN, look_alike_report
+    from humimic.perception.cues.learn_colors import trim_dark
+
+    for shirt, low, high in ((None, 0.0, 0.002), ("[0.76,0.60,0.45]", 0.1, 0.3)):
+        world = _world(*([f"human.shirt={shirt}"] if shirt else []))
+        try:
+            lut = learned_lut(world, world.eye_cameras, background_odds=1.0).lut
+            pos, _ = frame_pixels(world, world.eye_cameras, np.array([0, 60]),
+                                  material_geoms(world.scene.model, "skin"), 2.0,
+                                  np.random.default_rng(3), negatives_per_frame=1)
+        finally:
+            world.close()
+        want = float((lut.lookup(trim_dark(np.concatenate(pos))) <= 1.0).mean())
+        assert low <= lut.class_lost <= high and low <= want <= high, (lut.class_lost, want)
+        assert abs(lut.class_lost - want) <= 0.2 * max(want, 0.01)
+        report = look_alike_report(lut.look_alike, lut.class_lost)
+        assert report["skin_lost"] == lut.class_lost
+        assert ("colour_warning" in report) == (lut.class_lost > LOST_WARN) == bool(shirt)
+    assert "lost 1" in report["colour_warning"]  # "lost 17% of the skin's own pixels"

@@ -192,3 +192,104 @@ def test_colour_masked_match_ignores_background_clutter():
     masked, plain = np.array(errs["masked"]), np.array(errs["plain"])
     assert masked.max() < 0.012  # measured <= 6.6 mm at 1 m (disparity ~14 px)
     assert plain.max() > 2 * masked.max()  # measured: plain up to 23 mm
+
+
+class _SpeckledLUT:
+    """A skin table with holes: a disc pixel counts as skin unless its noisy red level is a
+    multiple of 8 (an eighth of them, drawn by each eye's own pixel noise), as a table cut in
+    the bins a skin-like shirt shares leaves the skin; the grey background is never skin."""
+
+    @staticmethod
+    def lookup(rgb):
+        r = np.asarray(rgb)[..., 0].astype(int)
+        return np.where((r > 140) & (r % 8 != 0), 1e3, 0.0).astype(np.float32)
+
+    def posterior(self, rgb):
+        p = self.lookup(rgb)
+        return p / (p + 1.0)
+
+
+def test_closed_mask_matches_a_speckled_blob():
+    """The colour mask of a blob whose pixels the table drops at random, differently in each
+    eye (pixel noise across a cut bin's edge): the per-pixel mask makes the template match the
+    speckle; closed (``mask_closing``, the default 1 px) it matches the blob's outline."""
+    from _synth_vision import add_noise, draw_ellipse
+
+    from humimic.perception.blobs.stereo import StereoParams
+
+    rng = np.random.default_rng(11)
+    cam_l, cam_r = stereo_head(k1=0.0, k2=0.0)
+    lut = _SpeckledLUT()
+    errs: dict[int, list[float]] = {0: [], 1: []}
+    for k in range(24):
+        X = np.array([1.2, -0.12 + 0.01 * k, 1.15])
+        img_l, img_r = (np.full((240, 320, 3), 110, np.uint8) for _ in range(2))
+        uv_l, uv_r = cam_l.project_base(X), cam_r.project_base(X)
+        for img, uv in ((img_l, uv_l), (img_r, uv_r)):
+            draw_ellipse(img, uv, (6, 6), 0, (200, 150, 120))
+        img_l, img_r = add_noise(img_l, rng, 2.0), add_noise(img_r, rng, 2.0)
+        cov = 9.0 * np.eye(2)
+        for closing in errs:
+            rig = StereoRig(cam_l, cam_r, StereoParams(mask_closing=closing))
+            m = rig.match(img_l, img_r, uv_l, cov, uv_r, cov, COV_UV, COV_UV, lut)
+            errs[closing].append(np.linalg.norm(m.p_base - X) if m.ok else np.inf)
+    closed, speckled = np.array(errs[1]), np.array(errs[0])
+    assert StereoParams().mask_closing == 1
+    # measured (seeds 11-14): RMS 6.1-9.4 mm closed, 12.4-18.7 mm per-pixel (ratio 0.50-0.58)
+    assert np.sqrt(np.mean(closed**2)) < 0.75 * np.sqrt(np.mean(speckled**2))
+    assert np.sqrt(np.mean(closed**2)) < 0.02
+
+
+def test_small_blob_scale_against_eigenvalues():
+    """max(1, ref / max(sigma_blob, floor)), sigma_blob the mean of the shape's two standard
+    deviations (numpy's eigenvalues): blobs at least ``ref`` wide keep the calibrated noise,
+    blobs under the floor grow it no further."""
+    from humimic.perception.blobs.triangulation import small_blob_scale
+
+    rng = np.random.default_rng(4)
+    A = rng.normal(size=(50, 2, 2)) * rng.uniform(0.5, 8, (50, 1, 1))
+    covs = A @ np.swapaxes(A, 1, 2) + 0.1 * np.eye(2)
+    sig = np.sqrt(np.linalg.eigvalsh(covs)).mean(1)
+    np.testing.assert_allclose(small_blob_scale(covs, 5.0, 0.1),
+                               np.maximum(1.0, 5.0 / np.maximum(sig, 0.1)), rtol=1e-9)
+    np.testing.assert_allclose(small_blob_scale(covs, 5.0),
+                               np.maximum(1.0, 5.0 / np.maximum(sig, 2.5)), rtol=1e-9)
+    assert np.all(small_blob_scale(covs, None) == 1.0)
+    assert small_blob_scale(np.diag([9.0, 4.0]), 5.0)[0] == pytest.approx(2.0)  # sigma 2.5
+    assert small_blob_scale(np.diag([4.0, 1.0]), 5.0)[0] == pytest.approx(2.0)  # floored
+    assert small_blob_scale(np.diag([4.0, 1.0]), 5.0, 1.0)[0] == pytest.approx(5.0 / 1.5)
+    assert small_blob_scale(np.diag([49.0, 36.0]), 5.0)[0] == 1.0
+
+
+def test_following_covariance_takes_a_match_noise_per_target():
+    from humimic.perception.blobs.triangulation import following_covariance
+
+    t = np.array([[1.0, 0.0], [0.6, 0.8]])
+    Cl = np.eye(2) * 0.09
+    both = following_covariance(Cl, np.array([0.04, 0.1]), t)
+    for r, s in enumerate((0.04, 0.1)):
+        np.testing.assert_array_equal(both[r], following_covariance(Cl, s, t[r:r + 1])[0])
+
+
+def test_core_grows_the_noise_of_small_blobs(monkeypatch):
+    """PerceptionCore hands the stereo stage pixel_std and match_std grown by
+    small_blob_scale of each target's left blob (the farther, smaller blob: a larger R)."""
+    from test_perception_locks import Scripted
+
+    from humimic.perception.blobs.triangulation import small_blob_scale
+
+    calls = []
+
+    def spy(self, il, ir, uv_l, cov_l, uv_r, cov_r, C_l, C_r, luts=None, match_std=None):
+        calls.append((np.array(cov_l), np.array(C_l), np.array(match_std)))
+        return [type("M", (), {"ok": False, "reason": "spy", "score": 0.0})()] * len(uv_l)
+
+    monkeypatch.setattr(StereoRig, "match_many", spy)
+    s = Scripted(pixel_std=0.3, match_std=0.05)
+    s.frames(12)
+    assert calls
+    cov_l, C_l, ms = calls[-1]
+    k = small_blob_scale(cov_l, 5.0)
+    assert np.any(k > 1.0)  # the synthetic blobs include ones under 5 px
+    np.testing.assert_allclose(C_l, 0.09 * k[:, None, None] ** 2 * np.eye(2))
+    np.testing.assert_allclose(ms, 0.05 * k)

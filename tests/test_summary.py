@@ -23,3 +23,25 @@ def test_every_family_shows_its_scores():
     assert rows["lag_ms.end_to_end"] == "21.5"
     assert not any(k.startswith("trackers.icu.reacquire_s") for k in rows)  # lists stay out
     assert not any(k.startswith("faults") for k in rows)
+
+
+def test_measurements_inconsistent_with_their_covariance_are_warned():
+    """A target whose debiased raw NEES lies above the 95 % band on over 20 % of frames (a
+    skin-like shirt: 53-57 %) is named; the default wave's 0-2 % is not, nor a covariance too
+    large (NEES below the band: outside it, but not above)."""
+    from humimic.metrics.summary import verdict_warning
+
+    def m(above, frames=300, verdict="ok"):
+        return {"tracking": {"right_hand": {
+            "verdict": verdict, "measured_frames": frames, "detection_rate": 0.9,
+            "cause": "occluded", "raw_nees_pos3_debiased_in_band": 0.3,
+            "raw_nees_pos3_debiased_above_band": above, "filtered_nees_pos3_in_band": 0.23}}}
+
+    assert verdict_warning(m(0.02)) is None
+    assert verdict_warning(m(0.53)) == (
+        "warning: right_hand's 3-D measurements scatter beyond the covariance perception "
+        "reports (debiased NEES above the 95 % band on 53% of frames; filtered NEES in the "
+        "band on 23%)")
+    assert verdict_warning(m(0.53, frames=10)) is None  # too few frames to judge
+    assert verdict_warning(m(None)) is None
+    assert "scatter" not in verdict_warning(m(0.53, verdict="poor"))  # named as poor already

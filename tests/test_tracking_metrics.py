@@ -234,3 +234,19 @@ def test_archive_streamed_from_the_records_equals_the_stacked_one(tmp_path, monk
         np.testing.assert_array_equal(getattr(one, f.name), want, err_msg=f.name)
     np.testing.assert_array_equal(f_one.P, fa.P[:, 1:])
     np.testing.assert_array_equal(f_one.since_init, fa.since_init[:, 1:])
+
+
+def test_fraction_above_band_counts_errors_larger_than_their_covariance():
+    """Gaussian errors of the stated covariance: 2.5 % above the 95 % band; twice as large
+    (4x the variance): most of them above; half as large: none above (but outside the band)."""
+    from scipy.stats import chi2
+
+    from humimic.maths.stats import fraction_above_band, fraction_in_band
+
+    rng = np.random.default_rng(2)
+    v = chi2.rvs(3, size=20000, random_state=rng)
+    assert fraction_above_band(v, 3) == pytest.approx(0.025, abs=0.004)
+    assert fraction_above_band(4 * v, 3) == pytest.approx(np.mean(4 * v > chi2.ppf(0.975, 3)))
+    assert fraction_above_band(4 * v, 3) > 0.4
+    assert fraction_above_band(v / 4, 3) == 0.0 and fraction_in_band(v / 4, 3) < 0.9
+    assert np.isnan(fraction_above_band([np.nan], 3))

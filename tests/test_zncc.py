@@ -126,3 +126,28 @@ def test_batched_reads_equal_single_reads():
     batch = read_batch([Prefiltered(img, 0.8, s) for s in spacing], mx, my)
     for r, s in enumerate(spacing):
         assert np.array_equal(batch[r], Prefiltered(img, 0.8, s).remap(mx[r], my[r]))
+
+
+def test_closed_posterior_is_scipys_grey_closing():
+    """The colour mask's closing (dilation, then erosion, by a square) against scipy.ndimage's
+    grey_closing with the border replicated; a 1-px hole in a blob is filled, a 1-px speck
+    outside stays, and a blob 3 px wide keeps its outline."""
+    from scipy import ndimage
+
+    from humimic.perception.blobs.zncc import closed_posterior
+
+    rng = np.random.default_rng(3)
+    post = rng.uniform(0, 1, (30, 40)).astype(np.float32)
+    for r in (1, 2):
+        ref = ndimage.grey_closing(post, size=(2 * r + 1, 2 * r + 1), mode="nearest")
+        np.testing.assert_array_equal(closed_posterior(post, r), ref)
+    assert closed_posterior(post, 0) is post
+    blob = np.zeros((20, 20), np.float32)
+    blob[5:15, 5:8] = 1.0
+    blob[9, 6] = 0.0  # a hole
+    blob[2, 15] = 1.0  # a speck
+    out = closed_posterior(blob, 1)
+    assert out[9, 6] == 1.0 and out[2, 15] == 1.0
+    ref = np.zeros((20, 20))
+    ref[5:15, 5:8] = 1.0
+    np.testing.assert_array_equal(out[:, :14], ref[:, :14])

@@ -93,6 +93,18 @@ def fraction_in_band(values, dof: int, level: float = 0.95) -> float:
     return float(np.mean((v >= lo) & (v <= hi)))
 
 
+def fraction_above_band(values, dof: int, level: float = 0.95) -> float:
+    """Fraction of the finite per-sample NEES ``values`` above the single-sample band's upper
+    end (errors larger than their covariance allows; a consistent estimator: ``(1 - level)/2``):
+    the one-sided half of the chi-square NEES test (Bar-Shalom, Li & Kirubarajan, *Estimation
+    with Applications to Tracking and Navigation*, 2001, sec. 5.4.2)."""
+    v = np.asarray(values, dtype=float)
+    v = v[np.isfinite(v)]
+    if len(v) == 0:
+        return math.nan
+    return float(np.mean(v > chi2_band(dof, 1, level)[1]))
+
+
 def finite_or_none(x) -> float | None:
     """``float(x)`` if finite, else None (JSON's null in ``metrics.json``)."""
     if x is None:

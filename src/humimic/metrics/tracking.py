@@ -43,7 +43,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from humimic.maths.stats import finite_or_none, fraction_in_band, nees, rmse
+from humimic.maths.stats import (
+    finite_or_none,
+    fraction_above_band,
+    fraction_in_band,
+    nees,
+    rmse,
+)
 from humimic.metrics import mm
 from humimic.metrics.visibility import visibility_scores
 from humimic.perception.blobs.record import STATE_CODE
@@ -64,7 +70,9 @@ def nees_scores(prefix: str, err: np.ndarray, cov: np.ndarray, debiased: bool = 
                 ) -> dict:
     """``<prefix>`` (mean NEES) and ``<prefix>_in_band`` (fraction of samples inside the 95 %
     chi-square band, dof = ``err.shape[1]``); with ``debiased`` also ``<prefix>_debiased_in_band``
-    (the mean error removed first). None when there are no samples."""
+    (the mean error removed first) and ``<prefix>_debiased_above_band`` (the fraction above the
+    band: errors larger than the covariance says; 0.025 when consistent). None when there are
+    no samples."""
     dof = err.shape[1]
     values = nees(err, cov) if len(err) else np.zeros(0)
     out = {prefix: finite_or_none(np.nanmean(values)) if len(values) else None,
@@ -72,6 +80,7 @@ def nees_scores(prefix: str, err: np.ndarray, cov: np.ndarray, debiased: bool = 
     if debiased:
         d = nees(err - err.mean(axis=0), cov) if len(err) else np.zeros(0)
         out[f"{prefix}_debiased_in_band"] = finite_or_none(fraction_in_band(d, dof))
+        out[f"{prefix}_debiased_above_band"] = finite_or_none(fraction_above_band(d, dof))
     return out
 
 

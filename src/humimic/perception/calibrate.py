@@ -40,13 +40,18 @@ from humimic.perception.blobs.stereo import (
     StereoRig,
     epipolar_direction,
     following_covariance,
+    small_blob_scale,
 )
 
 
-def unit_covariances(pa, i: int, frames: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def unit_covariances(pa, i: int, frames: np.ndarray, noise_ref_sigma_px: float | None = 5.0
+                     ) -> tuple[np.ndarray, np.ndarray]:
     """``(R_c, R_m)``, each ``(len(frames), 3, 3)`` (m^2 per px^2): target ``i``'s triangulated
     covariance for a unit blob-centre error (followed by the match) and for a unit match error
-    along the epipolar line, at its recorded correspondences."""
+    along the epipolar line, at its recorded correspondences, each grown as the stage grows it
+    for a blob smaller than ``noise_ref_sigma_px`` (``perception.noise_ref_sigma_px``,
+    :func:`~humimic.perception.blobs.triangulation.small_blob_scale` of the left blob)."""
+    k2 = np.square(small_blob_scale(pa.cov[frames, i, 0], noise_ref_sigma_px))
     Rc, Rm = [], []
     for f in frames.tolist():
         cl, cr = pa.camera(f, 0), pa.camera(f, 1)
@@ -57,7 +62,8 @@ def unit_covariances(pa, i: int, frames: np.ndarray) -> tuple[np.ndarray, np.nda
             np.eye(2), 0.0, t)[0])[1])
         Rm.append(rig.triangulate(uv_l, uv_r, cov_joint=following_covariance(
             np.zeros((2, 2)), 1.0, t)[0])[1])
-    return np.array(Rc).reshape(-1, 3, 3), np.array(Rm).reshape(-1, 3, 3)
+    return (k2[:, None, None] * np.array(Rc).reshape(-1, 3, 3),
+            k2[:, None, None] * np.array(Rm).reshape(-1, 3, 3))
 
 
 def fit_pixel_noise(err: np.ndarray, Rc: np.ndarray, Rm: np.ndarray) -> tuple[float, float]:
@@ -70,7 +76,8 @@ def fit_pixel_noise(err: np.ndarray, Rc: np.ndarray, Rm: np.ndarray) -> tuple[fl
     return float(np.sqrt(max(var[0], 0.0))), float(np.sqrt(max(var[1], 0.0)))
 
 
-def calibration_data(pa, truth: dict, skip_s: float = FILTER_SETTLE_S) -> dict:
+def calibration_data(pa, truth: dict, skip_s: float = FILTER_SETTLE_S,
+                     noise_ref_sigma_px: float | None = 5.0) -> dict:
     """Per published target with measurements: its frames (``skip_s`` after its first
     measurement), errors ``(N, 3)`` against the truth, recorded R and unit covariances."""
     out = {}
@@ -80,7 +87,7 @@ def calibration_data(pa, truth: dict, skip_s: float = FILTER_SETTLE_S) -> dict:
         if ok.sum() < 10:
             continue
         frames = np.flatnonzero(ok & (pa.t >= pa.t[np.argmax(ok)] + skip_s))
-        Rc, Rm = unit_covariances(pa, i, frames)
+        Rc, Rm = unit_covariances(pa, i, frames, noise_ref_sigma_px)
         out[target] = {"err": pa.p_base[frames, i] - p[frames], "R": pa.R_base[frames, i],
                        "Rc": Rc, "Rm": Rm}
     return out
@@ -93,10 +100,12 @@ def in_band(err: np.ndarray, R: np.ndarray) -> tuple[float, float]:
             fraction_in_band(nees(err - err.mean(axis=0), R), 3))
 
 
-def calibrate(archive) -> tuple[float, float, dict]:
+def calibrate(archive, noise_ref_sigma_px: float | None = 5.0) -> tuple[float, float, dict]:
     """Fit on a run's ``tracking.npz`` (:class:`~humimic.perception.blobs.archive.
-    TrackingArchive`): ``(pixel_std, match_std, per-target NEES fractions before/after)``."""
-    data = calibration_data(archive.perception, archive.truth)
+    TrackingArchive`): ``(pixel_std, match_std, per-target NEES fractions before/after)``; the
+    noises hold for blobs ``noise_ref_sigma_px`` wide (the scenario's)."""
+    data = calibration_data(archive.perception, archive.truth,
+                            noise_ref_sigma_px=noise_ref_sigma_px)
     if not data:
         raise InputError("no target was measured in at least 10 frames: nothing to calibrate")
     e = np.concatenate([d["err"] - d["err"].mean(axis=0) for d in data.values()])
@@ -133,7 +142,8 @@ def main(argv: list[str] | None = None) -> int:
         with tempfile.TemporaryDirectory() as tmp:
             out = args.out or Path(tmp)
             run_one(scenario, out, rerun="off", progress=True)
-            s_c, s_m, report = calibrate(load_archive(out / "tracking.npz"))
+            s_c, s_m, report = calibrate(load_archive(out / "tracking.npz"),
+                                         scenario.perception.noise_ref_sigma_px)
     except InputError as err:
         return report_error(err)
     cfg = scenario.perception

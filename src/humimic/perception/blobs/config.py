@@ -112,6 +112,15 @@ class StereoConfig(Section):
     colour, so the background around a blob (at another depth, so shifted differently between
     the eyes) turns black and only the blob, its outline and shading, is matched. False: the
     paper's plain box template (background clutter can pull the match)."""
+    mask_closing: int = Field(1, ge=0, le=5)
+    """Our extension: the colour mask's probability image is closed (dilated, then eroded) by a
+    square of this half-width (px) before it multiplies the image, so that holes the pixel
+    noise punches into a blob's mask are filled alike in both eyes. A shirt of nearly the skin's
+    colour ([0.76, 0.60, 0.45]) left the skin's colour table cut in the bins both share (the
+    background cut, ``background_odds``), and 12-25 % of the head's and hands' pixels dropped
+    out, differently in each eye; the template matched that speckle (ude_wave_tracking seed 3:
+    depth error std 1.5 -> 13-17 mm, measured in docs/ude_perception_notes.md). 0: the plain
+    per-pixel mask."""
 
 
 class TargetColor(Section):
@@ -197,6 +206,15 @@ class PerceptionConfig(Section):
     centre's error that the template carries over; calibrated with ``pixel_std`` (0.014 px for
     a still hand at 640x480 to 0.08 px for a hand moving along the depth axis; default: the
     wide 320x240 fit, 0.039-0.044)."""
+    noise_ref_sigma_px: float | None = Field(5.0, gt=0.0, le=100.0)
+    """Our extension: ``pixel_std`` and ``match_std`` hold for blobs at least this wide (the mean
+    of a blob's two standard deviations, px) and grow as ``noise_ref_sigma_px / sigma_blob``
+    for smaller ones, down to 2.5 px (``SMALL_BLOB_FLOOR_PX``; at most twice the noise)
+    (:func:`~humimic.perception.blobs.triangulation.small_blob_scale`): a blob's outline is
+    sampled by fewer pixels the smaller (the farther) it is. Measured
+    (mimic_tracked_wave seed 7, skin [0.45, 0.30, 0.22], 1.8 m): with fixed noises the waving
+    hand's filtered NEES was in the 95 % band on 73 % of frames, the stereo error 1.5-2x the
+    R it reported. None: the calibrated noises for every blob."""
     covariance: Literal["following", "independent"] = "following"
     """How pixel errors are propagated into each measurement's covariance R: ``following``
     (the right match follows the template cut at the left centre: ``pixel_std`` moves the point

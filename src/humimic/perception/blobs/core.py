@@ -44,7 +44,7 @@ from humimic.perception.blobs.identity import (
     turned_round,
 )
 from humimic.perception.blobs.record import STATE_CODE
-from humimic.perception.blobs.stereo import StereoParams, StereoRig
+from humimic.perception.blobs.stereo import StereoParams, StereoRig, small_blob_scale
 from humimic.perception.cues.color_models import load_posterior_kernels
 from humimic.scenario.base import pass_through
 
@@ -134,6 +134,7 @@ class PerceptionCore:
             load_posterior_kernels()
         self.match_std = cfg.match_std if cfg.covariance == "following" else None
         self.C_px = np.eye(2) * cfg.pixel_std**2
+        self.noise_ref_sigma = cfg.noise_ref_sigma_px
         self.ident: list[dict[int, str]] = [{}, {}]
         self.margin: dict[str, float] = dict.fromkeys(self.targets, 0.0)
         """Identity margin of each target at the last decision (see identity.assign)."""
@@ -197,11 +198,13 @@ class PerceptionCore:
         p_base, R_base = np.zeros((n, 3)), np.zeros((n, 3, 3))
         uv_match, score = np.zeros((n, 2, 2)), np.zeros(n)
         measured: dict[str, Measurement] = {}
-        if pub:
+        if pub:  # the calibrated pixel noises, grown for blobs smaller than calibrated on
+            k = small_blob_scale(cov[pub, 0], self.noise_ref_sigma)
+            C_px = self.C_px * np.square(k)[:, None, None]
             ms = rig.match_many(il.image, ir.image, centre[pub, 0], cov[pub, 0], centre[pub, 1],
-                                cov[pub, 1], self.C_px, self.C_px,
+                                cov[pub, 1], C_px, C_px,
                                 [self.luts[i] for i in pub] if self.color_mask else None,
-                                self.match_std)
+                                None if self.match_std is None else self.match_std * k)
             for i, m in zip(pub, ms, strict=True):
                 reason[i], score[i] = m.reason, m.score
                 if m.ok:

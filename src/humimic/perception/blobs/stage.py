@@ -79,6 +79,9 @@ class PerceptionStage(Stage):
         ratios = [lut.look_alike for lut in luts.values() if lut.look_alike is not None]
         self.look_alike = max(ratios) if ratios else None
         """The learned skin model's look-alike pixels per skin pixel (None: from a file)."""
+        lost = [lut.class_lost for lut in luts.values() if lut.class_lost is not None]
+        self.skin_lost = max(lost) if lost else None
+        """The share of the skin's own pixels the learned table lost (None: from a file)."""
         self.repeats = RepeatDetector(skip_repeats)
         """Frozen frames (a camera repeating its image) are skipped like lost ones."""
         self.cameras, self.rlog = self.core.cameras, rlog
@@ -206,7 +209,7 @@ class PerceptionStage(Stage):
                "latency_ms": 1e3 * self.latency,
                "pipelined": self.pipelined, "worker": self.worker,
                "stale_frames_skipped": self.repeats.stale_frames,
-               **look_alike_report(self.look_alike)}
+               **look_alike_report(self.look_alike, self.skin_lost)}
         return {"perception": out}
 
     def close(self) -> None:

@@ -43,6 +43,7 @@ from humimic.perception.blobs.triangulation import (  # noqa: F401  (re-exported
     dlt_jacobian,
     following_covariance,
     joint_covariance,
+    small_blob_scale,
     triangulate_dlt,
 )
 from humimic.perception.blobs.zncc import Prefiltered, zncc_strips, zncc_windows
@@ -77,6 +78,11 @@ class StereoParams:
     offsets of d / fine_steps within +-d of the best sample and a parabola through the best
     three gives the sub-pixel match (a parabola on the coarse samples alone is biased towards
     them: 'pixel locking')."""
+    mask_closing: int = 1
+    """With colour masks, the probability image is closed by a square of this half-width (px)
+    before it multiplies the image (:func:`~humimic.perception.blobs.zncc.closed_posterior`):
+    holes the pixel noise punched into a blob's mask (a shirt of nearly its colour) are filled
+    in both eyes alike. 0: the plain per-pixel mask."""
     min_target_fraction: float = 0.1
     """With colour masks (``template_luts``), a template less target-coloured than this (mean
     probability) fails with reason 'few_target_pixels'."""
@@ -218,7 +224,7 @@ class StereoRig:
         around the blob turns black (clutter at other depths cannot pull the match) while the
         blob's outline, its strongest cue, stays sharp. ``match_std`` (px): use the
         template-following error model (:func:`following_covariance`, with ``cov_uv_left``)
-        instead of independent left and right covariances.
+        instead of independent left and right covariances (a scalar, or one per target).
         """
         p = self.params
         hh = int(p.template_half)
@@ -278,9 +284,9 @@ class StereoRig:
             + kd[:, :, None] * t[:, 0, None, None]
         mx, my = ir.distort((qx - ir.cx) / ir.fx, (qy - ir.cy) / ir.fy)
         masks = [None if luts is None else luts[i] for i, *_ in jobs]
-        src_l = [Prefiltered(img_l, p.prefilter_sigma, dr, lut)
+        src_l = [Prefiltered(img_l, p.prefilter_sigma, dr, lut, p.mask_closing)
                  for dr, lut in zip(d.tolist(), masks, strict=True)]
-        src_r = [Prefiltered(img_r, p.prefilter_sigma, dr, lut)
+        src_r = [Prefiltered(img_r, p.prefilter_sigma, dr, lut, p.mask_closing)
                  for dr, lut in zip(d.tolist(), masks, strict=True)]
         strips = _read(src_r, mx, my)
         # templates: ideal left pixels around each left point, columns along its epipolar dir.
@@ -345,7 +351,9 @@ class StereoRig:
         else:  # the raw-pixel direction of the epipolar line at each match
             q1 = qr[good] + t[good]
             u1, v1 = ir.distort((q1[:, 0] - ir.cx) / ir.fx, (q1[:, 1] - ir.cy) / ir.fy)
-            C = following_covariance(np.zeros((2, 2)) if cl is None else cl, match_std,
+            ms = np.asarray(match_std, float)
+            C = following_covariance(np.zeros((2, 2)) if cl is None else cl,
+                                     ms[rows] if ms.ndim else ms,
                                      np.stack([u1 - ur, v1 - vr], 1))
         P, R = self._triangulate_normalised(xl_a, xr_a, C)
         depth_l = P @ self.P_left[2, :3] + self.P_left[2, 3]

@@ -103,10 +103,33 @@ def zncc_windows(windows: np.ndarray, templates: np.ndarray) -> np.ndarray:
     return np.clip(out, -1.0, 1.0)
 
 
+def closed_posterior(post: np.ndarray, radius: int) -> np.ndarray:
+    """Grey-level morphological closing -- dilation (max filter), then erosion (min filter)
+    (Serra, *Image Analysis and Mathematical Morphology*, 1982, ch. XII; Gonzalez & Woods,
+    *Digital Image Processing*, 3rd ed., eq. 9.2-5) -- of a posterior image ``post (h, w)``
+    with a ``(2 radius + 1)^2`` square, the border replicated; ``radius`` 0: ``post`` itself.
+
+    Why: a colour table decides each pixel alone, and the camera's pixel noise moves pixels of
+    a colour near a bin the table cut (a shirt of nearly the skin's colour claimed the bins both
+    share) across the bin's edge independently in each eye, so the colour mask of a skin blob
+    becomes a speckle of holes that differ between the eyes -- and the stereo template matched
+    the speckle. Closing fills holes narrower than the square inside the blob and keeps its
+    outline (the cue the template matches) and every part at least as wide as the square;
+    isolated look-alike pixels outside it stay single pixels.
+    """
+    if radius <= 0:
+        return post
+    k = np.ones((2 * radius + 1,) * 2, np.uint8)
+    return cv2.erode(cv2.dilate(post, k, borderType=cv2.BORDER_REPLICATE), k,
+                     borderType=cv2.BORDER_REPLICATE)
+
+
 class Prefiltered:
     """An image read with ``cv2.remap`` (bilinear, replicated border), anti-aliased for samples
     spaced ``spacing`` px apart, optionally colour-masked (``lut``: each pixel times its
-    probability ``p / (p + 1)`` of having the target's colour, at full resolution first).
+    probability ``p / (p + 1)`` of having the target's colour, at full resolution first, the
+    probability image closed by a square of half-width ``closing`` px first,
+    :func:`closed_posterior`).
 
     Only the crop the requested samples need is prepared (and kept for later reads inside it):
     box-averaged by the integer factor ``k = max(1, floor(spacing / 1.5))`` (an exact
@@ -115,8 +138,9 @@ class Prefiltered:
     sample spacing. ``sigma <= 0``: plain bilinear reads of the image.
     """
 
-    def __init__(self, image: np.ndarray, sigma: float, spacing: float = 1.0, lut=None):
-        self.image, self.sigma, self.lut = image, float(sigma), lut
+    def __init__(self, image: np.ndarray, sigma: float, spacing: float = 1.0, lut=None,
+                 closing: int = 0):
+        self.image, self.sigma, self.lut, self.closing = image, float(sigma), lut, int(closing)
         self.k = max(1, math.floor(spacing / 1.5))
         self.blur = max(self.sigma, spacing / (2.0 * self.k))
         self.ksize = 3 if self.blur <= 0.85 else 2 * math.ceil(2.5 * self.blur) + 1
@@ -148,7 +172,8 @@ class Prefiltered:
             h = max((box[3] - y0 + 1) // k, 1) * k
             crop = self.image[y0:y0 + h, x0:x0 + w]
             if self.lut is not None:  # colour mask, at full resolution, back to uint8
-                crop = cv2.multiply(crop, cv2.merge([self.lut.posterior(crop)] * 3),
+                post = closed_posterior(self.lut.posterior(crop), self.closing)
+                crop = cv2.multiply(crop, cv2.merge([post] * 3),
                                     dtype=cv2.CV_8U)
             if k > 1:
                 crop = cv2.resize(crop, (crop.shape[1] // k, crop.shape[0] // k),

@@ -231,15 +231,46 @@ def bin_counts(px: np.ndarray, bits: int) -> np.ndarray:
     return np.bincount(idx, minlength=1 << (3 * bits))
 
 
-def look_alike_report(ratio: float | None) -> dict:
+def look_alike_report(ratio: float | None, lost: float | None = None) -> dict:
     """A stage's metrics of the skin model it uses: ``skin_look_alike`` (the learned model's
     :func:`look_alike_ratio`; None for a model read from a file) and, above
-    :data:`LOOK_ALIKE_WARN`, ``colour_warning`` (a line for the run's warning)."""
-    out = {"skin_look_alike": ratio}
+    :data:`LOOK_ALIKE_WARN`, ``colour_warning`` (a line for the run's warning); given ``lost``
+    (:func:`lost_fraction`), also ``skin_lost``, and above :data:`LOST_WARN` a warning."""
+    out: dict = {"skin_look_alike": ratio}
+    warn = []
     if ratio is not None and ratio > LOOK_ALIKE_WARN:
-        out["colour_warning"] = (f"the scene shows {ratio:.2f} pixels of the skin's colours "
-                                 "per skin pixel (clothes or room of the skin's colour)")
+        warn.append(f"the scene shows {ratio:.2f} pixels of the skin's colours per skin pixel "
+                    "(clothes or room of the skin's colour)")
+    if lost is not None:
+        out["skin_lost"] = lost
+        if lost > LOST_WARN:
+            warn.append(f"the skin's colour table lost {lost:.0%} of the skin's own pixels to "
+                        "look-alike colours of the scene (clothes or room near the skin's "
+                        "colour): blobs and stereo are less accurate")
+    if warn:
+        out["colour_warning"] = "; ".join(warn)
     return out
+
+
+LOST_WARN = 0.05
+"""A learned skin table that no longer takes more than this share of the skin's own pixels for
+skin (:func:`lost_fraction`) is named in the run's warning line. Measured (ude_wave_tracking
+seed 3): the default person 0.000; shirts [0.76, 0.60, 0.45] / [0.82, 0.70, 0.56] / [0.70,
+0.52, 0.40] lose (see docs/ude_perception_notes.md) -- while :func:`look_alike_ratio`, which
+counts what the cut table still confuses, stays at 0.11 for the first: the cut hid the
+look-alikes by dropping skin."""
+
+
+def lost_fraction(table: np.ndarray, bits: int, class_px: np.ndarray) -> float | None:
+    """Share of the class's own pixels (``class_px (N, 3)`` uint8, as rendered) whose bin of
+    ``table`` is not above the uniform outlier's density 1 (Ude eq. 6's test): the class's
+    pixels a blob cannot claim, e.g. those :func:`cut_background` gave to a shirt of nearly
+    the skin's colour. None without pixels."""
+    counts = bin_counts(class_px, bits)
+    n = int(counts.sum())
+    if n == 0:
+        return None
+    return float(counts[np.asarray(table) <= 1.0].sum() / n)
 
 
 def look_alike_ratio(table: np.ndarray, bits: int, class_px: np.ndarray,
@@ -284,7 +315,8 @@ def _store(model: ColorModel, lut: ColorLUT) -> dict[str, np.ndarray]:
     return {"space": np.array(model.space), "name": np.array(model.name),
             "weights": model.weights, "means": model.means, "covs": model.covs,
             "table": lut.table,
-            "look_alike": np.array(np.nan if lut.look_alike is None else lut.look_alike)}
+            "look_alike": np.array(np.nan if lut.look_alike is None else lut.look_alike),
+            "class_lost": np.array(np.nan if lut.class_lost is None else lut.class_lost)}
 
 
 def _restore(stored: dict[str, np.ndarray] | None, bits: int) -> ColorLUT | None:
@@ -295,9 +327,11 @@ def _restore(stored: dict[str, np.ndarray] | None, bits: int) -> ColorLUT | None
                            stored["covs"], str(stored["name"]))
         lut = ColorLUT(model, bits, stored["table"])
         ratio = float(stored["look_alike"])  # an entry from before it: learnt again, the same
+        lost = float(stored["class_lost"])
     except (KeyError, ValueError):  # an entry of another layout: learn again
         return None
     lut.look_alike = None if np.isnan(ratio) else ratio
+    lut.class_lost = None if np.isnan(lost) else lost
     return lut
 
 
@@ -326,6 +360,7 @@ def learned_lut(world, cameras: list[str], color_class: str = "skin", space: str
                                                    other, ratio=background_ratio,
                                                    odds=background_odds))
         lut.look_alike = look_alike_ratio(lut.table, bits, plain, other)
+        lut.class_lost = lost_fraction(lut.table, bits, plain)
         cache.save(kind, digest, _store(model, lut))
     return CachedLUT(lut, cached, time.perf_counter() - t0, digest)
 

@@ -257,6 +257,10 @@ class ColorLUT:
         """For a model learned from the scene's renders: the scene's pixels it takes for the
         class per class pixel (:func:`~humimic.perception.cues.auto_colors.look_alike_ratio`);
         None otherwise."""
+        self.class_lost: float | None = None
+        """For a model learned from the scene's renders: the share of the class's own pixels
+        its table does not take for the class
+        (:func:`~humimic.perception.cues.auto_colors.lost_fraction`); None otherwise."""
 
     def index(self, rgb_u8: np.ndarray) -> np.ndarray:
         """Table index (int32) of uint8 pixels ``(..., 3)``: ``r' 2^(2 bits) + g' 2^bits +
