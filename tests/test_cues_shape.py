@@ -307,6 +307,36 @@ def test_rim_skin_distance_against_direct_pixel_sums_and_closed_forms():
     assert np.all(np.sum((pts[0] - [80, 60]) * inward[0], axis=1) < 0)   # normals point in
 
 
+def test_rim_skin_sides_and_the_relative_rim_test():
+    """The two sides of a rim against map_coordinates' bilinear samples of a disc of skin
+    posterior ``level`` (a dark hand's shaded rim reads ~0.5, the default skin's ~1) over a
+    background of ``level / 4``: the relative test (inside >= 2 x outside) holds at every level
+    the absolute one (1 - (inside - outside) <= 0.5) fails below 2/3 (closed form: inside -
+    outside = 3/4 level); skin on neither side, or the same on both, fails it."""
+    from scipy.ndimage import map_coordinates
+
+    from humimic.perception.cues.skin import rim_separates, rim_skin_sides
+
+    yy, xx = np.mgrid[:120, :160]
+    disc = ((xx - 80.0) ** 2 + (yy - 60.0) ** 2 <= 30.0 ** 2).astype(np.float32)
+    t = np.linspace(0, 2 * np.pi, 24, endpoint=False)
+    ring = np.stack([np.cos(t), np.sin(t)], -1)
+    rim = np.array([80.0, 60.0]) + 30.0 * ring
+    for level in (1.0, 0.7, 0.5, 0.3):
+        skin = (level * (0.25 + 0.75 * disc)).astype(np.float32)
+        inside, outside = rim_skin_sides(skin, rim[None], ring[None], 3.0)
+        ref_in = map_coordinates(skin, [(rim - 3 * ring)[:, 1], (rim - 3 * ring)[:, 0]], order=1)
+        ref_out = map_coordinates(skin, [(rim + 3 * ring)[:, 1], (rim + 3 * ring)[:, 0]],
+                                  order=1)
+        assert abs(inside[0] - ref_in.mean()) < 1e-5 and abs(outside[0] - ref_out.mean()) < 1e-5
+        assert abs(inside[0] - level) < 1e-5 and abs(outside[0] - level / 4) < 1e-5
+        assert rim_separates(inside, outside)[0]
+        assert (1.0 - (inside[0] - outside[0]) <= 0.5) == (level >= 2 / 3)
+    assert list(rim_separates([0.0, 0.6, 0.6, 0.6], [0.0, 0.6, 0.31, 0.3])) == [
+        False, False, False, True]
+    assert list(rim_separates([0.6, 0.6], [0.19, 0.21], odds=3.0)) == [True, False]
+
+
 def test_moving_edges_is_the_edges_where_the_flow_is_long_enough():
     """Against the squared length compared in the flow's dtype (as numpy compares a float32
     array with a Python float), lengths just either side of the threshold included."""

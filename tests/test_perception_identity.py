@@ -11,14 +11,13 @@ import pytest
 from _synth_vision import stereo_head
 
 from humimic.perception.blobs.identity import (
-    HAND_MAX_RADIUS_M,
-    HEAD_MIN_RADIUS_M,
     Blob,
     assign,
     image_rule_cost,
     stereo_evidence,
     turned_round,
 )
+from humimic.perception.blobs.sizes import HAND_RADIUS_M, HEAD_RADIUS_M
 from humimic.perception.blobs.stereo import StereoRig
 
 TARGETS = ["head", "right_hand", "left_hand"]
@@ -120,21 +119,89 @@ def test_image_rules_count_each_violation():
     assert image_rule_cost({"right_hand": small(100)}) == 0.0
 
 
-def test_size_thresholds_separate_the_avatars_parts(root):
-    """The thresholds against the avatar model's own parts: the sigma radius of a uniform
-    elliptic silhouette with semi-axes a, b is sqrt(a b) / 2. The head seen from any side stays
-    above both thresholds; a hand, even palm-on, below them."""
+def test_size_classes_are_the_avatars_parts(root):
+    """The size classes against the avatar model's own parts: the sigma radius of a uniform
+    elliptic silhouette with semi-axes a, b is sqrt(a b) / 2. The head's class spans it seen
+    from the front (y, z half-axes) to the side (x, z); a hand's end-on (x, y) to palm-on
+    (x, z) (edge-on, y z, between)."""
     import mujoco
 
     m = mujoco.MjModel.from_xml_path(str(root / "models" / "avatar.xml"))
 
     def silhouettes(geom: str) -> list[float]:
         a = m.geom(geom).size
-        return [np.sqrt(a[i] * a[j]) / 2 for i, j in ((0, 1), (0, 2), (1, 2))]
+        return [np.sqrt(a[i] * a[j]) / 2 for i, j in ((1, 2), (0, 2), (0, 1))]
 
-    head, hands = silhouettes("head"), silhouettes("r_hand") + silhouettes("l_hand")
-    assert max(hands) < HEAD_MIN_RADIUS_M < min(head)
-    assert max(hands) < HAND_MAX_RADIUS_M < min(head)
+    front, side, _ = silhouettes("head")
+    assert HEAD_RADIUS_M == pytest.approx((front, side), abs=1e-4)
+    for hand in ("r_hand", "l_hand"):
+        _, palm, end = silhouettes(hand)
+        assert HAND_RADIUS_M == pytest.approx((end, palm), abs=1e-4)
+
+
+def test_size_likelihoods_against_numerical_integration():
+    """The size classes' likelihoods (a uniform true radius plus Gaussian reading noise) and
+    their lower-bound forms against scipy's quadrature of the convolution; the graded cost
+    against its definition from scipy.stats values; the noise's growth with depth."""
+    from scipy import integrate, stats
+
+    from humimic.perception.blobs.sizes import (
+        FULL_LOG_BF,
+        head_log_bayes_factor,
+        radius_sd_m,
+        size_cost,
+        size_log_likelihood,
+    )
+
+    assert radius_sd_m(2.2, 134.0) == pytest.approx(np.hypot(0.002, 0.5 * 2.2 / 134.0))
+    def convolved(f, r, sd, lo, hi):  # the mean of f(r; x, sd) over x uniform on [lo, hi]
+        return integrate.quad(lambda x: f(r, x, sd), lo, hi, epsabs=1e-12)[0] / (hi - lo)
+
+    lo, hi = 0.0157, 0.0300
+    for r, sd in ((0.025, 0.004), (0.041, 0.0085), (0.010, 0.002), (0.052, 0.005)):
+        dens = convolved(stats.norm.pdf, r, sd, lo, hi)
+        surv = convolved(stats.norm.sf, r, sd, lo, hi)
+        assert size_log_likelihood(r, sd, lo, hi) == pytest.approx(np.log(dens), abs=1e-6)
+        assert size_log_likelihood(r, sd, lo, hi, True) == pytest.approx(np.log(surv), abs=1e-6)
+
+    def bf(r, sd):
+        return np.log(convolved(stats.norm.pdf, r, sd, *HEAD_RADIUS_M)
+                      / convolved(stats.norm.pdf, r, sd, *HAND_RADIUS_M))
+
+    for r, sd in ((0.0412, 0.0085), (0.035, 0.0085), (0.038, 0.0049), (0.029, 0.0049)):
+        llr = bf(r, sd)
+        assert head_log_bayes_factor(r, sd) == pytest.approx(llr, abs=1e-6)
+        assert size_cost(True, r, sd) == pytest.approx(min(1.0, max(0.0, -llr / np.log(3.0))),
+                                                      abs=1e-3)
+        assert size_cost(False, r, sd) == pytest.approx(min(1.0, max(0.0, llr / FULL_LOG_BF)),
+                                                       abs=1e-3)
+    assert size_cost(True, float("nan"), 0.005) == 0.0
+
+
+def test_a_still_head_far_away_is_named_by_its_size():
+    """A head 2.2 m away through the wide cameras (100 deg, 320 px: 3 px sigma radius) read
+    41.2 mm in fig12_tbp_pointing, between the hard limits the size rule had (head >= 38 mm,
+    hand <= 42 mm): no rule then said it was not a hand, and with a hand beside it the head's
+    margin was 0, never published. Graded by the likelihood ratio with the reading's noise at
+    that depth (8.5 mm; Bayes factor 4.4 for the head), it is the head, sure (margin 1); the
+    hand beside it (30 mm) stays a hand, and a lone 30 mm blob is still not the head."""
+    cam_l, cam_r = stereo_head(k1=0.0, k2=0.0, hfov_deg=100.0)
+    rig = StereoRig(cam_l, cam_r)
+    far = {"head": ((2.2, 0.0, 1.55), 0.0412), "right_hand": ((2.0, 0.30, 1.25), 0.030),
+           "left_hand": ((2.1, -0.25, 1.0), 0.022)}
+    names = ["head", "right_hand"]
+    left = blobs_seen(cam_l, names, [0, 1], truth=far)
+    right = blobs_seen(cam_r, names, [1, 0], truth=far)
+    ev = stereo_evidence(rig, cam_l, cam_r, left, right)
+    assert ev.radius_m[0, 0] == pytest.approx(0.0412, rel=1e-6)
+    assert ev.radius_sd_m[0, 0] == pytest.approx(0.0085, abs=3e-4)
+    names_l, names_r, margins = assign(TARGETS, left, right, {}, {}, ev)
+    assert names_l == {0: "head", 1: "right_hand"} and names_r == {1: "head", 0: "right_hand"}
+    assert margins["head"] >= 1.0
+    lone_l, lone_r = left[1:], right[1:]
+    ev = stereo_evidence(rig, cam_l, cam_r, lone_l, lone_r)
+    names_l, _, _ = assign(TARGETS, lone_l, lone_r, {}, {}, ev)
+    assert names_l[1] in ("right_hand", "left_hand")
 
 
 def test_a_head_cut_by_the_border_stays_the_head(head):
@@ -142,7 +209,7 @@ def test_a_head_cut_by_the_border_stays_the_head(head):
     and its metric size under the head's minimum. Cut by the border, it keeps its name (and
     the hand its own); the same small blob inside the image is (rightly) not called the head."""
     cam_l, cam_r, rig = head
-    small = {"head": 0.6 * HEAD_MIN_RADIUS_M, "right_hand": 0.030}
+    small = {"head": 0.023, "right_hand": 0.030}
     names = ["head", "right_hand"]
     outcome = {}
     for clipped in (True, False):

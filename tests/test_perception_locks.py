@@ -132,13 +132,13 @@ def test_a_person_judged_turned_faces_the_robot_again_once_lost():
 
 def test_a_name_left_unsure_is_decided_again_when_its_evidence_firms_up():
     """Identities are decided when the set of blobs changes; a margin that the size evidence of
-    that moment left at 0 (a far head read at 0.040 m, between the head's least and the hands'
-    largest sigma radius: it may be a hand) is re-decided on the following frames, so once the
+    that moment left near 0 (a head read at 0.038 m, a size a hand may have as well: Bayes factor
+    1.3 for the head at this depth) is re-decided on the following frames, so once the
     head reads its true size it is sure and measured, though no blob came or went (before, it
     stayed unsure, and unmeasured, until something else changed)."""
     s = Scripted()
     one_hand = (("left_hand",), ("left_hand",))
-    small_head = dict(TRUTH, head=(TRUTH["head"][0], 0.040))
+    small_head = dict(TRUTH, head=(TRUTH["head"][0], 0.038))
     s.frames(10, small_head, hidden=one_hand)
     assert s.names(0) == {HEAD: "head", RIGHT: "right_hand", LEFT: None}
     assert "head" not in s.sure() and "right_hand" in s.sure()  # or it is the left hand

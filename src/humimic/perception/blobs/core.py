@@ -282,7 +282,8 @@ class PerceptionCore:
         :data:`RECHECK_FRAMES`) until sure. Decided
         only when the set of blobs changed, a margin that one noisy size reading left at 0
         stayed there: a head 2.2 m away (its sigma radius read 0.041-0.044 m against the
-        hands' limit of 0.042) named but never measured while nothing else changed."""
+        hands' hard limit of 0.042 the size rule had before it was graded) named but never
+        measured while nothing else changed."""
         for name in set(self.ident[0].values()) & set(self.ident[1].values()):
             if self.margin[name] >= self.identity_margin:
                 continue

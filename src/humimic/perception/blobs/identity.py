@@ -18,11 +18,13 @@ targets under:
   range, ``-1`` when consistent (so one object gets one name in both eyes). A consistent pair
   also gives the blob's metric size, its "sigma radius" ``det(Sigma)^(1/4) z / f`` (m): the
   avatar's head (ellipsoid half-axes 78 x 115 mm seen from the front) measures ~47 mm, a hand
-  (45 x 80 mm palm-on, 22 x 80 mm edge-on) 20-35 mm: ``+1`` for a head smaller than
-  :data:`HEAD_MIN_RADIUS_M` or a hand larger than :data:`HAND_MAX_RADIUS_M`. This names a lone
-  blob, which the image rules cannot. A blob cut by the image border (``Blob.clipped``) is
-  only part of its object: it is never "too small to be the head" (area or size rule), so a
-  head in a corner of a foveal view stays the head;
+  (45 x 80 mm palm-on, 22 x 80 mm edge-on) 20-35 mm: up to ``+1`` against a name, graded by
+  the likelihood ratio of head against hand size with the reading's uncertainty growing with
+  depth (:mod:`humimic.perception.blobs.sizes`: the full rule once the Bayes factor against
+  the name reaches 3). This names a lone blob, which the image rules cannot. A blob cut by the
+  image border (``Blob.clipped``) is only part of its object: its reading is a lower bound of
+  its size, never "too small to be the head" (area or size rule), so a head in a corner of a
+  foveal view stays the head;
 * continuity: ``-keep`` per blob that keeps its current identity, so tracked blobs keep their
   names (one rule against is not enough to swap; two are);
 * locked names (our extension): a blob whose name was sure and whose region of interest has
@@ -52,6 +54,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from humimic.perception.blobs.sizes import SIZE_SD_FLOOR_M, radius_sd_m, size_cost
 from humimic.perception.blobs.stereo import StereoRig
 
 AREA_RULE = 1.0
@@ -61,10 +64,6 @@ STEREO_RULE = 2.0
 PAIR_BONUS = 1.0
 SIZE_RULE = 1.0
 KEEP = 0.75
-#: Metric sigma radius (m) below which a blob is too small to be the head (head ~0.047 m).
-HEAD_MIN_RADIUS_M = 0.038
-#: Metric sigma radius (m) above which a blob is too large to be a hand (hands <~0.035 m).
-HAND_MAX_RADIUS_M = 0.042
 HANDS = ("right_hand", "left_hand")
 #: Image-rule violations (both eyes) of locked names, none under the other facing, that show
 #: a person turned round (:func:`turned_round`).
@@ -99,6 +98,9 @@ class PairEvidence:
     clipped: np.ndarray | None = None
     """(n_left, n_right) bool: either blob is cut by its image border (its radius is then
     only a lower bound)."""
+    radius_sd_m: np.ndarray | None = None
+    """(n_left, n_right) standard deviation (m) of each radius reading
+    (:func:`~humimic.perception.blobs.sizes.radius_sd_m` at its depth); None: the floor."""
 
 
 def image_rule_cost(assigned: dict[str, Blob], away: bool = False) -> float:
@@ -124,16 +126,15 @@ def image_rule_cost(assigned: dict[str, Blob], away: bool = False) -> float:
     return cost
 
 
-def size_rule_cost(name: str, radius_m: float, clipped: bool = False) -> float:
-    """``+1`` when a consistent pair's metric size contradicts the name (NaN: no evidence).
-    A ``clipped`` pair's size is a lower bound: it cannot show a head too small."""
-    if not math.isfinite(radius_m):
+def size_rule_cost(name: str, radius_m: float, clipped: bool = False,
+                   sd_m: float = SIZE_SD_FLOOR_M) -> float:
+    """Up to ``SIZE_RULE`` when a consistent pair's metric size (reading ``radius_m`` with
+    standard deviation ``sd_m``) speaks against the name, graded by the head / hand likelihood
+    ratio (:func:`~humimic.perception.blobs.sizes.size_cost`; NaN: no evidence). A ``clipped``
+    pair's size is a lower bound: it cannot show a head too small."""
+    if name != "head" and name not in HANDS:
         return 0.0
-    if name == "head" and radius_m < HEAD_MIN_RADIUS_M and not clipped:
-        return SIZE_RULE
-    if name in HANDS and radius_m > HAND_MAX_RADIUS_M:
-        return SIZE_RULE
-    return 0.0
+    return size_cost(name == "head", radius_m, sd_m, clipped, SIZE_RULE)
 
 
 def stereo_evidence(rig: StereoRig, cam_left, cam_right, left: list[Blob], right: list[Blob],
@@ -147,10 +148,11 @@ def stereo_evidence(rig: StereoRig, cam_left, cam_right, left: list[Blob], right
     """
     incons = np.ones((len(left), len(right)), bool)
     radius = np.full((len(left), len(right)), np.nan)
+    sd = np.full((len(left), len(right)), np.nan)
     clipped = np.array([[a.clipped or b.clipped for b in right] for a in left],
                        bool).reshape(len(left), len(right))
     if not left or not right:
-        return PairEvidence(incons, radius, clipped)
+        return PairEvidence(incons, radius, clipped, sd)
     pairs = list(itertools.product(range(len(left)), range(len(right))))
     uvl = np.array([left[i].centre for i, _ in pairs], float)
     uvr = np.array([right[j].centre for _, j in pairs], float)
@@ -158,7 +160,7 @@ def stereo_evidence(rig: StereoRig, cam_left, cam_right, left: list[Blob], right
     for (i, j), p_base, a, b in zip(pairs, p, uvl, uvr, strict=True):
         if not np.all(np.isfinite(p_base)):
             continue
-        sizes = []
+        sizes, sds = [], []
         for cam, uv, blob in ((cam_left, a, left[i]), (cam_right, b, right[j])):
             T = np.linalg.inv(cam.T_base_cam)
             z = T[2, :3] @ p_base + T[2, 3]
@@ -167,10 +169,12 @@ def stereo_evidence(rig: StereoRig, cam_left, cam_right, left: list[Blob], right
                     <= gate * gate):
                 break
             sizes.append(math.sqrt(blob.area) * z / cam.intrinsics.fx)
+            sds.append(radius_sd_m(z, cam.intrinsics.fx))
         else:
             incons[i, j] = False
             radius[i, j] = 0.5 * (sizes[0] + sizes[1])
-    return PairEvidence(incons, radius, clipped)
+            sd[i, j] = 0.5 * (sds[0] + sds[1])
+    return PairEvidence(incons, radius, clipped, sd)
 
 
 def clipped_by_border(centre: np.ndarray, cov: np.ndarray, width: int, height: int,
@@ -227,6 +231,7 @@ def assign(targets: list[str], left: list[Blob], right: list[Blob],
     locked_right = _holding_locks(right, targets, locked_right)
     options: list[tuple[float, float, tuple[str, ...], tuple[str, ...]]] = []
     allowed: list[bool] = []
+    sized: dict[tuple[str, int, int], float] = {}   # size rule costs, each computed once
     for names_l in _maps(left, targets):
         free_l = _keeps_locks(left, names_l, locked_left)
         cost_l = image_rule_cost(dict(zip(names_l, left, strict=True)), away)
@@ -245,9 +250,14 @@ def assign(targets: list[str], left: list[Blob], right: list[Blob],
                     if evidence.inconsistent[i, j]:
                         cost += STEREO_RULE
                     else:
-                        cost += size_rule_cost(
-                            name, float(evidence.radius_m[i, j]),
-                            evidence.clipped is not None and bool(evidence.clipped[i, j]))
+                        key = (name, i, j)
+                        if key not in sized:
+                            sized[key] = size_rule_cost(
+                                name, float(evidence.radius_m[i, j]),
+                                evidence.clipped is not None and bool(evidence.clipped[i, j]),
+                                SIZE_SD_FLOOR_M if evidence.radius_sd_m is None
+                                else float(evidence.radius_sd_m[i, j]))
+                        cost += sized[key]
                         cost -= PAIR_BONUS
             options.append((cost - kept, cost, names_l, names_r))
             allowed.append(free_l and _keeps_locks(right, names_r, locked_right))

@@ -86,10 +86,14 @@ class Hand2DConfig(Section):
     distance (px) for the detectors to agree."""
     lost_edge_px: float = Field(4.0, gt=0.0, le=30.0)
     """Loss: the estimate's mean edge distance (px) above which a frame counts as bad ..."""
-    lost_skin: float = Field(0.5, ge=0.0, le=2.0)
+    lost_rim_odds: float = Field(2.0, ge=1.0, le=100.0)
     """... unless (with the ``skin`` cue) its rim still separates skin from background: the
-    skin cue's ``D = 1 - (skin inside - skin outside)`` at most this (a hand over a background
-    of its own brightness has no grey-level rim; GEST's ``lost_skin``)."""
+    skin posterior just inside the template at least this many times that just outside
+    (:func:`~humimic.perception.cues.skin.rim_separates`; a hand over a background of its own
+    brightness has no grey-level rim). Relative, as the skin posterior's level on a hand
+    depends on the skin tone: the absolute test it replaces (``1 - (inside - outside) <=
+    0.5``, GEST's ``lost_skin``) declared a very dark hand lost while on it (menezes_fig5_hand,
+    skin [0.25, 0.16, 0.11]: its shaded rim's inside 0.48-0.79)."""
     min_skin: float = Field(0.3, ge=0.0, le=1.0)
     """Loss: the least fraction of skin pixels inside the estimated hand."""
     lost_frames: int = Field(3, ge=1, le=1000)

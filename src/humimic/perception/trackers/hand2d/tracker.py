@@ -5,7 +5,8 @@ with random-walk dynamics and the fused cues of :mod:`.likelihood`, started and 
 States (``messages.TRACK_STATES``): ``init`` -- searching the whole image until the detectors
 agree; ``tracking`` -- one filter cycle per frame, cues computed only in the particles' region
 of interest; ``lost`` -- the estimate left the hand (its mean edge distance above
-``lost_edge_px`` or too little skin on its palm) for ``lost_frames`` frames in a row: searching
+``lost_edge_px`` while its rim does not separate skin from background, or too little skin on
+its palm) for ``lost_frames`` frames in a row: searching
 again, as in ``init``.
 """
 
@@ -27,7 +28,7 @@ from humimic.perception.cues.edges import grey as to_grey
 from humimic.perception.cues.histograms import patch_histograms, quantize, update_reference
 from humimic.perception.cues.importance import Blobs
 from humimic.perception.cues.motion import OpticalFlow
-from humimic.perception.cues.skin import rim_skin_distance
+from humimic.perception.cues.skin import rim_separates, rim_skin_sides
 from humimic.perception.cues.templates import hand
 from humimic.perception.trackers.hand2d.detect import detect_hands, face_on_blob
 from humimic.perception.trackers.hand2d.likelihood import (
@@ -196,8 +197,8 @@ class Hand2DTracker:
         mean = step.mean
         d = mean_edge_distance(cues, mean, self.template, self.params)
         skin = skin_fraction(image, self.lut, mean)
-        fits = d <= cfg.lost_edge_px or (cues.skin is not None and rim_skin_distance(
-            cues.skin, *self._rim(mean, cues.origin)) <= cfg.lost_skin)
+        fits = d <= cfg.lost_edge_px or (cues.skin is not None and bool(rim_separates(
+            *rim_skin_sides(cues.skin, *self._rim(mean, cues.origin)), cfg.lost_rim_odds)))
         good = step.ok and fits and skin >= cfg.min_skin
         self.bad = 0 if good else self.bad + 1
         if good and q is not None and self.reference is not None:
