@@ -259,3 +259,23 @@ def test_label_counts_match_mujocos_segmentation(hidden_world):
                     got = rig.label_counts(cam, vis.geom_target, n, only, scale)
                     np.testing.assert_array_equal(got, want)
                     assert want.sum() > 0
+
+
+def test_tracker_scores_report_the_skin_its_table_lost():
+    """A tracker's own learned skin table (``skin_lut``) reports what the blobs' does: the
+    look-alike ratio and the share of the skin's pixels it lost, with the warning above
+    ``LOST_WARN``."""
+    from types import SimpleNamespace
+
+    from humimic.perception.cues.auto_colors import LOST_WARN
+    from humimic.perception.trackers.common import PoseTrackerStage
+
+    class Fake(PoseTrackerStage):
+        def scores(self):
+            return {}
+
+    stage = Fake("t")
+    stage.skin_lut = SimpleNamespace(look_alike=0.1, class_lost=3 * LOST_WARN)
+    out = stage.metrics()["trackers"]["t"]
+    assert out["skin_look_alike"] == 0.1 and out["skin_lost"] == 3 * LOST_WARN
+    assert "lost 15%" in out["colour_warning"]

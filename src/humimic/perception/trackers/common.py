@@ -153,7 +153,7 @@ class PoseTrackerStage(Stage):
                "lost_fraction": float(np.mean(lost)) if n else None}
         out.update(self.scores())
         if self.skin_lut is not None:
-            out.update(look_alike_report(self.skin_lut.look_alike))
+            out.update(look_alike_report(self.skin_lut.look_alike, self.skin_lut.class_lost))
         return {"trackers": {self.tracker_name: out}}
 
 
@@ -331,5 +331,5 @@ class ImageTrackerStage(Stage):
             out.update(scores(np.array(self.times), uv, scale, tracking, truth, self.others()))
             out["hidden_frames"] = int(np.sum(~truth.visible))
         if self.skin_lut is not None:
-            out.update(look_alike_report(self.skin_lut.look_alike))
+            out.update(look_alike_report(self.skin_lut.look_alike, self.skin_lut.class_lost))
         return {"trackers": {self.tracker_name: out}}

@@ -88,7 +88,7 @@ class KpfStage(Stage):
     def metrics(self) -> dict:
         return {"trackers": {self.name: {
             **kpf_metrics(self.rec, self.world, self.body, self.camera),
-            **look_alike_report(self.skin_lut.look_alike)}}}
+            **look_alike_report(self.skin_lut.look_alike, self.skin_lut.class_lost)}}}
 
     def log(self, rlog) -> None:
         log_run(rlog, self.name, self.rec, self.world, self.body)
