@@ -42,9 +42,11 @@ from humimic.perception.blobs.stereo import (
     following_covariance,
     small_blob_scale,
 )
+from humimic.perception.blobs.triangulation import NOISE_REF_SIGMA_PX
 
 
-def unit_covariances(pa, i: int, frames: np.ndarray, noise_ref_sigma_px: float | None = 5.0
+def unit_covariances(pa, i: int, frames: np.ndarray,
+                     noise_ref_sigma_px: float | None = NOISE_REF_SIGMA_PX
                      ) -> tuple[np.ndarray, np.ndarray]:
     """``(R_c, R_m)``, each ``(len(frames), 3, 3)`` (m^2 per px^2): target ``i``'s triangulated
     covariance for a unit blob-centre error (followed by the match) and for a unit match error
@@ -77,7 +79,7 @@ def fit_pixel_noise(err: np.ndarray, Rc: np.ndarray, Rm: np.ndarray) -> tuple[fl
 
 
 def calibration_data(pa, truth: dict, skip_s: float = FILTER_SETTLE_S,
-                     noise_ref_sigma_px: float | None = 5.0) -> dict:
+                     noise_ref_sigma_px: float | None = NOISE_REF_SIGMA_PX) -> dict:
     """Per published target with measurements: its frames (``skip_s`` after its first
     measurement), errors ``(N, 3)`` against the truth, recorded R and unit covariances."""
     out = {}
@@ -100,7 +102,8 @@ def in_band(err: np.ndarray, R: np.ndarray) -> tuple[float, float]:
             fraction_in_band(nees(err - err.mean(axis=0), R), 3))
 
 
-def calibrate(archive, noise_ref_sigma_px: float | None = 5.0) -> tuple[float, float, dict]:
+def calibrate(archive, noise_ref_sigma_px: float | None = NOISE_REF_SIGMA_PX
+              ) -> tuple[float, float, dict]:
     """Fit on a run's ``tracking.npz`` (:class:`~humimic.perception.blobs.archive.
     TrackingArchive`): ``(pixel_std, match_std, per-target NEES fractions before/after)``; the
     noises hold for blobs ``noise_ref_sigma_px`` wide (the scenario's)."""

@@ -25,6 +25,7 @@ from typing import Literal
 from pydantic import Field, field_validator, model_validator
 
 from humimic.paths import MODELS_DIR
+from humimic.perception.blobs.triangulation import NOISE_REF_SIGMA_PX
 from humimic.scenario.base import Section
 from humimic.world.names import EYE_CAMERAS
 
@@ -206,7 +207,7 @@ class PerceptionConfig(Section):
     centre's error that the template carries over; calibrated with ``pixel_std`` (0.014 px for
     a still hand at 640x480 to 0.08 px for a hand moving along the depth axis; default: the
     wide 320x240 fit, 0.039-0.044)."""
-    noise_ref_sigma_px: float | None = Field(5.0, gt=0.0, le=100.0)
+    noise_ref_sigma_px: float | None = Field(NOISE_REF_SIGMA_PX, gt=0.0, le=100.0)
     """Our extension: ``pixel_std`` and ``match_std`` hold for blobs at least this wide (the mean
     of a blob's two standard deviations, px) and grow as ``noise_ref_sigma_px / sigma_blob``
     for smaller ones, down to 2.5 px (``SMALL_BLOB_FLOOR_PX``; at most twice the noise)

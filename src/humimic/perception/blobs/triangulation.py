@@ -87,6 +87,9 @@ def following_covariance(cov_left: np.ndarray, match_std: float, t_right: np.nda
 #: then spans it in a few samples). Without the floor the hand's R at 2.4 m was 1.26x its
 #: error and 19 % of the filter's NEES fell below the 95 % band.
 SMALL_BLOB_FLOOR_PX = 2.5
+#: The blob width (px) the shipped pixel noises were calibrated at
+#: (``perception.noise_ref_sigma_px``).
+NOISE_REF_SIGMA_PX = 5.0
 
 
 def small_blob_scale(blob_cov: np.ndarray, sigma_ref_px: float | None,
