@@ -226,7 +226,8 @@ def test_compiled_lut_index_is_the_lut_s_index():
 
     px = np.random.default_rng(5).integers(0, 256, (500, 3), dtype=np.uint8)
     px[:3] = [[0, 0, 0], [255, 255, 255], [255, 0, 128]]
-    for bits in (5, 6, 8):
-        lut = ColorLUT(load_color_model(DEFAULT_COLOR_MODEL), bits)
+    for bits in (5, 6, 8):  # the index needs no densities: an empty table, not 2^24 of them
+        lut = ColorLUT(load_color_model(DEFAULT_COLOR_MODEL), bits,
+                       table=np.zeros(1 << 3 * bits, np.float32))
         got = [lut_index(r, g, b, bits) for r, g, b in px]
         np.testing.assert_array_equal(got, lut.index(px))
