@@ -23,6 +23,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from humimic.estimation.coasting import gate_threshold
 from humimic.estimation.random_jerk import RandomJerkFilter
 from humimic.messages import Estimates, TargetEstimate
 from humimic.pipeline.stage import Stage
@@ -79,9 +80,11 @@ class FilterStage(Stage):
         """Ground truth, only to draw the true positions beside the estimates in rerun."""
         self._gt_p = ({n: gt.p_base(n) for n in self.targets}
                       if gt is not None and rlog is not None and rlog.enabled else {})
+        coast = None if cfg.coast_tau_v is None else (cfg.coast_tau_v, cfg.coast_tau_a)
+        gate = None if cfg.gate_probability is None else gate_threshold(cfg.gate_probability)
         self.filters = {t: RandomJerkFilter(cfg.b, cfg.init_vel_std**2, cfg.init_acc_std**2,
-                                            cfg.max_gap) for t in self.targets}
-        self._t_meas = dict.fromkeys(self.targets, -np.inf)
+                                            cfg.max_gap, coast, gate, cfg.gate_reinit_after)
+                        for t in self.targets}
         self.coasted = dict.fromkeys(self.targets, 0)
         self.longest_coast = dict.fromkeys(self.targets, 0.0)
         self.nonfinite = 0
@@ -108,20 +111,23 @@ class FilterStage(Stage):
         for i, name in enumerate(self.targets):
             kf = self.filters[name]
             m = meas.targets.get(name)
-            resets = kf.resets
+            resets, gated = kf.resets, kf.gated
             if m is not None:
                 kf.step(t, m.p_base, m.R_base)
-                measured[i] = True
-                self._t_meas[name] = t
             else:
                 kf.step(t)
-                if kf.initialised:  # a prediction, not a reset
-                    self.coasted[name] += 1
-                    self.longest_coast[name] = max(self.longest_coast[name],
-                                                   t - self._t_meas[name])
-            if kf.resets != resets and self.rlog is not None:
+            if kf.initialised and kf.t_measured == t:  # fused (or initialised from) it
+                measured[i] = True
+            elif kf.initialised:  # a prediction, not a reset
+                self.coasted[name] += 1
+                self.longest_coast[name] = max(self.longest_coast[name], t - kf.t_measured)
+            if self.rlog is not None and kf.resets != resets:
                 self.rlog.log_text(t, f"{EVENTS}/filter/{name}",
                                    f"no measurement for {self.cfg.max_gap:g} s: reset", "WARN")
+            if self.rlog is not None and kf.gated != gated:
+                self.rlog.log_text(t, f"{EVENTS}/filter/{name}",
+                                   f"measurement gated (d2 {kf.last_nis:.1f}): "
+                                   + ("re-initialised" if measured[i] else "coasting"), "WARN")
             if kf.initialised:
                 x, Pi = kf.x, kf.P
                 if not (np.all(np.isfinite(x)) and np.all(np.isfinite(Pi))):
@@ -151,5 +157,10 @@ class FilterStage(Stage):
                            "resets": {n: kf.resets for n, kf in self.filters.items()},
                            "coasted_frames": dict(self.coasted),
                            "longest_coast_s": dict(self.longest_coast),
+                           "coast_tau_s": (None if self.cfg.coast_tau_v is None else
+                                           [self.cfg.coast_tau_v, self.cfg.coast_tau_a]),
+                           "gate_probability": self.cfg.gate_probability,
+                           "gated_measurements": {n: kf.gated for n, kf in self.filters.items()},
+                           "gate_reinits": {n: kf.reinits for n, kf in self.filters.items()},
                            "nonfinite_estimates": self.nonfinite,
                            "latency_ms": 1e3 * self.cfg.latency}}
