@@ -33,6 +33,7 @@ functions here, used by :class:`~humimic.estimation.random_jerk.RandomJerkFilter
 from __future__ import annotations
 
 import functools
+import math
 
 import numpy as np
 import scipy.linalg
@@ -74,9 +75,15 @@ def damped_model(dt: float, b: float, tau_v: float, tau_a: float
     M[:3, :3] = -F
     M[2, 5] = b * b  # G b^2 G^T with G = [0, 0, 1]^T: the jerk drives the acceleration
     M[3:, 3:] = F.T
-    E = scipy.linalg.expm(M * dt)
+    # Van Loan's -F block grows as e^{dt/tau}: take it over dt / 2^k <= min(tau), then double
+    # (A(2h) = A(h)^2, Q(2h) = A(h) Q(h) A(h)^T + Q(h))
+    k = max(0, math.ceil(math.log2(dt / min(tau_v, tau_a)))) if dt > 0.0 else 0
+    E = scipy.linalg.expm(M * (dt / 2**k))
     A1 = E[3:, 3:].T
     Q1 = A1 @ E[:3, 3:]
+    for _ in range(k):
+        Q1 = A1 @ Q1 @ A1.T + Q1
+        A1 = A1 @ A1
     A, Q = np.kron(A1, _I3), np.kron(0.5 * (Q1 + Q1.T), _I3)
     A.flags.writeable = Q.flags.writeable = False
     return A, Q

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 from typing import Literal
 
-from pydantic import Field
+from pydantic import Field, model_validator
 
 from humimic.estimation.random_jerk import B_PAPER_SI, INIT_ACC_VAR, INIT_VEL_VAR
 from humimic.scenario.base import Section
@@ -56,3 +56,13 @@ class FilterConfig(Section):
     measurement (as after ``max_gap``; ``filter.gate_reinits``): the target really moved."""
     latency: float = Field(0.0, ge=0.0, le=0.5)
     """Declared processing latency (s) added to each estimate's ready time."""
+
+    @model_validator(mode="after")
+    def _idle(self) -> FilterConfig:
+        """An option moved from its default while the one it needs is off would do nothing."""
+        fields = type(self).model_fields
+        for key, on in (("coast_tau_a", "coast_tau_v"), ("gate_reinit_after", "gate_probability")):
+            if getattr(self, on) is None and getattr(self, key) != fields[key].default:
+                raise ValueError(f"{key} = {getattr(self, key)!r} has no effect without {on} "
+                                 f"(set {on} or leave {key} out)")
+        return self
