@@ -15,6 +15,17 @@ since the last measurement; a lost frame is simply absent and the next predictio
 ``filter.coasted_frames`` counts the estimates published on prediction alone,
 ``filter.longest_coast_s`` the longest such stretch, and ``filter.nonfinite_estimates`` any
 estimate that was not finite (always 0 unless something is broken).
+
+A coasted frame is predicted with the damped model of :mod:`humimic.estimation.coasting`
+(``filter.coast_tau_v``, ``coast_tau_a``), not Ude's constant-acceleration extrapolation, and a
+measurement outside the chi-square innovation gate (``filter.gate_probability``) is not fused:
+its frame coasts (``filter.gated_measurements``; ``filter.gate_reinits`` counts the
+re-initialisations after ``gate_reinit_after`` rejections in a row). Measured (right hand,
+predicted RMSE before -> after): ude_cmu_turn seeds 1-3 885/905/787 -> 544/557/593 mm (the
+filter followed a few drifting measurements, d^2 < 8, that no gate rejects; left hand
+186/207/333 -> 80/84/330), ude_hidden_target 228 -> 40 mm (damping alone 113, the gate alone
+222), mimic_tracked_wave with the left eye covered 0.4 s 44 -> 9 mm (palm RMSE 45.5 -> 17.0
+mm); runs without a coast unchanged, no measurement gated.
 """
 
 from __future__ import annotations
