@@ -159,3 +159,17 @@ def test_a_few_bad_measurements_then_a_gap_coast_within_a_bound():
     old, old_speed, _ = _turn_away(FilterConfig(coast_tau_v=None, gate_probability=None))
     assert old[-1] - old[75] > 1.0 and old_speed[-1] > 7.0  # what the test guards against
     np.testing.assert_array_equal(err[:76], old[:76])
+
+
+def test_the_stage_scores_a_gated_measurement_as_a_coasted_frame():
+    rng = np.random.default_rng(2)
+    stage = FilterStage(FilterConfig(), ["hand"], FilterRecord(["hand"]))
+    R, p = (0.005**2) * np.eye(3), np.array([1.2, 0.2, 1.3])
+    for k in range(40):
+        z = p + (0.4 if k == 30 else 0.0) + rng.normal(scale=0.005, size=3)
+        stage.step(k * DT, Measurements({"hand": Measurement("hand", z, R)}))
+    a, m = stage.record.arrays(), stage.metrics()["filter"]
+    assert m["gated_measurements"]["hand"] == 1 and m["gate_reinits"]["hand"] == 0
+    assert m["coasted_frames"]["hand"] == 1 and m["longest_coast_s"]["hand"] == pytest.approx(DT)
+    assert a.valid[:, 0].all() and np.flatnonzero(~a.measured[:, 0]).tolist() == [30]
+    assert np.abs(a.x[30, 0, 0:3] - p).max() < 0.03  # not pulled towards the outlier
