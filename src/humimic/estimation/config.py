@@ -6,6 +6,10 @@ Example::
       kind: random_jerk
       b: 27.5          # m s^-2.5 (the paper's b = 27500 with millimetres)
       max_gap: 0.2     # s of prediction only before a lost target's filter is reset
+      coast_tau_v: 0.15      # s: velocity decay while coasting (null: Ude's extrapolation)
+      coast_tau_a: 0.05      # s: acceleration decay while coasting
+      gate_probability: 0.9999   # chi-square innovation gate, 3 dof (null: no gate)
+      gate_reinit_after: 3       # consecutive gated measurements that re-initialise
 
 Units: m, s.
 """
@@ -14,7 +18,7 @@ from __future__ import annotations
 
 from typing import Literal
 
-from pydantic import Field
+from pydantic import Field, model_validator
 
 from humimic.estimation.random_jerk import B_PAPER_SI, INIT_ACC_VAR, INIT_VEL_VAR
 from humimic.scenario.base import Section
@@ -35,5 +39,30 @@ class FilterConfig(Section):
     """A target unmeasured for longer than this (s) is dropped: its filter is reset and
     re-initialised by the next measurement (Ude's initialisation). Until then missed frames
     are predicted and published."""
+    coast_tau_v: float | None = Field(0.15, gt=0.0, le=60.0)
+    """Time constant (s) with which the velocity decays in frames predicted without a
+    measurement (:mod:`humimic.estimation.coasting`: a mean-reverting hand, about a quarter of
+    a 0.5-1 s gesture stroke); null: Ude's constant-acceleration extrapolation (1-2 m off
+    after 0.2 s of coasting on bad measurements, ude_cmu_turn)."""
+    coast_tau_a: float = Field(0.05, gt=0.0, le=60.0)
+    """Time constant (s) of the acceleration's decay while coasting (Singer's manoeuvre time
+    constant); acts only with ``coast_tau_v``."""
+    gate_probability: float | None = Field(0.9999, gt=0.5, lt=1.0)
+    """Chi-square innovation gate (Bar-Shalom et al. 2001, sec. 5.4): a measurement whose
+    normalised innovation squared exceeds the chi2(3) quantile of this probability (0.9999:
+    21.1) is rejected and the frame coasts (``filter.gated_measurements``); null: no gate."""
+    gate_reinit_after: int = Field(3, ge=1, le=1000)
+    """Consecutive gated measurements after which the filter is re-initialised from the
+    measurement (as after ``max_gap``; ``filter.gate_reinits``): the target really moved."""
     latency: float = Field(0.0, ge=0.0, le=0.5)
     """Declared processing latency (s) added to each estimate's ready time."""
+
+    @model_validator(mode="after")
+    def _idle(self) -> FilterConfig:
+        """An option moved from its default while the one it needs is off would do nothing."""
+        fields = type(self).model_fields
+        for key, on in (("coast_tau_a", "coast_tau_v"), ("gate_reinit_after", "gate_probability")):
+            if getattr(self, on) is None and getattr(self, key) != fields[key].default:
+                raise ValueError(f"{key} = {getattr(self, key)!r} has no effect without {on} "
+                                 f"(set {on} or leave {key} out)")
+        return self

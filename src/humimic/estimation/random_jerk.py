@@ -23,6 +23,8 @@ import functools
 
 import numpy as np
 
+from humimic.estimation.coasting import coast_predict, innovation_nis
+
 #: The paper's spectral amplitude, b = 27500 mm s^-2.5, in SI units (m s^-2.5).
 B_PAPER_SI = 27.5
 #: Initial velocity variance (m/s)^2 -- "very large" vs human hand speeds (<~3 m/s): sigma 10 m/s.
@@ -130,11 +132,22 @@ class RandomJerkFilter:
     only); a missed frame more than ``max_gap`` seconds after the last measurement resets the
     filter instead (counted in :attr:`resets`), to be re-initialised by the next measurement:
     extrapolating a hand for seconds is no estimate. Times must not go backwards.
+
+    With ``coast_tau=(tau_v, tau_a)`` a frame without a fused measurement is predicted with the
+    damped model of :mod:`humimic.estimation.coasting` (velocity and acceleration decaying with
+    those time constants) instead of Ude's constant-acceleration extrapolation; a prediction to
+    a measured frame is always Ude's. With ``gate`` (a chi-square threshold, see
+    :func:`~humimic.estimation.coasting.gate_threshold`) a measurement whose normalised
+    innovation squared exceeds it is rejected (counted in :attr:`gated`) and the frame coasts;
+    the ``reinit_after``-th consecutive rejection, or one more than ``max_gap`` after the last
+    fused measurement, re-initialises the filter from that measurement instead (counted in
+    :attr:`reinits`): a target that really moved is re-acquired.
     """
 
     def __init__(
         self, b: float = B_PAPER_SI, vel_var: float = INIT_VEL_VAR, acc_var: float = INIT_ACC_VAR,
-        max_gap: float = np.inf,
+        max_gap: float = np.inf, coast_tau: tuple[float, float] | None = None,
+        gate: float | None = None, reinit_after: int = 3,
     ) -> None:
         if not (b > 0.0 and np.isfinite(b)):
             raise ValueError(f"spectral amplitude b must be positive and finite, got {b!r}")
@@ -142,8 +155,18 @@ class RandomJerkFilter:
         self.vel_var = float(vel_var)
         self.acc_var = float(acc_var)
         self.max_gap = float(max_gap)
+        self.coast_tau = None if coast_tau is None else (float(coast_tau[0]), float(coast_tau[1]))
+        self.gate = None if gate is None else float(gate)
+        self.reinit_after = int(reinit_after)
         self.resets = 0
         """Resets after a gap longer than ``max_gap``."""
+        self.gated = 0
+        """Measurements rejected by the innovation gate."""
+        self.reinits = 0
+        """Re-initialisations from a gated measurement."""
+        self.last_nis: float | None = None
+        """The last measurement's normalised innovation squared (None: not gated or initial)."""
+        self._rejected = 0
         self.reset()
 
     def reset(self) -> None:
@@ -152,6 +175,7 @@ class RandomJerkFilter:
         self._t: float | None = None
         self._t_meas = -np.inf
         self._t_init = np.inf
+        self._rejected = 0
 
     @property
     def initialised(self) -> bool:
@@ -161,6 +185,11 @@ class RandomJerkFilter:
     def t(self) -> float | None:
         """Time (s) the current state refers to, or None before the first measurement."""
         return self._t
+
+    @property
+    def t_measured(self) -> float:
+        """Time (s) of the last fused measurement (-inf before the first)."""
+        return self._t_meas
 
     @property
     def since_init(self) -> float:
@@ -215,19 +244,38 @@ class RandomJerkFilter:
         if z is None and self._x is not None and t - self._t_meas > self.max_gap:
             self.reset()
             self.resets += 1
+        self.last_nis = None
         if self._x is None:
             if z is None:
                 return None
-            self._x, self._P = initial_state(z, R, self.vel_var, self.acc_var)
-            self._t = self._t_init = self._t_meas = float(t)
-            return self._x.copy()
+            return self._initialise(t, z, R)
         dt = self._check_time(t)
-        if dt > 0.0:
-            self._x, self._P = predict(self._x, self._P, dt, self.b)
-        self._t = float(t)
         if z is not None:
-            self._x, self._P = update(self._x, self._P, z, R)
-            self._t_meas = self._t
+            x, P = predict(self._x, self._P, dt, self.b) if dt > 0.0 else (self._x, self._P)
+            if self.gate is not None:
+                self.last_nis = innovation_nis(z - x[0:3], P[0:3, 0:3] + R)
+                if self.last_nis > self.gate:  # Bar-Shalom et al. 2001, sec. 5.4
+                    self.gated += 1
+                    self._rejected += 1
+                    if self._rejected >= self.reinit_after or t - self._t_meas > self.max_gap:
+                        self.reinits += 1
+                        return self._initialise(t, z, R)
+                    z = None
+                else:
+                    self._rejected = 0
+        if z is not None:
+            self._x, self._P = update(x, P, z, R)
+            self._t_meas = float(t)
+        elif dt > 0.0:
+            self._x, self._P = (predict(self._x, self._P, dt, self.b) if self.coast_tau is None
+                                else coast_predict(self._x, self._P, dt, self.b, *self.coast_tau))
+        self._t = float(t)
+        return self._x.copy()
+
+    def _initialise(self, t: float, z: np.ndarray, R: np.ndarray) -> np.ndarray:
+        self.reset()
+        self._x, self._P = initial_state(z, R, self.vel_var, self.acc_var)
+        self._t = self._t_init = self._t_meas = float(t)
         return self._x.copy()
 
     def predict_at(self, t: float) -> tuple[np.ndarray, np.ndarray]:

@@ -36,7 +36,8 @@ Undefined scores (no measurement, no estimate) are ``None`` (JSON null), never N
   after its (re)initialisation (its start-up transient, when v and a start from 0 with huge
   variances, is left out);
 * ``predicted_frames``, ``predicted_rmse_mm``: the estimates published for frames without a
-  measurement (prediction only, up to the filter's ``max_gap``).
+  fused measurement (prediction only, up to the filter's ``max_gap``; a measurement the
+  filter's innovation gate rejected leaves its frame predicted).
 """
 
 from __future__ import annotations
