@@ -50,7 +50,8 @@ def test_a_dark_hand_near_the_robot_is_not_declared_lost(tmp_path):
     sets = ["output.plots=false", "human.distance=0.9", "human.skin=[0.45,0.30,0.22]"]
     sc = load_scenario(SCENARIOS_DIR / "menezes_gest_far.yaml", sets, seed=1)
     m = run_one(sc, tmp_path, rerun="off", progress=False)["trackers"]["gest"]
-    # measured 0.96 (0.65 before); 0.917 and 5.9 mm on 2026-11-29
+    # measured 0.96 (0.65 before); 0.917 and 5.9 mm on 2026-11-29, 0.942 and 6.0 mm with the
+    # relative rim test (it lost the hand 3 frames fewer)
     assert m["tracked_in_view_fraction"] >= 0.85
     assert m["position_rmse_mm"] < 15.0                            # measured 5.9
 
