@@ -301,7 +301,7 @@ def test_reach_scenario_position_error(tmp_path, skin):
 
 @pytest.mark.parametrize("bad", [{"gate_m": 0.0}, {"proposal": "inertia"},
                                  {"reacquire_frames": -1}, {"skin_gains": [0.0]},
-                                 {"skin_gains": []}])
+                                 {"skin_gains": []}, {"lost_rim_odds": 0.5}])
 def test_bad_settings_are_rejected(bad):
     with pytest.raises(ValueError):
         GestConfig(**bad)

@@ -45,7 +45,9 @@ def rim_skin_sides(skin: np.ndarray, contour: np.ndarray, outward: np.ndarray,
 
 def rim_separates(inside, outside, odds: float = 2.0):
     """Whether a rim separates skin from background: its inside at least ``odds`` times as
-    skin-like as its outside (``inside >= odds * outside`` and ``inside > 0``; ours).
+    skin-like as its outside (``inside >= odds * outside`` and ``inside > 0``; ours): the rim
+    half of the 2-D hand tracker's loss test and of GEST's
+    (:func:`humimic.perception.trackers.gest.loss.rim_fits`).
 
     Relative, not absolute: how high the skin posterior of a hand is depends on how well the
     skin model covers that skin and its shading. The 2-D hand tracker's absolute test

@@ -1,6 +1,11 @@
 """GEST's loss test (Menezes sec. 6.1: automatic recovery after the hand is lost): does a
 hand-sized ellipse fit the left image's edges or skin rim at the published centre?
 
+The skin rim fits when the skin posterior just inside it is at least ``odds`` times that just
+outside (:func:`rim_fits`, the 2-D hand tracker's relative test,
+:func:`~humimic.perception.cues.skin.rim_separates`), not when ``D_k = 1 - (inside - outside)``
+is small: how high a hand's skin posterior reads depends on its skin tone and shading.
+
 The estimate's own ellipse is tried first (:class:`.tracker.GestTracker`); when it does not
 fit, :func:`any_pose_fits` tries the ellipsoid seen along each of its axes, turned in the
 image: the test asks whether the hand is where GEST says it is, not whether its orientation
@@ -15,10 +20,13 @@ import math
 
 import numpy as np
 
+from humimic.perception.cues.skin import rim_separates, rim_skin_sides
 from humimic.perception.trackers.gest.likelihood import (
+    RIM_OFFSET_PX,
+    HandProjection,
+    HandView,
     ellipse_family,
     shape_distance,
-    skin_distance,
 )
 
 #: The image-plane turns (rad) of the hand-sized ellipses the loss test tries when the
@@ -37,11 +45,19 @@ def lost_threshold_px(state: np.ndarray, camera, floor_px: float, rel: float) ->
     return max(floor_px, rel * camera.intrinsics.fx * float(np.max(state[6:9])) / depth)
 
 
+def rim_fits(proj: HandProjection, view: HandView, odds: float) -> np.ndarray:
+    """Per contour of ``proj``, whether its rim separates skin from background in ``view``:
+    the skin posterior ``RIM_OFFSET_PX`` inside at least ``odds`` times that outside
+    (:func:`~humimic.perception.cues.skin.rim_separates`)."""
+    return rim_separates(*rim_skin_sides(view.skin, proj.contour, proj.normal, RIM_OFFSET_PX),
+                         odds)
+
+
 def any_pose_fits(state: np.ndarray, proj, view, n_points: int, limit_px: float,
-                   limit_skin: float) -> bool:
+                  rim_odds: float) -> bool:
     """Whether an ellipse of the hand's size at the estimate's image centre fits the edges
-    (mean distance at most ``limit_px``) or the skin rim (at most ``limit_skin``) in some
-    pose: the ellipsoid seen along each of its axes (semi-axes pairs over the centre's
+    (mean distance at most ``limit_px``) or the skin rim (:func:`rim_fits` with ``rim_odds``)
+    in some pose: the ellipsoid seen along each of its axes (semi-axes pairs over the centre's
     depth), turned in the image by :data:`LOSS_TEST_ANGLES`. The loss test asks whether the
     hand is at the published centre; the orientation estimate is not part of it (a dark
     hand with few edges, its orientation 90 deg off, was declared lost on a third of its
@@ -54,4 +70,4 @@ def any_pose_fits(state: np.ndarray, proj, view, n_points: int, limit_px: float,
     pairs = np.array([[a[0], a[1]], [a[0], a[2]], [a[1], a[2]]])
     family = ellipse_family(proj.patch_state[0, :2], pairs, LOSS_TEST_ANGLES, n_points)
     return bool(shape_distance(family, view).min() <= limit_px
-                or skin_distance(family, view).min() <= limit_skin)
+                or rim_fits(family, view, rim_odds).any())

@@ -19,18 +19,18 @@ particles over decimetres of depth); while tracking it proposes only the candida
 Blobs cut by the image border are no candidates. Initialisation is automatic: the filter
 starts from the highest candidate (``init``), and re-starts after a loss from a candidate
 near where the hand was last tracked (``reacquire_m``; any after ``reacquire_frames``).
-The estimate is ``lost`` when its centre leaves the left image, its contour is off the
-edges by more than ``lost_px`` while its rim does not separate skin from background either
-(``lost_skin``), or ``lost_frames`` frames pass without a candidate within
-``lost_m``. The contour test judges the *published* estimate (the Kalman centre below, not the
-particles' mean) and whether a hand-sized ellipse in *any* pose fits there
-(:func:`.loss.any_pose_fits`): it asks whether the hand is where GEST says, not whether the
-orientation estimate is right. The cue images are computed in a box around the candidates
-and the last estimate (:mod:`.roi`). The published centre is, by default (``position:
-kalman``), not the particles' mean but the centre's Gaussian posterior given the stereo
-measurements under the random walk
-(a Kalman update per frame: every particle shares the measurement and the linear dynamics of
-the centre, so its conditional posterior is one Gaussian; the weights, collapsed by the
+The estimate is ``lost`` when its centre leaves the left image, its contour is off the edges
+by more than ``lost_px`` while its rim does not separate skin from background either (the
+skin inside at least ``lost_rim_odds`` times the outside, :func:`.loss.rim_fits`), or
+``lost_frames`` frames pass without a candidate within ``lost_m``. The contour test judges
+the *published* estimate (the Kalman centre below, not the particles' mean) and whether a
+hand-sized ellipse in *any* pose fits there (:func:`.loss.any_pose_fits`): it asks whether
+the hand is where GEST says, not whether the orientation estimate is right. The cue images
+are computed in a box around the candidates and the last estimate (:mod:`.roi`). The
+published centre is, by default (``position: kalman``), not the particles' mean but the
+centre's Gaussian posterior given the stereo measurements under the random walk (a Kalman
+update per frame: every particle shares the measurement and the linear dynamics of the
+centre, so its conditional posterior is one Gaussian; the weights, collapsed by the
 orientation and size cues, would otherwise make the estimate one random draw). The published
 orientation is the particles' mean rotation modulo the ellipsoid's symmetries
 (:func:`.ellipsoid.mean_orientation`), not the mean of their angles.
@@ -63,9 +63,8 @@ from humimic.perception.trackers.gest.likelihood import (
     project_views,
     reference_histogram,
     shape_distance,
-    skin_distance,
 )
-from humimic.perception.trackers.gest.loss import any_pose_fits, lost_threshold_px
+from humimic.perception.trackers.gest.loss import any_pose_fits, lost_threshold_px, rim_fits
 from humimic.perception.trackers.gest.proposal import CandidateProposal, PoseReset
 from humimic.perception.trackers.gest.roi import (
     crop_frame,
@@ -267,8 +266,8 @@ class GestTracker:
         d = float(shape_distance(proj, views[0])[0])
         limit_px = lost_threshold_px(mean, views[0], cfg.lost_px, cfg.lost_rel)
         fits = proj.valid[0] and (
-            d <= limit_px or float(skin_distance(proj, views[0])[0]) <= cfg.lost_skin
-            or any_pose_fits(mean, proj, views[0], cfg.n_points, limit_px, cfg.lost_skin))
+            d <= limit_px or bool(rim_fits(proj, views[0], cfg.lost_rim_odds)[0])
+            or any_pose_fits(mean, proj, views[0], cfg.n_points, limit_px, cfg.lost_rim_odds))
         status = ("tracking" if (s.ok and fits
                                  and _centre_in_image(mean, left)
                                  and self.unsupported < cfg.lost_frames) else "lost")

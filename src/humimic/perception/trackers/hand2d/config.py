@@ -92,8 +92,9 @@ class Hand2DConfig(Section):
     (:func:`~humimic.perception.cues.skin.rim_separates`; a hand over a background of its own
     brightness has no grey-level rim). Relative, as the skin posterior's level on a hand
     depends on the skin tone: the absolute test it replaces (``1 - (inside - outside) <=
-    0.5``, GEST's ``lost_skin``) declared a very dark hand lost while on it (menezes_fig5_hand,
-    skin [0.25, 0.16, 0.11]: its shaded rim's inside 0.48-0.79)."""
+    0.5``, as GEST's ``lost_skin`` was; GEST's ``lost_rim_odds`` is this test now) declared a
+    very dark hand lost while on it (menezes_fig5_hand, skin [0.25, 0.16, 0.11]: its shaded
+    rim's inside 0.48-0.79)."""
     min_skin: float = Field(0.3, ge=0.0, le=1.0)
     """Loss: the least fraction of skin pixels inside the estimated hand."""
     lost_frames: int = Field(3, ge=1, le=1000)
