@@ -54,6 +54,34 @@ def branch_switches(S: np.ndarray, threshold: float) -> np.ndarray:
     return np.where(S[np.arange(len(S)), k] > threshold, k, -1)
 
 
+def wrist_separation(body: bm.BodyModel, q: np.ndarray, flips: np.ndarray, side: str
+                     ) -> np.ndarray:
+    """``(K,)`` the distance (m) from arm ``side``'s wrist of the pose ``q (14,)`` to that of
+    each of the poses ``flips (K, 14)`` (NaN rows give NaN): what taking a flip costs the
+    wrist if it is the wrong branch (``branch_min_separation_mm``)."""
+    prefix, _ = SIDES[side]
+    flips = np.atleast_2d(np.asarray(flips, float))
+    ok = np.all(np.isfinite(flips), axis=1)
+    d = np.full(len(flips), np.nan)
+    if ok.any():
+        w = body.forward(np.vstack([np.asarray(q, float)[None], flips[ok]])).joint(
+            f"{prefix}_wrist")
+        d[ok] = np.linalg.norm(w[1:] - w[0], axis=1)
+    return d
+
+
+def gate_near_flips(r: np.ndarray, separation: np.ndarray, min_separation: float | None
+                    ) -> np.ndarray:
+    """The ratios ``r`` with those of flips whose wrist lies nearer than ``min_separation``
+    (m; None: none) to the estimate's set to NaN (out of the CUSUM, which restarts their sums):
+    a near flip costs at most its separation if taken wrongly, and the cues' evidence between
+    near flips is the weakest (a small depth difference, a small perspective scale change)."""
+    r = np.array(r, float)
+    if min_separation is not None:
+        r[~(np.asarray(separation, float) >= min_separation)] = np.nan
+    return r
+
+
 def flip_arm(body: bm.BodyModel, q: np.ndarray, side: str, kind: str, c_ref: np.ndarray,
              limits: bm.JointLimits, fallback: np.ndarray) -> np.ndarray:
     """States ``q (N, 14)`` with arm ``side`` replaced by its flip ``kind`` seen from ``c_ref``
@@ -79,6 +107,8 @@ class FlipBranches:
             body, intrinsics, cfg.model_copy(update={"skin_ring": cfg.branch_skin_ring}))
         self.S = np.zeros((len(SIDES), len(FLIPS)))
         self.history: list[tuple[np.ndarray, np.ndarray]] = []
+        self.separations: list[np.ndarray] = []
+        """Per frame ``(arms, kinds)`` each flip's wrist separation (m, NaN: no flip)."""
 
     def log_post(self, tracker, q: np.ndarray, maps, T_cam_base: np.ndarray) -> np.ndarray:
         """The decision's log-posterior of poses ``q``: the tracker's (the sigmas' floors), or
@@ -108,6 +138,7 @@ class FlipBranches:
         def f(q):
             return self.log_post(tracker, q, maps, T_cam_base)
         r = np.full((len(SIDES), len(FLIPS)), np.nan)
+        sep = np.full_like(r, np.nan)
         best = {}
         for a, side in enumerate(SIDES):
             base, ll0 = self._refined(tracker, mode, side, f, T_cam_base)
@@ -118,6 +149,10 @@ class FlipBranches:
                     continue
                 best[side, k], ll = self._refined(tracker, q, side, f, T_cam_base)
                 r[a, k] = ll - ll0
+                sep[a, k] = wrist_separation(self.body, base, best[side, k][None], side)[0]
+        self.separations.append(sep)
+        mm = self.cfg.branch_min_separation_mm
+        r = gate_near_flips(r, sep, None if mm is None else mm / 1000.0)
         self.S = cusum_update(self.S, r, self.cfg.branch_forget)
         self.history.append((r, self.S.copy()))
         for (side, _), k in zip(SIDES.items(), branch_switches(self.S, self.cfg.branch_threshold),

@@ -49,7 +49,7 @@ NEEDS: dict[str, tuple[str, ...]] = {
     "refine_step": ("refine_polls", "branch_refine_polls"),
     "refine_depth_m": ("refine_polls",), "refine_feedback": ("refine_polls",),
     **{k: ("branch_threshold",) for k in ("branch_forget", "branch_refine_polls",
-                                          "branch_skin_ring")},
+                                          "branch_skin_ring", "branch_min_separation_mm")},
     **{k: ("observed_walk_px",) for k in ("observed_walk_floor", "observed_walk_groups")},
     **{k: ("particle_velocity",) for k in ("particle_velocity_innovation",
                                            "particle_velocity_decay")},
@@ -224,6 +224,13 @@ class KpfConfig(KpfDynamics):
     branch_skin_ring: float | None = Field(None, gt=1.0, le=4.0)
     """The branch decision's likelihood with this ``skin_ring`` (the filter's own without it);
     None: the filter's likelihood."""
+    branch_min_separation_mm: float | None = Field(None, gt=0.0, le=2000.0)
+    """A loss-aware branch decision: only flips whose wrist lies at least this far (mm) from
+    the estimate's (both refined) enter the CUSUM and may be switched to; a nearer flip's sum
+    restarts at 0 (:func:`~humimic.perception.trackers.kpf.branches.gate_near_flips`). A near
+    flip costs little if wrong and its evidence is the weakest (Table 1's side hold: the wrist
+    flip 104 mm, the double 147 mm from the truth, tied with it; the angular hold's flips 250-470
+    mm). None: every flip."""
     colour_gradients: bool = False
     """Our extension: the edge and ridge cues on the strongest colour channel's derivatives
     at each pixel instead of grey levels' (clothes as bright as the background keep their
