@@ -132,27 +132,34 @@ class FlipBranches:
         """Update the sums with this frame's ratios at ``mode (14,)``; switch an arm whose sum
         passed the threshold (the tracker's particles and last estimate too); the estimate.
         With ``branch_refine_polls`` the ratios are between the refined estimate's arm and its
-        refined flips (each at its branch's local peak, as the particles' modes are)."""
+        refined flips (each at its branch's local peak, as the particles' modes are). With
+        ``branch_min_separation_mm`` only the flips of the (unrefined) estimate whose wrist lies
+        that far from its own are refined and scored; an arm without one is skipped."""
         c_ref = np.linalg.inv(np.asarray(T_cam_base, float))[:3, 3]
 
         def f(q):
             return self.log_post(tracker, q, maps, T_cam_base)
         r = np.full((len(SIDES), len(FLIPS)), np.nan)
         sep = np.full_like(r, np.nan)
+        mm = self.cfg.branch_min_separation_mm
         best = {}
         for a, side in enumerate(SIDES):
+            raw = arm_flips(self.body, mode[None], side, c_ref)
+            sep[a] = wrist_separation(self.body, mode, np.stack([raw[k][0] for k in FLIPS]), side)
+            # a near flip is neither refined nor scored (its ratio stays NaN)
+            far = np.isfinite(gate_near_flips(np.zeros(len(FLIPS)), sep[a],
+                                              None if mm is None else mm / 1000.0))
+            if not far.any():
+                continue
             base, ll0 = self._refined(tracker, mode, side, f, T_cam_base)
             flips = arm_flips(self.body, base[None], side, c_ref)
             for k, kind in enumerate(FLIPS):
                 q = flips[kind][0]
-                if not (np.all(np.isfinite(q)) and tracker.limits.inside(q[None])[0]):
+                if not (far[k] and np.all(np.isfinite(q)) and tracker.limits.inside(q[None])[0]):
                     continue
                 best[side, k], ll = self._refined(tracker, q, side, f, T_cam_base)
                 r[a, k] = ll - ll0
-                sep[a, k] = wrist_separation(self.body, base, best[side, k][None], side)[0]
         self.separations.append(sep)
-        mm = self.cfg.branch_min_separation_mm
-        r = gate_near_flips(r, sep, None if mm is None else mm / 1000.0)
         self.S = cusum_update(self.S, r, self.cfg.branch_forget)
         self.history.append((r, self.S.copy()))
         for (side, _), k in zip(SIDES.items(), branch_switches(self.S, self.cfg.branch_threshold),

@@ -226,11 +226,11 @@ class KpfConfig(KpfDynamics):
     None: the filter's likelihood."""
     branch_min_separation_mm: float | None = Field(None, gt=0.0, le=2000.0)
     """A loss-aware branch decision: only flips whose wrist lies at least this far (mm) from
-    the estimate's (both refined) enter the CUSUM and may be switched to; a nearer flip's sum
-    restarts at 0 (:func:`~humimic.perception.trackers.kpf.branches.gate_near_flips`). A near
-    flip costs little if wrong and its evidence is the weakest (Table 1's side hold: the wrist
-    flip 104 mm, the double 147 mm from the truth, tied with it; the angular hold's flips 250-470
-    mm). None: every flip."""
+    the estimate's (before ``branch_refine_polls``) are scored, enter the CUSUM and may be
+    switched to; a nearer flip's sum restarts at 0 (:func:`~humimic.perception.trackers.kpf.
+    branches.gate_near_flips`). A near flip costs little if wrong and its evidence is the
+    weakest (Table 1's side hold: the wrist flip 104 mm, the double 147 mm from the truth, tied
+    with it; the angular hold's flips 250-470 mm). None: every flip."""
     colour_gradients: bool = False
     """Our extension: the edge and ridge cues on the strongest colour channel's derivatives
     at each pixel instead of grey levels' (clothes as bright as the background keep their
