@@ -109,6 +109,9 @@ class FlipBranches:
         self.history: list[tuple[np.ndarray, np.ndarray]] = []
         self.separations: list[np.ndarray] = []
         """Per frame ``(arms, kinds)`` each flip's wrist separation (m, NaN: no flip)."""
+        self.steps: list[np.ndarray] = []
+        """Per frame ``(arms,)`` how far (m) each arm's estimated wrist moved since the last
+        estimate."""
 
     def log_post(self, tracker, q: np.ndarray, maps, T_cam_base: np.ndarray) -> np.ndarray:
         """The decision's log-posterior of poses ``q``: the tracker's (the sigmas' floors), or
@@ -134,14 +137,17 @@ class FlipBranches:
         With ``branch_refine_polls`` the ratios are between the refined estimate's arm and its
         refined flips (each at its branch's local peak, as the particles' modes are). With
         ``branch_min_separation_mm`` only the flips of the (unrefined) estimate whose wrist lies
-        that far from its own are refined and scored; an arm without one is skipped."""
+        that far from its own are refined and scored; an arm without one is skipped, and with
+        ``branch_max_step_mm`` an arm whose estimated wrist moved farther since the last
+        estimate."""
         c_ref = np.linalg.inv(np.asarray(T_cam_base, float))[:3, 3]
 
         def f(q):
             return self.log_post(tracker, q, maps, T_cam_base)
         r = np.full((len(SIDES), len(FLIPS)), np.nan)
         sep = np.full_like(r, np.nan)
-        mm = self.cfg.branch_min_separation_mm
+        mm, ms = self.cfg.branch_min_separation_mm, self.cfg.branch_max_step_mm
+        moved = np.full(len(SIDES), np.nan)
         best = {}
         for a, side in enumerate(SIDES):
             raw = arm_flips(self.body, mode[None], side, c_ref)
@@ -149,7 +155,9 @@ class FlipBranches:
             # a near flip is neither refined nor scored (its ratio stays NaN)
             far = np.isfinite(gate_near_flips(np.zeros(len(FLIPS)), sep[a],
                                               None if mm is None else mm / 1000.0))
-            if not far.any():
+            # a moving arm's ratios wait for it to stop (``branch_max_step_mm``)
+            moved[a] = wrist_separation(self.body, tracker.mode, mode[None], side)[0]
+            if not far.any() or (ms is not None and not moved[a] <= ms / 1000.0):
                 continue
             base, ll0 = self._refined(tracker, mode, side, f, T_cam_base)
             flips = arm_flips(self.body, base[None], side, c_ref)
@@ -160,6 +168,7 @@ class FlipBranches:
                 best[side, k], ll = self._refined(tracker, q, side, f, T_cam_base)
                 r[a, k] = ll - ll0
         self.separations.append(sep)
+        self.steps.append(moved)
         self.S = cusum_update(self.S, r, self.cfg.branch_forget)
         self.history.append((r, self.S.copy()))
         for (side, _), k in zip(SIDES.items(), branch_switches(self.S, self.cfg.branch_threshold),

@@ -49,7 +49,8 @@ NEEDS: dict[str, tuple[str, ...]] = {
     "refine_step": ("refine_polls", "branch_refine_polls"),
     "refine_depth_m": ("refine_polls",), "refine_feedback": ("refine_polls",),
     **{k: ("branch_threshold",) for k in ("branch_forget", "branch_refine_polls",
-                                          "branch_skin_ring", "branch_min_separation_mm")},
+                                          "branch_skin_ring", "branch_min_separation_mm",
+                                          "branch_max_step_mm")},
     **{k: ("observed_walk_px",) for k in ("observed_walk_floor", "observed_walk_groups")},
     **{k: ("particle_velocity",) for k in ("particle_velocity_innovation",
                                            "particle_velocity_decay")},
@@ -231,6 +232,12 @@ class KpfConfig(KpfDynamics):
     branches.gate_near_flips`). A near flip costs little if wrong and its evidence is the
     weakest (Table 1's side hold: the wrist flip 104 mm, the double 147 mm from the truth, tied
     with it; the angular hold's flips 250-470 mm). None: every flip."""
+    branch_max_step_mm: float | None = Field(None, gt=0.0, le=2000.0)
+    """The branch decision only for a still arm: an arm whose estimated wrist moved farther
+    than this (mm) since the last estimate is not scored and its sums restart (while the arm
+    moves the estimate lags the image, and a flip's refined pose can catch up: in Table 1's
+    rise both gestures gave the double flip +0.3-1 nats a frame, right for angular pointing,
+    wrong for side pointing). None: every frame."""
     colour_gradients: bool = False
     """Our extension: the edge and ridge cues on the strongest colour channel's derivatives
     at each pixel instead of grey levels' (clothes as bright as the background keep their
