@@ -232,3 +232,30 @@ def test_a_static_arm_never_switches_to_a_flip_nearer_than_the_separation():
         np.testing.assert_array_equal(np.isfinite(r), far & np.isfinite(sep))
         np.testing.assert_allclose(br.separations[-1][0], sep, atol=1e-9)
     assert np.all(br.S == 0.0) and np.array_equal(tr.mode, q)
+
+
+def test_a_moving_arm_is_not_scored():
+    """``branch_max_step_mm``: an arm whose estimated wrist moved farther than it since the
+    last estimate gets no ratios (its sums restart); a still arm is scored as without it."""
+    body = kpf_body()
+    T = _camera()
+    c = np.linalg.inv(T)[:3, 3]
+    q = _arm_poses(40, 9)[3]
+    last = q.copy()
+    last[9] += 0.3                                   # the right elbow bent 0.3 rad less
+    moved = np.linalg.norm(body.forward(last[None]).joint("r_wrist")
+                           - body.forward(q[None]).joint("r_wrist"))
+    assert moved > 0.05
+    rows = []
+    for mm in (None, 1000 * moved - 1.0, 1000 * moved + 1.0):
+        cfg = KpfConfig(branch_threshold=50.0) if mm is None else \
+            KpfConfig(branch_threshold=50.0, branch_max_step_mm=mm)
+        tr = _Tracker(body, last, q[None].repeat(5, 0), c, 0.5)
+        br = FlipBranches(body, None, cfg)
+        br.step(tr, q.copy(), None, T)
+        np.testing.assert_allclose(br.steps[-1], [moved, 0.0], atol=1e-9)
+        rows.append(br.history[-1][0])
+    free, moving, still = rows
+    assert np.isfinite(free[0]).sum() >= 1
+    assert np.all(np.isnan(moving[0])) and np.array_equal(moving[1], free[1], equal_nan=True)
+    np.testing.assert_array_equal(still, free)
