@@ -25,6 +25,11 @@ wrist / elbow / both flips): angular hold with ``skin_ring`` 1.5 -0.79 / -0.13 /
 "both" flip -0.72 (the others coincide with the pose or leave the limits). At the ESTIMATE the
 unrefined flips lose by 0.1-0.5 nats (the estimate sits on its branch's peak, its flips do not):
 ``branch_refine_polls`` compares refined poses. Numbers: ``KpfConfig.branch_threshold``.
+
+Two gates on what is scored (29 Nov, ``i14-branch``; numbers in their ``KpfConfig`` fields):
+``branch_min_separation_mm`` leaves out flips whose wrist lies near the estimate's
+(:func:`wrist_separation`, :func:`gate_near_flips`: a near flip costs little if wrong, and its
+evidence is the weakest), ``branch_max_step_mm`` a moving arm (the estimate lags the image).
 """
 
 from __future__ import annotations
