@@ -259,3 +259,38 @@ def test_a_moving_arm_is_not_scored():
     assert np.isfinite(free[0]).sum() >= 1
     assert np.all(np.isnan(moving[0])) and np.array_equal(moving[1], free[1], equal_nan=True)
     np.testing.assert_array_equal(still, free)
+
+
+def test_clipped_ratios_delay_the_switch_to_the_frame_the_capped_sum_predicts():
+    """``branch_max_ratio``: the static arm of the CUSUM test, its best flip's ratio clipped to
+    ``cap`` (between it and the runner-up): it switches on the frame at which
+    ``cap (1 - lam^t) / (1 - lam)`` passes the threshold, later than unclipped."""
+    body = kpf_body()
+    T = _camera()
+    c = np.linalg.inv(T)[:3, 3]
+    qs = _arm_poses(200, 9)
+    flips = arm_flips(body, qs, "R", c)
+    here = np.linalg.norm(body.forward(qs).joint("r_wrist") - c, axis=1)
+    gain = {k: here - np.linalg.norm(body.forward(f).joint("r_wrist") - c, axis=1)
+            for k, f in flips.items()}
+    best = np.nanmax(np.column_stack([gain[k] for k in FLIPS]), axis=1)
+    valid = np.all([body.free_limits.inside(np.nan_to_num(flips[k])) for k in FLIPS], axis=0)
+    i = int(np.argmax(np.where(valid, best, -np.inf)))
+    k_nats, lam = 0.5, 0.9
+    kinds = np.array([k_nats * gain[k][i] for k in FLIPS])
+    top = int(np.argmax(kinds))
+    cap = 0.5 * (kinds[top] + max(np.sort(kinds)[-2], 0.0))
+    h = 3.0 * cap
+    t_cap = next(t for t in range(1, 100) if cap * (1 - lam ** t) / (1 - lam) > h)
+    t_free = next(t for t in range(1, 100) if kinds[top] * (1 - lam ** t) / (1 - lam) > h)
+    assert t_cap > t_free
+    tr = _Tracker(body, qs[i], qs[i][None].repeat(5, 0), c, k_nats)
+    br = FlipBranches(body, None, KpfConfig(branch_threshold=h, branch_forget=lam,
+                                            branch_max_ratio=cap))
+    mode = qs[i].copy()
+    for t in range(1, t_cap + 1):
+        before = mode.copy()
+        mode = br.step(tr, mode, None, T)
+        assert (not np.array_equal(mode, before)) == (t == t_cap), t
+        assert np.nanmax(np.abs(br.history[-1][0])) <= cap
+    np.testing.assert_allclose(mode, flips[FLIPS[top]][i], atol=1e-12)

@@ -51,6 +51,15 @@ def cusum_update(S: np.ndarray, r: np.ndarray, forget: float) -> np.ndarray:
     return np.where(np.isfinite(r), np.maximum(0.0, forget * S + np.nan_to_num(r)), 0.0)
 
 
+def clip_ratios(r: np.ndarray, cap: float | None) -> np.ndarray:
+    """The ratios ``r`` clipped to ``[-cap, cap]`` nats (NaN kept; None: as they are): Huber's
+    robust probability-ratio test (Huber 1965, "A robust version of the probability ratio
+    test"), so that no single frame's outlier carries the CUSUM over its threshold
+    (``branch_max_ratio``)."""
+    r = np.asarray(r, float)
+    return r if cap is None else np.clip(r, -cap, cap)
+
+
 def branch_switches(S: np.ndarray, threshold: float) -> np.ndarray:
     """``(arms,)`` per row of ``S (arms, kinds)`` the kind to switch to (the largest sum above
     ``threshold``), -1 for none."""
@@ -174,6 +183,7 @@ class FlipBranches:
                 r[a, k] = ll - ll0
         self.separations.append(sep)
         self.steps.append(moved)
+        r = clip_ratios(r, self.cfg.branch_max_ratio)
         self.S = cusum_update(self.S, r, self.cfg.branch_forget)
         self.history.append((r, self.S.copy()))
         for (side, _), k in zip(SIDES.items(), branch_switches(self.S, self.cfg.branch_threshold),

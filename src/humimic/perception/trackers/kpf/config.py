@@ -50,7 +50,7 @@ NEEDS: dict[str, tuple[str, ...]] = {
     "refine_depth_m": ("refine_polls",), "refine_feedback": ("refine_polls",),
     **{k: ("branch_threshold",) for k in ("branch_forget", "branch_refine_polls",
                                           "branch_skin_ring", "branch_min_separation_mm",
-                                          "branch_max_step_mm")},
+                                          "branch_max_step_mm", "branch_max_ratio")},
     **{k: ("observed_walk_px",) for k in ("observed_walk_floor", "observed_walk_groups")},
     **{k: ("particle_velocity",) for k in ("particle_velocity_innovation",
                                            "particle_velocity_decay")},
@@ -222,6 +222,10 @@ class KpfConfig(KpfDynamics):
     branch_refine_polls: int = Field(0, ge=0, le=50)
     """Pattern-search polls (step ``refine_step``) refining the estimate's arm and each
     flip before their ratio (0: the flips of the estimate as they are)."""
+    branch_max_ratio: float | None = Field(None, gt=0.0, le=100.0)
+    """The per-frame ratios clipped to +- this (nats) before the CUSUM (:func:`~humimic.
+    perception.trackers.kpf.branches.clip_ratios`, Huber's robust ratio test): a switch needs
+    several frames' evidence. None: as they are."""
     branch_skin_ring: float | None = Field(None, gt=1.0, le=4.0)
     """The branch decision's likelihood with this ``skin_ring`` (the filter's own without it);
     None: the filter's likelihood."""
