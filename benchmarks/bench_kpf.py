@@ -41,10 +41,12 @@ HUMAN = {"distance": 2.0, "motion": {"kind": "point", "hand": "right", "gestures
                                      "move": 1.5, "hold": 2.0, "rest": 1.0}}
 
 
-def bench_frames(n_frames: int) -> dict:
-    """The bench's ``frames`` ((image, T_cam_base) at 7.5 Hz of :data:`HUMAN` pointing, left
+def bench_frames(n_frames: int, gesture: str = "side") -> dict:
+    """The bench's ``frames`` ((image, T_cam_base) at 7.5 Hz of :data:`HUMAN` pointing
+    (``gesture``: side or angle), left
     wide eye), their ``intrinsics``, the tracker's start ``q0`` (the truth) and skin ``lut``."""
-    seq = render_sequence("kpf", HUMAN, n_frames / 7.5, cameras="left", rate=7.5)
+    human = {**HUMAN, "motion": {**HUMAN["motion"], "gestures": [gesture]}}
+    seq = render_sequence("kpf", human, n_frames / 7.5, cameras="left", rate=7.5)
     cam = seq.cameras[0]
     scenario = load_scenario(SCENARIOS_DIR / "schmidt_side.yaml", duration=0.2)
     world = World(scenario, Rngs(0))

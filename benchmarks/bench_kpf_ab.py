@@ -14,6 +14,7 @@ and the median of the per-round ratios.
 
     MUJOCO_GL=egl python benchmarks/bench_kpf_ab.py BASELINE_CHECKOUT/src src \\
         [--rounds R] [--config P,I] [--only NAME] [--frames N] [--repeats K]
+        [--gesture side|angle]
 """
 
 from __future__ import annotations
@@ -43,11 +44,11 @@ def _env(tree: str) -> dict:
     return env
 
 
-def prepare(path: str, frames: int) -> None:
+def prepare(path: str, frames: int, gesture: str = "side") -> None:
     """Render the frames and the tracker's start (as ``bench_kpf``) into a pickle."""
     from bench_kpf import bench_frames
 
-    data = bench_frames(frames)
+    data = bench_frames(frames, gesture)
     with open(path, "wb") as f:
         pickle.dump(data, f)
 
@@ -94,12 +95,14 @@ def main() -> None:
     p.add_argument("--only", default="kpf", help="tracker of schmidt_table1.yaml")
     p.add_argument("--frames", type=int, default=20)
     p.add_argument("--repeats", type=int, default=5, help="runs of the frames per round")
+    p.add_argument("--gesture", default="side", choices=("side", "angle"),
+                   help="the pointing gesture of the frames")
     p.add_argument("--prepare", help=argparse.SUPPRESS)
     p.add_argument("--child", help=argparse.SUPPRESS)
     args = p.parse_args()
     config = tuple(int(x) for x in args.config.split(","))
     if args.prepare:
-        return prepare(args.prepare, args.frames)
+        return prepare(args.prepare, args.frames, args.gesture)
     if args.child:
         return child(args.child, config, args.only, args.repeats)
     if len(args.trees) != 2:
@@ -107,7 +110,8 @@ def main() -> None:
     me = [sys.executable, str(Path(__file__).resolve())]
     with tempfile.TemporaryDirectory() as tmp:
         data = str(Path(tmp) / "frames.pkl")
-        subprocess.run(me + ["--prepare", data, "--frames", str(args.frames)], check=True,
+        subprocess.run(me + ["--prepare", data, "--frames", str(args.frames), "--gesture",
+                            args.gesture], check=True,
                        env=_env(args.trees[0]))
         hz = {s: {0: [], 1: []} for s in STATS}
         for r in range(args.rounds):

@@ -13,6 +13,8 @@ from humimic.perception.trackers.kpf.branches import (
     branch_switches,
     cusum_update,
     flip_arm,
+    gate_near_flips,
+    wrist_separation,
 )
 from humimic.perception.trackers.kpf.config import KpfConfig
 from humimic.perception.trackers.kpf.flips import FLIPS, arm_flips
@@ -171,3 +173,124 @@ def test_refined_ratios_compare_each_branchs_local_peak():
             continue
         np.testing.assert_allclose(r0[k], lp(flips[kind][0]) - lp(q), atol=1e-12)
         assert lp(flips[kind][0]) <= r1[k] <= -lp(q) and abs(r1[k] - r0[k]) > 1e-6
+
+
+def test_wrist_separation_of_the_wrist_flip_is_the_chord_of_its_ray():
+    """The wrist flip moves the wrist to the other point where its camera ray meets the
+    forearm's sphere about the elbow: the two are a chord apart, ``2 sqrt(l^2 - d^2)`` with
+    ``d`` the elbow's distance to the ray (computed here from the joints)."""
+    body = kpf_body()
+    c = np.linalg.inv(_camera())[:3, 3]
+    qs = _arm_poses(30, 5)
+    pose = body.forward(qs)
+    E, W = pose.joint("r_elbow"), pose.joint("r_wrist")
+    u = (W - c) / np.linalg.norm(W - c, axis=1, keepdims=True)
+    v = E - c
+    d2 = np.sum(v * v, axis=1) - np.sum(v * u, axis=1) ** 2
+    chord = 2.0 * np.sqrt(body.skeleton.forearm ** 2 - d2)
+    flips = arm_flips(body, qs, "R", c)
+    for i in range(len(qs)):
+        got = wrist_separation(body, qs[i], flips["wrist"][i:i + 1], "R")
+        np.testing.assert_allclose(got, [chord[i]], atol=1e-9)
+    both = np.vstack([flips["wrist"][0], np.full(14, np.nan)])
+    sep = wrist_separation(body, qs[0], both, "R")
+    assert np.isfinite(sep[0]) and np.isnan(sep[1])      # a missing flip has no separation
+
+
+def test_near_flips_leave_the_cusum():
+    r = np.array([[0.3, -0.2, np.nan], [0.1, 0.4, 0.2]])
+    sep = np.array([[0.10, 0.30, np.nan], [0.25, 0.15, 0.20]])
+    np.testing.assert_array_equal(gate_near_flips(r, sep, None), r)
+    np.testing.assert_array_equal(gate_near_flips(r, sep, 0.2),
+                                  [[np.nan, -0.2, np.nan], [0.1, np.nan, 0.2]])
+
+
+def test_a_static_arm_never_switches_to_a_flip_nearer_than_the_separation():
+    """The static arm of the CUSUM test above (the flips nearer the camera win every frame):
+    with ``branch_min_separation_mm`` between the flips' wrist separations only the far ones
+    keep a ratio and may be switched to; above them all, no sum grows and nothing switches."""
+    body = kpf_body()
+    T = _camera()
+    c = np.linalg.inv(T)[:3, 3]
+    qs = _arm_poses(200, 9)
+    fl = arm_flips(body, qs, "R", c)
+    ok = np.column_stack([body.free_limits.inside(np.nan_to_num(fl[k])) & np.all(np.isfinite(
+        fl[k]), axis=1) for k in FLIPS])
+    i = int(np.argmax(ok.sum(1)))
+    q, flips = qs[i], {k: fl[k][i:i + 1] for k in FLIPS}
+    sep = np.array([np.linalg.norm(body.forward(flips[k]).joint("r_wrist")[0]
+                                   - body.forward(q[None]).joint("r_wrist")[0])
+                    if ok[i, j] else np.nan for j, k in enumerate(FLIPS)])
+    assert np.sum(np.isfinite(sep)) == 3
+    cut = float(np.nanmean(sep))
+    for mm, far in ((1000 * cut, sep >= cut), (1000 * (np.nanmax(sep) + 0.01), sep < 0)):
+        tr = _Tracker(body, q, q[None].repeat(5, 0), c, 0.5)
+        br = FlipBranches(body, None, KpfConfig(branch_threshold=50.0,
+                                                branch_min_separation_mm=mm))
+        br.step(tr, q.copy(), None, T)
+        r = br.history[-1][0][0]
+        np.testing.assert_array_equal(np.isfinite(r), far & np.isfinite(sep))
+        np.testing.assert_allclose(br.separations[-1][0], sep, atol=1e-9)
+    assert np.all(br.S == 0.0) and np.array_equal(tr.mode, q)
+
+
+def test_a_moving_arm_is_not_scored():
+    """``branch_max_step_mm``: an arm whose estimated wrist moved farther than it since the
+    last estimate gets no ratios (its sums restart); a still arm is scored as without it."""
+    body = kpf_body()
+    T = _camera()
+    c = np.linalg.inv(T)[:3, 3]
+    q = _arm_poses(40, 9)[3]
+    last = q.copy()
+    last[9] += 0.3                                   # the right elbow bent 0.3 rad less
+    moved = np.linalg.norm(body.forward(last[None]).joint("r_wrist")
+                           - body.forward(q[None]).joint("r_wrist"))
+    assert moved > 0.05
+    rows = []
+    for mm in (None, 1000 * moved - 1.0, 1000 * moved + 1.0):
+        cfg = KpfConfig(branch_threshold=50.0) if mm is None else \
+            KpfConfig(branch_threshold=50.0, branch_max_step_mm=mm)
+        tr = _Tracker(body, last, q[None].repeat(5, 0), c, 0.5)
+        br = FlipBranches(body, None, cfg)
+        br.step(tr, q.copy(), None, T)
+        np.testing.assert_allclose(br.steps[-1], [moved, 0.0], atol=1e-9)
+        rows.append(br.history[-1][0])
+    free, moving, still = rows
+    assert np.isfinite(free[0]).sum() >= 1
+    assert np.all(np.isnan(moving[0])) and np.array_equal(moving[1], free[1], equal_nan=True)
+    np.testing.assert_array_equal(still, free)
+
+
+def test_clipped_ratios_delay_the_switch_to_the_frame_the_capped_sum_predicts():
+    """``branch_max_ratio``: the static arm of the CUSUM test, its best flip's ratio clipped to
+    ``cap`` (between it and the runner-up): it switches on the frame at which
+    ``cap (1 - lam^t) / (1 - lam)`` passes the threshold, later than unclipped."""
+    body = kpf_body()
+    T = _camera()
+    c = np.linalg.inv(T)[:3, 3]
+    qs = _arm_poses(200, 9)
+    flips = arm_flips(body, qs, "R", c)
+    here = np.linalg.norm(body.forward(qs).joint("r_wrist") - c, axis=1)
+    gain = {k: here - np.linalg.norm(body.forward(f).joint("r_wrist") - c, axis=1)
+            for k, f in flips.items()}
+    best = np.nanmax(np.column_stack([gain[k] for k in FLIPS]), axis=1)
+    valid = np.all([body.free_limits.inside(np.nan_to_num(flips[k])) for k in FLIPS], axis=0)
+    i = int(np.argmax(np.where(valid, best, -np.inf)))
+    k_nats, lam = 0.5, 0.9
+    kinds = np.array([k_nats * gain[k][i] for k in FLIPS])
+    top = int(np.argmax(kinds))
+    cap = 0.5 * (kinds[top] + max(np.sort(kinds)[-2], 0.0))
+    h = 3.0 * cap
+    t_cap = next(t for t in range(1, 100) if cap * (1 - lam ** t) / (1 - lam) > h)
+    t_free = next(t for t in range(1, 100) if kinds[top] * (1 - lam ** t) / (1 - lam) > h)
+    assert t_cap > t_free
+    tr = _Tracker(body, qs[i], qs[i][None].repeat(5, 0), c, k_nats)
+    br = FlipBranches(body, None, KpfConfig(branch_threshold=h, branch_forget=lam,
+                                            branch_max_ratio=cap))
+    mode = qs[i].copy()
+    for t in range(1, t_cap + 1):
+        before = mode.copy()
+        mode = br.step(tr, mode, None, T)
+        assert (not np.array_equal(mode, before)) == (t == t_cap), t
+        assert np.nanmax(np.abs(br.history[-1][0])) <= cap
+    np.testing.assert_allclose(mode, flips[FLIPS[top]][i], atol=1e-12)

@@ -106,6 +106,10 @@ def test_covered_camera_frames_are_lost_and_particles_stay_finite(run):
     ("{kind: kpf, camera: R_wide}", "trackers.kpf.camera"),
     ("{kind: kpf, branch_threshold: 0}", "trackers.kpf.branch_threshold"),
     ("{kind: kpf, branch_forget: 1.5}", "trackers.kpf.branch_forget"),
+    ("{kind: kpf, branch_threshold: 0.5, branch_min_separation_mm: -1}",
+     "trackers.kpf.branch_min_separation_mm"),
+    ("{kind: kpf, branch_min_separation_mm: 200}", "branch_min_separation_mm = 200.0 has no "
+                                                   "effect without branch_threshold"),
     ("{kind: kpf, split_arms: true}", "split_arms needs partitioned"),
     ("{kind: kpf, partitioned: true, split_resample: arms}", "trackers.kpf.split_resample"),
     ("{kind: kpf, branch_skin_ring: 1.5}", "branch_skin_ring = 1.5 has no effect without "
@@ -195,7 +199,9 @@ def test_every_needed_option_exists_and_is_accepted_once_switched_on():
              "rescue_drop": 1.0, "rescue_depth_share": 0.1, "depth_extent_m": 0.1,
              "hand_radius_px": 10.0, "hand_min_area_px": 8.0, "refine_step": 0.2,
              "refine_depth_m": 0.02, "refine_feedback": False, "branch_forget": 0.5,
-             "branch_refine_polls": 2, "branch_skin_ring": 1.5, "observed_walk_floor": 0.5,
+             "branch_refine_polls": 2, "branch_skin_ring": 1.5, "branch_min_separation_mm": 200.0,
+             "branch_max_step_mm": 20.0, "branch_max_ratio": 0.5,
+             "observed_walk_floor": 0.5,
              "observed_walk_groups": "motion", "particle_velocity_innovation": True,
              "particle_velocity_decay": 0.5, "keep_range_groups": "motion",
              "keep_range_target": "motion", "keep_range_clip": False,

@@ -25,6 +25,11 @@ wrist / elbow / both flips): angular hold with ``skin_ring`` 1.5 -0.79 / -0.13 /
 "both" flip -0.72 (the others coincide with the pose or leave the limits). At the ESTIMATE the
 unrefined flips lose by 0.1-0.5 nats (the estimate sits on its branch's peak, its flips do not):
 ``branch_refine_polls`` compares refined poses. Numbers: ``KpfConfig.branch_threshold``.
+
+Two gates on what is scored (29 Nov, ``i14-branch``; numbers in their ``KpfConfig`` fields):
+``branch_min_separation_mm`` leaves out flips whose wrist lies near the estimate's
+(:func:`wrist_separation`, :func:`gate_near_flips`: a near flip costs little if wrong, and its
+evidence is the weakest), ``branch_max_step_mm`` a moving arm (the estimate lags the image).
 """
 
 from __future__ import annotations
@@ -46,12 +51,49 @@ def cusum_update(S: np.ndarray, r: np.ndarray, forget: float) -> np.ndarray:
     return np.where(np.isfinite(r), np.maximum(0.0, forget * S + np.nan_to_num(r)), 0.0)
 
 
+def clip_ratios(r: np.ndarray, cap: float | None) -> np.ndarray:
+    """The ratios ``r`` clipped to ``[-cap, cap]`` nats (NaN kept; None: as they are): Huber's
+    robust probability-ratio test (Huber 1965, "A robust version of the probability ratio
+    test"), so that no single frame's outlier carries the CUSUM over its threshold
+    (``branch_max_ratio``)."""
+    r = np.asarray(r, float)
+    return r if cap is None else np.clip(r, -cap, cap)
+
+
 def branch_switches(S: np.ndarray, threshold: float) -> np.ndarray:
     """``(arms,)`` per row of ``S (arms, kinds)`` the kind to switch to (the largest sum above
     ``threshold``), -1 for none."""
     S = np.asarray(S, float)
     k = np.argmax(S, axis=1)
     return np.where(S[np.arange(len(S)), k] > threshold, k, -1)
+
+
+def wrist_separation(body: bm.BodyModel, q: np.ndarray, flips: np.ndarray, side: str
+                     ) -> np.ndarray:
+    """``(K,)`` the distance (m) from arm ``side``'s wrist of the pose ``q (14,)`` to that of
+    each of the poses ``flips (K, 14)`` (NaN rows give NaN): what taking a flip costs the
+    wrist if it is the wrong branch (``branch_min_separation_mm``)."""
+    prefix, _ = SIDES[side]
+    flips = np.atleast_2d(np.asarray(flips, float))
+    ok = np.all(np.isfinite(flips), axis=1)
+    d = np.full(len(flips), np.nan)
+    if ok.any():
+        w = body.forward(np.vstack([np.asarray(q, float)[None], flips[ok]])).joint(
+            f"{prefix}_wrist")
+        d[ok] = np.linalg.norm(w[1:] - w[0], axis=1)
+    return d
+
+
+def gate_near_flips(r: np.ndarray, separation: np.ndarray, min_separation: float | None
+                    ) -> np.ndarray:
+    """The ratios ``r`` with those of flips whose wrist lies nearer than ``min_separation``
+    (m; None: none) to the estimate's set to NaN (out of the CUSUM, which restarts their sums):
+    a near flip costs at most its separation if taken wrongly, and the cues' evidence between
+    near flips is the weakest (a small depth difference, a small perspective scale change)."""
+    r = np.array(r, float)
+    if min_separation is not None:
+        r[~(np.asarray(separation, float) >= min_separation)] = np.nan
+    return r
 
 
 def flip_arm(body: bm.BodyModel, q: np.ndarray, side: str, kind: str, c_ref: np.ndarray,
@@ -79,6 +121,11 @@ class FlipBranches:
             body, intrinsics, cfg.model_copy(update={"skin_ring": cfg.branch_skin_ring}))
         self.S = np.zeros((len(SIDES), len(FLIPS)))
         self.history: list[tuple[np.ndarray, np.ndarray]] = []
+        self.separations: list[np.ndarray] = []
+        """Per frame ``(arms, kinds)`` each flip's wrist separation (m, NaN: no flip)."""
+        self.steps: list[np.ndarray] = []
+        """Per frame ``(arms,)`` how far (m) each arm's estimated wrist moved since the last
+        estimate."""
 
     def log_post(self, tracker, q: np.ndarray, maps, T_cam_base: np.ndarray) -> np.ndarray:
         """The decision's log-posterior of poses ``q``: the tracker's (the sigmas' floors), or
@@ -102,22 +149,41 @@ class FlipBranches:
         """Update the sums with this frame's ratios at ``mode (14,)``; switch an arm whose sum
         passed the threshold (the tracker's particles and last estimate too); the estimate.
         With ``branch_refine_polls`` the ratios are between the refined estimate's arm and its
-        refined flips (each at its branch's local peak, as the particles' modes are)."""
+        refined flips (each at its branch's local peak, as the particles' modes are). With
+        ``branch_min_separation_mm`` only the flips of the (unrefined) estimate whose wrist lies
+        that far from its own are refined and scored; an arm without one is skipped, and with
+        ``branch_max_step_mm`` an arm whose estimated wrist moved farther since the last
+        estimate."""
         c_ref = np.linalg.inv(np.asarray(T_cam_base, float))[:3, 3]
 
         def f(q):
             return self.log_post(tracker, q, maps, T_cam_base)
         r = np.full((len(SIDES), len(FLIPS)), np.nan)
+        sep = np.full_like(r, np.nan)
+        mm, ms = self.cfg.branch_min_separation_mm, self.cfg.branch_max_step_mm
+        moved = np.full(len(SIDES), np.nan)
         best = {}
         for a, side in enumerate(SIDES):
+            raw = arm_flips(self.body, mode[None], side, c_ref)
+            sep[a] = wrist_separation(self.body, mode, np.stack([raw[k][0] for k in FLIPS]), side)
+            # a near flip is neither refined nor scored (its ratio stays NaN)
+            far = np.isfinite(gate_near_flips(np.zeros(len(FLIPS)), sep[a],
+                                              None if mm is None else mm / 1000.0))
+            # a moving arm's ratios wait for it to stop (``branch_max_step_mm``)
+            moved[a] = wrist_separation(self.body, tracker.mode, mode[None], side)[0]
+            if not far.any() or (ms is not None and not moved[a] <= ms / 1000.0):
+                continue
             base, ll0 = self._refined(tracker, mode, side, f, T_cam_base)
             flips = arm_flips(self.body, base[None], side, c_ref)
             for k, kind in enumerate(FLIPS):
                 q = flips[kind][0]
-                if not (np.all(np.isfinite(q)) and tracker.limits.inside(q[None])[0]):
+                if not (far[k] and np.all(np.isfinite(q)) and tracker.limits.inside(q[None])[0]):
                     continue
                 best[side, k], ll = self._refined(tracker, q, side, f, T_cam_base)
                 r[a, k] = ll - ll0
+        self.separations.append(sep)
+        self.steps.append(moved)
+        r = clip_ratios(r, self.cfg.branch_max_ratio)
         self.S = cusum_update(self.S, r, self.cfg.branch_forget)
         self.history.append((r, self.S.copy()))
         for (side, _), k in zip(SIDES.items(), branch_switches(self.S, self.cfg.branch_threshold),

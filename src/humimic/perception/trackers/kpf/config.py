@@ -49,7 +49,8 @@ NEEDS: dict[str, tuple[str, ...]] = {
     "refine_step": ("refine_polls", "branch_refine_polls"),
     "refine_depth_m": ("refine_polls",), "refine_feedback": ("refine_polls",),
     **{k: ("branch_threshold",) for k in ("branch_forget", "branch_refine_polls",
-                                          "branch_skin_ring")},
+                                          "branch_skin_ring", "branch_min_separation_mm",
+                                          "branch_max_step_mm", "branch_max_ratio")},
     **{k: ("observed_walk_px",) for k in ("observed_walk_floor", "observed_walk_groups")},
     **{k: ("particle_velocity",) for k in ("particle_velocity_innovation",
                                            "particle_velocity_decay")},
@@ -221,9 +222,37 @@ class KpfConfig(KpfDynamics):
     branch_refine_polls: int = Field(0, ge=0, le=50)
     """Pattern-search polls (step ``refine_step``) refining the estimate's arm and each
     flip before their ratio (0: the flips of the estimate as they are)."""
+    branch_max_ratio: float | None = Field(None, gt=0.0, le=100.0)
+    """The per-frame ratios clipped to +- this (nats) before the CUSUM (:func:`~humimic.
+    perception.trackers.kpf.branches.clip_ratios`, Huber's robust ratio test): a switch needs
+    several frames' evidence. None: as they are. Measured at 0.5 with threshold 1.0 and the
+    two gates above (200 mm, 20 mm): side 40.7 ± 2.8, angular 211 ± 10 (seeds 0-9), another
+    person's side seed 3 143 -> 57, the narrow eye side 69 ± 20, angular 115 ± 11. Off."""
     branch_skin_ring: float | None = Field(None, gt=1.0, le=4.0)
     """The branch decision's likelihood with this ``skin_ring`` (the filter's own without it);
     None: the filter's likelihood."""
+    branch_min_separation_mm: float | None = Field(None, gt=0.0, le=2000.0)
+    """A loss-aware branch decision: only flips whose wrist lies at least this far (mm) from
+    the estimate's (before ``branch_refine_polls``) are scored, enter the CUSUM and may be
+    switched to; a nearer flip's sum restarts at 0 (:func:`~humimic.perception.trackers.kpf.
+    branches.gate_near_flips`). A near flip costs little if wrong and its evidence is the
+    weakest (Table 1's side hold: the wrist flip 104 mm, the double 147 mm from the truth, tied
+    with it; the angular hold's flips 250-470 mm). None: every flip. Measured (Table 1's
+    ``kpf`` with the pair, (1000, 3), threshold 0.5, ring 1.5, 3 polls, mean wrist error, mm,
+    seeds 0-4; the pair alone side 42, angular 197; without the gate 91 / 116): 200 mm: angular
+    125 ± 26 but side 146 ± 25: with the near ties gated the double flip (400-530 mm away) wins
+    during the rise, as it does, rightly, for angular pointing. Off."""
+    branch_max_step_mm: float | None = Field(None, gt=0.0, le=2000.0)
+    """The branch decision only for a still arm: an arm whose estimated wrist moved farther
+    than this (mm) since the last estimate is not scored and its sums restart (while the arm
+    moves the estimate lags the image, and a flip's refined pose can catch up: in Table 1's
+    rise both gestures gave the double flip +0.3-1 nats a frame, right for angular pointing,
+    wrong for side pointing). None: every frame. Measured with ``branch_min_separation_mm``
+    200 (as above, seeds 0-9; the pair alone side 40.3 ± 3.5, angular 198 ± 10): 20 mm,
+    threshold 0.5: side 48 ± 22 (seed 8 107), angular 170 ± 30; threshold 1.0: side 40.0 ±
+    2.2, angular 209 ± 9 (the holds are decided late or not at all); with it, seeds 0-4, the
+    narrow eye angular 184 -> 116 ± 11 but side 66 -> 74 ± 26, another person side 54 -> 71 ±
+    40; (150, 2) ~2x the CPU per frame. Off."""
     colour_gradients: bool = False
     """Our extension: the edge and ridge cues on the strongest colour channel's derivatives
     at each pixel instead of grey levels' (clothes as bright as the background keep their
