@@ -122,6 +122,15 @@ class StereoConfig(Section):
     out, differently in each eye; the template matched that speckle (ude_wave_tracking seed 3:
     depth error std 1.5 -> 13-17 mm, measured in docs/ude_perception_notes.md). 0: the plain
     per-pixel mask."""
+    min_visible_ratio: float = Field(0.8, ge=0.0, le=1.0)
+    """Our extension: a match is refused (reason ``shrinking_blob``) while, in either eye, the
+    target pixels of the matched window are below this share of their largest over the last
+    ``visible_window_s``: a blob being hidden behind a nearer part, whose edge the match then
+    follows (:mod:`humimic.perception.blobs.occlusion`; measured: 0.56-0.79 in the frames a
+    hand turned behind the torso, 0.85 and above for the waving and turning hands otherwise).
+    0: never refused."""
+    visible_window_s: float = Field(0.1, gt=0.0, le=2.0)
+    """The window (s) of :attr:`min_visible_ratio`."""
 
 
 class TargetColor(Section):
