@@ -131,8 +131,10 @@ class PerceptionCore:
         self.locked: list[dict[int, tuple[str, int]]] = [{}, {}]
         """Per eye, slot -> (name, age when last sure): names EM cannot have swapped since."""
         self.color_mask = cfg.stereo.color_mask
-        self.min_visible_ratio = cfg.stereo.min_visible_ratio
-        self.visible = VisibleMass(cfg.stereo.visible_window_s)
+        st = self.stereo
+        self.visible = None if not st.occlusion_check else VisibleMass(
+            st.occlusion_window_s, st.occlusion_min_drop, st.occlusion_spread_k,
+            st.occlusion_min_asymmetry)
         """Each target's recent visible mass in both eyes (matches refused while it shrinks)."""
         if self.color_mask:   # the colour-masked crops' kernel, before the first match
             load_posterior_kernels()
@@ -211,8 +213,8 @@ class PerceptionCore:
                                 None if self.match_std is None else self.match_std * k)
             for i, m in zip(pub, ms, strict=True):
                 reason[i], score[i] = m.reason, m.score
-                if m.ok and self.color_mask and self.visible.update(
-                        self.targets[i], t, m.mass_px) < self.min_visible_ratio:
+                if (m.ok and self.color_mask and self.visible is not None
+                        and self.visible.hidden(self.targets[i], t, m.mass_px)):
                     reason[i] = "shrinking_blob"  # being hidden: the match follows the edge
                 elif m.ok:
                     ok[i], p_base[i], R_base[i] = True, m.p_base, m.R_base

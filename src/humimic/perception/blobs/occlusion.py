@@ -50,33 +50,48 @@ def window_mass_px(fraction: np.ndarray, side: int, spacing: np.ndarray) -> np.n
     return np.asarray(fraction, float) * side**2 * np.square(np.asarray(spacing, float))
 
 
-def visible_mass_ratio(mass_px: np.ndarray, recent_px: np.ndarray) -> float:
-    """``min_e mass_e / max_k recent_{k,e}`` over the eyes ``e``: the share of its recent
-    visible mass a blob still shows in the eye where it shrank most (``mass_px (2,)`` now,
-    ``recent_px (K, 2)`` the earlier frames of the window). 1 without history; an eye whose
-    recent maximum is 0 counts as 1."""
+def visible_drop(mass_px: np.ndarray, recent_px: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per eye, how much of its recent visible mass a blob lost, and how much that mass varied:
+    ``drop_e = 1 - mass_e / median_k recent_{k,e}`` and the relative spread
+    ``std_k recent_{k,e} / median_k recent_{k,e}`` (sample standard deviation) from the
+    matched windows' target pixels now (``mass_px (2,)``) and in the earlier frames of the
+    window (``recent_px (K, 2)``, K >= 2). An eye whose median is 0 has drop and spread 0."""
     recent = np.asarray(recent_px, float).reshape(-1, 2)
-    if len(recent) == 0:
-        return 1.0
-    ref = recent.max(axis=0)
-    now = np.asarray(mass_px, float)
-    ratio = np.where(ref > 0.0, now / np.where(ref > 0.0, ref, 1.0), 1.0)
-    return float(ratio.min())
+    ref = np.median(recent, axis=0)
+    safe = np.where(ref > 0.0, ref, 1.0)
+    drop = np.where(ref > 0.0, 1.0 - np.asarray(mass_px, float) / safe, 0.0)
+    spread = np.where(ref > 0.0, recent.std(axis=0, ddof=1) / safe, 0.0)
+    return drop, spread
+
+
+def half_occluded(drop: np.ndarray, spread: np.ndarray, min_drop: float, spread_k: float,
+                  min_asymmetry: float) -> bool:
+    """Whether a blob is being hidden, unequally in the two eyes: in some eye its visible mass
+    fell by at least ``min_drop`` and by at least ``spread_k`` times its recent relative spread
+    (a speckled mask's frame-to-frame noise is not a hiding), and the two eyes' drops differ by
+    at least ``min_asymmetry`` (a half-occluded strip: an edge at the blob's own depth, or one
+    along the epipolar line, hides as much in both eyes and does not move the match)."""
+    hiding = (drop >= min_drop) & (drop >= spread_k * spread)
+    return bool(hiding.any()) and abs(float(drop[0] - drop[1])) >= min_asymmetry
 
 
 class VisibleMass:
     """Per target, the matched windows' target masses (left, right) over the last ``window_s``
-    seconds, and the ratio of a new frame's to them (:func:`visible_mass_ratio`)."""
+    seconds, and :func:`half_occluded` of a new frame against them."""
 
-    def __init__(self, window_s: float) -> None:
+    def __init__(self, window_s: float, min_drop: float, spread_k: float,
+                 min_asymmetry: float) -> None:
         self.window_s = float(window_s)
+        self.args = (float(min_drop), float(spread_k), float(min_asymmetry))
         self._hist: dict[str, deque] = {}
 
-    def update(self, name: str, t: float, mass_px: np.ndarray) -> float:
-        """Add frame ``t``'s masses and return their ratio to the earlier ones in the window."""
+    def hidden(self, name: str, t: float, mass_px: np.ndarray) -> bool:
+        """Add frame ``t``'s masses; whether the blob is being hidden (needs 3 earlier frames
+        in the window)."""
         h = self._hist.setdefault(name, deque())
         while h and h[0][0] < t - self.window_s - 1e-9:
             h.popleft()
-        ratio = visible_mass_ratio(mass_px, [m for _, m in h])
+        out = len(h) >= 3 and half_occluded(*visible_drop(mass_px, [m for _, m in h]),
+                                            *self.args)
         h.append((t, np.asarray(mass_px, float).copy()))
-        return ratio
+        return out

@@ -87,6 +87,12 @@ class StereoParams:
     min_target_fraction: float = 0.1
     """With colour masks (``template_luts``), a template less target-coloured than this (mean
     probability) fails with reason 'few_target_pixels'."""
+    occlusion_check: bool = True
+    occlusion_window_s: float = 0.2
+    occlusion_min_drop: float = 0.2
+    occlusion_spread_k: float = 3.0
+    occlusion_min_asymmetry: float = 0.05
+    """The core's 'shrinking_blob' refusal (:mod:`~humimic.perception.blobs.occlusion`)."""
 
 
 @dataclass(frozen=True)
