@@ -17,17 +17,18 @@ visibility ground truth shows why: the hand was 1.00 / 0.90 / 0.80 unoccluded in
 and 0.92 / 0.83 / 0.65 in the right one.
 
 What sets these frames apart is the visible mass (:func:`visible_drop`: the target pixels of
-the matched window against their median over the last 0.2 s): it fell by 0.21-0.42 in the
-right eye and by 0.11-0.24 in the left one, 0.06-0.19 apart (seeds 1-3). A falling mass alone is not enough: a hand leaving
-the view or sinking behind an edge along the epipolar line (``ude_hidden_target``) loses the
-same share in both eyes (to 0.03) and is measured right (d^2 <= 14), and a speckled mask (a
-skin-coloured shirt) moves by 10-15 % from frame to frame in each eye alone. So a measurement
-is refused (reason ``shrinking_blob``) when :func:`half_occluded`: in some eye the drop is at
-least ``occlusion_min_drop`` (0.2) and ``occlusion_spread_k`` (3) times the mass's recent
-relative spread, and the eyes' drops differ by ``occlusion_min_asymmetry`` (0.05). Offline on
-the archived masses: the three frames of each of ``ude_cmu_turn`` seeds 1-3 refused, no frame
-of ``ude_hidden_target`` or ``mimic_tracked_wave`` (seed 7, 1.8 m, dark skin), 2 of 1214
-matched frames in the beige shirt (one 80 d^2 off, one fine).
+the matched window against their median over the last 0.2 s): it fell by 0.21-0.42 in the right
+eye and by 0.11-0.24 in the left one, 0.06-0.19 apart (seeds 1-3). A falling mass alone is not
+enough: a hand leaving the view or sinking behind an edge along the epipolar line
+(``ude_hidden_target``) loses the same share in both eyes (to 0.03) and is measured right (d^2
+<= 14), and a speckled mask (a skin-coloured shirt) moves by 10-15 % from frame to frame in
+each eye alone. So a measurement is refused (reason ``shrinking_blob``) when
+:func:`half_occluded`: in some eye the drop is at least ``occlusion_min_drop`` (0.2) and
+``occlusion_spread_k`` (3) times the mass's recent relative spread, and the eyes' drops differ
+by ``occlusion_min_asymmetry`` (0.05). Offline on the archived masses: the three frames of each
+of ``ude_cmu_turn`` seeds 1-3 refused, no frame of ``ude_hidden_target`` or
+``mimic_tracked_wave`` (seed 7, 1.8 m, dark skin), 2 of 1214 matched frames in the beige shirt
+(one 80 d^2 off, one fine).
 """
 
 from __future__ import annotations
