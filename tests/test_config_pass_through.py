@@ -34,7 +34,10 @@ def test_non_default_values_are_passed_through():
                                   sigma_min_px=2.0, sigma_max_px=20.0, min_fill=0.2, lost_frames=7,
                                   backoff_s=1.0, backoff_every=5),
         stereo=StereoConfig(template_half=5, prefilter_sigma=0.0, fine_steps=2,
-                            template_sigma=2.0, min_zncc=0.7, box_sigma=2.5, mask_closing=2))
+                            template_sigma=2.0, min_zncc=0.7, box_sigma=2.5, mask_closing=2,
+                            occlusion_check=False, occlusion_window_s=0.3,
+                            occlusion_min_drop=0.25, occlusion_spread_k=2.0,
+                            occlusion_min_asymmetry=0.1))
     for params, section in ((detection_params(cfg), cfg.detection), (em_params(cfg), cfg),
                             (stereo_params(cfg), cfg.stereo)):
         given = {k: getattr(section, k) for k in _fields(type(params))

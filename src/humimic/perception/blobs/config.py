@@ -122,6 +122,17 @@ class StereoConfig(Section):
     out, differently in each eye; the template matched that speckle (ude_wave_tracking seed 3:
     depth error std 1.5 -> 13-17 mm, measured in docs/ude_perception_notes.md). 0: the plain
     per-pixel mask."""
+    occlusion_check: bool = True
+    """Our extension: a match is refused (reason ``shrinking_blob``) while its blob is being
+    hidden unequally in the two eyes -- a half-occluded blob, whose outline then ends at a
+    nearer edge that the match follows (:mod:`humimic.perception.blobs.occlusion`): in some
+    eye the target pixels of the matched window fell by ``occlusion_min_drop`` of their median
+    over the last ``occlusion_window_s`` and by ``occlusion_spread_k`` times their relative
+    spread there, and the two eyes' drops differ by ``occlusion_min_asymmetry``."""
+    occlusion_window_s: float = Field(0.2, gt=0.0, le=2.0)
+    occlusion_min_drop: float = Field(0.2, gt=0.0, le=1.0)
+    occlusion_spread_k: float = Field(3.0, ge=0.0, le=20.0)
+    occlusion_min_asymmetry: float = Field(0.05, ge=0.0, le=1.0)
 
 
 class TargetColor(Section):

@@ -43,6 +43,7 @@ from humimic.perception.blobs.identity import (
     stereo_evidence,
     turned_round,
 )
+from humimic.perception.blobs.occlusion import VisibleMass
 from humimic.perception.blobs.record import STATE_CODE
 from humimic.perception.blobs.stereo import StereoParams, StereoRig, small_blob_scale
 from humimic.perception.cues.color_models import load_posterior_kernels
@@ -130,6 +131,11 @@ class PerceptionCore:
         self.locked: list[dict[int, tuple[str, int]]] = [{}, {}]
         """Per eye, slot -> (name, age when last sure): names EM cannot have swapped since."""
         self.color_mask = cfg.stereo.color_mask
+        st = self.stereo
+        self.visible = None if not st.occlusion_check else VisibleMass(
+            st.occlusion_window_s, st.occlusion_min_drop, st.occlusion_spread_k,
+            st.occlusion_min_asymmetry)
+        """Each target's recent visible mass in both eyes (matches refused while it shrinks)."""
         if self.color_mask:   # the colour-masked crops' kernel, before the first match
             load_posterior_kernels()
         self.match_std = cfg.match_std if cfg.covariance == "following" else None
@@ -207,7 +213,10 @@ class PerceptionCore:
                                 None if self.match_std is None else self.match_std * k)
             for i, m in zip(pub, ms, strict=True):
                 reason[i], score[i] = m.reason, m.score
-                if m.ok:
+                if (m.ok and self.color_mask and self.visible is not None
+                        and self.visible.hidden(self.targets[i], t, m.mass_px)):
+                    reason[i] = "shrinking_blob"  # being hidden: the match follows the edge
+                elif m.ok:
                     ok[i], p_base[i], R_base[i] = True, m.p_base, m.R_base
                     uv_match[i] = m.uv_left, m.uv_right
                     name = self.targets[i]

@@ -35,10 +35,11 @@ not grow with the number of targets, only the small per-target scalar set-up doe
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
+from humimic.perception.blobs.occlusion import target_fraction, window_mass_px
 from humimic.perception.blobs.triangulation import (  # noqa: F401  (re-exported)
     dlt_jacobian,
     following_covariance,
@@ -86,6 +87,12 @@ class StereoParams:
     min_target_fraction: float = 0.1
     """With colour masks (``template_luts``), a template less target-coloured than this (mean
     probability) fails with reason 'few_target_pixels'."""
+    occlusion_check: bool = True
+    occlusion_window_s: float = 0.2
+    occlusion_min_drop: float = 0.2
+    occlusion_spread_k: float = 3.0
+    occlusion_min_asymmetry: float = 0.05
+    """The core's 'shrinking_blob' refusal (:mod:`~humimic.perception.blobs.occlusion`)."""
 
 
 @dataclass(frozen=True)
@@ -101,24 +108,14 @@ class StereoMeasurement:
     uv_right: np.ndarray
     """The match in raw right-image pixels."""
     score: float
+    mass_px: np.ndarray = field(default_factory=lambda: np.zeros(2))
+    """Target pixels of the left template and of the matched right window (colour masks only;
+    zeros without, and on failures): :mod:`~humimic.perception.blobs.occlusion`."""
 
 
 def _fail(reason: str, uv_left, score: float = 0.0) -> StereoMeasurement:
     return StereoMeasurement(False, reason, np.zeros(3), np.zeros((3, 3)),
                              np.nan_to_num(np.asarray(uv_left, float)), np.zeros(2), score)
-
-
-def _target_fraction(luts, targets: list[int], templates: np.ndarray) -> np.ndarray:
-    """Mean of ``p / (p + 1)`` over each (masked) template ``(n, h, w, C)``: how much of it is
-    target-coloured (one table lookup per distinct colour model)."""
-    out = np.zeros(len(targets))
-    px = templates if templates.dtype == np.uint8 else \
-        np.clip(templates, 0, 255).astype(np.uint8)
-    for lut in {id(luts[i]): luts[i] for i in targets}.values():
-        rows = [r for r, i in enumerate(targets) if luts[i] is lut]
-        p = lut.lookup(px[rows]).astype(np.float64)
-        out[rows] = (p / (p + 1.0)).mean(axis=(1, 2))
-    return out
 
 
 class StereoRig:
@@ -298,9 +295,10 @@ class StereoRig:
             + kd[:, :, None] * tl[:, 0, None, None]
         mx, my = il.distort((lx - il.cx) / il.fx, (ly - il.cy) / il.fy)
         tpls = _read(src_l, mx, my)
-        few = np.zeros(n, bool)
+        few, frac = np.zeros(n, bool), np.zeros((n, 2))
         if luts is not None:  # templates with too little of the target's colour
-            few = _target_fraction(luts, [i for i, *_ in jobs], tpls) < p.min_target_fraction
+            frac[:, 0] = target_fraction(luts, [i for i, *_ in jobs], tpls)
+            few = frac[:, 0] < p.min_target_fraction
         sc = zncc_strips(strips, tpls)  # sc[r, m] <-> template centred on s_lo + (m - 1) d
         sc[few] = -1.0  # reported below
         valid = (np.arange(sc.shape[1]) >= 1) & (np.arange(sc.shape[1])[None, :]
@@ -327,6 +325,9 @@ class StereoRig:
         with np.errstate(invalid="ignore", divide="ignore"):
             off = np.where(curv < 0, np.clip(0.5 * (f_m - f_p) / curv, -1.0, 1.0), 0.0)
         s_star = s_f[ar, b] + off * d / F
+        if luts is not None:  # the matched right window's target share (occlusion check)
+            frac[:, 1] = target_fraction(luts, [i for i, *_ in jobs], win[ar, b])
+        mass = window_mass_px(frac, 2 * hh + 1, d[:, None])
         qr = q0 + s_star[:, None] * t
         good = best >= p.min_zncc
         for r in np.flatnonzero(~good).tolist():
@@ -336,7 +337,7 @@ class StereoRig:
         if not good.any():
             return
         rows = [jobs[r][0] for r in np.flatnonzero(good).tolist()]
-        scores = best[good].tolist()
+        scores, mass = best[good].tolist(), mass[good]
         xl_a = np.array([(xl, yl) for _, xl, yl, _, _ in jobs])[good]
         xr_a = np.stack([(qr[good, 0] - ir.cx) / ir.fx, (qr[good, 1] - ir.cy) / ir.fy], 1)
         cl = np.asarray(cov_l, float) if cov_l is not None else None
@@ -366,7 +367,7 @@ class StereoRig:
                 out[i] = _fail("behind_camera", uv_left[i], scores[r])
             else:
                 out[i] = StereoMeasurement(True, "", P[r], R[r], uv_left[i].copy(),
-                                           np.array([ur[r], vr[r]]), scores[r])
+                                           np.array([ur[r], vr[r]]), scores[r], mass[r])
 
     def match(self, image_left, image_right, uv_left, blob_cov_left, uv_right_blob,
               blob_cov_right, cov_uv_left, cov_uv_right, template_lut=None
