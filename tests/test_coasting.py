@@ -172,4 +172,6 @@ def test_the_stage_scores_a_gated_measurement_as_a_coasted_frame():
     assert m["gated_measurements"]["hand"] == 1 and m["gate_reinits"]["hand"] == 0
     assert m["coasted_frames"]["hand"] == 1 and m["longest_coast_s"]["hand"] == pytest.approx(DT)
     assert a.valid[:, 0].all() and np.flatnonzero(~a.measured[:, 0]).tolist() == [30]
-    assert np.abs(a.x[30, 0, 0:3] - p).max() < 0.03  # not pulled towards the outlier
+    # not pulled towards the 0.4 m outlier: measured 7.9 mm (2026-11-29; seeds 0-3: 3.3-11 mm,
+    # the filter's noise; the bound was 30 mm)
+    assert np.abs(a.x[30, 0, 0:3] - p).max() < 0.02

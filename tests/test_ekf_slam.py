@@ -181,6 +181,8 @@ def test_camera_only_and_imu_only_stay_finite():
     e = {k: rmse(r.est[:, 0:3] - r.truth[:, 0:3]) for k, r in
          (("camera", cam), ("imu", imu), ("fused", fused))}
     assert e["fused"] < e["imu"], e
+    # measured 6.6, 8.8, 98 mm (2026-11-29): monocular alone has no scale, the IMU alone drifts
+    assert e["fused"] < 0.015 and e["camera"] > 3 * e["fused"], e
 
 
 def test_gain_update_rejects_indefinite_innovation():

@@ -45,7 +45,8 @@ def test_a_hand_built_jacobian_keeps_the_seen_directions_and_floors_the_unseen()
 
 def test_shaped_propagation_has_the_closed_form_covariance():
     """Random-walk noise ``A n`` with ``n`` uniform of half-width D: covariance
-    ``A diag(D^2 / 3) A^T`` (sample covariance of 200k draws, ~1 % off); the motion group's
+    ``A diag(D^2 / 3) A^T`` (sample covariance of 200k draws: measured <= 0.41 % of the largest
+    entry off over seeds 10-15, 0.17 % on this one; 2026-11-29); the motion group's
     the same with ``motion_scale D``; without ``shape`` the paper's diagonal."""
     rng = np.random.default_rng(4)
     d, n = 4, 200_000
@@ -56,15 +57,17 @@ def test_shaped_propagation_has_the_closed_form_covariance():
         out, _ = kpf.mixed_propagate(x, np.zeros(d), share, D, rng, lambda q: np.ones(len(q),
                                      bool), 0.25, shape=A)
         want = A @ np.diag((scale * D) ** 2 / 3.0) @ A.T
-        assert np.abs(np.cov(out.T) - want).max() < 0.02 * np.abs(want).max()
+        assert np.abs(np.cov(out.T) - want).max() < 0.01 * np.abs(want).max()  # was 0.02
     out, _ = kpf.mixed_propagate(x, np.zeros(d), 0.0, D, rng, lambda q: np.ones(len(q), bool))
-    assert np.allclose(np.cov(out.T), np.diag(D ** 2 / 3.0), atol=0.02 * D.max() ** 2)
+    # measured <= 0.11 % of D_max^2 over seeds 10-15 (the bound was 2 %)
+    assert np.allclose(np.cov(out.T), np.diag(D ** 2 / 3.0), atol=0.003 * D.max() ** 2)
 
 
 def test_shaping_one_group_only_leaves_the_others_noise_diagonal():
     """``shape_groups="random"`` (``observed_walk_groups``): the random group's covariance
     ``A diag(D^2 / 3) A^T``, the motion group's the paper's ``diag((0.25 D)^2 / 3)``
-    (sample covariances of 200k draws each); ``"motion"`` the other way round."""
+    (sample covariances of 200k draws each: measured <= 0.48 % of the largest entry off over
+    seeds 10-15; 2026-11-29); ``"motion"`` the other way round."""
     rng = np.random.default_rng(6)
     d, n = 4, 400_000
     D = np.array([0.4, 0.35, 0.6, 0.45])
@@ -75,8 +78,8 @@ def test_shaping_one_group_only_leaves_the_others_noise_diagonal():
         out, moved = kpf.mixed_propagate(np.zeros((n, d)), np.zeros(d), 0.5, D, rng,
                                          lambda q: np.ones(len(q), bool), 0.25, shape=A,
                                          shape_groups=groups)
-        assert np.abs(np.cov(out[~moved].T) - want_r).max() < 0.02 * np.abs(want_r).max()
-        assert np.abs(np.cov(out[moved].T) - want_m).max() < 0.02 * np.abs(want_m).max()
+        assert np.abs(np.cov(out[~moved].T) - want_r).max() < 0.01 * np.abs(want_r).max()
+        assert np.abs(np.cov(out[moved].T) - want_m).max() < 0.01 * np.abs(want_m).max()
 
 
 def test_a_straight_arms_twist_noise_is_floored_and_the_torso_untouched():

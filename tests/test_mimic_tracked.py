@@ -5,8 +5,9 @@ margin; the paper's goals (RMSE <= 25 mm, lag <= 50 ms) are in the benchmark rep
 Measured on 2026-11-23 (calibrated measurement noise): RMSE 15.5 mm, lag 20.9 ms (a
 cross-correlation lag: the hold PD adds ~half a frame to the latency), photon-to-joint latency
 16.7 ms (perception declares one frame; the estimate is used at the servo tick it is ready),
-measurements 9.3 mm and estimates 8.1 mm RMS. Detection starts at once (``detection.period:
-0``) and mimicry 0.5 s later, once the filter's velocity has converged.
+measurements 9.3 mm and estimates 8.1 mm RMS; re-measured 2026-11-29: RMSE 15.1 mm, lag 21.9 ms,
+measurements 7.8 mm, estimates 6.9 mm (the bounds 2.0-2.6x these). Detection starts at once
+(``detection.period: 0``) and mimicry 0.5 s later, once the filter's velocity has converged.
 """
 
 from __future__ import annotations

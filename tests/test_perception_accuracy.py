@@ -70,7 +70,9 @@ def test_static_hand_wide_filter_smooths_depth(static_hand):
         for mean, std in zip(t[f"{key}_bias_mm_s" if key == "vel" else "acc_bias_mm_s2"],
                              t[f"{key}_std_mm_s" if key == "vel" else "acc_std_mm_s2"],
                              strict=True):
-            assert abs(mean) <= 0.1 * std  # measured <= 0.04 std (<= 0.008 on 2026-11-29)
+            # measured <= 0.04 std before; on 2026-11-29 <= 0.0086 std (seeds 2-4: 0.0044,
+            # 0.0096, 0.020: the bound 2x the worst seed; it was 0.1)
+            assert abs(mean) <= 0.04 * std
 
 
 def test_table2_propagated_matches_empirical_covariance(static_hand):

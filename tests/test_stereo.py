@@ -158,7 +158,7 @@ def test_following_covariance_matches_monte_carlo():
     emp = np.cov(P.T)
     np.testing.assert_allclose(np.diag(R), np.diag(emp), rtol=0.05)
     _, R_ind = rig.triangulate(uv_l, uv_r, C_l, C_l + s_m**2 * np.outer(t, t))
-    assert R_ind[0, 0] > 5 * emp[0, 0]  # independent points: depth overstated here
+    assert R_ind[0, 0] > 20 * emp[0, 0]  # independent points: depth overstated (measured 50x)
 
 
 def test_colour_masked_match_ignores_background_clutter():

@@ -43,8 +43,9 @@ def test_apf_with_a_cheaper_first_stage_matches_the_kalman_filter():
             total += s.log_evidence
         errs.append(np.array(means)[:, 0] - KF_MEANS[:, 0])
         lls.append(total - KF_LOGLIK)
-    assert np.sqrt(np.mean(np.square(errs))) < 0.01          # measured 0.003 (posterior sd 0.07)
-    assert np.sqrt(np.mean(np.square(lls))) < 1.0            # measured 0.3 nats
+    # measured 0.0069 (posterior sd 0.07) and 0.17 nats on 2026-11-29 (the second bound was 1.0)
+    assert np.sqrt(np.mean(np.square(errs))) < 0.01
+    assert np.sqrt(np.mean(np.square(lls))) < 0.5
 
 
 def test_constant_velocity_model():

@@ -145,10 +145,11 @@ def test_table3_in_the_camera_frame_and_table2_shapes():
     cam = pa.p_base[:, 0] @ T_cb[:3, :3].T + T_cb[:3, 3]
     np.testing.assert_allclose(r["raw_mean"], 1e3 * cam.mean(0))
     np.testing.assert_allclose(r["raw_std"], 1e3 * cam.std(0))
-    assert r["raw_std"][2] > 5 * r["raw_std"][0]  # depth noise (match noise) dominates
+    assert r["raw_std"][2] > 10 * r["raw_std"][0]  # depth noise dominates: measured 27.6x
     t2 = table2(pa, "hand", skip_s=0.0)
     assert t2.n == 60 and t2.empirical.shape == (3, 3)
-    assert t2.propagated_following[2, 2] == pytest.approx(t2.empirical[2, 2], rel=0.35)
+    # measured 1.6 % off (seeds 1-4: 1.5-1.8 %; 2026-11-29; the bound was 35 %)
+    assert t2.propagated_following[2, 2] == pytest.approx(t2.empirical[2, 2], rel=0.05)
 
 
 def test_archive_round_trip(tmp_path):
