@@ -263,7 +263,7 @@ def test_eq5_and_eq4_against_direct_formulas():
     direct = np.minimum(mm.dt[pts[..., 1].astype(int), pts[..., 0].astype(int)],
                         K * mm.dt_moving[pts[..., 1].astype(int), pts[..., 0].astype(int)])
     # float32 maps: measured 9.5e-7 (2026-11-29; the bound was 1e-4)
-    np.testing.assert_allclose(motion_dt_distance(mm, pts, K=K), direct.mean(axis=1), atol=3e-6)
+    np.testing.assert_allclose(motion_dt_distance(mm, pts, K=K), direct.mean(axis=1), atol=1e-5)
     # eq. 4: a static edge costs rho more than a moving one at the same distance
     nrm = np.broadcast_to([1.0, 0.0], pts.shape)
     rho, search = 3.0, 10

@@ -55,12 +55,13 @@ def test_edge_cue_peaks_on_the_boundary_at_the_limb_angle(lut):
     p = np.rint(along(a, width / 2)[0, 0]).astype(int)
     across = np.abs(gy[p[:, 1], p[:, 0]] * np.cos(a) - gx[p[:, 1], p[:, 0]] * np.sin(a))
     mag = np.hypot(gx, gy)[p[:, 1], p[:, 0]]
-    # float32 maps: measured 4.1e-8 (the bound was 1e-3, then 1e-6 + 1e-5 relative)
+    # float32 maps: measured 4.1e-8 (the bound was 1e-3, then 1e-6 + 1e-5 relative); float32
+    # bounds in this file sit ~10x above the measured rounding (SIMD order varies by CPU)
     assert np.allclose(across / mag, np.abs(
         maps.grad[1].ravel()[p[:, 1] * W + p[:, 0]] * np.cos(a)
         - maps.grad[0].ravel()[p[:, 1] * W + p[:, 0]] * np.sin(a))
         / np.hypot(maps.grad[0], maps.grad[1]).ravel()[p[:, 1] * W + p[:, 0]], rtol=0,
-        atol=1.2e-7)
+        atol=5e-7)
 
 
 @pytest.mark.parametrize("width", [4.0, 8.0, 16.0])
@@ -118,7 +119,7 @@ def test_sampling_and_ridge_match_direct_indexing_and_the_paper_formula(lut):
                                                                        + 2 * s * c * b)
             want[n, j] = np.mean(np.where(ok, r, 0.0))
     # measured 1.5e-8 (2026-11-29; the bound was 1e-5 + 1e-5 relative)
-    assert np.allclose(C.ridge_response(maps, uv, width, angle), want, rtol=0, atol=5e-8)
+    assert np.allclose(C.ridge_response(maps, uv, width, angle), want, rtol=0, atol=2e-7)
 
 
 def test_colour_and_skin_cues(lut):
@@ -128,7 +129,7 @@ def test_colour_and_skin_cues(lut):
     maps = C.cue_maps(img, lut)
     quad = np.array([[25, 25], [55, 25], [55, 55], [25, 55]], float)[None, None]
     colour = C.band_colours(maps, quad[:, :, None])[0, 0, 0]
-    assert np.allclose(colour, np.array([200, 40, 40]) / 255, rtol=0, atol=2e-7)  # 7.3e-8
+    assert np.allclose(colour, np.array([200, 40, 40]) / 255, rtol=0, atol=1e-6)  # 7.3e-8
     ref = np.array([[[200, 40, 40]]]) / 255
     assert C.colour_response(C.band_colours(maps, quad[:, :, None]), ref)[0, 0] < 1e-6
     skin = C.skin_response(maps, np.array([[[110.0, 80.0], [40.0, 40.0]]]),
@@ -191,13 +192,13 @@ def test_colour_gradients_find_an_edge_grey_levels_miss(lut):
     mag = np.hypot(gu, gv)
     want = np.stack([gu, gv]) * np.tanh(mag / 0.15) / np.maximum(mag, 1e-6)
     # measured 2.5e-7 (2026-11-29; the bound was 2e-4)
-    assert np.allclose(rich.grad, want, rtol=0, atol=8e-7)
+    assert np.allclose(rich.grad, want, rtol=0, atol=3e-6)
     # achromatic: the same maps as grey levels
     g = C.cue_maps(bar_image(a, width), lut, colour_gradients=True)
     ref = C.cue_maps(bar_image(a, width), lut)
     # measured 0 and 1.45e-6 (2026-11-29; the bounds were 1e-4)
-    assert np.allclose(g.gradient, ref.gradient, rtol=0, atol=1e-7)
-    assert np.allclose(g.ridge, ref.ridge, rtol=0, atol=4e-6)
+    assert np.allclose(g.gradient, ref.gradient, rtol=0, atol=1e-6)
+    assert np.allclose(g.ridge, ref.ridge, rtol=0, atol=1.5e-5)
 
 
 def test_strongest_channel_is_the_argmax_of_the_squared_sums():

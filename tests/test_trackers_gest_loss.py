@@ -22,12 +22,13 @@ def test_ellipse_family_matches_opencvs_fit_and_the_conics_gradient():
     for row, ((a, b), th) in enumerate((ab, t) for ab in axes for t in angles):
         pts = fam.contour[row]
         (cx, cy), (w, h), ang = cv2.fitEllipse(pts.astype(np.float32))
-        # float32 points: measured <= 7.6e-7 and 1.9e-6 px (one ulp; 2026-11-29; was 1e-3)
-        assert np.allclose([cx, cy], centre, atol=5e-6)
-        assert np.allclose(sorted([w, h]), [2 * b, 2 * a], atol=5e-6)
+        # float32 points: measured <= 7.6e-7 and 1.9e-6 px (one ulp; 2026-11-29; was 1e-3;
+        # ~10x above: float32 rounding varies with the CPU's SIMD order)
+        assert np.allclose([cx, cy], centre, atol=2e-5)
+        assert np.allclose(sorted([w, h]), [2 * b, 2 * a], atol=2e-5)
         # OpenCV's angle is that of its first axis (w); the major axis is at th mod pi
         major = math.radians(ang) + (0.0 if w > h else math.pi / 2)
-        assert abs(math.remainder(major - th, math.pi)) < 2e-7  # measured 5.7e-8 (was 1e-4)
+        assert abs(math.remainder(major - th, math.pi)) < 1e-6  # measured 5.7e-8 (was 1e-4)
         # outward normals: the gradient of (p - c)^T Q (p - c) with Q = R diag(a^-2, b^-2) R^T
         R = np.array([[math.cos(th), -math.sin(th)], [math.sin(th), math.cos(th)]])
         Q = R @ np.diag([a ** -2, b ** -2]) @ R.T
