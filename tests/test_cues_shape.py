@@ -383,3 +383,18 @@ def test_edge_code_counts_edge_and_moving_edge():
     assert got.dtype == np.uint8
     np.testing.assert_array_equal(got, expect)
     assert set(np.unique(got)) == {0, 1, 2}
+
+
+def test_remap_uv_takes_more_rows_than_one_remap_call():
+    """``cv2.remap`` refuses maps of 32767 rows or more (40 000 states x 30 points crashed eq. 3):
+    laid out in rows of 1024, as one call per half (to float32 rounding: SIMD order)."""
+    from humimic.perception.cues.edges import remap_uv
+
+    rng = np.random.default_rng(0)
+    img = rng.random((40, 50), dtype=np.float32)
+    u, v = rng.uniform(-5, 55, (2, 40000, 30)).astype(np.float32)
+    got = remap_uv(img, u, v, 3.0, cv2.INTER_LINEAR)
+    want = np.concatenate([remap_uv(img, u[:20000], v[:20000], 3.0, cv2.INTER_LINEAR),
+                           remap_uv(img, u[20000:], v[20000:], 3.0, cv2.INTER_LINEAR)])
+    assert got.shape == (40000, 30)
+    np.testing.assert_allclose(got, want, rtol=0, atol=1e-6)  # measured 1.2e-7 (values < 3)

@@ -164,11 +164,12 @@ def edge_maps(image: np.ndarray, low: float = 50.0, high: float = 150.0,
 def remap_uv(image: np.ndarray, u: np.ndarray, v: np.ndarray, outside, interpolation: int
              ) -> np.ndarray:
     """``cv2.remap`` of ``image`` at points with coordinates ``u``, ``v`` (same shape, any
-    size) -> that shape (``+ (C,)`` for a C-channel image). remap's maps must be under 32767
-    wide: a longer last axis is laid out in rows of 1024."""
+    size, up to 33 M points) -> that shape (``+ (C,)`` for a C-channel image). remap's maps
+    must be under 32767 wide and high: a longer last axis, or more rows, are laid out in rows
+    of 1024."""
     shape = np.shape(u)
     last = shape[-1] if shape else 1
-    if 0 < last < 32767:
+    if 0 < last < 32767 and math.prod(shape[:-1]) < 32767:
         mx = np.asarray(u, np.float32).reshape(-1, last)
         my = np.asarray(v, np.float32).reshape(-1, last)
     else:
