@@ -155,6 +155,7 @@ def test_a_drifted_cloud_finds_the_face_again(redetect_after):
     assert tr.step(person(rng, truth)).state == "tracking"
     tr.pf.initialize(tr.rng, Gaussian(clutter, np.eye(3)))
     steps = [tr.step(mannequin(person(rng, truth), clutter)) for _ in range(20)]
+    assert tr.restarts == (1 if redetect_after else 0)
     found = [len(s.faces) > 0 for s in steps]
     err = np.hypot(*(steps[-1].mean[:2] - truth[:2]))
     if redetect_after:  # measured: found from the 7th frame on, final error 3.0 px

@@ -94,6 +94,9 @@ class IcuTracker:
         self.frame = 0
         self.missed = 0
         """Consecutive tracking frames whose face search found no face taken for the tutor."""
+        self.restarts = 0
+        """Restarts on a tutor's face the whole-frame search found after the window had lost
+        it (``redetect_after``): how often the cloud had drifted off the face."""
         self.refs: np.ndarray | None = None
 
     # ---- detection and recognition -----------------------------------------------------------
@@ -195,6 +198,7 @@ class IcuTracker:
             if 0 < cfg.redetect_after <= self.missed:  # the window lost the face: whole frame
                 boxes, p = self.faces(g)
                 if np.any(p >= cfg.min_confidence):  # the tutor found again: start there
+                    self.restarts += 1
                     return self._start(q, boxes, p, p >= cfg.min_confidence)
             else:
                 boxes, p = self.faces(g, self._window(m),
