@@ -81,7 +81,8 @@ class IcuConfig(Section):
     estimate (~1 ms CPU); while searching, every frame."""
     redetect_after: int = Field(6, ge=0, le=1000)
     """While tracking, after this many face searches in a row found no face taken for the
-    tutor in the window around the estimate, search the whole frame (~16 ms CPU a frame at
+    tutor on the estimate (within 0.3 face widths; none in the window, or one beside it),
+    search the whole frame (~16 ms CPU a frame at
     320 x 240) until one is found, then restart there (the filter and the colour references):
     a cloud drifted onto clutter, so that the window misses the face's place or size while the
     colour loss test does not fire, is put back on the tutor; 0: never. Measured, Fig. 15 seed
