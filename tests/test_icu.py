@@ -163,3 +163,19 @@ def test_a_drifted_cloud_finds_the_face_again(redetect_after):
         assert err < 9.0 and abs(steps[-1].mean[2] - truth[2]) < 8.0
     else:  # measured: never found, the estimate 121 px off
         assert not any(found) and err > 60.0
+
+
+def test_a_cloud_beside_the_detected_face_counts_as_a_miss():
+    """The tutor's face found in the window but half a face width from the estimate (Fig. 9
+    in lab_clutter: the cloud sat 24 px beside a 55 px face box) counts toward
+    ``redetect_after``; on the face it does not."""
+    rng = np.random.default_rng(5)
+    tr = IcuTracker(IcuConfig(kind="icu", lost_colour=1.0), W, H, np.random.default_rng(6),
+                    FaceDetector())
+    truth = np.array([160.0, 110.0, 50.0])
+    assert tr.step(person(rng, truth)).state == "tracking"
+    for offset, missed in ((0.0, 0), (24.0, 1)):
+        tr.missed = 0
+        tr.pf.initialize(tr.rng, Gaussian(truth + [offset, 0.0, 0.0], 0.01 * np.eye(3)))
+        s = tr.step(person(rng, truth))
+        assert len(s.faces) == 1 and tr.missed == missed, (offset, s.faces)
