@@ -79,6 +79,15 @@ class IcuConfig(Section):
     detect_every: int = Field(1, ge=1, le=100)
     """While tracking, the face detector runs every this many frames, only around the
     estimate (~1 ms CPU); while searching, every frame."""
+    redetect_after: int = Field(6, ge=0, le=1000)
+    """While tracking, after this many face searches in a row found no face taken for the
+    tutor on the estimate (within 0.3 face widths; none in the window, or one beside it),
+    search the whole frame (~16 ms CPU a frame at
+    320 x 240) until one is found, then restart there (the filter and the colour references):
+    a cloud drifted onto clutter, so that the window misses the face's place or size while the
+    colour loss test does not fire, is put back on the tutor; 0: never. Measured, Fig. 15 seed
+    11 in ``lab_clutter``: without it the cloud stuck on the shelves above-left of the nearing
+    head (centre error median 23.0 px, no switch to the near module)."""
     search: Literal["skin", "whole"] = "skin"
     """Where faces are searched while nobody is tracked: ``skin`` -- around the skin blobs of
     head size (the scenario's skin model; ~1 ms per blob instead of ~16 ms CPU for the whole

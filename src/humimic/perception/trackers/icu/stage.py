@@ -87,6 +87,7 @@ class IcuStage(ImageTrackerStage):
                 "near_module": near.module, **module_scores(
                     np.array(self.times), self.modules, truth.depth, truth.visible,
                     near.enter_m, near.leave_m)}
+        out["trackers"][self.tracker_name]["window_restarts"] = self.tracker.restarts
         if self.tracker.recogniser is not None and self.times:
             _, _, _, truth = self.arrays()
             out["trackers"][self.tracker_name]["recognition"] = recognition_counts(

@@ -7,7 +7,12 @@ the tutor (or any face without recognition) started ICONDENSATION on (u, v, s): 
 come from the dynamics, from the prior and from the detected faces weighted by their
 probability of being the tutor (eq. 12), the face detector running every ``detect_every``
 frames in a window around the estimate, the shape cue's edges computed only around the
-particle cloud; ``lost`` -- for ``lost_frames`` frames the colour at the estimate stayed
+particle cloud (after ``redetect_after`` frames without the tutor's face on the estimate, the
+detector runs over the whole frame instead, as the paper's detector sees the whole image, and
+the tutor's face found there restarts the filter and the colour references: a cloud that
+drifted onto clutter is not pulled back by eq. 12's draws alone, whose weights f / q vanish
+far from every hypothesis);
+``lost`` -- for ``lost_frames`` frames the colour at the estimate stayed
 unlike the references (head's or torso's Bhattacharyya distance above ``lost_colour``) or the
 face there was recognised as someone else, or the estimate left the image: back to the search,
 and to ``tracking`` when the tutor's face is found again. (The paper's machine also switches
@@ -39,6 +44,10 @@ WINDOW_SIZES = (0.8, 1.3)
 """... and only at sizes between these multiples of the estimated face width (measured, 3
 seeds of Figs. 9 and 10 with detection every frame: 1.2 widths at 0.7-1.45 x cost 25 % more
 than 1.0 at 0.8-1.3 x for no better centre error)."""
+ON_FACE = 0.3
+"""The estimate is on a face when its centre is within this many face-box widths of the box's
+centre (the rendered heads' box centres lie 0.1-0.15 widths from the true head centre; a cloud
+that sat beside a detected face, 0.45-0.55 widths off, in Fig. 9 in ``lab_clutter``)."""
 SKIN_POSTERIOR = 0.5
 """A pixel is skin when its colour is more likely under the skin model than uniform."""
 EDGE_PAD_PX = 8.0
@@ -87,6 +96,11 @@ class IcuTracker:
         self.state = "init"
         self.bad = 0
         self.frame = 0
+        self.missed = 0
+        """Consecutive tracking frames whose face search found no face taken for the tutor."""
+        self.restarts = 0
+        """Restarts on a tutor's face the whole-frame search found after the window had lost
+        it (``redetect_after``): how often the cloud had drifted off the face."""
         self.refs: np.ndarray | None = None
 
     # ---- detection and recognition -----------------------------------------------------------
@@ -148,10 +162,15 @@ class IcuTracker:
         nan = np.full(3, np.nan)
         if not ok.any():
             return IcuStep(self.state, nan, np.nan, None, None, boxes, conf, p, np.nan)
+        return self._start(q, boxes, p, ok)
+
+    def _start(self, q, boxes: np.ndarray, p: np.ndarray, ok: np.ndarray) -> IcuStep:
+        """(Re)start the filter and the colour references at the likeliest tutor's face."""
+        conf = float(p.max()) if len(p) and self.recogniser is not None else np.nan
         best = self.face_states(boxes)[int(np.argmax(np.where(ok, p, -1.0)))]
         self.pf.initialize(self.rng, Gaussian(best, np.diag(self.sigma**2)))
         self.refs = references(q, best)
-        self.state, self.bad = "tracking", 0
+        self.state, self.bad, self.missed = "tracking", 0, 0
         return IcuStep("tracking", best, 0.0, self.pf.particles.copy(),
                        np.exp(self.pf.log_weights), boxes, conf, p, 0.0)
 
@@ -180,8 +199,17 @@ class IcuTracker:
         importance = None
         if self.frame % cfg.detect_every == 0:
             m = self.pf.mean
-            boxes, p = self.faces(g, self._window(m), (WINDOW_SIZES[0] * m[2] / FACE_TO_HEAD,
-                                                       WINDOW_SIZES[1] * m[2] / FACE_TO_HEAD))
+            if 0 < cfg.redetect_after <= self.missed:  # the window lost the face: whole frame
+                boxes, p = self.faces(g)
+                if np.any(p >= cfg.min_confidence):  # the tutor found again: start there
+                    self.restarts += 1
+                    return self._start(q, boxes, p, p >= cfg.min_confidence)
+            else:
+                boxes, p = self.faces(g, self._window(m),
+                                      (WINDOW_SIZES[0] * m[2] / FACE_TO_HEAD,
+                                       WINDOW_SIZES[1] * m[2] / FACE_TO_HEAD))
+            on = np.hypot(*(box_centers(boxes) - m[:2]).T) < ON_FACE * boxes[:, 2]
+            self.missed = 0 if np.any(on & (p >= cfg.min_confidence)) else self.missed + 1
             if len(boxes):  # Menezes eq. 12
                 importance = recognition_proposal(
                     box_centers(boxes), p, self.sigma[:2], boxes[:, 2] * FACE_TO_HEAD,
