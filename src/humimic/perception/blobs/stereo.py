@@ -109,8 +109,9 @@ class StereoMeasurement:
     """The match in raw right-image pixels."""
     score: float
     mass_px: np.ndarray = field(default_factory=lambda: np.zeros(2))
-    """Target pixels of the left template and of the matched right window (colour masks only;
-    zeros without, and on failures): :mod:`~humimic.perception.blobs.occlusion`."""
+    """Target pixels of the left template and of the matched right window (colour masks only,
+    the right one with ``occlusion_check``; zeros without, and on failures):
+    :mod:`~humimic.perception.blobs.occlusion`."""
 
 
 def _fail(reason: str, uv_left, score: float = 0.0) -> StereoMeasurement:
@@ -325,7 +326,7 @@ class StereoRig:
         with np.errstate(invalid="ignore", divide="ignore"):
             off = np.where(curv < 0, np.clip(0.5 * (f_m - f_p) / curv, -1.0, 1.0), 0.0)
         s_star = s_f[ar, b] + off * d / F
-        if luts is not None:  # the matched right window's target share (occlusion check)
+        if luts is not None and p.occlusion_check:  # the matched right window's target share
             frac[:, 1] = target_fraction(luts, [i for i, *_ in jobs], win[ar, b])
         mass = window_mass_px(frac, 2 * hh + 1, d[:, None])
         qr = q0 + s_star[:, None] * t
