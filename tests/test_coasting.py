@@ -175,3 +175,16 @@ def test_the_stage_scores_a_gated_measurement_as_a_coasted_frame():
     # not pulled towards the 0.4 m outlier: measured 7.9 mm (2026-11-29; seeds 0-3: 3.3-11 mm,
     # the filter's noise; the bound was 30 mm)
     assert np.abs(a.x[30, 0, 0:3] - p).max() < 0.02
+
+
+@pytest.mark.parametrize("key, on", [("coast_tau_a", "coast_tau_v"),
+                                     ("gate_reinit_after", "gate_probability")])
+def test_an_option_without_the_one_it_needs_is_an_error(key, on):
+    """The scenario layer's shared idle-option check (``scenario.base.reject_idle_options``)."""
+    from pydantic import ValidationError
+
+    value = {"coast_tau_a": 0.1, "gate_reinit_after": 5}[key]
+    with pytest.raises(ValidationError, match=f"{key} = {value} has no effect without {on}"):
+        FilterConfig(**{on: None, key: value})
+    FilterConfig(**{on: None})   # off, its dependent left at its default: fine
+    FilterConfig(**{key: value})  # on (the default): fine

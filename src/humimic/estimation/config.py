@@ -21,7 +21,11 @@ from typing import Literal
 from pydantic import Field, model_validator
 
 from humimic.estimation.random_jerk import B_PAPER_SI, INIT_ACC_VAR, INIT_VEL_VAR
-from humimic.scenario.base import Section
+from humimic.scenario.base import Section, reject_idle_options
+
+NEEDS: dict[str, tuple[str, ...]] = {"coast_tau_a": ("coast_tau_v",),
+                                     "gate_reinit_after": ("gate_probability",)}
+"""Options that act only with another on: option -> the options that switch it on."""
 
 
 class FilterConfig(Section):
@@ -59,10 +63,5 @@ class FilterConfig(Section):
 
     @model_validator(mode="after")
     def _idle(self) -> FilterConfig:
-        """An option moved from its default while the one it needs is off would do nothing."""
-        fields = type(self).model_fields
-        for key, on in (("coast_tau_a", "coast_tau_v"), ("gate_reinit_after", "gate_probability")):
-            if getattr(self, on) is None and getattr(self, key) != fields[key].default:
-                raise ValueError(f"{key} = {getattr(self, key)!r} has no effect without {on} "
-                                 f"(set {on} or leave {key} out)")
+        reject_idle_options(self, NEEDS)
         return self

@@ -15,6 +15,7 @@ from typing import Literal
 from pydantic import Field, model_validator
 
 from humimic.perception.trackers.kpf.config_dynamics import KpfDynamics
+from humimic.scenario import base
 from humimic.scenario.base import Section
 
 
@@ -61,12 +62,8 @@ NEEDS: dict[str, tuple[str, ...]] = {
 
 
 def idle_options(cfg: KpfDynamics) -> list[tuple[str, tuple[str, ...]]]:
-    """The options of ``cfg`` moved from their defaults while none of the options they need
-    (:data:`NEEDS`) is on, with those options: settings that would silently do nothing."""
-    fields = type(cfg).model_fields
-    return [(key, on) for key, on in NEEDS.items()
-            if getattr(cfg, key) != fields[key].get_default(call_default_factory=True)
-            and not any(getattr(cfg, k) for k in on)]
+    """:func:`~humimic.scenario.base.idle_options` of ``cfg`` with :data:`NEEDS`."""
+    return base.idle_options(cfg, NEEDS)
 
 
 class KpfConfig(KpfDynamics):
@@ -276,9 +273,7 @@ class KpfConfig(KpfDynamics):
         if self.split_arms and not self.partitioned:
             raise ValueError("split_arms needs partitioned: true (it splits the partitioned "
                              "arms into shoulder and elbow groups)")
-        for key, on in idle_options(self)[:1]:
-            raise ValueError(f"{key} = {getattr(self, key)!r} has no effect without "
-                             f"{' or '.join(on)} (set {on[0]} or leave {key} out)")
+        base.reject_idle_options(self, NEEDS)
         if self.twist_range_deg is not None and not (
                 -180.0 <= self.twist_range_deg[0] < self.twist_range_deg[1] <= 180.0):
             raise ValueError("twist_range_deg must be [low, high] with -180 <= low < high <= "
