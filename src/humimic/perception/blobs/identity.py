@@ -68,6 +68,10 @@ HANDS = ("right_hand", "left_hand")
 #: Image-rule violations (both eyes) of locked names, none under the other facing, that show
 #: a person turned round (:func:`turned_round`).
 TURN_RULES = 2.0
+#: A blob whose region touches another same-coloured blob's keeps its name (held aside, see
+#: :func:`stayed_on_own_blob`) while each frame moves it at most this fraction of its distance
+#: to the nearest other blob's last centre: EM handing it to the other object moves it there.
+OWN_BLOB_RATIO = 1.0 / 3.0
 
 
 @dataclass(frozen=True)
@@ -304,6 +308,21 @@ def fixed_names(locked, names, blobs, evidence: PairEvidence, n_targets: int
         if len(nm) == n_targets and len(rest) == 1:
             fx[rest[0]] = nm[rest[0]]
     return fixed
+
+
+def stayed_on_own_blob(prev: np.ndarray, new: np.ndarray, others_prev: list[np.ndarray],
+                       ratio: float = OWN_BLOB_RATIO) -> bool:
+    """Whether a blob whose region of interest touched other same-coloured blobs' is still on
+    its own object: from its centre ``prev`` (px) on the last frame to ``new`` on this one it
+    moved at most ``ratio`` times the distance from ``new`` to the nearest of the other blobs'
+    last centres ``others_prev``: nearest-neighbour association (Bar-Shalom & Fortmann 1988,
+    *Tracking and Data Association*), accepted only when decided by a wide margin. EM handing
+    the blob to the other object moves it onto the other's place, and blobs merging (centres
+    closer than their steps) are never judged. No other blob: True."""
+    d_self = float(np.hypot(*(np.asarray(new, float) - np.asarray(prev, float))))
+    d_other = min((float(np.hypot(*(np.asarray(new, float) - np.asarray(o, float))))
+                   for o in others_prev), default=math.inf)
+    return d_self <= ratio * d_other
 
 
 def turned_round(left: list[Blob], right: list[Blob], names_left: dict[int, str],
