@@ -318,7 +318,7 @@ def stayed_on_own_blob(prev: np.ndarray, new: np.ndarray, others_prev: list[np.n
     last centres ``others_prev``: nearest-neighbour association (Bar-Shalom & Fortmann 1988,
     *Tracking and Data Association*), accepted only when decided by a wide margin. EM handing
     the blob to the other object moves it onto the other's place, and blobs merging (centres
-    closer than their steps) are never judged. No other blob: True."""
+    within a few steps of each other) are not judged their own. No other blob: True."""
     d_self = float(np.hypot(*(np.asarray(new, float) - np.asarray(prev, float))))
     d_other = min((float(np.hypot(*(np.asarray(new, float) - np.asarray(o, float))))
                    for o in others_prev), default=math.inf)
