@@ -29,8 +29,9 @@ targets under:
   names (one rule against is not enough to swap; two are);
 * locked names (our extension): a blob whose name was sure and whose region of interest has
   not touched another same-coloured blob's since (:func:`~humimic.perception.blobs.em_blobs.
-  rois_overlap`) is the same object, whatever the rules say: EM cannot have swapped it. The
-  cheapest assignment is chosen among those that keep every locked name. The image rules
+  rois_overlap`), or touched it while every frame's step kept it on its own object
+  (:func:`stayed_on_own_blob`), is the same object, whatever the rules say: EM cannot have
+  swapped it. The cheapest assignment is chosen among those that keep every locked name. The image rules
   assume a person facing the robot; one who turns round shows the hands mirrored, and without
   the lock the rules renamed the tracked left hand the right one (ude_cmu_turn: 31 % of the
   right hand's reports false). Locked names that break every side rule in both eyes while the
