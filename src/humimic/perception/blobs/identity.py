@@ -31,13 +31,14 @@ targets under:
   not touched another same-coloured blob's since (:func:`~humimic.perception.blobs.em_blobs.
   rois_overlap`), or touched it while every frame's step kept it on its own object
   (:func:`stayed_on_own_blob`), is the same object, whatever the rules say: EM cannot have
-  swapped it. The cheapest assignment is chosen among those that keep every locked name. The image rules
-  assume a person facing the robot; one who turns round shows the hands mirrored, and without
-  the lock the rules renamed the tracked left hand the right one (ude_cmu_turn: 31 % of the
-  right hand's reports false). Locked names that break every side rule in both eyes while the
-  mirrored rules hold show the person turned round (:func:`turned_round`, judged on the names
-  the locks fix, :func:`fixed_names`, with the head seen); the perception core then applies
-  the mirrored rules (``away``) until locked names show the reverse or the person is lost.
+  swapped it. The cheapest assignment is chosen among those that keep every locked name. The
+  image rules assume a person facing the robot; one who turns round shows the hands mirrored,
+  and without the lock the rules renamed the tracked left hand the right one (ude_cmu_turn:
+  31 % of the right hand's reports false). Locked names that break every side rule in both
+  eyes while the mirrored rules hold show the person turned round (:func:`turned_round`,
+  judged on the names the locks fix, :func:`fixed_names`, with the head seen); the perception
+  core then applies the mirrored rules (``away``) until locked names show the reverse or the
+  person is lost.
 
 Between events identities follow the tracker's blobs (continuity alone), so hands may cross.
 Each target also gets a *margin*: how much more evidence cost (without continuity) the cheapest
