@@ -213,11 +213,13 @@ def test_head_and_eye_motion_is_compensated():
 
 
 # ---- a real person turning around (CMU clip) --------------------------------------------------
-def test_turning_person_hands_hidden_and_said_so():
+@pytest.mark.parametrize("seed", [1, 3])
+def test_turning_person_hands_hidden_and_said_so(seed):
     """CMU subject 01 turns its back to the robot 1.6 m away (ude_cmu_turn): the visibility
     ground truth shows the hands hidden by the body after the turn, detection is scored over
-    the frames a hand could be seen, and a poor hand says why."""
-    m, stages, world = run("ude_cmu_turn")
+    the frames a hand could be seen, and a poor hand says why. Seed 3: the hands' regions
+    touched as the turn began (the left hand's lock held through it, see below)."""
+    m, stages, world = run("ude_cmu_turn", seed=seed)
     tr = m["tracking"]
     vis = world.visibility.arrays()
     before, behind = vis.t <= 1.6, (vis.t >= 2.6) & (vis.t <= 3.0)
@@ -236,13 +238,20 @@ def test_turning_person_hands_hidden_and_said_so():
     # every side rule, and the mirrored rules none, shows the person turned round and the
     # rules are mirrored (perception.track_facing), so the hands found afresh with the back
     # to the robot are named right too. Measured: no false report (main: right hand 31 %,
-    # left 12 % of the reports false; the lock alone: 6 % / 12 %)
+    # left 12 % of the reports false; the lock alone: 6 % / 12 %). Seed 3: the hands' regions
+    # touched just before the right hand went behind the body; the left hand's lock, held
+    # aside while they touched, came back (its blob stayed on its own object), so the turn
+    # was seen: no false report (the lock dropped at the touch: right 37 %, left 35 % false)
     assert m["perception"]["facing_turns"] == 1
     for hand in ("right_hand", "left_hand"):
         assert tr[hand]["false_detection_rate"] <= 0.03, tr[hand]
+    # coasted frames after the turn: measured right / left hand 61 / 80 mm (seed 1), 50 / 90
+    # mm (seed 3; with the lock dropped at the touch 438 / 331 mm, the other hand's blob)
+    assert tr["right_hand"]["predicted_rmse_mm"] <= 150.0, tr["right_hand"]
+    assert tr["left_hand"]["predicted_rmse_mm"] <= 240.0, tr["left_hand"]
     # the hands are still measured on < 50 % of their visible frames (0.475 / 0.424, as on
-    # main): seen edge-on after the turn, their blobs (sd ~1 x 2.5 px) fill too little of the
-    # stereo template (few_target_pixels)
+    # main; seed 3 0.492 / 0.451): seen edge-on after the turn, their blobs (sd ~1 x 2.5 px)
+    # fill too little of the stereo template (few_target_pixels)
     assert tr["right_hand"]["detection_rate"] >= 0.45
     assert any(tr[h]["verdict"] == "poor" for h in ("right_hand", "left_hand"))
     head = tr["head"]

@@ -14,6 +14,7 @@ from humimic.perception.blobs.identity import (
     Blob,
     assign,
     image_rule_cost,
+    stayed_on_own_blob,
     stereo_evidence,
     turned_round,
 )
@@ -363,3 +364,23 @@ def test_core_releases_a_lock_when_em_could_have_swapped_the_blob():
     assert locked_after(tracked(15.0)) == [[0]] * 2  # the hands' regions overlap
     assert locked_after(tracked(25.0, with_right=False)) == [[0, 2]] * 2  # right hand lost
     assert locked_after(tracked(25.0), age_now=3) == [[]] * 2  # restarted since locked
+
+
+def test_a_blob_stays_on_its_own_object_only_by_a_wide_margin():
+    """stayed_on_own_blob: the blob's step (3-4-5 triangles, so the distances are exact) against
+    a third of its new distance to the nearest other blob's last centre."""
+    prev = np.array([100.0, 50.0])
+    other = np.array([100.0, 74.0])  # 24 px below
+    # 5 px step sideways: 5 from its own last centre, |(4, 21)| = 21.4 from the other's
+    assert stayed_on_own_blob(prev, prev + [3.0, -4.0], [other])
+    # 5.5 px towards the other: 18.5 / 3 = 6.17 from it, still its own; 6.5 px: 17.5 / 3 =
+    # 5.83 < 6.5, no longer
+    assert stayed_on_own_blob(prev, prev + [0.0, 5.5], [other])
+    assert not stayed_on_own_blob(prev, prev + [0.0, 6.5], [other])
+    # handed to the other object: on its place
+    assert not stayed_on_own_blob(prev, other + [0.5, 0.0], [other])
+    # merging blobs (centres 4 px apart, a 1.5 px step towards the other): not judged its own
+    assert not stayed_on_own_blob(prev, prev + [0.0, 1.5], [prev + [0.0, 4.0]])
+    # the nearest of several counts; no other blob: nothing to be confused with
+    assert not stayed_on_own_blob(prev, prev + [3.0, 4.0], [other, prev + [12.0, 14.0]])
+    assert stayed_on_own_blob(prev, prev + [30.0, 40.0], [])

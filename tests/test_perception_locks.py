@@ -145,3 +145,37 @@ def test_a_name_left_unsure_is_decided_again_when_its_evidence_firms_up():
     s.frames(RECHECK_FRAMES, TRUTH, hidden=one_hand)
     assert {"head", "right_hand"} <= s.sure()
     assert s.names(0) == {HEAD: "head", RIGHT: "right_hand", LEFT: None}
+
+
+def _hands(right, left):
+    """TRUTH with the hands at ``right`` and ``left`` (base frame, m); None: that hand unmoved."""
+    return dict(TRUTH, right_hand=(right, 0.028) if right else TRUTH["right_hand"],
+                left_hand=(left, 0.022) if left else TRUTH["left_hand"])
+
+
+def test_a_hand_kept_on_its_blob_through_a_touch_keeps_its_name_through_a_turn():
+    """ude_cmu_turn seeds 3 and 4: as the person began to turn, the left hand rose under the
+    right one (regions of interest overlapping) and crossed to the head's image side where a
+    facing person's right hand is; the right hand went behind the body and came back, after
+    the turn, on the image's right. The left hand's lock had gone at the touch and its name,
+    against the rules, was not sure enough to be locked again, so nothing showed the turn and
+    the rules named both hands the wrong way round, surely (37 % of the right hand's reports
+    false, its predicted RMSE 438 mm). Its blob had stayed on its own object in every frame of
+    the touch (identity.stayed_on_own_blob): the lock is given back when the blobs part, the
+    turn is seen when the right hand returns, and both hands are named right."""
+    s = Scripted()
+    right = (1.1, 0.12, 1.15)
+    s.frames(10, _hands(right, (1.1, -0.10, 0.92)))
+    assert {v[0] for v in s.core.locked[0].values()} == set(TARGETS)
+    for y, z in zip(np.linspace(-0.08, 0.03, 10), np.linspace(0.93, 0.97, 10), strict=True):
+        s.frames(1, _hands(right, (1.1, y, z)))  # ~2 px a frame, under the right hand
+    assert all({LEFT, RIGHT} <= s.core._touch[e] for e in (0, 1))  # regions overlapping
+    hidden = (("right_hand",), ("right_hand",))
+    for y in np.linspace(0.04, 0.25, 16):  # the right hand hidden, the left one goes on
+        s.frames(1, _hands(right, (1.1, y, 0.97)), hidden=hidden)
+    assert s.names(0)[LEFT] == "left_hand" and s.core.facing_turns == 0
+    s.frames(8, _hands((1.1, -0.2, 1.0), (1.1, 0.25, 0.97)))  # right hand back, image right
+    assert s.core.facing_turns == 1 and s.core.away
+    for eye in (0, 1):
+        assert s.names(eye) == {HEAD: "head", RIGHT: "right_hand", LEFT: "left_hand"}
+    assert s.sure() == set(TARGETS)

@@ -40,6 +40,7 @@ from humimic.perception.blobs.identity import (
     assign,
     clipped_by_border,
     fixed_names,
+    stayed_on_own_blob,
     stereo_evidence,
     turned_round,
 )
@@ -130,6 +131,13 @@ class PerceptionCore:
         self._turn_events: list[tuple[float, str, str, str]] = []
         self.locked: list[dict[int, tuple[str, int]]] = [{}, {}]
         """Per eye, slot -> (name, age when last sure): names EM cannot have swapped since."""
+        self.held: list[dict[int, tuple[str, int]]] = [{}, {}]
+        """Per eye, the locks of blobs whose regions touch another same-coloured blob's, held
+        aside: given back once apart if every frame kept the blob on its own object
+        (:func:`~humimic.perception.blobs.identity.stayed_on_own_blob`), else dropped."""
+        self._last: list[dict[int, np.ndarray]] = [{}, {}]
+        """Per eye, the tracked slots' blob centres on the last frame."""
+        self._group_of = {k: g for g in self.groups for k in g}
         self.color_mask = cfg.stereo.color_mask
         st = self.stereo
         self.visible = None if not st.occlusion_check else VisibleMass(
@@ -229,8 +237,9 @@ class PerceptionCore:
                 for eye, lock in enumerate(self.locked):
                     k = slot_of[eye][x]
                     if k not in touching[eye]:
-                        for j in [j for j, v in lock.items() if v[0] == x]:
-                            del lock[j]
+                        for held in (lock, self.held[eye]):
+                            for j in [j for j, v in held.items() if v[0] == x]:
+                                del held[j]
                         lock[k] = (x, int(age[eye][k]))
         events = self._turn_events + self._update_states(t, seen.all(1) & confirmed)
         self._turn_events = []
@@ -315,15 +324,31 @@ class PerceptionCore:
 
     def _release_locks(self, t: float, tracked, touching) -> None:
         """Drop the locks of blobs no longer tracked without a break (lost, or restarted: younger
-        than when locked) or ``touching`` another of their colour (:meth:`_touching`). A person
-        judged turned round faces the robot again (the default) once the person (head and hands)
-        is lost in both eyes."""
+        than when locked); hold aside (:attr:`held`) those of blobs ``touching`` another of their
+        colour (:meth:`_touching`: EM may swap them), drop a held lock once its blob's step
+        does not show it on its own object
+        (:func:`~humimic.perception.blobs.identity.stayed_on_own_blob`, against the other
+        same-coloured blobs' last centres), and give it back once the blob touches none. A
+        person judged turned round faces the robot again (the default) once the person (head
+        and hands) is lost in both eyes."""
         for eye, tr in enumerate(tracked):
             age = self.trackers[eye].tracker.age
-            lock = self.locked[eye]
+            lock, held, last = self.locked[eye], self.held[eye], self._last[eye]
             for k in list(lock):
-                if k not in tr or int(age[k]) < lock[k][1] or k in touching[eye]:
+                if k not in tr or int(age[k]) < lock[k][1]:
                     del lock[k]
+                elif k in touching[eye]:
+                    held[k] = lock.pop(k)
+            for k in list(held):
+                others = [last[j] for j in self._group_of[k] if j != k and j in last]
+                if (k not in tr or int(age[k]) < held[k][1] or k not in last
+                        or not stayed_on_own_blob(last[k], tr[k].centre, others)):
+                    del held[k]
+                elif k not in touching[eye]:
+                    name = held.pop(k)
+                    if all(v[0] != name[0] for v in lock.values()):
+                        lock[k] = name
+            self._last[eye] = {k: b.centre for k, b in tr.items()}
         skin = [k for k, x in enumerate(self.targets) if x in ("head", *HANDS)]
         if self.away and not any(k in tr for tr in tracked for k in skin):
             self.away = False

@@ -29,14 +29,16 @@ targets under:
   names (one rule against is not enough to swap; two are);
 * locked names (our extension): a blob whose name was sure and whose region of interest has
   not touched another same-coloured blob's since (:func:`~humimic.perception.blobs.em_blobs.
-  rois_overlap`) is the same object, whatever the rules say: EM cannot have swapped it. The
-  cheapest assignment is chosen among those that keep every locked name. The image rules
-  assume a person facing the robot; one who turns round shows the hands mirrored, and without
-  the lock the rules renamed the tracked left hand the right one (ude_cmu_turn: 31 % of the
-  right hand's reports false). Locked names that break every side rule in both eyes while the
-  mirrored rules hold show the person turned round (:func:`turned_round`, judged on the names
-  the locks fix, :func:`fixed_names`, with the head seen); the perception core then applies
-  the mirrored rules (``away``) until locked names show the reverse or the person is lost.
+  rois_overlap`), or touched it while every frame's step kept it on its own object
+  (:func:`stayed_on_own_blob`), is the same object, whatever the rules say: EM cannot have
+  swapped it. The cheapest assignment is chosen among those that keep every locked name. The
+  image rules assume a person facing the robot; one who turns round shows the hands mirrored,
+  and without the lock the rules renamed the tracked left hand the right one (ude_cmu_turn:
+  31 % of the right hand's reports false). Locked names that break every side rule in both
+  eyes while the mirrored rules hold show the person turned round (:func:`turned_round`,
+  judged on the names the locks fix, :func:`fixed_names`, with the head seen); the perception
+  core then applies the mirrored rules (``away``) until locked names show the reverse or the
+  person is lost.
 
 Between events identities follow the tracker's blobs (continuity alone), so hands may cross.
 Each target also gets a *margin*: how much more evidence cost (without continuity) the cheapest
@@ -68,6 +70,10 @@ HANDS = ("right_hand", "left_hand")
 #: Image-rule violations (both eyes) of locked names, none under the other facing, that show
 #: a person turned round (:func:`turned_round`).
 TURN_RULES = 2.0
+#: A blob whose region touches another same-coloured blob's keeps its name (held aside, see
+#: :func:`stayed_on_own_blob`) while each frame moves it at most this fraction of its distance
+#: to the nearest other blob's last centre: EM handing it to the other object moves it there.
+OWN_BLOB_RATIO = 1.0 / 3.0
 
 
 @dataclass(frozen=True)
@@ -304,6 +310,21 @@ def fixed_names(locked, names, blobs, evidence: PairEvidence, n_targets: int
         if len(nm) == n_targets and len(rest) == 1:
             fx[rest[0]] = nm[rest[0]]
     return fixed
+
+
+def stayed_on_own_blob(prev: np.ndarray, new: np.ndarray, others_prev: list[np.ndarray],
+                       ratio: float = OWN_BLOB_RATIO) -> bool:
+    """Whether a blob whose region of interest touched other same-coloured blobs' is still on
+    its own object: from its centre ``prev`` (px) on the last frame to ``new`` on this one it
+    moved at most ``ratio`` times the distance from ``new`` to the nearest of the other blobs'
+    last centres ``others_prev``: nearest-neighbour association (Bar-Shalom & Fortmann 1988,
+    *Tracking and Data Association*), accepted only when decided by a wide margin. EM handing
+    the blob to the other object moves it onto the other's place, and blobs merging (centres
+    within a few steps of each other) are not judged their own. No other blob: True."""
+    d_self = float(np.hypot(*(np.asarray(new, float) - np.asarray(prev, float))))
+    d_other = min((float(np.hypot(*(np.asarray(new, float) - np.asarray(o, float))))
+                   for o in others_prev), default=math.inf)
+    return d_self <= ratio * d_other
 
 
 def turned_round(left: list[Blob], right: list[Blob], names_left: dict[int, str],
