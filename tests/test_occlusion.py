@@ -50,6 +50,18 @@ def test_half_occluded_needs_a_significant_unequal_drop():
     assert not h.hidden("x", 0.5, [10.0, 30.0])  # the earlier frames left the window
 
 
+def test_a_hidden_frame_stays_out_of_the_reference():
+    """A frame judged hidden does not join the masses the next frames are judged against: the
+    next frame as hidden is refused too. (Had the first joined: median 40, spread 5.0 / 40,
+    3 spreads 0.37 > its drop 0.22, and it passed.)"""
+    h = VisibleMass(0.2, 0.2, 3.0, 0.05)
+    for k, m in enumerate([40.0, 42.0, 40.0, 42.0]):
+        assert not h.hidden("x", k / 60, [m, m])
+    assert h.hidden("x", 4 / 60, [40.0, 30.0])  # drop 0 / 0.25, spread 0.029
+    assert h.hidden("x", 5 / 60, [40.0, 31.0])
+    assert not h.hidden("x", 6 / 60, [41.0, 40.0])  # in full view again: measured
+
+
 def _lut():
     rng = np.random.default_rng(1)
     patch = add_noise(np.full((40, 40, 3), SKIN_RGB, np.uint8), rng, 20.0)
@@ -126,11 +138,11 @@ class _Core:
         return row[8][0], row[9][0], row[10][0]  # reason, p_base, R_base
 
 
-def _slide(**stereo):
+def _slide(frames: int = 8, seed: int = 5, **stereo):
     """Ten frames in view, then the edge slides over the hand (1.5 mm a frame)."""
-    rng = np.random.default_rng(5)
+    rng = np.random.default_rng(seed)
     core = _Core(**stereo)
-    edges = [-0.3] * 10 + [-0.086 + 0.0015 * k for k in range(8)]
+    edges = [-0.3] * 10 + [-0.086 + 0.0015 * k for k in range(frames)]
     return [core.frame(k / 60.0, y, rng) for k, y in enumerate(edges)]
 
 
@@ -149,3 +161,22 @@ def test_match_refused_while_the_blob_is_hidden():
     # check were measured 67-88 mm too near (d2 56-103; frames 13-14, 50 mm, d2 30, lost 11 %)
     assert max(d2[:10]) < 1.0
     assert min(d2[k] for k in refused) > 20.0
+
+
+@pytest.mark.parametrize("seed", [5, 6])
+def test_no_frame_measured_while_the_blob_is_still_being_hidden(seed):
+    """Once a hand sliding behind a nearer edge is refused, it stays refused while the edge
+    goes on hiding it (until too little of it is left to match): the refused frames' smaller
+    masses are kept out of the reference. Measured: frames 15-22 refused, 23 few target
+    pixels; before (the hidden frames joined the reference, its median fell and its spread
+    grew) frames 17-22 were measured 88-174 mm too near (seed 6: from frame 17)."""
+    out = _slide(frames=14, seed=seed)
+    reasons = [r for r, _, _ in out]
+    first = reasons.index("shrinking_blob")
+    assert 13 <= first <= 16
+    after = reasons[first:]
+    assert all(r != "" for r in after), after
+    assert after.count("shrinking_blob") >= 5
+    # the frames measured before it were in view or barely hidden (measured: <= 51 mm)
+    err = [abs(float((p - HAND)[0])) for r, p, _ in out[:first] if r == ""]
+    assert max(err) < 0.1
