@@ -183,3 +183,22 @@ def test_no_frame_measured_while_the_blob_is_still_being_hidden(seed):
     # the frames measured before it were in view or barely hidden (measured: <= 51 mm)
     err = [abs(float((p - HAND)[0])) for r, p, _ in out[:first] if r == ""]
     assert max(err) < 0.1
+
+
+#: ``ude_cmu_turn`` seed 11, skin [0.45, 0.30, 0.22]: the right hand's matched masses (px^2,
+#: left / right) from 1.45 s, every 1/60 s, as it turns edge-on and then goes behind the torso
+#: (0.92 / 0.82 / 0.65 unoccluded in the right eye in the last three frames, the left 1.0 / 0.9
+#: / 0.8; those matches 123 / 184 / 247 mm too near).
+DARK_TURN = [(44.7, 41.9), (42.3, 40.8), (39.7, 46.9), (41.7, 38.9), (43.1, 42.2), (39.7, 45.3),
+             (39.4, 40.0), (41.2, 42.4), (38.3, 38.3), (37.0, 40.6), (37.0, 40.3), (34.2, 37.9),
+             (39.9, 37.9), (37.7, 32.2), (37.8, 30.2), (29.8, 20.5)]
+
+
+def test_a_turning_hand_is_judged_against_its_frame_to_frame_noise():
+    """The masses of a dark hand turning edge-on, then hidden: the second hidden frame (0.25 of
+    the right eye's mass gone) is refused against the mass's frame-to-frame noise (0.07); the
+    standard deviation over the window, which counts the turn, was 0.09 and 3 of it let the
+    frame pass. The first hidden frame (0.20, 2.9 noises) is not: at the noise."""
+    h = VisibleMass(0.2, 0.2, 3.0, 0.05)
+    refused = [h.hidden("right_hand", 1.45 + k / 60, list(m)) for k, m in enumerate(DARK_TURN)]
+    assert refused == [False] * 14 + [True, True]
