@@ -49,7 +49,14 @@ a darker one on seed 11 falls just short (0.20 < 3 x 0.07; skin [0.50, 0.34, 0.2
 no test on these masses, the two eyes' mass ratio or the match's depth against the hand's own
 recent track tells that frame from unoccluded ones of the same runs (which reach 0.14
 asymmetry, and -65 mm at 3 sigma of the track). Refused by hand, that one frame takes those
-runs' predicted RMSE from 170 / 158 to 46 / 69 mm.
+runs' predicted RMSE from 170 / 158 to 46 / 69 mm. The strongest sign of that frame is the
+match's own residual, ``1 - ZNCC``: 3.1-4.9 times its median over the window at the first
+hidden frame of all ten runs (the outlines differ), but also over 3 on unoccluded frames (a
+speckled mask; the hand at 1.12 s, d^2 2), and 2.5 would refuse 15 of those. Together with
+the match at least 1.5 sigma nearer than a line fitted to the hand's last 0.2 s, 3 times the
+median caught every hidden frame of the ten runs and refused one other (the beige shirt at
+7.9 s, a bad match: 54 mm near, d^2 42), offline -- on a margin too thin (3.1 against 3) to be
+more than a lead.
 """
 
 from __future__ import annotations
