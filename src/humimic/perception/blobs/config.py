@@ -128,7 +128,8 @@ class StereoConfig(Section):
     nearer edge that the match follows (:mod:`humimic.perception.blobs.occlusion`): in some
     eye the target pixels of the matched window fell by ``occlusion_min_drop`` of their median
     over the last ``occlusion_window_s`` and by ``occlusion_spread_k`` times their relative
-    spread there, and the two eyes' drops differ by ``occlusion_min_asymmetry``."""
+    frame-to-frame noise there (frames found hidden stay out of that reference), and the two
+    eyes' drops differ by ``occlusion_min_asymmetry``."""
     occlusion_window_s: float = Field(0.2, gt=0.0, le=2.0)
     occlusion_min_drop: float = Field(0.2, gt=0.0, le=1.0)
     occlusion_spread_k: float = Field(3.0, ge=0.0, le=20.0)
