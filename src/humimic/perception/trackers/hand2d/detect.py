@@ -7,7 +7,8 @@ blob's long axis) lies within ``init_edge_px`` mean edge distance. Among agreein
 whose box holds the most moving edges wins (Menezes' hands wave), then the best template fit.
 
 A hand is found at any in-plane turn: its blob's elongation and long axis come from the
-blob's second moments (:func:`blob_axes`), not its box. With an upright box (height / width
+blob's second moments (:func:`blob_axes`), not its box, and the blob must fill the ellipse of
+those moments (:data:`HAND_FILL`). With an upright box (height / width
 1-3) and angles within 0.6 rad of upright, a hand held across the chest (the palm edge-on, its
 long axis horizontal: ``menezes_hand_people`` with ``human.motion.kind: figure8``) was never a
 candidate, and the tracker started on the other person's hanging hand at the image's edge and
@@ -31,6 +32,12 @@ ANGLES = (-0.6, -0.3, 0.0, 0.3, 0.6)
 HAND_ASPECT = (1.0, 3.0)
 """Length / width of a hand's skin blob along its principal axes (palm-on: 1.78; edge-on,
 wrist and turned hands vary)."""
+HAND_FILL = 0.75
+"""Least share of its equal-moment ellipse a hand's skin blob fills (an ellipse 1, a rectangle
+0.95, a hand cut by the image's edge 0.82). A hand merged with a look-alike surface fills less:
+a very dark hand on lab_clutter's dark-brown bar (menezes_fig5_hand, skin [0.25, 0.16, 0.11],
+seed 2) gave one blob 186 x 60 px, 2.6 times longer than wide, filling 0.29 -- the upright-box
+rule had refused it by its box; taken, the track started 14 px and 20 px wider off the hand."""
 HAND_TEMPLATE_ASPECT = 0.08 / 0.045
 """Length / width of the hand template (:func:`~humimic.perception.cues.templates.hand`)."""
 
@@ -84,15 +91,19 @@ def blob_axes(mask: np.ndarray) -> tuple[float, float, float]:
             4.0 * np.sqrt(mid + half))
 
 
-def component_axes(mask: np.ndarray, box: np.ndarray) -> tuple[float, float, float]:
+def component_axes(mask: np.ndarray, box: np.ndarray) -> tuple[float, float, float, float]:
     """:func:`blob_axes` of the largest 8-connected skin component inside ``box`` (x, y, w,
-    h) of the full-resolution ``mask`` (the blob the subsampled search found)."""
+    h) of the full-resolution ``mask`` (the blob the subsampled search found), and the share
+    of its equal-moment ellipse (area pi width length / 4) its pixels fill."""
     x, y, w, h = np.asarray(box, int)
     crop = np.ascontiguousarray(np.asarray(mask[y:y + h, x:x + w]) > 0, np.uint8)
     n, labels, stats, _ = cv2.connectedComponentsWithStats(crop, connectivity=8)
     if n < 2:
-        return 0.0, 0.0, 0.0
-    return blob_axes(labels == 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA])))
+        return 0.0, 0.0, 0.0, 0.0
+    k = 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
+    theta, width, length = blob_axes(labels == k)
+    ellipse = 0.25 * np.pi * width * length
+    return theta, width, length, (stats[k, cv2.CC_STAT_AREA] / ellipse if ellipse > 0 else 0.0)
 
 
 def candidate_states(center: np.ndarray, width: float, theta: float = 0.0) -> np.ndarray:
@@ -114,8 +125,9 @@ def detect_hands(skin_mask: np.ndarray, dt: np.ndarray, moving: np.ndarray,
                        aspect=(0.0, np.inf))
     states, dist, mov = [], [], []
     for c, box in zip(blobs.centers, blobs.boxes, strict=True):
-        theta, width, length = component_axes(skin_mask, box)
-        if (width < min_hand_px or not HAND_ASPECT[0] <= length / width <= HAND_ASPECT[1]):
+        theta, width, length, fill = component_axes(skin_mask, box)
+        if (width < min_hand_px or not HAND_ASPECT[0] <= length / width <= HAND_ASPECT[1]
+                or fill < HAND_FILL):
             continue
         cand = candidate_states(c, min(width, length / HAND_TEMPLATE_ASPECT), theta)
         d = dt_distance(dt, template.place(cand)[0])
