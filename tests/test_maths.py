@@ -17,6 +17,9 @@ def test_rmse_skips_nan_rows_and_is_nan_when_empty():
     assert math.isnan(rmse(np.full((4, 3), np.nan)))
     assert math.isnan(rmse(np.zeros((0, 3))))
     assert rmse(np.array([1.0, -1.0, 1.0])) == pytest.approx(1.0)
+    # empty scalars and empty (N, 3, 3) rows: NaN, not reshape's error
+    assert math.isnan(rmse(np.zeros(0))) and math.isnan(rmse(np.zeros((0, 3, 3))))
+    assert rmse(np.ones((2, 2, 2))) == pytest.approx(2.0)  # each row's norm sqrt(4)
 
 
 def test_nees_matches_explicit_inverse_and_flags_singular():

@@ -67,6 +67,21 @@ def test_scores_lost_wrong_person_and_errors():
     assert s["false_track_fraction"] is None and s["acquire_s"] == 0.0
 
 
+def test_scores_of_a_target_never_tracked_in_view():
+    """The target hidden whenever the tracker tracks (it followed the other hand; a hand
+    never found): no judged frame, the errors None -- ``scale_rmse_px`` over no frames had
+    raised (``menezes_hand_people --set trackers.hand.target=left_hand``: a traceback, exit
+    1, no metrics.json)."""
+    n = 6
+    visible = np.array([1, 1, 1, 0, 0, 0], bool)
+    tracking = ~visible
+    s = scores(np.arange(n) / 10.0, np.tile([100.0, 100.0], (n, 1)), np.full(n, 20.0),
+               tracking, _truth(n, visible))
+    assert s["center_rmse_px"] is None and s["scale_rmse_px"] is None
+    assert s["center_median_px"] is None and s["lost_fraction"] == 1.0
+    assert s["false_track_fraction"] == 1.0
+
+
 def test_track_messages():
     tr = Track2D("right_hand", 10.0, 20.0, 15.0, state="lost")
     msg = Tracks2D("hand", "L_wide", (tr,))

@@ -14,8 +14,13 @@ from scipy.stats import chi2
 
 
 def _rows(err) -> np.ndarray:
+    """``err`` as rows ``(N, d)``: scalars ``(N,)`` as ``(N, 1)``, ``(N, ...)`` flattened per
+    row -- by the row's shape, not ``reshape(N, -1)``, which cannot size an empty array (a
+    tracker that never tracked a visible target: ``scale_rmse_px`` over no frames had raised
+    and lost the run's metrics)."""
     e = np.asarray(err, dtype=float)
-    e = e.reshape(len(e), -1) if e.ndim != 2 else e
+    if e.ndim != 2:
+        e = e.reshape(len(e), int(np.prod(e.shape[1:], dtype=int)))
     return e[np.all(np.isfinite(e), axis=1)]
 
 
