@@ -107,6 +107,24 @@ class ProfileProbe(Stage):
         self.lik.adapt({k: v[0] for k, v in self.lik.evaluate(q[None], maps, T).colours.items()})
 
 
+class TruthGaze(Stage):
+    """Our probe of foveated active gaze (issue 14; not in the paper): before every servo tick
+    both eyes are turned (set, not servoed) so their axes -- the wide and foveal cameras are
+    coaxial -- meet the mean of the TRUE positions of the human ``targets`` (e.g.
+    ``right_elbow right_wrist``): an ideal gaze on the arm, the upper bound of one that follows
+    a tracker's estimate."""
+
+    name = "truth_gaze"
+
+    def __init__(self, world, targets: list[str]):
+        self.world = world
+        self.p_world = np.mean([world.gt.p_world(t) for t in targets], axis=0)
+
+    def servo(self, t: float, bus) -> None:
+        w = self.world
+        w.look_at_point(self.p_world[w.gt.index_of(t)])
+
+
 def eye_baseline(world) -> float:
     """The distance (m) between the robot's two eyes (the bodies ``L_eye``, ``R_eye`` of the
     robot model, children of its head)."""
@@ -123,9 +141,10 @@ def disparity_change(f_px: float, baseline: float, z: float, dz: float) -> float
     return f_px * baseline * (1.0 / z - 1.0 / (z + dz))
 
 
-def profile_run(scenario, tracker: str, delta: np.ndarray, torso_offset=(0.0, 0.0, 0.0)
-                ) -> tuple[list[dict], dict]:
-    """Render ``scenario`` and profile each frame (:class:`ProfileProbe`); ``(rows, info)``."""
+def profile_run(scenario, tracker: str, delta: np.ndarray, torso_offset=(0.0, 0.0, 0.0),
+                gaze: list[str] | None = None) -> tuple[list[dict], dict]:
+    """Render ``scenario`` and profile each frame (:class:`ProfileProbe`), the eyes on the
+    true ``gaze`` targets' mean if given (:class:`TruthGaze`); ``(rows, info)``."""
     from humimic.perception.trackers.common import check_camera, skin_model_lut
     from humimic.pipeline.simulation import simulate
     from humimic.rngs import Rngs
@@ -140,7 +159,8 @@ def profile_run(scenario, tracker: str, delta: np.ndarray, torso_offset=(0.0, 0.
         lut = skin_model_lut(scenario, world, [camera], f"trackers.{tracker}")
         probe = ProfileProbe(world, camera, cfg, lut, delta, torso_offset)
         rlog = RerunLog(world.scene, "off", None, "depth-profile")
-        simulate(world, [probe], rlog, progress=False)
+        stages = [probe] if not gaze else [TruthGaze(world, gaze), probe]
+        simulate(world, stages, rlog, progress=False)
         info = {"fx_px": probe.fx, "baseline_m": eye_baseline(world)}
     finally:
         world.close()
