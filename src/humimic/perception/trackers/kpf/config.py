@@ -66,6 +66,23 @@ def idle_options(cfg: KpfDynamics) -> list[tuple[str, tuple[str, ...]]]:
     return base.idle_options(cfg, NEEDS)
 
 
+FOVEA_PARTS = ("r_upper_arm", "r_forearm", "r_hand", "l_upper_arm", "l_forearm", "l_hand")
+
+
+class KpfFovea(Section):
+    """Our extension (:mod:`~humimic.perception.trackers.kpf.fovea`): the arm limbs' cue terms
+    also in the same eye's narrow (foveal) camera, whose gaze the scenario's ``mimic.gaze``
+    (``tracker:`` this tracker, ``target: right_elbow``) keeps on the tracker's estimate."""
+
+    camera: Literal["L_foveal", "R_foveal"] = "L_foveal"
+    """The foveal camera (rendered: ``cameras.which: both``)."""
+    parts: list[Literal[FOVEA_PARTS]] = Field(
+        default_factory=lambda: ["r_upper_arm", "r_forearm", "r_hand"], min_length=1)
+    """The limbs scored in it."""
+    weight: float = Field(1.0, gt=0.0, le=10.0)
+    """Its factors' exponent (1: the two views' likelihoods multiplied)."""
+
+
 class KpfConfig(KpfDynamics):
     """Kernel particle filter 14-DOF upper-body tracker (Schmidt sec. 5.2)."""
 
@@ -267,6 +284,8 @@ class KpfConfig(KpfDynamics):
     """Lost when the best mode's mean cue cost exceeds this."""
     latency: float = Field(0.0, ge=0.0, le=5.0)
     """Declared processing delay of a pose estimate (s)."""
+    fovea: KpfFovea | None = None
+    """Our extension: a second, foveal view of the arms (:class:`KpfFovea`); None: off."""
 
     @model_validator(mode="after")
     def _check(self) -> KpfConfig:

@@ -1,0 +1,78 @@
+"""Our extension (issue 14; not in the paper, whose conclusion lists active vision as future
+work): the kpf likelihood with a second view of the arms through the same eye's narrow
+(foveal) camera, the eye's gaze on the tracker's own arm estimate (``trackers.<kpf>.fovea``).
+
+The wide eye (100 deg, f = 134 px) sees the person at 2 m with a 4.6 px wide forearm; the
+foveal camera of the same eye (24 deg, f = 753 px), coaxial with it, sees the arm 5.6x larger
+when the eye looks at it (the scenario's ``mimic.gaze`` with ``tracker: <kpf>``, ``target:
+right_elbow``). Both images are taken at the same instant from the same eye; given the pose
+they are taken as independent observations, so their likelihoods multiply (Bayes' rule for
+conditionally independent measurements), and eq. 10's product over limbs gains, for each
+foveal part ``l``, the foveal view's factor of that limb:
+
+    log p(y_w, y_f | x) = sum_l T_w(l) + w_f sum_{l in fovea} T_f(l)        (Schmidt eq. 10, x2)
+
+with ``T(l) = 1/N_l sum_c -e_{c,l}^2 / (2 sigma_c^2)`` (eq. 9 with eq. 10's balancing factor)
+computed in each view by :class:`~humimic.perception.trackers.kpf.likelihood.Likelihood`, and
+``w_f`` (``fovea.weight``) a tempering of the second view (1: the plain product). A limb off
+the foveal image costs 1 in every cue there, as in the wide view. The colour references are
+the wide view's (eq. 7 adapts them from the wide view's best mode): both cameras see the same
+clothes through the same renderer.
+
+Profiled on Table 1's frames (``schmidt-depth-profile --set cameras.which=foveal --gaze
+right_elbow right_wrist``, the eye on the true arm): in the hold, the truth's elbow flip and
+double flip cost 1.0-3.0 nats in the foveal view (the wide eye: -0.00-0.33), the wrist flip
+0.25 (side) / 0.33 (angular) nats (the wide eye 0.01); see docs/schmidt_kpf_notes.md, "Round
+of 29 Nov, i14-fovgaze".
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from humimic.perception.trackers.kpf.likelihood import Evaluation, Likelihood
+
+
+def two_view_terms(terms_wide: np.ndarray, terms_fovea: np.ndarray, in_fovea: np.ndarray,
+                   weight: float) -> np.ndarray:
+    """Eq. 10's per-part log factors of two conditionally independent views: the wide view's
+    ``(N, parts)`` terms plus ``weight`` times the foveal view's on the parts ``in_fovea``
+    ``(parts,) bool``; their row sums are ``log p(y_w | x) + weight log p_fovea(y_f | x)``."""
+    return terms_wide + weight * np.where(in_fovea, terms_fovea, 0.0)
+
+
+class FovealLikelihood(Likelihood):
+    """:class:`Likelihood` of the wide view (the tracker's camera) times the foveal view's
+    factors of the ``parts`` (:func:`two_view_terms`); the foveal frame is given before each
+    tracker step by :meth:`look` (until then, and after ``look(None, None)``, the wide view
+    alone)."""
+
+    def __init__(self, body, intrinsics, cfg, fovea_intrinsics, parts: tuple[str, ...],
+                 weight: float = 1.0):
+        super().__init__(body, intrinsics, cfg)
+        unknown = sorted(set(parts) - set(self.parts))
+        if unknown:
+            raise ValueError(f"fovea parts {unknown} are not body parts; parts: {self.parts}")
+        self.fovea = Likelihood(body, fovea_intrinsics, cfg)
+        self.in_fovea = np.array([p in parts for p in self.parts])
+        self.weight = float(weight)
+        self.view: tuple | None = None
+        """(maps, T_cam_base) of the foveal frame, or None."""
+
+    def look(self, maps, T_cam_base: np.ndarray | None) -> None:
+        """The foveal frame's cue maps and camera pose for the next evaluations."""
+        self.view = None if maps is None else (maps, T_cam_base)
+
+    def evaluate(self, q: np.ndarray, maps, T_cam_base: np.ndarray,
+                 floors: bool = False) -> Evaluation:
+        ev = super().evaluate(q, maps, T_cam_base, floors=floors)
+        if self.view is None:
+            return ev
+        fov = self.fovea.evaluate(q, *self.view, floors=floors)
+        return Evaluation(ev.cost, two_view_terms(ev.terms, fov.terms, self.in_fovea,
+                                                  self.weight), ev.colours)
+
+    def share_references(self, references: dict[str, np.ndarray]) -> None:
+        super().share_references(references)
+        if hasattr(self, "fovea"):
+            self.fovea.share_references(references)
