@@ -74,5 +74,4 @@ class FovealLikelihood(Likelihood):
 
     def share_references(self, references: dict[str, np.ndarray]) -> None:
         super().share_references(references)
-        if hasattr(self, "fovea"):
-            self.fovea.share_references(references)
+        self.fovea.share_references(references)
