@@ -12,7 +12,7 @@ from humimic.perception.blobs.config import DEFAULT_COLOR_MODEL
 from humimic.perception.cues.color_models import ColorLUT, load_color_model
 from humimic.perception.trackers.kpf.config import KpfConfig
 from humimic.perception.trackers.kpf.flips import arm_flips
-from humimic.perception.trackers.kpf.fovea import FovealLikelihood, two_view_terms
+from humimic.perception.trackers.kpf.fovea import FovealLikelihood, parts_in_view, two_view_terms
 from humimic.perception.trackers.kpf.frame_cues import FrameCues
 from humimic.perception.trackers.kpf.likelihood import Likelihood
 from humimic.perception.trackers.kpf.scores import ENDPOINTS
@@ -116,3 +116,35 @@ def test_fovea_parts_must_be_body_parts():
     body = kpf_body()
     with pytest.raises(ValueError, match="r_shin"):
         FovealLikelihood(body, INTRINSICS, CFG, INTRINSICS, ("r_forearm", "r_shin"))
+
+
+def test_parts_in_view_needs_the_whole_outline_inside_the_margin():
+    uv = np.array([[[10.0, 10.0], [300.0, 200.0]],      # inside a 320 x 240 image, 10 px in
+                   [[10.0, 10.0], [315.0, 200.0]],      # 4 px from the right border
+                   [[-5.0, 10.0], [100.0, 100.0]],      # a vertex off the image
+                   [[50.0, 50.0], [60.0, 60.0]]])       # inside, but not valid
+    valid = np.array([True, True, True, False])
+    assert parts_in_view(uv, valid, 320, 240, 5.0).tolist() == [True, False, False, False]
+    assert parts_in_view(uv, valid, 320, 240, 0.0).tolist() == [True, True, False, False]
+
+
+def test_look_with_a_margin_scores_only_the_parts_in_view():
+    """The scored parts are the foveal parts whose outline at the reference pose lies inside
+    the foveal image (bounding boxes computed here); a margin no part fits leaves the wide
+    view alone."""
+    import humimic.bodymodel as bm
+    body, q0, (mw, T), (mf, Tf), fi = views()
+    two = FovealLikelihood(body, INTRINSICS, CFG, fi, ARM)
+    two.adapt({p: c[0] for p, c in two.evaluate(q0[None], mw, T).colours.items()})
+    wide = Likelihood(body, INTRINSICS, CFG)
+    wide.share_references(two.references)
+    two.look(mf, Tf, q0, 1e3)
+    assert not two.scored.any()
+    assert np.allclose(two.evaluate(q0[None], mw, T).log_lik,
+                       wide.evaluate(q0[None], mw, T).log_lik)
+    uv = bm.project(body, body.forward(q0[None]), fi, Tf).outline.uv[0]
+    lo, hi = uv.min(axis=1), uv.max(axis=1)
+    want = [p in ARM and bool(np.all(lo[i] >= 2) and hi[i, 0] <= 317 and hi[i, 1] <= 237)
+            for i, p in enumerate(body.part_names)]
+    two.look(mf, Tf, q0, 2.0)
+    assert two.scored.tolist() == want and any(want), (want, lo, hi)

@@ -41,6 +41,19 @@ def two_view_terms(terms_wide: np.ndarray, terms_fovea: np.ndarray, in_fovea: np
     return terms_wide + weight * np.where(in_fovea, terms_fovea, 0.0)
 
 
+def parts_in_view(uv: np.ndarray, valid: np.ndarray, width: int, height: int,
+                  margin: float) -> np.ndarray:
+    """``(P,)`` the parts whose outline ``uv (P, V, 2)`` (px; ``valid (P,)``) lies wholly inside
+    the ``width x height`` image at least ``margin`` px from its border. (A cue point off the
+    image reads no response (:mod:`~humimic.perception.trackers.kpf.cue_costs`), the same for
+    the truth and a wrong pose, so a limb half out of the narrow image pulls the estimate
+    towards poses that put it inside; scoring only the limbs in view at the last estimate
+    avoids that.)"""
+    u, v = uv[..., 0], uv[..., 1]
+    inside = (u >= margin) & (v >= margin) & (u <= width - 1 - margin) & (v <= height - 1 - margin)
+    return np.asarray(valid, bool) & np.all(inside, axis=-1)
+
+
 class FovealLikelihood(Likelihood):
     """:class:`Likelihood` of the wide view (the tracker's camera) times the foveal view's
     factors of the ``parts`` (:func:`two_view_terms`); the foveal frame is given before each
@@ -58,10 +71,24 @@ class FovealLikelihood(Likelihood):
         self.weight = float(weight)
         self.view: tuple | None = None
         """(maps, T_cam_base) of the foveal frame, or None."""
+        self.scored = self.in_fovea
+        """(parts,) the parts scored in the foveal frame (:meth:`look`)."""
 
-    def look(self, maps, T_cam_base: np.ndarray | None) -> None:
-        """The foveal frame's cue maps and camera pose for the next evaluations."""
+    def look(self, maps, T_cam_base: np.ndarray | None, q_ref: np.ndarray | None = None,
+             margin: float | None = None) -> None:
+        """The foveal frame's cue maps and camera pose for the next evaluations; with
+        ``margin`` (px) only those of the parts wholly inside the image (:func:`parts_in_view`)
+        at the pose ``q_ref (14,)`` (the last estimate) are scored."""
         self.view = None if maps is None else (maps, T_cam_base)
+        self.scored = self.in_fovea
+        if maps is not None and margin is not None and q_ref is not None:
+            from humimic import bodymodel as bm
+
+            i = self.fovea.intr
+            view = bm.project(self.body, self.body.forward(np.asarray(q_ref)[None]), i,
+                              T_cam_base)
+            self.scored = self.in_fovea & parts_in_view(
+                view.outline.uv[0], view.outline.valid[0], i.width, i.height, margin)
 
     def evaluate(self, q: np.ndarray, maps, T_cam_base: np.ndarray,
                  floors: bool = False) -> Evaluation:
@@ -69,7 +96,7 @@ class FovealLikelihood(Likelihood):
         if self.view is None:
             return ev
         fov = self.fovea.evaluate(q, *self.view, floors=floors)
-        return Evaluation(ev.cost, two_view_terms(ev.terms, fov.terms, self.in_fovea,
+        return Evaluation(ev.cost, two_view_terms(ev.terms, fov.terms, self.scored,
                                                   self.weight), ev.colours)
 
     def share_references(self, references: dict[str, np.ndarray]) -> None:

@@ -67,7 +67,10 @@ class KpfStage(Stage):
             self.tracker = KpfTracker(self.body, frame.camera.intrinsics, self.cfg, self.rng,
                                       self.frame_rate, self._likelihood(frame, fov))
         if isinstance(self.tracker.lik, FovealLikelihood):
-            self.tracker.lik.look(*(fov[1:] if fov is not None else (None, None)))
+            q_ref = self.tracker.mode if self.tracker.mode is not None else \
+                bm.truth_state(self.world, self.world.gt.index_of(t), "base")
+            self.tracker.lik.look(*(fov[1:] if fov is not None else (None, None)), q_ref,
+                                  self.cfg.fovea.in_view_margin_px)
         if self.tracker.mode is None:
             self.tracker.start(bm.truth_state(self.world, self.world.gt.index_of(t), "base"),
                                maps, T_cam_base)
