@@ -22,8 +22,9 @@ clothes through the same renderer.
 Profiled on Table 1's frames (``schmidt-depth-profile --set cameras.which=foveal --gaze
 right_elbow right_wrist``, the eye on the true arm): in the hold, the truth's elbow flip and
 double flip cost 1.0-3.0 nats in the foveal view (the wide eye: -0.00-0.33), the wrist flip
-0.25 (side) / 0.33 (angular) nats (the wide eye 0.01); see docs/schmidt_kpf_notes.md, "Round
-of 29 Nov, i14-fovgaze".
+0.25 (side) / 0.33 (angular) nats (the wide eye 0.01). Tracked (``schmidt_table1_fovgaze``,
+with the flip-branch decision, (1000, 3), seeds 0-9): angular pointing 65 mm (Table 1's kpf
+198), side 51 (40); see docs/schmidt_kpf_notes.md, "Round of 29 Nov, i14-fovgaze".
 """
 
 from __future__ import annotations
