@@ -3,7 +3,7 @@ likelihood profiled along the true wrist's camera ray and at its kinematic mirro
 
 ``python -m humimic.perception.reproduce schmidt-depth-profile [--gesture side angle] [--eye
 wide|foveal] [--seeds S ...] [--set KEY=VALUE ...] [--tracker kpf] [--range MM] [--step MM]
-[--torso-offset X Y Z] [--out DIR] [--from DIR] [--scale K]`` renders
+[--torso-offset X Y Z] [--gaze TARGET ...] [--out DIR] [--from DIR] [--scale K]`` renders
 ``scenarios/schmidt_table1.yaml``'s frames (``--eye foveal``: its foveal variant) for each
 gesture and seed -- no tracker runs -- and on each frame evaluates
 :func:`~humimic.perception.trackers.kpf.profile.depth_profile` around the TRUE pose with the
@@ -23,7 +23,9 @@ stereo arithmetic (the eyes' baseline from the robot model, the disparity change
 change makes at the person's distance), what a second eye would add. ``--torso-offset``
 (mm, base frame) profiles around the truth with its torso moved (a tracker's torso error; the
 errors stay to the true wrist); ``--from DIR`` re-summarises a ``profile.json`` and ``--scale
-K`` multiplies the log-likelihoods by K first (the cue sigmas divided by sqrt K).
+K`` multiplies the log-likelihoods by K first (the cue sigmas divided by sqrt K). ``--gaze
+right_elbow right_wrist`` (with ``--set cameras.which=foveal``) keeps the eyes on the true arm
+(:class:`TruthGaze`): the narrow camera's view of the arm at Table 1's 2 m.
 """
 
 from __future__ import annotations
