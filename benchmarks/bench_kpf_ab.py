@@ -14,7 +14,11 @@ and the median of the per-round ratios.
 
     MUJOCO_GL=egl python benchmarks/bench_kpf_ab.py BASELINE_CHECKOUT/src src \\
         [--rounds R] [--config P,I] [--only NAME] [--frames N] [--repeats K]
-        [--gesture side|angle]
+        [--gesture side|angle] [--fovea]
+
+``--fovea``: the frames of ``scenarios/schmidt_table1_fovgaze.yaml`` (the left eye's wide and
+foveal cameras, the eye on the true right elbow) and tree B's runs with the scenario's
+``trackers.kpf.fovea`` (give the same tree twice to measure the fovea's cost).
 """
 
 from __future__ import annotations
@@ -53,7 +57,48 @@ def prepare(path: str, frames: int, gesture: str = "side") -> None:
         pickle.dump(data, f)
 
 
-def child(path: str, config: tuple[int, int], name: str, repeats: int) -> None:
+def prepare_fovea(path: str, frames: int, gesture: str = "side") -> None:
+    """As :func:`prepare`, through ``schmidt_table1_fovgaze.yaml``'s two cameras (the left
+    eye's wide and foveal), the eyes set on the TRUE right elbow every frame (a stand-in for
+    the scenario's gaze on the tracker's estimate: the same work per frame)."""
+    import mujoco
+
+    from humimic import bodymodel as bm
+    from humimic.paths import SCENARIOS_DIR
+    from humimic.perception.trackers.common import skin_model_lut
+    from humimic.rngs import Rngs
+    from humimic.scenario import load_scenario
+    from humimic.sensors.camera_model import invert_transform
+    from humimic.world.world import World
+
+    sc = load_scenario(SCENARIOS_DIR / "schmidt_table1_fovgaze.yaml",
+                       [f"human.motion.gestures=[{gesture}]"], seed=0, duration=frames / 7.5)
+    world = World(sc, Rngs(0))
+    m, d = world.scene.model, world.scene.data
+    out = []
+    try:
+        lut = skin_model_lut(sc, world, ["L_wide", "L_foveal"], "bench")
+        elbow = world.gt.p_world("right_elbow")
+        every = int(round(sc.timing.physics_rate / 7.5))
+        for tick in range(0, world.n_ticks, every):
+            world.apply_human(tick)
+            mujoco.mj_forward(m, d)
+            world.look_at_point(elbow[tick])
+            shots = world.eye_rig.capture(tick / sc.timing.physics_rate)
+            out.append([(shots[c].image, invert_transform(shots[c].camera.T_base_cam))
+                        for c in ("L_wide", "L_foveal")])
+        data = {"frames": [f[0] for f in out], "fovea": [f[1] for f in out],
+                "intrinsics": shots["L_wide"].camera.intrinsics,
+                "fovea_intrinsics": shots["L_foveal"].camera.intrinsics,
+                "q0": bm.truth_state(world, 0, "base"), "lut": lut}
+    finally:
+        world.close()
+    with open(path, "wb") as f:
+        pickle.dump(data, f)
+
+
+def child(path: str, config: tuple[int, int], name: str, repeats: int,
+          fovea: bool = False) -> None:
     """Track the pickled frames ``repeats`` times; print the thread-CPU rates (JSON)."""
     import cv2
 
@@ -73,13 +118,25 @@ def child(path: str, config: tuple[int, int], name: str, repeats: int) -> None:
     body = kpf_body()
     load_kernels(body, intr, cfg, frames[0][0], lut, frames[0][1], q0)
     kw = {"colour_gradients": cfg.colour_gradients}
+    fov = data.get("fovea") if fovea else None
+    if fov is not None:
+        from humimic.perception.trackers.kpf.fovea import FovealLikelihood
+
+        f = load_scenario(SCENARIOS_DIR / "schmidt_table1_fovgaze.yaml").trackers["kpf"].fovea
+        cfg = cfg.model_copy(update={"fovea": f})
     cpu = []
     for _ in range(repeats):
-        tr = KpfTracker(body, intr, cfg, np.random.default_rng(0))
+        lik = None if fov is None else FovealLikelihood(
+            body, intr, cfg, data["fovea_intrinsics"], tuple(f.parts), f.weight)
+        tr = KpfTracker(body, intr, cfg, np.random.default_rng(0), lik=lik)
+        if lik is not None:
+            lik.look(FrameCues(fov[0][0], lut, **kw), fov[0][1])
         tr.start(q0, FrameCues(frames[0][0], lut, **kw), frames[0][1])
         cpu.append([])
-        for img, T in frames[1:]:
+        for i, (img, T) in enumerate(frames[1:], 1):
             c0 = time.thread_time()
+            if lik is not None:
+                lik.look(FrameCues(fov[i][0], lut, **kw), fov[i][1])
             tr.step(FrameCues(img, lut, **kw), T)
             cpu[-1].append(time.thread_time() - c0)
     n_f = len(frames) - 1
@@ -97,27 +154,33 @@ def main() -> None:
     p.add_argument("--repeats", type=int, default=5, help="runs of the frames per round")
     p.add_argument("--gesture", default="side", choices=("side", "angle"),
                    help="the pointing gesture of the frames")
+    p.add_argument("--fovea", action="store_true",
+                   help="frames of schmidt_table1_fovgaze.yaml (the eye on the true elbow); "
+                   "tree B's runs with its trackers.kpf.fovea, tree A's without")
+    p.add_argument("--fovea-child", action="store_true", help=argparse.SUPPRESS)
     p.add_argument("--prepare", help=argparse.SUPPRESS)
     p.add_argument("--child", help=argparse.SUPPRESS)
     args = p.parse_args()
     config = tuple(int(x) for x in args.config.split(","))
     if args.prepare:
-        return prepare(args.prepare, args.frames, args.gesture)
+        return (prepare_fovea if args.fovea else prepare)(args.prepare, args.frames,
+                                                         args.gesture)
     if args.child:
-        return child(args.child, config, args.only, args.repeats)
+        return child(args.child, config, args.only, args.repeats, args.fovea_child)
     if len(args.trees) != 2:
         p.error("give two source trees")
     me = [sys.executable, str(Path(__file__).resolve())]
     with tempfile.TemporaryDirectory() as tmp:
         data = str(Path(tmp) / "frames.pkl")
         subprocess.run(me + ["--prepare", data, "--frames", str(args.frames), "--gesture",
-                            args.gesture], check=True,
+                            args.gesture] + (["--fovea"] if args.fovea else []), check=True,
                        env=_env(args.trees[0]))
         hz = {s: {0: [], 1: []} for s in STATS}
         for r in range(args.rounds):
             for k in ((0, 1) if r % 2 == 0 else (1, 0)):
+                fov = ["--fovea-child"] if args.fovea and k == 1 else []
                 out = subprocess.run(me + ["--child", data, "--config", args.config, "--only",
-                                           args.only, "--repeats", str(args.repeats)],
+                                           args.only, "--repeats", str(args.repeats)] + fov,
                                      check=True, env=_env(args.trees[k]), capture_output=True,
                                      text=True).stdout
                 got = json.loads(out.strip().splitlines()[-1])

@@ -119,6 +119,10 @@ def test_covered_camera_frames_are_lost_and_particles_stay_finite(run):
     ("{kind: kpf, D_rate: 0}", "trackers.kpf.D_rate"),
     ("{kind: kpf, D_torso_m: 0, split_arms: true}", "trackers.kpf.D_torso_m"),
     ("{kind: kpf, motion_nois: 0.2}", "trackers.kpf.motion_nois"),
+    ("{kind: kpf, fovea: {zoom: 2}}", "trackers.kpf.fovea.zoom"),
+    ("{kind: kpf, fovea: {parts: [r_shin]}}", "trackers.kpf.fovea.parts.0"),
+    ("{kind: kpf, fovea: {weight: 0}}", "trackers.kpf.fovea.weight"),
+    ("{kind: kpf, fovea: {}}", "trackers.kpf.fovea.camera"),     # cameras.which: wide
 ])
 def test_bad_tracker_config_exits_2_naming_the_key(tmp_path, capsys, tracker, key):
     path = tmp_path / "s.yaml"

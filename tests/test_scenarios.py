@@ -71,8 +71,8 @@ def test_scenario_runs_end_to_end_and_every_stage_scores(name, tmp_path):
         assert metrics["trackers"][name]["frames_per_s"] is not None, name
     if scenario.mimic is not None and scenario.mimic.mode == "joints":
         assert metrics["mimicry"]["joints"]["mode"] == "joints"
-    elif scenario.mimic is not None:
-        for site in scenario.mimic.map.values():
+    elif scenario.mimic is not None and scenario.mimic.start < scenario.duration:
+        for site in scenario.mimic.map.values():   # (a later start: the eyes' gaze alone)
             palm = metrics["mimicry"][site]
             assert palm["status"] == "ok" and palm["rmse_mm"] is not None, palm
         assert metrics["latency_ms"]["end_to_end"] is not None

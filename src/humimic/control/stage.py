@@ -45,7 +45,8 @@ from humimic.world.names import HUMAN_PREFIX, ROBOT_JOINTS
 MAX_AGE = 0.25
 EYES = np.array([ROBOT_JOINTS.index(j) for j in ("L_EP", "L_ET", "R_EP", "R_ET")])
 #: A human target's name among a tracker's pose joints (``PoseEstimate.joints``).
-POSE_JOINT = {"right_hand": "r_hand", "left_hand": "l_hand"}
+POSE_JOINT = {"right_hand": "r_hand", "left_hand": "l_hand", "right_elbow": "r_elbow",
+              "left_elbow": "l_elbow", "right_wrist": "r_wrist", "left_wrist": "l_wrist"}
 #: Joints of a driven arm whose limit band strains it (the wrists hardly move a palm).
 STRAIN_JOINTS = ("SFE", "SAA", "HR", "EB")
 

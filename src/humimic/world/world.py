@@ -166,11 +166,15 @@ class World:
         mujoco.mj_forward(m, d)
 
     def _look_at(self, target) -> None:
-        s, m, d = self.scene, self.scene.model, self.scene.data
         if isinstance(target, str):
-            p_world = self.gt.p_world(target)[0]
+            self.look_at_point(self.gt.p_world(target)[0])
         else:
-            p_world = np.asarray(target, dtype=float)
+            self.look_at_point(np.asarray(target, dtype=float))
+
+    def look_at_point(self, p_world: np.ndarray) -> None:
+        """Set both eyes' pan and tilt (and their servo targets) to aim at a world point, at
+        rest (joint range permitting)."""
+        s, m, d = self.scene, self.scene.model, self.scene.data
         for eye in ("L", "R"):
             body = m.body(f"{ROBOT_PREFIX}{eye}_eye")
             parent = body.parentid[0]
@@ -181,6 +185,8 @@ class World:
                 j = ROBOT_JOINTS.index(joint)
                 lo, hi = s.robot_range[j]
                 d.qpos[s.robot_qpos[j]] = np.clip(angle, lo, hi)
+                d.qvel[s.robot_dof[j]] = 0.0
+                d.ctrl[s.robot_actuators[j]] = d.qpos[s.robot_qpos[j]]
         mujoco.mj_forward(m, d)
 
     def close(self) -> None:

@@ -66,6 +66,34 @@ def idle_options(cfg: KpfDynamics) -> list[tuple[str, tuple[str, ...]]]:
     return base.idle_options(cfg, NEEDS)
 
 
+FOVEA_PARTS = ("r_upper_arm", "r_forearm", "r_hand", "l_upper_arm", "l_forearm", "l_hand")
+
+
+class KpfFovea(Section):
+    """Our extension (:mod:`~humimic.perception.trackers.kpf.fovea`): the arm limbs' cue terms
+    also in the same eye's narrow (foveal) camera, whose gaze the scenario's ``mimic.gaze``
+    (``tracker:`` this tracker, ``target: right_elbow``) keeps on the tracker's estimate
+    (``scenarios/schmidt_table1_fovgaze.yaml``). Measured (Table 1's ``kpf`` at (1000, 3),
+    seeds 0-4, mean wrist error, mm, side / angular): alone 48.7 / 192 (Table 1's 41.7 /
+    197); with ``branch_threshold`` 1.0, ``branch_refine_polls`` 3 and
+    ``branch_min_separation_mm`` 200 50.8 / 61.6, seeds 5-9 51.7 / 68.2 (Table 1's 38.9 / 199;
+    the decision without the fovea, ungated: 70.8 / 195); frames per CPU second x0.52 at
+    (150, 2), x0.72 at (1000, 3). Off: side pointing gets worse and (150, 2) falls below its
+    speed goal."""
+
+    camera: Literal["L_foveal", "R_foveal"] = "L_foveal"
+    """The foveal camera (rendered: ``cameras.which: both``)."""
+    parts: list[Literal[FOVEA_PARTS]] = Field(
+        default_factory=lambda: ["r_upper_arm", "r_forearm", "r_hand"], min_length=1)
+    """The limbs scored in it."""
+    weight: float = Field(1.0, gt=0.0, le=10.0)
+    """Its factors' exponent (1: the two views' likelihoods multiplied)."""
+    in_view_margin_px: float | None = Field(None, ge=0.0, le=100.0)
+    """Score in it only the parts wholly inside its image, this far from the border, at the
+    last estimate (:func:`~humimic.perception.trackers.kpf.fovea.parts_in_view`); None: all
+    ``parts`` every frame."""
+
+
 class KpfConfig(KpfDynamics):
     """Kernel particle filter 14-DOF upper-body tracker (Schmidt sec. 5.2)."""
 
@@ -267,6 +295,8 @@ class KpfConfig(KpfDynamics):
     """Lost when the best mode's mean cue cost exceeds this."""
     latency: float = Field(0.0, ge=0.0, le=5.0)
     """Declared processing delay of a pose estimate (s)."""
+    fovea: KpfFovea | None = None
+    """Our extension: a second, foveal view of the arms (:class:`KpfFovea`); None: off."""
 
     @model_validator(mode="after")
     def _check(self) -> KpfConfig:

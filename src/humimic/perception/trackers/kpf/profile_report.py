@@ -204,14 +204,14 @@ def render_profiles(args, delta: np.ndarray) -> tuple[dict, dict]:
                 raise ScenarioError(sc.name, "--tracker", "no such tracker", args.tracker,
                                     ", ".join(sc.trackers or {}))
             rows, info = profile_run(sc, args.tracker, delta,
-                                     1e-3 * np.asarray(args.torso_offset))
+                                     1e-3 * np.asarray(args.torso_offset), args.gaze)
             for r in rows:
                 r["seed"] = seed
             rows_by.setdefault(gesture, []).extend(rows)
             print(f"{gesture} seed {seed}: {len(rows)} frames", flush=True)
     info.update(eye=sc.cameras.which, resolution=list(sc.cameras.resolution),
                 distance_m=sc.human.distance, tracker=args.tracker, seeds=args.seeds,
-                torso_offset_mm=list(args.torso_offset))
+                torso_offset_mm=list(args.torso_offset), gaze=args.gaze)
     return rows_by, info
 
 
@@ -233,6 +233,10 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--torso-offset", type=float, nargs=3, default=(0.0, 0.0, 0.0),
                    metavar=("X", "Y", "Z"), help="profile around the true pose with its torso "
                    "moved by this (mm, robot base frame: x towards the person)")
+    p.add_argument("--gaze", nargs="+", default=None, metavar="TARGET",
+                   choices=["right_elbow", "right_wrist", "right_hand", "right_shoulder"],
+                   help="turn the eyes every servo tick to the mean of these TRUE human "
+                   "targets (foveated active gaze on the arm; e.g. right_elbow right_wrist)")
     p.add_argument("--out", type=Path, default=None, help="directory for JSON and PNG")
     p.add_argument("--from", dest="source", type=Path, default=None,
                    help="summarise this --out directory's profile.json instead of rendering")
@@ -267,7 +271,7 @@ def main(argv: list[str] | None = None) -> int:
     print(f"\n{info['eye']} eye, {info['resolution'][0]} x {info['resolution'][1]}"
           f" (f = {info['fx_px']:.1f} px), person {info['distance_m']:g} m away; likelihood of "
           f"trackers.{info['tracker']}; seeds {info['seeds']}; torso moved "
-          f"{info.get('torso_offset_mm', [0, 0, 0])} mm")
+          f"{info.get('torso_offset_mm', [0, 0, 0])} mm; gaze on {info.get('gaze') or '-'}")
     print(table(results))
     for g, by in results.items():
         a = by["all"]

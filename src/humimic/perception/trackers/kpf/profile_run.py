@@ -3,7 +3,7 @@ likelihood profiled along the true wrist's camera ray and at its kinematic mirro
 
 ``python -m humimic.perception.reproduce schmidt-depth-profile [--gesture side angle] [--eye
 wide|foveal] [--seeds S ...] [--set KEY=VALUE ...] [--tracker kpf] [--range MM] [--step MM]
-[--torso-offset X Y Z] [--out DIR] [--from DIR] [--scale K]`` renders
+[--torso-offset X Y Z] [--gaze TARGET ...] [--out DIR] [--from DIR] [--scale K]`` renders
 ``scenarios/schmidt_table1.yaml``'s frames (``--eye foveal``: its foveal variant) for each
 gesture and seed -- no tracker runs -- and on each frame evaluates
 :func:`~humimic.perception.trackers.kpf.profile.depth_profile` around the TRUE pose with the
@@ -23,7 +23,9 @@ stereo arithmetic (the eyes' baseline from the robot model, the disparity change
 change makes at the person's distance), what a second eye would add. ``--torso-offset``
 (mm, base frame) profiles around the truth with its torso moved (a tracker's torso error; the
 errors stay to the true wrist); ``--from DIR`` re-summarises a ``profile.json`` and ``--scale
-K`` multiplies the log-likelihoods by K first (the cue sigmas divided by sqrt K).
+K`` multiplies the log-likelihoods by K first (the cue sigmas divided by sqrt K). ``--gaze
+right_elbow right_wrist`` (with ``--set cameras.which=foveal``) keeps the eyes on the true arm
+(:class:`TruthGaze`): the narrow camera's view of the arm at Table 1's 2 m.
 """
 
 from __future__ import annotations
@@ -107,6 +109,24 @@ class ProfileProbe(Stage):
         self.lik.adapt({k: v[0] for k, v in self.lik.evaluate(q[None], maps, T).colours.items()})
 
 
+class TruthGaze(Stage):
+    """Our probe of foveated active gaze (issue 14; not in the paper): before every servo tick
+    both eyes are turned (set, not servoed) so their axes -- the wide and foveal cameras are
+    coaxial -- meet the mean of the TRUE positions of the human ``targets`` (e.g.
+    ``right_elbow right_wrist``): an ideal gaze on the arm, the upper bound of one that follows
+    a tracker's estimate."""
+
+    name = "truth_gaze"
+
+    def __init__(self, world, targets: list[str]):
+        self.world = world
+        self.p_world = np.mean([world.gt.p_world(t) for t in targets], axis=0)
+
+    def servo(self, t: float, bus) -> None:
+        w = self.world
+        w.look_at_point(self.p_world[w.gt.index_of(t)])
+
+
 def eye_baseline(world) -> float:
     """The distance (m) between the robot's two eyes (the bodies ``L_eye``, ``R_eye`` of the
     robot model, children of its head)."""
@@ -123,9 +143,10 @@ def disparity_change(f_px: float, baseline: float, z: float, dz: float) -> float
     return f_px * baseline * (1.0 / z - 1.0 / (z + dz))
 
 
-def profile_run(scenario, tracker: str, delta: np.ndarray, torso_offset=(0.0, 0.0, 0.0)
-                ) -> tuple[list[dict], dict]:
-    """Render ``scenario`` and profile each frame (:class:`ProfileProbe`); ``(rows, info)``."""
+def profile_run(scenario, tracker: str, delta: np.ndarray, torso_offset=(0.0, 0.0, 0.0),
+                gaze: list[str] | None = None) -> tuple[list[dict], dict]:
+    """Render ``scenario`` and profile each frame (:class:`ProfileProbe`), the eyes on the
+    true ``gaze`` targets' mean if given (:class:`TruthGaze`); ``(rows, info)``."""
     from humimic.perception.trackers.common import check_camera, skin_model_lut
     from humimic.pipeline.simulation import simulate
     from humimic.rngs import Rngs
@@ -140,7 +161,8 @@ def profile_run(scenario, tracker: str, delta: np.ndarray, torso_offset=(0.0, 0.
         lut = skin_model_lut(scenario, world, [camera], f"trackers.{tracker}")
         probe = ProfileProbe(world, camera, cfg, lut, delta, torso_offset)
         rlog = RerunLog(world.scene, "off", None, "depth-profile")
-        simulate(world, [probe], rlog, progress=False)
+        stages = [probe] if not gaze else [TruthGaze(world, gaze), probe]
+        simulate(world, stages, rlog, progress=False)
         info = {"fx_px": probe.fx, "baseline_m": eye_baseline(world)}
     finally:
         world.close()

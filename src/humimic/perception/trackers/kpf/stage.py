@@ -20,6 +20,7 @@ from humimic import bodymodel as bm
 from humimic.messages import PoseEstimate
 from humimic.perception.cues.auto_colors import look_alike_report
 from humimic.perception.trackers.common import pose_error_plot
+from humimic.perception.trackers.kpf.fovea import FovealLikelihood
 from humimic.perception.trackers.kpf.frame_cues import FrameCues
 from humimic.perception.trackers.kpf.scores import ENDPOINTS, KpfRecord, errors, kpf_metrics
 from humimic.perception.trackers.kpf.tracker import KpfTracker, kpf_body
@@ -61,9 +62,16 @@ class KpfStage(Stage):
         t0, c0 = time.perf_counter(), time.thread_time()
         maps = FrameCues(frame.image, self.skin_lut,     # computed where the particles look
                          colour_gradients=self.cfg.colour_gradients)
+        fov = self._fovea(msg.value)
         if self.tracker is None:
             self.tracker = KpfTracker(self.body, frame.camera.intrinsics, self.cfg, self.rng,
-                                      self.frame_rate)
+                                      self.frame_rate, self._likelihood(frame, fov))
+        if isinstance(self.tracker.lik, FovealLikelihood):
+            q_ref = self.tracker.mode if self.tracker.mode is not None else \
+                bm.truth_state(self.world, self.world.gt.index_of(t), "base")
+            self.tracker.lik.look(*(fov[1:] if fov is not None else (None, None)), q_ref,
+                                  self.cfg.fovea.in_view_margin_px)
+        if self.tracker.mode is None:
             self.tracker.start(bm.truth_state(self.world, self.world.gt.index_of(t), "base"),
                                maps, T_cam_base)
         res = self.tracker.step(maps, T_cam_base)
@@ -84,6 +92,22 @@ class KpfStage(Stage):
         if self.rlog is not None and self.rlog.enabled:
             log_frame(self.rlog, self.name, self.camera, t, self.body, frame, T_cam_base, res,
                       self.world.gt.T_world_frame("base"))
+
+    def _fovea(self, frames: dict) -> tuple | None:
+        """``(frame, maps, T_cam_base)`` of the ``fovea`` camera's frame, or None."""
+        f = None if self.cfg.fovea is None else frames.get(self.cfg.fovea.camera)
+        if f is None:
+            return None
+        return f, FrameCues(f.image, self.skin_lut, colour_gradients=self.cfg.colour_gradients), \
+            invert_transform(f.camera.T_base_cam)
+
+    def _likelihood(self, frame, fov: tuple | None):
+        """The tracker's likelihood: the default, or with the foveal view (``fovea``)."""
+        if self.cfg.fovea is None or fov is None:
+            return None
+        c = self.cfg.fovea
+        return FovealLikelihood(self.body, frame.camera.intrinsics, self.cfg,
+                                fov[0].camera.intrinsics, tuple(c.parts), c.weight)
 
     def metrics(self) -> dict:
         return {"trackers": {self.name: {

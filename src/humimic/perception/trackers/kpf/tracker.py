@@ -122,9 +122,9 @@ class KpfTracker:
     (scales D, see ``KpfConfig.D_rate``)."""
 
     def __init__(self, body: bm.BodyModel, intrinsics, cfg, rng: np.random.Generator,
-                 frame_rate: float | None = None):
+                 frame_rate: float | None = None, lik: Likelihood | None = None):
         self.body, self.cfg, self.rng = body, cfg, rng
-        self.lik = Likelihood(body, intrinsics, cfg)
+        self.lik = Likelihood(body, intrinsics, cfg) if lik is None else lik
         self.D = np.asarray(cfg.D(frame_rate), float)
         self.limits = body.free_limits
         self.groups = (sp.split_groups(bm.DOF_NAMES) if cfg.split_arms else GROUPS) \

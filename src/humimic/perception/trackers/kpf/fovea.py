@@ -1,0 +1,105 @@
+"""Our extension (issue 14; not in the paper, whose conclusion lists active vision as future
+work): the kpf likelihood with a second view of the arms through the same eye's narrow
+(foveal) camera, the eye's gaze on the tracker's own arm estimate (``trackers.<kpf>.fovea``).
+
+The wide eye (100 deg, f = 134 px) sees the person at 2 m with a 4.6 px wide forearm; the
+foveal camera of the same eye (24 deg, f = 753 px), coaxial with it, sees the arm 5.6x larger
+when the eye looks at it (the scenario's ``mimic.gaze`` with ``tracker: <kpf>``, ``target:
+right_elbow``). Both images are taken at the same instant from the same eye; given the pose
+they are taken as independent observations, so their likelihoods multiply (Bayes' rule for
+conditionally independent measurements), and eq. 10's product over limbs gains, for each
+foveal part ``l``, the foveal view's factor of that limb:
+
+    log p(y_w, y_f | x) = sum_l T_w(l) + w_f sum_{l in fovea} T_f(l)        (Schmidt eq. 10, x2)
+
+with ``T(l) = 1/N_l sum_c -e_{c,l}^2 / (2 sigma_c^2)`` (eq. 9 with eq. 10's balancing factor)
+computed in each view by :class:`~humimic.perception.trackers.kpf.likelihood.Likelihood`, and
+``w_f`` (``fovea.weight``) a tempering of the second view (1: the plain product). A limb off
+the foveal image costs 1 in every cue there, as in the wide view. The colour references are
+the wide view's (eq. 7 adapts them from the wide view's best mode): both cameras see the same
+clothes through the same renderer.
+
+Profiled on Table 1's frames (``schmidt-depth-profile --set cameras.which=foveal --gaze
+right_elbow right_wrist``, the eye on the true arm): in the hold, the truth's elbow flip and
+double flip cost 1.0-3.0 nats in the foveal view (the wide eye: -0.00-0.33), the wrist flip
+0.25 (side) / 0.33 (angular) nats (the wide eye 0.01). Tracked (``schmidt_table1_fovgaze``,
+with the flip-branch decision, (1000, 3), seeds 0-9): angular pointing 65 mm (Table 1's kpf
+198), side 51 (40); see docs/schmidt_kpf_notes.md, "Round of 29 Nov, i14-fovgaze".
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from humimic.perception.trackers.kpf.likelihood import Evaluation, Likelihood
+
+
+def two_view_terms(terms_wide: np.ndarray, terms_fovea: np.ndarray, in_fovea: np.ndarray,
+                   weight: float) -> np.ndarray:
+    """Eq. 10's per-part log factors of two conditionally independent views: the wide view's
+    ``(N, parts)`` terms plus ``weight`` times the foveal view's on the parts ``in_fovea``
+    ``(parts,) bool``; their row sums are ``log p(y_w | x) + weight log p_fovea(y_f | x)``."""
+    return terms_wide + weight * np.where(in_fovea, terms_fovea, 0.0)
+
+
+def parts_in_view(uv: np.ndarray, valid: np.ndarray, width: int, height: int,
+                  margin: float) -> np.ndarray:
+    """``(P,)`` the parts whose outline ``uv (P, V, 2)`` (px; ``valid (P,)``) lies wholly inside
+    the ``width x height`` image at least ``margin`` px from its border. (A cue point off the
+    image reads no response (:mod:`~humimic.perception.trackers.kpf.cue_costs`), the same for
+    the truth and a wrong pose, so a limb half out of the narrow image pulls the estimate
+    towards poses that put it inside; scoring only the limbs in view at the last estimate
+    avoids that.)"""
+    u, v = uv[..., 0], uv[..., 1]
+    inside = (u >= margin) & (v >= margin) & (u <= width - 1 - margin) & (v <= height - 1 - margin)
+    return np.asarray(valid, bool) & np.all(inside, axis=-1)
+
+
+class FovealLikelihood(Likelihood):
+    """:class:`Likelihood` of the wide view (the tracker's camera) times the foveal view's
+    factors of the ``parts`` (:func:`two_view_terms`); the foveal frame is given before each
+    tracker step by :meth:`look` (until then, and after ``look(None, None)``, the wide view
+    alone)."""
+
+    def __init__(self, body, intrinsics, cfg, fovea_intrinsics, parts: tuple[str, ...],
+                 weight: float = 1.0):
+        super().__init__(body, intrinsics, cfg)
+        unknown = sorted(set(parts) - set(self.parts))
+        if unknown:
+            raise ValueError(f"fovea parts {unknown} are not body parts; parts: {self.parts}")
+        self.fovea = Likelihood(body, fovea_intrinsics, cfg)
+        self.in_fovea = np.array([p in parts for p in self.parts])
+        self.weight = float(weight)
+        self.view: tuple | None = None
+        """(maps, T_cam_base) of the foveal frame, or None."""
+        self.scored = self.in_fovea
+        """(parts,) the parts scored in the foveal frame (:meth:`look`)."""
+
+    def look(self, maps, T_cam_base: np.ndarray | None, q_ref: np.ndarray | None = None,
+             margin: float | None = None) -> None:
+        """The foveal frame's cue maps and camera pose for the next evaluations; with
+        ``margin`` (px) only those of the parts wholly inside the image (:func:`parts_in_view`)
+        at the pose ``q_ref (14,)`` (the last estimate) are scored."""
+        self.view = None if maps is None else (maps, T_cam_base)
+        self.scored = self.in_fovea
+        if maps is not None and margin is not None and q_ref is not None:
+            from humimic import bodymodel as bm
+
+            i = self.fovea.intr
+            view = bm.project(self.body, self.body.forward(np.asarray(q_ref)[None]), i,
+                              T_cam_base)
+            self.scored = self.in_fovea & parts_in_view(
+                view.outline.uv[0], view.outline.valid[0], i.width, i.height, margin)
+
+    def evaluate(self, q: np.ndarray, maps, T_cam_base: np.ndarray,
+                 floors: bool = False) -> Evaluation:
+        ev = super().evaluate(q, maps, T_cam_base, floors=floors)
+        if self.view is None:
+            return ev
+        fov = self.fovea.evaluate(q, *self.view, floors=floors)
+        return Evaluation(ev.cost, two_view_terms(ev.terms, fov.terms, self.scored,
+                                                  self.weight), ev.colours)
+
+    def share_references(self, references: dict[str, np.ndarray]) -> None:
+        super().share_references(references)
+        self.fovea.share_references(references)
