@@ -115,3 +115,29 @@ def test_track2d_plot_is_written(tmp_path):
                         (np.arange(50) >= 30).astype(float) * 2, ("init", "tracking", "lost"),
                         "x")
     assert path.is_file() and path.stat().st_size > 10_000
+
+
+def test_a_site_whose_target_was_lost_most_of_the_run_is_not_ok():
+    """A person standing still while the tracker lost the hand: the held, stale target is near
+    the truth (RMSE 20 mm), but the robot imitated nothing on 60 % of the ticks -- the verdict
+    says so instead of "ok"; a target never lost keeps the plain RMSE / lag line."""
+    site = {"status": "lost_often", "target": "right_hand", "rmse_mm": 20.0, "lag_ms": 10.0,
+            "lost_fraction": 0.6, "reason": "right_hand lost on 60% of the ticks"}
+    v = {x.label: x for x in verdicts({"mimicry": {"R_palm": site}})}["mimicry R_palm: RMSE / lag"]
+    assert v.status == "bad"
+    assert "right_hand lost on 60% of the ticks" in v.value and "lost ok ≤ 0.05" in v.threshold
+    some = {x.label: x for x in verdicts({"mimicry": {"R_palm": site | {
+        "status": "ok", "lost_fraction": 0.1}}})}["mimicry R_palm: RMSE / lag"]
+    assert some.status == "warn"
+    fine = {x.label: x for x in verdicts({"mimicry": {"R_palm": site | {
+        "status": "ok", "lost_fraction": 0.0}}})}["mimicry R_palm: RMSE / lag"]
+    assert (fine.status, fine.value) == ("ok", "20.0 mm / 10 ms")
+    assert fine.threshold == "RMSE ok ≤ 25, warn ≤ 50; |lag| ok ≤ 50, warn ≤ 100"
+
+
+def test_a_person_out_of_view_gets_a_warning_line_only_when_it_happens():
+    warning = "the scripted person passes through the robot (1.68 m behind its eyes at 6.0 s)"
+    items = {v.label: v for v in verdicts({"person_view": {"warning": warning}})}
+    assert items["person in view"].status == "warn" and items["person in view"].value == warning
+    assert "person in view" not in {v.label for v in verdicts({"person_view": {
+        "warning": None, "out_of_view_fraction": 0.0}})}
