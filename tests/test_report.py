@@ -136,8 +136,13 @@ def test_a_site_whose_target_was_lost_most_of_the_run_is_not_ok():
 
 
 def test_a_person_out_of_view_gets_a_warning_line_only_when_it_happens():
-    warning = "the scripted person passes through the robot (1.68 m behind its eyes at 6.0 s)"
-    items = {v.label: v for v in verdicts({"person_view": {"warning": warning}})}
-    assert items["person in view"].status == "warn" and items["person in view"].value == warning
-    assert "person in view" not in {v.label for v in verdicts({"person_view": {
+    view = {"warning": "the scripted person ...", "out_of_view_fraction": 0.459,
+            "first_out_of_view_s": 3.3, "min_front_distance_m": -1.68,
+            "min_front_distance_t_s": 6.0}
+    items = {v.label: v for v in verdicts({"person_view": view})}
+    assert items["person in view"].status == "warn"
+    assert items["person in view"].value == (
+        "out of the eyes' start view on 46% of the run (from 3.3 s); 1.68 m behind the eyes "
+        "at 6.0 s: walks through the robot")
+    assert "person in view" not in {v.label for v in verdicts({"person_view": view | {
         "warning": None, "out_of_view_fraction": 0.0}})}

@@ -100,11 +100,7 @@ def verdicts(metrics: dict) -> list[Verdict]:
     warnings = metrics.get("mujoco_warnings") or {}
     out.append(Verdict("MuJoCo warnings", ", ".join(f"{k}: {v}" for k, v in warnings.items())
                        or "none", "bad" if warnings else "ok", "none"))
-    view = metrics.get("person_view") or {}
-    if view.get("warning"):  # shown only when it warns: the eyes lost the person, not a stage
-        out.append(Verdict("person in view", view["warning"], "warn",
-                           f"in the eyes' start view ≥ {1 - OUT_OF_VIEW:.0%} of the run, "
-                           f"≥ {MIN_FRONT_DISTANCE_M:g} m in front"))
+    out.extend(_person_view_verdicts(metrics.get("person_view")))
     for target, s in (metrics.get("tracking") or {}).items():
         out.extend(_tracking_verdicts(target, s))
     for site, s in (metrics.get("mimicry") or {}).items():
@@ -124,6 +120,22 @@ def verdicts(metrics: dict) -> list[Verdict]:
     for name, s in (metrics.get("trackers") or {}).items():
         out.extend(_tracker_verdicts(name, s))
     return out
+
+
+def _person_view_verdicts(view: dict | None) -> list[Verdict]:
+    """A warning line when the scripted person leaves the eyes' start view or comes too near
+    (``person_view``; the full sentence is in the run's warning line); none otherwise."""
+    if not view or not view.get("warning"):
+        return []
+    out, first = view.get("out_of_view_fraction") or 0.0, view.get("first_out_of_view_s")
+    d, when = view.get("min_front_distance_m"), view.get("min_front_distance_t_s")
+    value = f"out of the eyes' start view on {out:.0%} of the run" + (
+        f" (from {first:.1f} s)" if first is not None else "")
+    if d is not None and d < MIN_FRONT_DISTANCE_M:
+        value += (f"; {-d:.2f} m behind the eyes at {when:.1f} s: walks through the robot"
+                  if d < 0 else f"; {d:.2f} m in front of the eyes at {when:.1f} s")
+    return [Verdict("person in view", value, "warn", f"out of view ≤ {OUT_OF_VIEW:.0%}, "
+                    f"≥ {MIN_FRONT_DISTANCE_M:g} m in front")]
 
 
 def _mimicry_verdict(site: str, s: dict) -> Verdict:
