@@ -4,15 +4,14 @@
 displacement after the mapping, ``lag_ms`` (cross-correlation peak: a lag, not a delay),
 ``jerk`` (RMS third derivative, m/s^3; ``jerk_human`` for the mapped truth),
 ``mapped_motion_rms_mm`` (the mapped truth's RMS distance from its mean, after the mapping's
-scale: what there was to copy;
-a run's warning line names a site under :data:`STILL_TARGET_MM`), ``joint_limit_hits``
-(servo ticks at which an arm or torso joint target sits on the IK's limit band;
-``joint_limit_hits_by_joint`` counts them per joint), ``clamped_fraction``;
+scale: what there was to copy; a run's warning line names a site under
+:data:`STILL_TARGET_MM`), ``joint_limit_hits`` (servo ticks at which an arm or torso joint
+target sits on the IK's limit band; ``joint_limit_hits_by_joint`` per joint),
+``clamped_fraction``;
 
-* ``status``: ``ok``, or ``lost_often`` (with a ``reason``) when ``lost_fraction`` -- servo
-  ticks at which the target's estimate was older than the stage's ``MAX_AGE`` -- exceeds
-  :data:`~humimic.metrics.mimicry.LOST_OFTEN` (or, unscored, ``never_detected``,
-  ``not_started``, ``too_short``);
+* ``status``: ``ok``, or ``lost_often`` (with a ``reason``) when ``lost_fraction`` (ticks
+  with an estimate older than the stage's ``MAX_AGE``) exceeds ``LOST_OFTEN`` (25 %; unscored:
+  ``never_detected``, ``not_started``, ``too_short``);
 * ``error_budget_mm``: the RMS of each stage term of :func:`~humimic.metrics.mimicry.error_terms`
   (``estimate``, ``pipeline_delay``, ``fresh_hold``, ``stale_hold``, ``interpolation``,
   ``workspace``, ``ik``, ``servo``) and of their sum, ``total`` (= ``rmse_mm``). The terms
