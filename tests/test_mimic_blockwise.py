@@ -31,10 +31,12 @@ def stage(monkeypatch):
     gt = SimpleNamespace(t=np.arange(n_gt) / RATE, p_base=lambda name: p_gt[name])
     rec = SimpleNamespace(n=N_REC, dt=2 / RATE)
     cols = {"t": (np.arange(N_REC) * 2 / RATE, ()),
-            "t_est": (None, (2,)), "scale": (None, (2,)), "active": (None, (2,))}
+            "t_est": (None, (2,)), "t_ready": (None, (2,)), "scale": (None, (2,)),
+            "active": (None, (2,))}
     for name in ("p_cmd", "p_cmd_raw", "p_cmd_alt", "p_ik", "p_robot", "p_est"):
         cols[name] = (rng.normal(size=(N_REC, 2, 3)), (2, 3))
-    cols["t_est"] = (cols["t"][0][:, None] - rng.uniform(0, 0.03, (N_REC, 2)), (2,))
+    cols["t_est"] = (cols["t"][0][:, None] - rng.uniform(0, 0.3, (N_REC, 2)), (2,))
+    cols["t_ready"] = (cols["t_est"][0] + rng.uniform(0, 0.03, (N_REC, 2)), (2,))
     cols["scale"] = (rng.uniform(0.8, 1.0, (N_REC, 2)), (2,))
     active = np.zeros((N_REC, 2), bool)
     active[K0:, 1] = True
@@ -67,8 +69,9 @@ def test_blocks_and_strided_rows_are_the_whole_series(stage):
 def test_budget_summed_over_blocks_is_the_whole_arrays(stage):
     stage, ch = stage
     _, s = site_series(stage, 1, ch)
-    terms = error_terms(s["true_now"], s["true_photon"], s["est"], s["cmd_raw"], s["cmd"],
-                        s["ik"], s["robot"])
+    terms = error_terms(s["true_now"], s["true_photon"], s["true_ready"], s["true_stale"],
+                        s["est"], s["cmd_raw"], s["cmd"], s["ik"], s["robot"])
+    assert np.any(rmse(terms["stale_hold"]) > 0.0)  # some rows held past MAX_AGE
     rms, shares, top = site_budget(stage, 1, ch)
     for name in (*TERMS, "total"):
         assert rms[name] == pytest.approx(rmse(terms[name]), rel=1e-12)

@@ -8,6 +8,7 @@ from scipy.spatial.transform import Rotation
 
 from humimic.maths.stats import rmse
 from humimic.metrics.mimicry import (
+    LOST_OFTEN,
     TERMS,
     add_budget_sums,
     budget_from_sums,
@@ -15,8 +16,10 @@ from humimic.metrics.mimicry import (
     error_terms,
     head_motion,
     image_offsets,
+    lost_status,
     mse_shares,
     rms_jerk,
+    stale_time,
     summary_stats,
     xcorr_lag,
 )
@@ -49,13 +52,45 @@ def test_error_terms_are_the_stage_differences():
     """Each term is one stage's output minus its input (e.g. the IK's residual is the IK's
     site minus the command), on the ground-truth time grid."""
     rng = np.random.default_rng(0)
-    true_now, true_photon, est, cmd_raw, cmd, ik, robot = (rng.normal(size=(50, 3))
-                                                           for _ in range(7))
-    terms = error_terms(true_now, true_photon, est, cmd_raw, cmd, ik, robot)
-    assert list(TERMS) == ["estimate", "latency", "interpolation", "workspace", "ik", "servo"]
+    (true_now, true_photon, true_ready, true_stale, est, cmd_raw, cmd, ik,
+     robot) = (rng.normal(size=(50, 3)) for _ in range(9))
+    terms = error_terms(true_now, true_photon, true_ready, true_stale, est, cmd_raw, cmd, ik,
+                        robot)
+    assert list(TERMS) == ["estimate", "pipeline_delay", "fresh_hold", "stale_hold",
+                           "interpolation", "workspace", "ik", "servo"]
     np.testing.assert_array_equal(terms["ik"], ik - cmd)
-    np.testing.assert_array_equal(terms["latency"], true_photon - true_now)
+    np.testing.assert_array_equal(terms["pipeline_delay"], true_photon - true_ready)
+    np.testing.assert_array_equal(terms["stale_hold"], true_stale - true_now)
     np.testing.assert_array_equal(terms["total"], robot - true_now)
+    np.testing.assert_allclose(sum(terms[k] for k in TERMS), terms["total"], atol=1e-12)
+
+
+def test_a_held_estimate_s_age_splits_into_delay_fresh_and_stale_hold():
+    """A target moving at constant velocity v, its last estimate (photon time 1.0 s, ready
+    30 ms later) held until 1.6 s while the target is lost after MAX_AGE = 0.25 s: the
+    pipeline's delay is v * 30 ms, the fresh hold v * 220 ms and the stale hold v * 350 ms --
+    the old single "latency" term (v * 600 ms) was mostly a lost target's, not a latency.
+    Before the estimate goes stale (now 1.1 s) the stale hold is exactly zero."""
+    v = np.array([0.2, -0.1, 0.05])
+    truth = lambda t: np.outer(np.atleast_1d(t), v)  # noqa: E731
+    t_photon, t_ready = np.array([1.0, 1.0]), np.array([1.03, 1.03])
+    t_now = np.array([1.6, 1.1])
+    t_stale = stale_time(t_now, t_photon, t_ready, 0.25)
+    np.testing.assert_allclose(t_stale, [1.25, 1.1])
+    est = truth(t_photon)
+    terms = error_terms(truth(t_now), truth(t_photon), truth(t_ready), truth(t_stale), est,
+                        est, est, est, est)
+    np.testing.assert_allclose(terms["pipeline_delay"], -np.outer([0.03, 0.03], v), atol=1e-12)
+    np.testing.assert_allclose(terms["fresh_hold"], -np.outer([0.22, 0.07], v), atol=1e-12)
+    np.testing.assert_allclose(terms["stale_hold"], -np.outer([0.35, 0.0], v), atol=1e-12)
+    np.testing.assert_allclose(terms["total"], -np.outer([0.6, 0.1], v), atol=1e-12)
+
+
+def test_lost_often_names_the_target_and_its_share():
+    assert lost_status(LOST_OFTEN, "right_hand", 0.25) == {"status": "ok"}
+    s = lost_status(0.6, "right_hand", 0.25)
+    assert s["status"] == "lost_often"
+    assert "right_hand lost on 60% of the ticks" in s["reason"]
 
 
 def test_mse_shares_against_closed_forms():
@@ -68,9 +103,9 @@ def test_mse_shares_against_closed_forms():
     terms = {k: z for k in TERMS} | {"estimate": a, "servo": b, "total": a + b}
     s = mse_shares(terms)
     assert s["estimate"] == pytest.approx(1 / 5) and s["servo"] == pytest.approx(4 / 5)
-    terms = {k: z for k in TERMS} | {"latency": 2 * a, "interpolation": -a, "total": a}
+    terms = {k: z for k in TERMS} | {"fresh_hold": 2 * a, "interpolation": -a, "total": a}
     s = mse_shares(terms)
-    assert s["latency"] == pytest.approx(2.0) and s["interpolation"] == pytest.approx(-1.0)
+    assert s["fresh_hold"] == pytest.approx(2.0) and s["interpolation"] == pytest.approx(-1.0)
 
 
 def _whole_run_budget(terms):
@@ -96,9 +131,10 @@ def test_budget_summed_over_blocks_equals_the_whole_arrays(with_nan):
     parts = {k: rng.normal(scale=s, size=(n, 3)) for k, s in
              zip(("true_now", "true_photon", "est", "cmd_raw", "cmd", "ik", "robot"),
                  (0.1, 0.1, 0.1, 0.1, 0.1, 0.1, 0.1), strict=True)}
+    parts |= {k: rng.normal(scale=0.1, size=(n, 3)) for k in ("true_ready", "true_stale")}
     if with_nan:  # rows a term was not measured in (e.g. lost estimates): skipped per term
         parts["est"][rng.choice(n, 300, replace=False), 1] = np.nan
-    terms = error_terms(*parts.values())
+    terms = error_terms(**parts)
     rms, shares, top = _whole_run_budget(terms)
     if with_nan:  # the total has no NaN: its max is finite, the shares skip the NaN rows
         assert np.isfinite(top)

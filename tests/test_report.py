@@ -115,3 +115,34 @@ def test_track2d_plot_is_written(tmp_path):
                         (np.arange(50) >= 30).astype(float) * 2, ("init", "tracking", "lost"),
                         "x")
     assert path.is_file() and path.stat().st_size > 10_000
+
+
+def test_a_site_whose_target_was_lost_most_of_the_run_is_not_ok():
+    """A person standing still while the tracker lost the hand: the held, stale target is near
+    the truth (RMSE 20 mm), but the robot imitated nothing on 60 % of the ticks -- the verdict
+    says so instead of "ok"; a target never lost keeps the plain RMSE / lag line."""
+    site = {"status": "lost_often", "target": "right_hand", "rmse_mm": 20.0, "lag_ms": 10.0,
+            "lost_fraction": 0.6, "reason": "right_hand lost on 60% of the ticks"}
+    v = {x.label: x for x in verdicts({"mimicry": {"R_palm": site}})}["mimicry R_palm: RMSE / lag"]
+    assert v.status == "bad"
+    assert "right_hand lost on 60% of the ticks" in v.value and "lost ok ≤ 0.05" in v.threshold
+    some = {x.label: x for x in verdicts({"mimicry": {"R_palm": site | {
+        "status": "ok", "lost_fraction": 0.1}}})}["mimicry R_palm: RMSE / lag"]
+    assert some.status == "warn"
+    fine = {x.label: x for x in verdicts({"mimicry": {"R_palm": site | {
+        "status": "ok", "lost_fraction": 0.0}}})}["mimicry R_palm: RMSE / lag"]
+    assert (fine.status, fine.value) == ("ok", "20.0 mm / 10 ms")
+    assert fine.threshold == "RMSE ok ≤ 25, warn ≤ 50; |lag| ok ≤ 50, warn ≤ 100"
+
+
+def test_a_person_out_of_view_gets_a_warning_line_only_when_it_happens():
+    view = {"warning": "the scripted person ...", "out_of_view_fraction": 0.459,
+            "first_out_of_view_s": 3.3, "min_front_distance_m": -1.68,
+            "min_front_distance_t_s": 6.0}
+    items = {v.label: v for v in verdicts({"person_view": view})}
+    assert items["person in view"].status == "warn"
+    assert items["person in view"].value == (
+        "out of the eyes' start view on 46% of the run (from 3.3 s); 1.68 m behind the eyes "
+        "at 6.0 s: walks through the robot")
+    assert "person in view" not in {v.label for v in verdicts({"person_view": view | {
+        "warning": None, "out_of_view_fraction": 0.0}})}

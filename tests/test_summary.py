@@ -45,3 +45,17 @@ def test_measurements_inconsistent_with_their_covariance_are_warned():
     assert verdict_warning(m(0.53, frames=10)) is None  # too few frames to judge
     assert verdict_warning(m(None)) is None
     assert "scatter" not in verdict_warning(m(0.53, verdict="poor"))  # named as poor already
+
+
+def test_a_lost_target_and_a_person_out_of_view_are_named_in_the_warning_line():
+    from humimic.metrics.summary import verdict_warning
+
+    site = {"status": "ok", "target": "right_hand", "lost_fraction": 0.0,
+            "mapped_motion_rms_mm": 150.0}
+    assert verdict_warning({"mimicry": {"R_palm": site}, "person_view": {"warning": None}}) \
+        is None
+    lost = site | {"status": "lost_often", "lost_fraction": 0.6,
+                   "reason": "right_hand lost on 60% of the ticks"}
+    view = "the scripted person passes through the robot"
+    line = verdict_warning({"mimicry": {"R_palm": lost}, "person_view": {"warning": view}})
+    assert line == (f"warning: {view}; mimicry.R_palm: right_hand lost on 60% of the ticks")

@@ -146,6 +146,8 @@ def _metrics(scenario, world, stages, result, setup_s, wall0) -> dict:
         "stages": timer.summary(),
     }
     deep_merge(metrics, world.faults.metrics())
+    if world.person_view is not None:
+        metrics["person_view"] = world.person_view
     for stage in stages:
         deep_merge(metrics, stage.metrics())
     return metrics

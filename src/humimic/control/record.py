@@ -61,6 +61,8 @@ class MimicRecord:
         self.p_est = SpillArray(n, (s, 3), fill=np.nan)
         """Mapped position of the estimate in use (its photon time in ``t_est``)."""
         self.t_est = SpillArray(n, (s,), fill=np.nan)
+        self.t_ready = SpillArray(n, (s,), fill=np.nan)
+        """When the estimate in use became available (``t_est`` plus the pipeline's delay)."""
         self.scale = SpillArray(n, (s,), fill=np.nan)
         """Mapping scale in use (``mimic.fit`` may shrink it)."""
         self.clamped = SpillArray(n, (s,), bool, False)

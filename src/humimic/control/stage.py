@@ -244,6 +244,7 @@ class MimicStage(Stage):
             rec.p_cmd_alt[k, i] = p_cmd_alt
             rec.p_est[k, i] = ch.to_robot(p_est)
             rec.t_est[k, i] = t_est
+            rec.t_ready[k, i] = t_ready
             rec.lost[k, i] = t - t_est > MAX_AGE
             rec.active[k, i] = True
             if ch.last_used is not est:

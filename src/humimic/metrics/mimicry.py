@@ -5,7 +5,9 @@
   cross-correlation (summed over axes), refined by a parabola through the peak.
 * :func:`rms_jerk` - RMS of the third time derivative, estimated with a Savitzky-Golay filter
   (a local polynomial fit; plain third differences would amplify noise by ``1/dt^3``).
-* :func:`error_terms` - the total error split into stage terms that add up to it (vectors);
+* :func:`error_terms` - the total error split into stage terms that add up to it (vectors):
+  the estimate's age split into the pipeline's delay, the hold of a fresh estimate and the
+  hold of a stale one (a lost target), not one "latency";
 * :func:`mse_shares` - each term's share of the total's mean square (shares add up to 1);
 * :func:`budget_sums` - their partial sums over a block of rows (a long run scored block by
   block: the whole run's RMS values and shares to rounding).
@@ -69,36 +71,74 @@ def rms_jerk(p: np.ndarray, dt: float, window_s: float = 0.08) -> float:
 
 
 #: Stage terms of :func:`error_terms`, in pipeline order.
-TERMS = ("estimate", "latency", "interpolation", "workspace", "ik", "servo")
+TERMS = ("estimate", "pipeline_delay", "fresh_hold", "stale_hold", "interpolation", "workspace",
+         "ik", "servo")
+
+#: A site whose target was lost (no estimate younger than the mimic stage's ``MAX_AGE``) on
+#: more than this share of its servo ticks is flagged ``lost_often``: its scores are mostly a
+#: held, stale target's.
+LOST_OFTEN = 0.25
 
 
-def error_terms(true_now: np.ndarray, true_photon: np.ndarray, est: np.ndarray,
-                cmd_raw: np.ndarray, cmd: np.ndarray, ik: np.ndarray,
-                robot: np.ndarray) -> dict[str, np.ndarray]:
+def lost_status(lost_fraction: float, target: str, max_age: float) -> dict:
+    """``{"status": "ok"}``, or ``lost_often`` with the reason when the target was lost (its
+    estimate older than ``max_age`` s) on more than :data:`LOST_OFTEN` of the ticks: the
+    scores are then mostly a stale target's (:func:`error_terms`' ``stale_hold``)."""
+    if lost_fraction <= LOST_OFTEN:
+        return {"status": "ok"}
+    return {"status": "lost_often",
+            "reason": f"{target} lost on {lost_fraction:.0%} of the ticks (no estimate for "
+                      f"over {max_age:g} s): the robot held a stale target"}
+
+
+def error_terms(true_now: np.ndarray, true_photon: np.ndarray, true_ready: np.ndarray,
+                true_stale: np.ndarray, est: np.ndarray, cmd_raw: np.ndarray, cmd: np.ndarray,
+                ik: np.ndarray, robot: np.ndarray) -> dict[str, np.ndarray]:
     """Split the robot's error ``robot - true_now`` into stage terms that add up to it exactly
-    (all ``(N, 3)`` displacements in the robot's mapped space on one time grid)::
+    (all ``(N, 3)`` displacements in the robot's mapped space on one time grid). The estimate
+    in use has photon time ``t_p`` and was ready at ``t_r``; it goes stale (the target counts
+    as lost) at ``t_s = max(t_r, t_p + MAX_AGE)``; ``true_ready``/``true_stale`` are the truth
+    at ``t_r`` and at ``min(t_now, t_s)``::
 
-        estimate      = est - true_photon       what control received vs the truth at its
-                                                photon time (perception and filtering)
-        latency       = true_photon - true_now  how old that truth is by now
-        interpolation = cmd_raw - est           the Cartesian PD (extrapolation cancels latency)
-        workspace     = cmd - cmd_raw           clamping into the reachable shell
-        ik            = ik - cmd                the IK's residual (limits, collisions, head task)
-        servo         = robot - ik              joint servo tracking
+        estimate       = est - true_photon          what control received vs the truth at its
+                                                    photon time (perception and filtering)
+        pipeline_delay = true_photon - true_ready   the truth's motion while the frame was
+                                                    processed (photon to ready: a latency)
+        fresh_hold     = true_ready - true_stale    its motion while control held a fresh
+                                                    estimate (the wait for the next frame, the
+                                                    servo's pickup, the command's tick ahead)
+        stale_hold     = true_stale - true_now      its motion since the estimate went stale
+                                                    (the target lost; zero while tracked)
+        interpolation  = cmd_raw - est              the Cartesian PD (extrapolation cancels
+                                                    the estimate's age)
+        workspace      = cmd - cmd_raw              clamping into the reachable shell
+        ik             = ik - cmd                   the IK's residual (limits, collisions, head)
+        servo          = robot - ik                 joint servo tracking
 
-    ``total`` is ``robot - true_now``. The terms add up to it at every instant, as vectors;
-    their RMS values do not add up (terms partly cancel, e.g. the PD's lag against the
-    latency): see :func:`mse_shares` for a split that does.
+    ``total`` is ``robot - true_now``. The three age terms add up to ``true_photon - true_now``
+    (the estimate's age, once called ``latency``). The terms add up to the total at every
+    instant, as vectors; their RMS values do not (terms partly cancel, e.g. the PD's lag
+    against the age): see :func:`mse_shares` for a split that does.
     """
     return {
         "estimate": est - true_photon,
-        "latency": true_photon - true_now,
+        "pipeline_delay": true_photon - true_ready,
+        "fresh_hold": true_ready - true_stale,
+        "stale_hold": true_stale - true_now,
         "interpolation": cmd_raw - est,
         "workspace": cmd - cmd_raw,
         "ik": ik - cmd,
         "servo": robot - ik,
         "total": robot - true_now,
     }
+
+
+def stale_time(t_now: np.ndarray, t_photon: np.ndarray, t_ready: np.ndarray,
+               max_age: float) -> np.ndarray:
+    """``min(t_now, max(t_ready, t_photon + max_age))``: where :func:`error_terms`' fresh hold
+    ends and its stale hold begins (``t_now`` while the estimate is younger than
+    ``max_age``)."""
+    return np.minimum(t_now, np.maximum(t_ready, t_photon + max_age))
 
 
 def mse_shares(terms: dict[str, np.ndarray]) -> dict[str, float]:

@@ -4,16 +4,20 @@
 displacement after the mapping, ``lag_ms`` (cross-correlation peak: a lag, not a delay),
 ``jerk`` (RMS third derivative, m/s^3; ``jerk_human`` for the mapped truth),
 ``mapped_motion_rms_mm`` (the mapped truth's RMS distance from its mean, after the mapping's
-scale: what there was to copy;
-a run's warning line names a site under :data:`STILL_TARGET_MM`), ``joint_limit_hits``
-(servo ticks at which an arm or torso joint target sits on the IK's limit band;
-``joint_limit_hits_by_joint`` counts them per joint), ``clamped_fraction``;
+scale: what there was to copy; a run's warning line names a site under
+:data:`STILL_TARGET_MM`), ``joint_limit_hits`` (servo ticks at which an arm or torso joint
+target sits on the IK's limit band; ``joint_limit_hits_by_joint`` per joint),
+``clamped_fraction``;
 
+* ``status``: ``ok``, or ``lost_often`` (with a ``reason``) when ``lost_fraction`` (ticks
+  with an estimate older than the stage's ``MAX_AGE``) exceeds ``LOST_OFTEN`` (25 %; unscored:
+  ``never_detected``, ``not_started``, ``too_short``);
 * ``error_budget_mm``: the RMS of each stage term of :func:`~humimic.metrics.mimicry.error_terms`
-  (``estimate``, ``latency``, ``interpolation``, ``workspace``, ``ik``, ``servo``) and of their
-  sum, ``total`` (= ``rmse_mm``). The terms add up to the total as vectors, at every instant;
-  their RMS values do not (they partly cancel). ``error_budget_share``: each term's share of
-  the total's mean square (:func:`~humimic.metrics.mimicry.mse_shares`; adds up to 1);
+  (``estimate``, ``pipeline_delay``, ``fresh_hold``, ``stale_hold``, ``interpolation``,
+  ``workspace``, ``ik``, ``servo``) and of their sum, ``total`` (= ``rmse_mm``). The terms
+  add up to the total as vectors, at every instant; their RMS values do not (they partly
+  cancel). ``error_budget_share``: each term's share of the total's mean square
+  (:func:`~humimic.metrics.mimicry.mse_shares`; adds up to 1);
 * ``measurements_rmse_mm`` / ``estimates_rmse_mm``: separate RMS errors, not budget terms, of
   the raw 3-D measurements (tracked perception only; None with the oracle, which measures
   nothing) and of the estimates that arrived, each against the truth at its photon time;
@@ -36,6 +40,7 @@ import numpy as np
 
 from humimic import spill
 from humimic.control.ik import on_limit_band
+from humimic.control.stage import MAX_AGE
 from humimic.maths.stats import finite_or_none as _num
 from humimic.maths.stats import rms_of, rmse, sum_squares
 from humimic.metrics import mm as _mm
@@ -47,7 +52,9 @@ from humimic.metrics.mimicry import (
     error_terms,
     head_motion,
     image_offsets,
+    lost_status,
     rms_jerk,
+    stale_time,
     summary_stats,
     xcorr_lag,
 )
@@ -95,8 +102,8 @@ def _never_started(stage, ch) -> dict:
 
 
 #: Every series of :func:`site_series`.
-SERIES_KEYS = ("t", "true_now", "true_photon", "est", "cmd_raw", "cmd", "cmd_alt", "ik",
-               "robot")
+SERIES_KEYS = ("t", "true_now", "true_photon", "true_ready", "true_stale", "est", "cmd_raw",
+               "cmd", "cmd_alt", "ik", "robot")
 
 
 def aligned_rows(stage, i: int) -> tuple[int, int]:
@@ -135,6 +142,9 @@ def site_series(stage, i: int, ch, keys: tuple[str, ...] = SERIES_KEYS,
         "t": lambda: rec.t[now],
         "true_now": lambda: mapped_truth(rec.t[now]),
         "true_photon": lambda: mapped_truth(rec.t_est[before, i]),
+        "true_ready": lambda: mapped_truth(rec.t_ready[before, i]),
+        "true_stale": lambda: mapped_truth(stale_time(rec.t[now], rec.t_est[before, i],
+                                                      rec.t_ready[before, i], MAX_AGE)),
         "est": lambda: rec.p_est[before, i] - p0r,
         "cmd_raw": lambda: rec.p_cmd_raw[before, i] - p0r,
         "cmd": lambda: rec.p_cmd[before, i] - p0r,
@@ -160,8 +170,8 @@ def site_budget(stage, i: int, ch) -> tuple[dict[str, float], dict[str, float], 
     sums = None
     for s in series_blocks(stage, i, ch, SERIES_KEYS[1:]):
         sums = add_budget_sums(sums, budget_sums(error_terms(
-            s["true_now"], s["true_photon"], s["est"], s["cmd_raw"], s["cmd"], s["ik"],
-            s["robot"])))
+            s["true_now"], s["true_photon"], s["true_ready"], s["true_stale"], s["est"],
+            s["cmd_raw"], s["cmd"], s["ik"], s["robot"])))
     return budget_from_sums(sums if sums is not None else budget_sums(
         {name: np.zeros((0, 3)) for name in (*TERMS, "total")}))
 
@@ -242,8 +252,9 @@ def site_metrics(stage, i: int, ch) -> tuple[dict, dict]:
     n_active = rec.n - k0
     hits, hits_by_joint = _limit_hits(stage, ch.site, k0)
     stage_lags = {"interpolation": interp[primary]["lag_ms"], "ik": lag("ik")}
+    lost = float(rec.lost[k0:rec.n, i].mean())
     return stage_lags, {
-        "status": "ok",
+        **lost_status(lost, ch.target, MAX_AGE),
         "target": ch.target,
         "rmse_mm": budget["total"],
         "lag_ms": _mm(xcorr_lag(s["true_now"], s["robot"], dt)),
@@ -258,7 +269,7 @@ def site_metrics(stage, i: int, ch) -> tuple[dict, dict]:
         "scale_initial": ch.scale_initial,
         "strained_fraction": (ch.fit.strained_ticks / n_active if ch.fit is not None
                               else None),
-        "lost_fraction": float(rec.lost[k0:rec.n, i].mean()),
+        "lost_fraction": lost,
         "started_s": float(rec.t[k0]),
         "ticks": int(n_active),
         "error_budget_mm": budget,

@@ -84,9 +84,11 @@ def verdict_warning(metrics: dict) -> str | None:
     never, with its likely cause (``tracking.<target>.verdict``), and the perception stage's
     ``colour_warning`` and each tracker's (``trackers.<name>.colour_warning``) when they have
     one (a scene with look-alikes of the skin's colours), each target whose measurements are
-    inconsistent with their covariance (:func:`inconsistent_measurements`), and each mimicry
-    site whose human part hardly moved (``mimicry.<site>.mapped_motion_rms_mm``); None when
-    there is none."""
+    inconsistent with their covariance (:func:`inconsistent_measurements`), the scripted
+    person leaving the eyes' view or walking through the robot (``person_view.warning``), and
+    each mimicry site whose target was lost much of the run (``status: lost_often``) or whose
+    human part hardly moved (``mimicry.<site>.mapped_motion_rms_mm``); None when there is
+    none."""
     poor = []
     for target, s in metrics.get("tracking", {}).items():
         if isinstance(s, dict) and s.get("verdict") == "poor":
@@ -106,7 +108,12 @@ def verdict_warning(metrics: dict) -> str | None:
     for name, s in metrics.get("trackers", {}).items():  # each tracker's own skin model
         if isinstance(s, dict) and s.get("colour_warning"):
             poor.append(f"{name}'s skin model: {s['colour_warning']}")
+    view = (metrics.get("person_view") or {}).get("warning")
+    if view:  # the scripted person leaves the eyes' view or walks through the robot
+        poor.append(view)
     for site, s in metrics.get("mimicry", {}).items():  # a mapping with nothing to copy
+        if isinstance(s, dict) and s.get("status") == "lost_often":
+            poor.append(f"mimicry.{site}: {s.get('reason')}")
         moved = s.get("mapped_motion_rms_mm") if isinstance(s, dict) else None
         if moved is not None and moved < STILL_TARGET_MM:
             poor.append(f"mimicry.{site}: its human part {s.get('target')} hardly moved "

@@ -8,6 +8,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from humimic.metrics.mimicry import LOST_OFTEN
+from humimic.world.person_view import MIN_FRONT_DISTANCE_M, OUT_OF_VIEW
+
 #: (ok, warn, higher_is_better) per verdict: ok at or past the first value, warn up to the
 #: second, bad beyond.
 THRESHOLDS = {
@@ -16,6 +19,7 @@ THRESHOLDS = {
     "nees_in_band": (0.80, 0.50, True),
     "mimic_rmse_mm": (25.0, 50.0, False),
     "lag_ms": (50.0, 100.0, False),
+    "mimic_lost_fraction": (0.05, LOST_OFTEN, False),
     "latency_ms": (50.0, 100.0, False),
     "slam_ate_m": (0.03, 0.10, False),
     "slam_heading_deg": (2.0, 5.0, False),
@@ -96,19 +100,12 @@ def verdicts(metrics: dict) -> list[Verdict]:
     warnings = metrics.get("mujoco_warnings") or {}
     out.append(Verdict("MuJoCo warnings", ", ".join(f"{k}: {v}" for k, v in warnings.items())
                        or "none", "bad" if warnings else "ok", "none"))
+    out.extend(_person_view_verdicts(metrics.get("person_view")))
     for target, s in (metrics.get("tracking") or {}).items():
         out.extend(_tracking_verdicts(target, s))
     for site, s in (metrics.get("mimicry") or {}).items():
-        if not isinstance(s, dict) or "rmse_mm" not in s:
-            continue
-        if s.get("status", "ok") != "ok":
-            out.append(Verdict(f"mimicry {site}", s.get("reason", s["status"]), "bad"))
-            continue
-        (st_r, rule_r), (st_l, rule_l) = (grade("mimic_rmse_mm", s["rmse_mm"]),
-                                          grade("lag_ms", abs(s.get("lag_ms") or 0.0)))
-        out.append(Verdict(f"mimicry {site}: RMSE / lag",
-                           f"{s['rmse_mm']:.1f} mm / {s.get('lag_ms', float('nan')):.0f} ms",
-                           _worst(st_r, st_l), f"RMSE {rule_r}; |lag| {rule_l}"))
+        if isinstance(s, dict) and "rmse_mm" in s:
+            out.append(_mimicry_verdict(site, s))
     joints = (metrics.get("mimicry") or {}).get("joints")
     if joints:
         bad = joints.get("limit_violations", 0) or not joints.get("finite", True)
@@ -123,6 +120,39 @@ def verdicts(metrics: dict) -> list[Verdict]:
     for name, s in (metrics.get("trackers") or {}).items():
         out.extend(_tracker_verdicts(name, s))
     return out
+
+
+def _person_view_verdicts(view: dict | None) -> list[Verdict]:
+    """A warning line when the scripted person leaves the eyes' start view or comes too near
+    (``person_view``; the full sentence is in the run's warning line); none otherwise."""
+    if not view or not view.get("warning"):
+        return []
+    out, first = view.get("out_of_view_fraction") or 0.0, view.get("first_out_of_view_s")
+    d, when = view.get("min_front_distance_m"), view.get("min_front_distance_t_s")
+    value = f"out of the eyes' start view on {out:.0%} of the run" + (
+        f" (from {first:.1f} s)" if first is not None else "")
+    if d is not None and d < MIN_FRONT_DISTANCE_M:
+        value += (f"; {-d:.2f} m behind the eyes at {when:.1f} s: walks through the robot"
+                  if d < 0 else f"; {d:.2f} m in front of the eyes at {when:.1f} s")
+    return [Verdict("person in view", value, "warn", f"out of view ≤ {OUT_OF_VIEW:.0%}, "
+                    f"≥ {MIN_FRONT_DISTANCE_M:g} m in front")]
+
+
+def _mimicry_verdict(site: str, s: dict) -> Verdict:
+    """A driven site's RMSE and lag, and the share of the run its target was lost (a stale
+    target held: ``lost_often`` beyond the warn bound); an unscored site's reason."""
+    if s.get("rmse_mm") is None:
+        return Verdict(f"mimicry {site}", s.get("reason", s.get("status", "")), "bad")
+    (st_r, rule_r), (st_l, rule_l) = (grade("mimic_rmse_mm", s["rmse_mm"]),
+                                      grade("lag_ms", abs(s.get("lag_ms") or 0.0)))
+    value = f"{s['rmse_mm']:.1f} mm / {s.get('lag_ms', float('nan')):.0f} ms"
+    status, rule = _worst(st_r, st_l), f"RMSE {rule_r}; |lag| {rule_l}"
+    lost = s.get("lost_fraction") or 0.0
+    if lost > 0.0:  # the scores hold over the ticks a stale target was held too
+        st_lost, rule_lost = grade("mimic_lost_fraction", lost)
+        value += f"; {s.get('target', 'target')} lost on {lost:.0%} of the ticks (held stale)"
+        status, rule = _worst(status, st_lost), f"{rule}; lost {rule_lost}"
+    return Verdict(f"mimicry {site}: RMSE / lag", value, status, rule)
 
 
 #: A tracker's headline errors, whichever it reports (``trackers.<name>.*``), and their units.

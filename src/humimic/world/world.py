@@ -28,6 +28,7 @@ from humimic.sensors.visibility import Visibility
 from humimic.world.gaze import pan_tilt_to
 from humimic.world.names import EYE_CAMERAS, ROBOT_JOINTS, ROBOT_PREFIX
 from humimic.world.people import PeopleMotion
+from humimic.world.person_view import person_view
 from humimic.world.scene import SceneOptions, build_scene
 
 
@@ -97,6 +98,9 @@ class World:
         self.visibility: Visibility | None = None
         """Visibility ground truth of the eye cameras, once a stage asked for it
         (:meth:`track_visibility`); sampled by the simulation at camera frames."""
+        self.person_view = person_view(self)
+        """Whether the scripted person stays in the eyes' start view and in front of the robot
+        (:mod:`~humimic.world.person_view`; warns once here); None without eye cameras."""
 
     def track_visibility(self) -> Visibility | None:
         """Start (or return) the eye cameras' visibility ground truth; None without cameras
