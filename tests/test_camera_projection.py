@@ -12,6 +12,7 @@ import mujoco
 import numpy as np
 import pytest
 
+from humimic.sensors.camera_model import Intrinsics
 from humimic.sensors.cameras import CameraRig, CameraSpec
 from humimic.world.gaze import pan_tilt_to
 from humimic.world.names import ROBOT_JOINTS, ROBOT_PREFIX
@@ -188,3 +189,16 @@ def test_camera_with_other_intrinsics_keeps_its_pose():
     assert np.abs(crop.T_cam_base - np.linalg.inv(T)).max() < 1e-12
     p = T[:3, :3] @ np.array([0.05, -0.03, 1.0]) + T[:3, 3]
     assert np.abs(cam.project_base(p) - crop.project_base(p) - (40, 30)).max() < 1e-9
+
+
+def test_contains_is_the_pinhole_condition():
+    """:meth:`Intrinsics.contains` of projected points against the closed form for a centred
+    principal point: in front, ``|x / z| <= (W / 2) / fx`` and ``|y / z| <= (H / 2) / fy``."""
+    intr = Intrinsics.from_fovy(np.radians(75.0), 320, 240)
+    p = np.random.default_rng(1).uniform([-3, -3, -1], [3, 3, 4], (2000, 3))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        expected = ((p[:, 2] > 0) & (np.abs(p[:, 0] / p[:, 2]) <= 160.0 / intr.fx)
+                    & (np.abs(p[:, 1] / p[:, 2]) <= 120.0 / intr.fy))
+    np.testing.assert_array_equal(intr.contains(intr.project(p)), expected)
+    assert 0.1 < expected.mean() < 0.9  # both kinds drawn
+    assert not intr.contains(np.array([np.nan, np.nan]))

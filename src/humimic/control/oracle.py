@@ -27,10 +27,7 @@ from humimic.stamped import Stamped
 
 def in_image(p_cam: np.ndarray, intrinsics) -> bool:
     """Whether a camera-frame point (OpenCV axes) projects inside the image."""
-    if p_cam[2] <= 1e-6:
-        return False
-    u, v = intrinsics.project(p_cam)
-    return bool(-0.5 <= u <= intrinsics.width - 0.5 and -0.5 <= v <= intrinsics.height - 0.5)
+    return bool(p_cam[2] > 1e-6 and intrinsics.contains(intrinsics.project(p_cam)))
 
 
 def noisy_state(p: np.ndarray, v: np.ndarray, a: np.ndarray, std: tuple[float, float, float],

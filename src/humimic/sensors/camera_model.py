@@ -125,6 +125,15 @@ class Intrinsics:
             y = np.where(z > 0, p[..., 1] / z, np.nan)
         return np.stack(self.distort(x, y), axis=-1)
 
+    def contains(self, uv: np.ndarray) -> np.ndarray:
+        """Whether pixels ``(..., 2)`` lie on the image (its ``width x height`` pixels' squares,
+        ``-0.5 <= u <= width - 0.5``, ``-0.5 <= v <= height - 0.5``); NaN (a point behind the
+        camera, :meth:`project`) is not."""
+        uv = np.asarray(uv, dtype=float)
+        with np.errstate(invalid="ignore"):
+            return ((uv[..., 0] >= -0.5) & (uv[..., 0] <= self.width - 0.5)
+                    & (uv[..., 1] >= -0.5) & (uv[..., 1] <= self.height - 0.5))
+
     def undistort_normalized(self, uv: np.ndarray) -> np.ndarray:
         """Raw pixels ``(..., 2)`` to undistorted normalised coordinates ``(..., 2)``
         (``cv2.undistortPointsIter`` to :data:`UNDISTORT_CRITERIA`)."""

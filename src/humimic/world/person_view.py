@@ -3,7 +3,7 @@
 The avatar is kinematic: its whole motion is known before the loop starts, so the world checks
 it once when it is built (:func:`person_view`), every ``1 / RATE`` s of the run (at most
 :data:`MAX_SAMPLES` times: 1.6 s of CPU for a 10-minute run, 0.01 s for 6 s), against the eye
-cameras at their start pose (pinhole, distortion ignored). The eyes may turn during the run
+cameras at their start pose (their camera models' projection). The eyes may turn during the run
 (gaze), so this is the view the run starts with, not every frame's. A motion clip's own root
 travel can walk the person out of the image or through the robot, and every score after that
 is of a person the robot cannot see. The result is ``metrics.json``'s ``person_view``:
@@ -39,17 +39,6 @@ OUT_OF_VIEW = 0.1
 MIN_FRONT_DISTANCE_M = 0.3
 
 log = logging.getLogger(__name__)
-
-
-def in_image(p_cam: np.ndarray, fx: float, fy: float, width: int, height: int) -> np.ndarray:
-    """``(N,)``: which camera-frame points ``(N, 3)`` (OpenCV axes, z forward) project inside
-    a pinhole image of ``width x height`` px with its principal point at the centre:
-    ``z > 0``, ``|x / z| <= (width / 2) / fx`` and ``|y / z| <= (height / 2) / fy``."""
-    p = np.asarray(p_cam, float)
-    z = p[:, 2]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        return ((z > 0.0) & (np.abs(p[:, 0]) <= z * (width / 2.0) / fx)
-                & (np.abs(p[:, 1]) <= z * (height / 2.0) / fy))
 
 
 def view_summary(t: np.ndarray, seen: np.ndarray, front_m: np.ndarray) -> dict:
@@ -95,11 +84,7 @@ def person_view(world) -> dict | None:
     seen = np.zeros(len(t), bool)
     for name in world.eye_cameras:
         cam = rig.camera_model(name)
-        T = cam.T_cam_base
-        intr = cam.intrinsics
-        for j in range(len(PARTS)):
-            p_cam = p[:, j] @ T[:3, :3].T + T[:3, 3]
-            seen |= in_image(p_cam, intr.fx, intr.fy, intr.width, intr.height)
+        seen |= cam.intrinsics.contains(cam.project_base(p)).any(axis=1)
     scene = world.scene
     T_wb = scene.T_world_base
     p_eyes = (scene.data.site_xpos[scene.robot_site("eye_center")] - T_wb[:3, 3]) @ T_wb[:3, :3]

@@ -377,9 +377,7 @@ def _matched(blobs, centroids) -> np.ndarray:
 
 def _centre_in_image(state: np.ndarray, frame: CameraImage) -> bool:
     """Whether the state's centre is in front of the camera and projects into the image."""
-    K = frame.camera.intrinsics
-    uv = frame.camera.project_base(state[:3])
-    return bool(np.isfinite(uv).all() and 0 <= uv[0] < K.width and 0 <= uv[1] < K.height)
+    return bool(frame.camera.intrinsics.contains(frame.camera.project_base(state[:3])))
 
 
 @dataclass(frozen=True)
