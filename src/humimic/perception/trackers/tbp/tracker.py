@@ -95,6 +95,9 @@ class TbpTracker:
         self.frames_without_refs = 0
         self.found = np.zeros(2, bool)
         """Whether the last estimate's right, left hand lay on skin."""
+        self.hand_uv = np.full((2, 2), np.nan)
+        """The last estimate's right, left hand centres in the image (px), NaN where the hand
+        did not lie on skin."""
         self.injected = 0
         """Particles drawn from the skin blobs so far (:meth:`_from_blobs`)."""
 
@@ -128,7 +131,15 @@ class TbpTracker:
     def _from_blobs(self, view: ArmView, torso: np.ndarray, rng: np.random.Generator) -> None:
         """Re-draw ``reinit_fraction`` of the particles' arms from configurations whose hand
         projects onto a skin blob (:mod:`.reinit`), for the arms whose hand the last estimate
-        did not find on skin; blobs on the face are left out."""
+        did not find on skin; blobs on the face are left out, and so is, for each arm, the
+        blob the last estimate's *other* hand lies on (found, or sharing a blob with this
+        one): the other arm's particles hold it, and offering it drew the lost arm onto the
+        other hand -- fig13_tbp_wave seed 4: the right arm, lagging behind the raised hand,
+        took the left hand's blob at 1.07 s and stayed there for 2.8 s (both hands on one
+        blob score 1-3 nats above the true raised arm under eq. 19, the stabiliser's pull).
+        The arm's own blob stays offered (other depths along its line of sight; leaving it
+        out too cost the wave under way at the start 2-8 deg on 4 of 5 replays).
+        """
         cfg = self.cfg
         n = int(round(cfg.reinit_fraction * cfg.n_particles))
         if n == 0 or view.skin is None or self.found.all():
@@ -145,10 +156,12 @@ class TbpTracker:
             return
         centres = blobs.centers[hand]
         radius = np.sqrt(blobs.areas[hand] / np.pi) + cfg.reinit_radius_px
+        on = near_blobs(self.hand_uv, centres, radius)      # the estimate's hands per blob
         R_t, p_t = pose.segment("torso")
         uv = hand_pixels(self.table, R_t[0], p_t[0], view.intrinsics, view.T_cam_base)
         groups = [(side, m) for side in (0, 1) if not self.found[side]
-                  for m in near_blobs(uv[side], centres, radius) if len(m)]
+                  for m, hands in zip(near_blobs(uv[side], centres, radius), on, strict=True)
+                  if len(m) and 1 - side not in hands]
         if not groups:
             return
         self.particles, _ = draw_arms(self.particles, self.table, groups, n,
@@ -168,6 +181,7 @@ class TbpTracker:
         p_cam = hand_centres(self.body, pose)[:, 0] @ view.T_cam_base[:3, :3].T
         p_cam += view.T_cam_base[:3, 3]
         uv = view.intrinsics.project(p_cam)
+        self.hand_uv = np.where(on_skin[:, None], uv, np.nan)
         hand_px = 2.0 * view.intrinsics.fx * max(self.body.part("r_hand").shape.semi_axes)
         apart = np.linalg.norm(uv[0] - uv[1]) > hand_px / np.min(p_cam[:, 2])
         return on_skin & (np.linalg.norm(uv - head_uv, axis=1) > head_r) & apart
