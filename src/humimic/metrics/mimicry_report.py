@@ -349,8 +349,7 @@ def lag_metrics(sites: dict, lags: dict) -> dict:
     (``end_to_end``). Lags, not delays: the hold PD lags by about half a frame more than the
     latency, extrapolation cancels the latency (a lag near 0 or negative)."""
     def mean_of(values):
-        values = [v for v in values if v is not None]
-        return float(np.mean(values)) if values else None
+        return float(np.mean(v)) if (v := [x for x in values if x is not None]) else None
 
     return {"interpolation": mean_of([v.get("interpolation") for v in lags.values()]),
             "ik": mean_of([v.get("ik") for v in lags.values()]),
@@ -361,8 +360,7 @@ def _joints_and_head(stage) -> tuple[dict, float, float]:
     """``(joints section, head displacement (m), head rotation (rad))`` from the record's
     per-tick joint and head columns, a block of rows at a time (a long run's columns are not
     gathered whole: ten minutes of 30 joints at 420 Hz are 60 MB a column)."""
-    rec, n = stage.rec, stage.rec.n
-    rng = stage.scene.robot_range
+    rec, n, rng = stage.rec, stage.rec.n, stage.scene.robot_range
     hits, worst, finite, dp, dr = 0, 0.0, True, 0.0, 0.0
     p0, R0 = (rec.p_head[0], rec.R_head[0]) if n else (None, None)
     for q, ctrl, p, R in zip(*(row_blocks(a, 0, n) for a in (rec.q_robot, rec.ctrl, rec.p_head,
@@ -387,10 +385,8 @@ def mimic_metrics(stage) -> dict:
     joints, dp, dr = _joints_and_head(stage)
     ik_ms = 1e3 * rec.ik_s[:n]
     out = {
-        **sites,
-        "mode": cfg.mode, "scale_setting": cfg.scale, "fit": cfg.fit.enabled,
-        "perception": cfg.perception,
-        "interpolation_mode": cfg.interpolation.mode,
+        **sites, "mode": cfg.mode, "scale_setting": cfg.scale, "fit": cfg.fit.enabled,
+        "perception": cfg.perception, "interpolation_mode": cfg.interpolation.mode,
         "head_still": {"max_displacement_mm": 1e3 * dp, "max_rotation_deg": float(np.degrees(dr))},
         "joints": joints,
         "ik": {"solve_ms_mean": float(ik_ms.mean()) if n else None,
