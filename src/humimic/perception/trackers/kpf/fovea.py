@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from humimic import bodymodel as bm
 from humimic.perception.trackers.kpf.likelihood import Evaluation, Likelihood
 
 
@@ -83,8 +84,6 @@ class FovealLikelihood(Likelihood):
         self.view = None if maps is None else (maps, T_cam_base)
         self.scored = self.in_fovea
         if maps is not None and margin is not None and q_ref is not None:
-            from humimic import bodymodel as bm
-
             i = self.fovea.intr
             view = bm.project(self.body, self.body.forward(np.asarray(q_ref)[None]), i,
                               T_cam_base)
