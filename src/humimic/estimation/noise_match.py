@@ -69,9 +69,10 @@ def noise_ratio(t: np.ndarray, z: np.ndarray, R: np.ndarray,
 
 
 class NoiseMatch:
-    """The scale of one target's R from its last ``window`` consecutive measurements
-    (:func:`noise_ratio`): the ratio when above ``threshold``, else 1. A frame without a
-    measurement starts the window afresh."""
+    """The scale of one target's R from its last ``window`` measurements (:func:`noise_ratio`
+    over their equally spaced triples): the ratio when above ``threshold``, else 1. A missed
+    frame does not empty the window (the noise is the scene's, not the track's): a gap breaks
+    only the triples across it; :meth:`reset` when the target is dropped."""
 
     def __init__(self, threshold: float, window: int = 12):
         self.threshold, self.window = float(threshold), int(window)

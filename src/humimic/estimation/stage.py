@@ -136,9 +136,9 @@ class FilterStage(Stage):
                 scale = 1.0 if noise is None else noise.scale(t, m.p_base, m.R_base)
                 kf.step(t, m.p_base, scale * m.R_base)
             else:
-                if noise is not None:
-                    noise.reset()
                 kf.step(t)
+            if noise is not None and kf.resets != resets:  # dropped after max_gap
+                noise.reset()
             if kf.initialised and kf.t_measured == t:  # fused (or initialised from) it
                 measured[i] = True
             elif kf.initialised:  # a prediction, not a reset
