@@ -132,9 +132,9 @@ def match_noise_px(match_std, scale, floor_px: float | None = None) -> np.ndarra
     error is the same in every frame (a bias the filter cannot average, and the calibration,
     which removes each target's mean error, does not see); a moving one draws a new error
     each frame. Measured with this matcher on flat hard-edged discs (sigma 2.3-4.6 px, random
-    sub-pixel positions, colour-masked): 0.063-0.094 px RMS; the still head of
-    ``mimic_tracked_wave`` (1.2-2.4 m, seeds 5 and 7): 0.10 px RMS of its per-run mean
-    (``docs/ude_perception_notes.md``).
+    sub-pixel positions, colour-masked): 0.069-0.104 px RMS per size, 0.084 pooled; the still
+    head of ``mimic_tracked_wave`` (1.2-2.4 m): 0.10 px RMS of its per-run mean
+    (``docs/ude_perception_notes.md``, "Hard-edged outlines").
     """
     base = np.asarray(match_std, float) * np.asarray(scale, float)
     if floor_px is None:
