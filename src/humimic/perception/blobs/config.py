@@ -12,6 +12,7 @@ Example (every key optional)::
       detection: {period: 5.0, lam: 0.67, restart_phase: 2}
       pixel_std: 0.28           # blob-centre noise (px) } propagated through triangulation
       match_std: 0.04           # stereo-match noise (px) } into each measurement's R
+      match_floor_px: null      # disparity floor of hard-edged outlines (px; 0.08 measured)
       latency: null             # s added to each measurement's t_ready (null: one frame)
 
 Units: s, px, m. Target names are the avatar's visible coloured parts.
