@@ -90,8 +90,9 @@ def calibration_data(pa, truth: dict, skip_s: float = FILTER_SETTLE_S,
             continue
         frames = np.flatnonzero(ok & (pa.t >= pa.t[np.argmax(ok)] + skip_s))
         Rc, Rm = unit_covariances(pa, i, frames, noise_ref_sigma_px)
+        k2 = np.square(small_blob_scale(pa.cov[frames, i, 0], noise_ref_sigma_px))
         out[target] = {"err": pa.p_base[frames, i] - p[frames], "R": pa.R_base[frames, i],
-                       "Rc": Rc, "Rm": Rm}
+                       "Rc": Rc, "Rm": Rm, "Rf": Rm / k2[:, None, None]}
     return out
 
 
@@ -102,11 +103,14 @@ def in_band(err: np.ndarray, R: np.ndarray) -> tuple[float, float]:
             fraction_in_band(nees(err - err.mean(axis=0), R), 3))
 
 
-def calibrate(archive, noise_ref_sigma_px: float | None = NOISE_REF_SIGMA_PX
-              ) -> tuple[float, float, dict]:
+def calibrate(archive, noise_ref_sigma_px: float | None = NOISE_REF_SIGMA_PX,
+              match_floor_px: float | None = None) -> tuple[float, float, dict]:
     """Fit on a run's ``tracking.npz`` (:class:`~humimic.perception.blobs.archive.
     TrackingArchive`): ``(pixel_std, match_std, per-target NEES fractions before/after)``; the
-    noises hold for blobs ``noise_ref_sigma_px`` wide (the scenario's)."""
+    noises hold for blobs ``noise_ref_sigma_px`` wide (the scenario's). The fit sees the errors
+    with each target's mean removed, so a ``perception.match_floor_px`` (the outline's
+    rounding, constant while a target is still) is not fitted; the 'after' fractions add it
+    as the stage does (:func:`~humimic.perception.blobs.triangulation.match_noise_px`)."""
     data = calibration_data(archive.perception, archive.truth,
                             noise_ref_sigma_px=noise_ref_sigma_px)
     if not data:
@@ -115,7 +119,8 @@ def calibrate(archive, noise_ref_sigma_px: float | None = NOISE_REF_SIGMA_PX
     s_c, s_m = fit_pixel_noise(e, np.concatenate([d["Rc"] for d in data.values()]),
                                np.concatenate([d["Rm"] for d in data.values()]))
     report = {t: {"before": in_band(d["err"], d["R"]),
-                  "after": in_band(d["err"], s_c**2 * d["Rc"] + s_m**2 * d["Rm"])}
+                  "after": in_band(d["err"], s_c**2 * d["Rc"] + s_m**2 * d["Rm"]
+                                   + (match_floor_px or 0.0) ** 2 * d["Rf"])}
               for t, d in data.items()}
     return s_c, s_m, report
 
@@ -146,7 +151,8 @@ def main(argv: list[str] | None = None) -> int:
             out = args.out or Path(tmp)
             run_one(scenario, out, rerun="off", progress=True)
             s_c, s_m, report = calibrate(load_archive(out / "tracking.npz"),
-                                         scenario.perception.noise_ref_sigma_px)
+                                         scenario.perception.noise_ref_sigma_px,
+                                         scenario.perception.match_floor_px)
     except InputError as err:
         return report_error(err)
     cfg = scenario.perception

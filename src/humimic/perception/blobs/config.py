@@ -12,6 +12,7 @@ Example (every key optional)::
       detection: {period: 5.0, lam: 0.67, restart_phase: 2}
       pixel_std: 0.28           # blob-centre noise (px) } propagated through triangulation
       match_std: 0.04           # stereo-match noise (px) } into each measurement's R
+      match_floor_px: null      # disparity floor of hard-edged outlines (px; 0.08 measured)
       latency: null             # s added to each measurement's t_ready (null: one frame)
 
 Units: s, px, m. Target names are the avatar's visible coloured parts.
@@ -232,6 +233,11 @@ class PerceptionConfig(Section):
     (mimic_tracked_wave seed 7, skin [0.45, 0.30, 0.22], 1.8 m): with fixed noises the waving
     hand's filtered NEES was in the 95 % band on 73 % of frames, the stereo error 1.5-2x the
     R it reported. None: the calibrated noises for every blob."""
+    match_floor_px: float | None = Field(None, gt=0.0, le=5.0)
+    """Our extension: a floor (px) added in quadrature to the (grown) ``match_std``, the
+    disparity error of a blob outline cut at whole pixels, constant while the target is still
+    (:func:`~humimic.perception.blobs.triangulation.match_noise_px`). Acts with
+    ``covariance: following``. None: off."""
     covariance: Literal["following", "independent"] = "following"
     """How pixel errors are propagated into each measurement's covariance R: ``following``
     (the right match follows the template cut at the left centre: ``pixel_std`` moves the point
@@ -252,6 +258,13 @@ class PerceptionConfig(Section):
         if isinstance(value, bool):  # the older spelling
             return "auto" if value else "off"
         return value
+
+    @model_validator(mode="after")
+    def _floor_needs_following(self) -> PerceptionConfig:
+        if self.match_floor_px is not None and self.covariance != "following":
+            raise ValueError("match_floor_px acts with covariance: following (got "
+                             f"{self.covariance!r})")
+        return self
 
     @field_validator("targets")
     @classmethod

@@ -47,6 +47,7 @@ from humimic.perception.blobs.identity import (
 from humimic.perception.blobs.occlusion import VisibleMass
 from humimic.perception.blobs.record import STATE_CODE
 from humimic.perception.blobs.stereo import StereoParams, StereoRig, small_blob_scale
+from humimic.perception.blobs.triangulation import match_noise_px
 from humimic.perception.cues.color_models import load_posterior_kernels
 from humimic.scenario.base import pass_through
 
@@ -149,6 +150,7 @@ class PerceptionCore:
         self.match_std = cfg.match_std if cfg.covariance == "following" else None
         self.C_px = np.eye(2) * cfg.pixel_std**2
         self.noise_ref_sigma = cfg.noise_ref_sigma_px
+        self.match_floor = cfg.match_floor_px
         self.ident: list[dict[int, str]] = [{}, {}]
         self.margin: dict[str, float] = dict.fromkeys(self.targets, 0.0)
         """Identity margin of each target at the last decision (see identity.assign)."""
@@ -218,7 +220,8 @@ class PerceptionCore:
             ms = rig.match_many(il.image, ir.image, centre[pub, 0], cov[pub, 0], centre[pub, 1],
                                 cov[pub, 1], C_px, C_px,
                                 [self.luts[i] for i in pub] if self.color_mask else None,
-                                None if self.match_std is None else self.match_std * k)
+                                None if self.match_std is None
+                                else match_noise_px(self.match_std, k, self.match_floor))
             for i, m in zip(pub, ms, strict=True):
                 reason[i], score[i] = m.reason, m.score
                 if (m.ok and self.color_mask and self.visible is not None
