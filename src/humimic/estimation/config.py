@@ -10,6 +10,8 @@ Example::
       coast_tau_a: 0.05      # s: acceleration decay while coasting
       gate_probability: 0.9999   # chi-square innovation gate, 3 dof (null: no gate)
       gate_reinit_after: 3       # consecutive gated measurements that re-initialise
+      noise_match: 8.0           # R scaled when the measurements scatter > 8x its variance
+      noise_match_window: 12     # consecutive measurements that estimate the scatter
 
 Units: m, s.
 """
@@ -24,7 +26,8 @@ from humimic.estimation.random_jerk import B_PAPER_SI, INIT_ACC_VAR, INIT_VEL_VA
 from humimic.scenario.base import Section, reject_idle_options
 
 NEEDS: dict[str, tuple[str, ...]] = {"coast_tau_a": ("coast_tau_v",),
-                                     "gate_reinit_after": ("gate_probability",)}
+                                     "gate_reinit_after": ("gate_probability",),
+                                     "noise_match_window": ("noise_match",)}
 """Options that act only with another on: option -> the options that switch it on."""
 
 
@@ -58,6 +61,16 @@ class FilterConfig(Section):
     gate_reinit_after: int = Field(3, ge=1, le=1000)
     """Consecutive gated measurements after which the filter is re-initialised from the
     measurement (as after ``max_gap``; ``filter.gate_reinits``): the target really moved."""
+    noise_match: float | None = Field(8.0, gt=1.0, le=1.0e4)
+    """When a target's last ``noise_match_window`` measurements scatter more than this many
+    times the variance R says (the median of their second differences' chi-square ratios,
+    :mod:`humimic.estimation.noise_match`), fuse them with R times that ratio
+    (``filter.noise_scaled_frames``); null: R as perception reports it. 8: the ratio of the
+    shipped scenarios' measurements stays below 4.4 (their median 0.2-2.6); with R 7x too small
+    in standard deviation it is 15-18, and the gate, seeing every innovation outside,
+    re-initialised the filter every 5 frames."""
+    noise_match_window: int = Field(12, ge=5, le=600)
+    """Consecutive measurements (frames) over which ``noise_match`` estimates the scatter."""
     latency: float = Field(0.0, ge=0.0, le=0.5)
     """Declared processing latency (s) added to each estimate's ready time."""
 
