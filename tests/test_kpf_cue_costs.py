@@ -28,7 +28,7 @@ from humimic.perception.trackers.kpf.likelihood import BAND_SHRINK, CUE_NAMES, L
 from humimic.perception.trackers.kpf.tracker import kpf_body
 
 ALL_CUES = {"torso": ["edge", "ridge", "colour"], "upper_arm": ["edge", "ridge", "colour"],
-            "forearm": ["edge", "ridge"], "hand": ["skin"], "head": ["skin"]}
+            "forearm": ["edge", "ridge", "colour"], "hand": ["skin"], "head": ["skin"]}
 FEW_CUES = {"torso": ["colour"], "upper_arm": ["ridge"], "forearm": [], "hand": [],
             "head": ["skin"]}
 

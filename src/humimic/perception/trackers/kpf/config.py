@@ -20,13 +20,18 @@ from humimic.scenario.base import Section
 
 
 class KpfCues(Section):
-    """Cues per limb type (Schmidt sec. 6)."""
+    """Cues per limb type (Schmidt sec. 6). ``colour`` on the forearm is our extension (the
+    paper's forearm has edge and ridge only): the mean-colour cue (eqs. 5-7) of a forearm in a
+    sleeve, which tells the limb from a background stripe of similar contrast beside it; the
+    sleeve's ridge alone depends on the shirt's contrast to the wall (``i14-shirt``,
+    docs/schmidt_kpf_notes.md)."""
 
     torso: list[Literal["edge", "ridge", "colour"]] = Field(
         default_factory=lambda: ["edge", "colour"])
     upper_arm: list[Literal["edge", "ridge", "colour"]] = Field(
         default_factory=lambda: ["edge", "ridge", "colour"])
-    forearm: list[Literal["edge", "ridge"]] = Field(default_factory=lambda: ["edge", "ridge"])
+    forearm: list[Literal["edge", "ridge", "colour"]] = Field(
+        default_factory=lambda: ["edge", "ridge"])
     hand: list[Literal["skin"]] = Field(default_factory=lambda: ["skin"])
     head: list[Literal["skin"]] = Field(default_factory=lambda: ["skin"])
 
