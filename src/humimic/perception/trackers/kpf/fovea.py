@@ -32,7 +32,22 @@ from __future__ import annotations
 import numpy as np
 
 from humimic import bodymodel as bm
+from humimic.perception.trackers.kpf.cues import _DISC
+from humimic.perception.trackers.kpf.frame_cues import LEVELS
 from humimic.perception.trackers.kpf.likelihood import Evaluation, Likelihood
+
+
+def fovea_levels(f_fovea: float, f_wide: float, levels: int = LEVELS) -> int:
+    """Ridge pyramid levels of the foveal view's cue maps: the wide view's ``levels`` plus
+    ``round(log2(f_fovea / f_wide))``. Schmidt's ridge cue reads each limb at the level where
+    its image width is nearest :data:`~humimic.perception.trackers.kpf.cues.RIDGE_WIDTH_PX`
+    (``ridge_level``, from the width in pixels), clipped to the pyramid: the wide eye's three
+    levels reach limbs ~16 px wide, the foveal camera (5.6x the focal length) shows the arm at
+    2 m 26-40 px wide, which the clip read at level 2, 1.6-2.5x wider than the filter: no
+    ridge at the true axis (cost 0.94 / 0.74 on the upper arm / forearm, seed 4 side, against
+    0.20 / 0.26 in the wide view), a lower cost off it. Two more levels give the same limb the
+    same width in pyramid pixels as in the wide view (cost 0.39 / 0.18)."""
+    return int(levels + max(0, round(float(np.log2(f_fovea / f_wide)))))
 
 
 def two_view_terms(terms_wide: np.ndarray, terms_fovea: np.ndarray, in_fovea: np.ndarray,
@@ -56,6 +71,55 @@ def parts_in_view(uv: np.ndarray, valid: np.ndarray, width: int, height: int,
     return np.asarray(valid, bool) & np.all(inside, axis=-1)
 
 
+def disc_in_view(centre: np.ndarray, axes: np.ndarray, angle: np.ndarray, width: int,
+                 height: int) -> np.ndarray:
+    """``(N, E)`` the share of the skin cue's sample points (:data:`~humimic.perception.
+    trackers.kpf.cues._DISC`, rounded to pixels as the cost pass does) of image ellipses
+    (centres ``(N, E, 2)``, semi-axes ``(N, E, 2)``, angles ``(N, E)``) inside a ``width x
+    height`` image."""
+    c, s = np.cos(angle)[..., None], np.sin(angle)[..., None]
+    x, y = _DISC[:, 0] * axes[..., :1], _DISC[:, 1] * axes[..., 1:]
+    u = np.rint(centre[..., :1] + c * x - s * y)
+    v = np.rint(centre[..., 1:] + s * x + c * y)
+    return np.mean((u >= 0) & (v >= 0) & (u < width) & (v < height), axis=-1)
+
+
+def in_view_skin(cost: np.ndarray, share: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Schmidt eq. 8 over the sample points inside the image only: the cost ``1 - f`` of a
+    skin fraction ``f`` counted over all points (off-image ones read no skin) becomes ``1 -
+    f / share`` of those inside (``share`` of them), and the part's term is weighted by
+    ``share``: ``(cost, weight)``, a part wholly off the image weighted 0 (unobserved)."""
+    inside = share > 0
+    return (np.where(inside, 1.0 - (1.0 - cost) / np.where(inside, share, 1.0), cost),
+            share)
+
+
+class FovealView(Likelihood):
+    """:class:`Likelihood` of the foveal view, whose narrow image shows only part of the arm
+    (at rest the hanging hand half below it): with ``skin_in_view`` the hands' skin cue
+    counts only its sample points inside the image (:func:`in_view_skin`). Counted over all
+    of them (eq. 8 as in the wide view), the hand half off the image costs ~0.6 at the truth
+    and less wherever a pose lifts it into the image: the foveal view pulled the resting
+    hand 20-45 mm up (seed 4 side)."""
+
+    def __init__(self, body, intrinsics, cfg, skin_in_view: bool = False):
+        super().__init__(body, intrinsics, cfg)
+        self.skin_in_view = skin_in_view
+        self.skin_cols = np.asarray(body.layout.ellipsoid_idx, np.intp)[self.skin_js]
+
+    def observed(self, planes: np.ndarray, ellipses) -> np.ndarray | None:
+        if not self.skin_in_view or not len(self.skin_js):
+            return None
+        centre, axes, angle = ellipses
+        j, cols = self.skin_js, self.skin_cols
+        share = disc_in_view(centre[:, j], axes[:, j], angle[:, j], self.intr.width,
+                             self.intr.height)
+        planes[3][:, cols], w = in_view_skin(planes[3][:, cols], share)
+        weight = np.ones(planes.shape[1:])
+        weight[:, cols] = w
+        return weight
+
+
 class FovealLikelihood(Likelihood):
     """:class:`Likelihood` of the wide view (the tracker's camera) times the foveal view's
     factors of the ``parts`` (:func:`two_view_terms`); the foveal frame is given before each
@@ -63,12 +127,12 @@ class FovealLikelihood(Likelihood):
     alone)."""
 
     def __init__(self, body, intrinsics, cfg, fovea_intrinsics, parts: tuple[str, ...],
-                 weight: float = 1.0):
+                 weight: float = 1.0, skin_in_view: bool = False):
         super().__init__(body, intrinsics, cfg)
         unknown = sorted(set(parts) - set(self.parts))
         if unknown:
             raise ValueError(f"fovea parts {unknown} are not body parts; parts: {self.parts}")
-        self.fovea = Likelihood(body, fovea_intrinsics, cfg)
+        self.fovea = FovealView(body, fovea_intrinsics, cfg, skin_in_view)
         self.in_fovea = np.array([p in parts for p in self.parts])
         self.weight = float(weight)
         self.view: tuple | None = None
