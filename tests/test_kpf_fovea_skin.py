@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from _kpf_synth import PALETTE, camera, static_pose
+from _kpf_synth import INTRINSICS, PALETTE, camera, painted_person, static_pose
 
 from humimic import bodymodel as bm
 from humimic.bodymodel.limb_view import limb_view
@@ -16,6 +16,7 @@ from humimic.perception.trackers.kpf.config import KpfConfig
 from humimic.perception.trackers.kpf.cues import CueMaps, skin_response
 from humimic.perception.trackers.kpf.fovea import FovealView, disc_in_view, in_view_skin
 from humimic.perception.trackers.kpf.frame_cues import FrameCues
+from humimic.perception.trackers.kpf.likelihood import Likelihood
 from humimic.perception.trackers.kpf.tracker import kpf_body
 from humimic.sensors.camera_model import Intrinsics
 
@@ -40,15 +41,14 @@ def test_disc_in_view_is_the_skin_response_of_an_all_skin_image():
     assert np.any((got > 0.0) & (got < 1.0)) and got.max() == 1.0
 
 
-def test_in_view_skin_counts_only_the_points_inside():
-    """17 points, ``m`` of them inside, ``k`` of those skin: the cue over all points reads
-    ``k / 17`` (cost ``1 - k / 17``); over those inside ``k / m``, weighted ``m / 17``."""
+def test_in_view_skin_reads_the_points_off_the_image_in_the_wide_view():
+    """17 points, ``m`` of them inside the narrow image, ``k`` of those skin, the hand's wide
+    view skin fraction ``f_w``: the cue over all points reads ``k / 17`` (cost ``1 - k /
+    17``); with the off-image points read in the wide view ``(k + (17 - m) f_w) / 17``."""
     k, m = np.array([0, 3, 5, 7, 0]), np.array([10, 5, 5, 17, 0])
-    cost, weight = in_view_skin(1.0 - k / 17, m / 17)
-    inside = m > 0
-    assert np.allclose(cost[inside], 1.0 - k[inside] / m[inside])
-    assert np.allclose(weight, m / 17)
-    assert weight[~inside] == 0.0
+    f_w = np.array([0.2, 1.0, 0.5, 0.0, 0.9])
+    cost = in_view_skin(1.0 - k / 17, m / 17, 1.0 - f_w)
+    assert np.allclose(cost, 1.0 - (k + (17 - m) * f_w) / 17)
 
 
 def _hand_at_the_border():
@@ -70,7 +70,9 @@ def _hand_at_the_border():
     q = np.repeat(q0[None], 200, axis=0)
     q[1:, 6:10] += rng.normal(0.0, 0.08, (199, 4))
     lut = ColorLUT(load_color_model(DEFAULT_COLOR_MODEL), 6)
-    return body, fi, T, q, FrameCues(img, lut, colour_gradients=True)
+    wide = FrameCues(painted_person(body, q0, T), lut, colour_gradients=True)
+    cost_wide = Likelihood(body, INTRINSICS, CFG).evaluate(q, wide, T).cost["skin"]
+    return body, fi, T, q, FrameCues(img, lut, colour_gradients=True), cost_wide
 
 
 @pytest.mark.parametrize("in_view", [False, True])
@@ -78,20 +80,23 @@ def test_a_hand_half_off_the_foveal_image_is_not_pulled_into_it(in_view):
     """Eq. 8 over all points scores the truth's hand, cut by the narrow image's edge (8 of
     its 17 points inside), worse than a pose that lifts it further into the image (measured
     2026-11-29: the best of the 105 such arm perturbations 0.23 nats above the truth on the
-    hand's term); over the points inside (``skin_in_view``) the truth beats them all (by
-    0.07). (A hand wholly off the image is unobserved there: term 0, left to the wide view.)"""
-    body, fi, T, q, maps = _hand_at_the_border()
+    hand's term); with the off-image points read in the wide view (``skin_in_view``) the
+    truth beats them all (by 0.05) and the 40 that put the hand wholly off the narrow image
+    (by 1.13)."""
+    body, fi, T, q, maps, cost_wide = _hand_at_the_border()
     view = FovealView(body, fi, CFG, skin_in_view=in_view)
+    view.wide_skin(cost_wide)
     hand = body.part_names.index("r_hand")
     t = view.evaluate(q, maps, T, floors=True).terms[:, hand]
     lv = limb_view(body, body.forward(q), fi, T)
     e = [body.part_names[i] for i in lv.ellipsoid_idx].index("r_hand")
     c, a, ang = (x[:, e] for x in lv.ellipses)
     share = disc_in_view(c[:, None], a[:, None], ang[:, None], fi.width, fi.height)[:, 0]
-    lifted = share > share[0]
-    assert 0.3 < share[0] < 0.7 and lifted.sum() > 20
+    lifted, out = share > share[0], share == 0
+    assert 0.3 < share[0] < 0.7 and lifted.sum() > 20 and out.sum() > 10
     margin = t[lifted].max() - t[0]
     if in_view:
         assert margin < -0.02
+        assert t[out].max() - t[0] < -0.4
     else:
         assert margin > 0.1

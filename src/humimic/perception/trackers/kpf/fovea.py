@@ -84,21 +84,22 @@ def disc_in_view(centre: np.ndarray, axes: np.ndarray, angle: np.ndarray, width:
     return np.mean((u >= 0) & (v >= 0) & (u < width) & (v < height), axis=-1)
 
 
-def in_view_skin(cost: np.ndarray, share: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Schmidt eq. 8 over the sample points inside the image only: the cost ``1 - f`` of a
-    skin fraction ``f`` counted over all points (off-image ones read no skin) becomes ``1 -
-    f / share`` of those inside (``share`` of them), and the part's term is weighted by
-    ``share``: ``(cost, weight)``, a part wholly off the image weighted 0 (unobserved)."""
-    inside = share > 0
-    return (np.where(inside, 1.0 - (1.0 - cost) / np.where(inside, share, 1.0), cost),
-            share)
+def in_view_skin(cost: np.ndarray, share: np.ndarray, cost_wide: np.ndarray) -> np.ndarray:
+    """Schmidt eq. 8 in the foveal view with its sample points off the narrow image read in
+    the wide one: the cost ``1 - f`` of a skin fraction ``f`` counted over all points
+    (off-image ones reading no skin), ``share`` of them inside, becomes ``1 - f - (1 -
+    share) (1 - c_w)`` with ``c_w`` (``cost_wide``) the same hand's cost in the wide view:
+    the points the narrow camera does not see count as skin as often as the wide camera
+    sees the hand's (a hand wholly off the narrow image costs its wide-view cost)."""
+    return cost - (1.0 - share) * (1.0 - cost_wide)
 
 
 class FovealView(Likelihood):
     """:class:`Likelihood` of the foveal view, whose narrow image shows only part of the arm
     (at rest the hanging hand half below it): with ``skin_in_view`` the hands' skin cue
-    counts only its sample points inside the image (:func:`in_view_skin`). Counted over all
-    of them (eq. 8 as in the wide view), the hand half off the image costs ~0.6 at the truth
+    reads its sample points off the image in the wide view (:func:`in_view_skin`; the wide
+    view's skin costs given by :meth:`wide_skin` before each evaluation). Counted over all
+    points (eq. 8 as in the wide view), the hand half off the image costs ~0.6 at the truth
     and less wherever a pose lifts it into the image: the foveal view pulled the resting
     hand 20-45 mm up (seed 4 side)."""
 
@@ -106,18 +107,20 @@ class FovealView(Likelihood):
         super().__init__(body, intrinsics, cfg)
         self.skin_in_view = skin_in_view
         self.skin_cols = np.asarray(body.layout.ellipsoid_idx, np.intp)[self.skin_js]
+        self.cost_wide: np.ndarray | None = None
 
-    def observed(self, planes: np.ndarray, ellipses) -> np.ndarray | None:
-        if not self.skin_in_view or not len(self.skin_js):
-            return None
+    def wide_skin(self, cost_wide: np.ndarray | None) -> None:
+        """The wide view's skin costs ``(N, parts)`` of the poses evaluated next."""
+        self.cost_wide = cost_wide
+
+    def observed(self, planes: np.ndarray, ellipses) -> None:
+        if not self.skin_in_view or not len(self.skin_js) or self.cost_wide is None:
+            return
         centre, axes, angle = ellipses
         j, cols = self.skin_js, self.skin_cols
         share = disc_in_view(centre[:, j], axes[:, j], angle[:, j], self.intr.width,
                              self.intr.height)
-        planes[3][:, cols], w = in_view_skin(planes[3][:, cols], share)
-        weight = np.ones(planes.shape[1:])
-        weight[:, cols] = w
-        return weight
+        planes[3][:, cols] = in_view_skin(planes[3][:, cols], share, self.cost_wide[:, cols])
 
 
 class FovealLikelihood(Likelihood):
@@ -159,7 +162,9 @@ class FovealLikelihood(Likelihood):
         ev = super().evaluate(q, maps, T_cam_base, floors=floors)
         if self.view is None:
             return ev
+        self.fovea.wide_skin(ev.cost["skin"])
         fov = self.fovea.evaluate(q, *self.view, floors=floors)
+        self.fovea.wide_skin(None)
         return Evaluation(ev.cost, two_view_terms(ev.terms, fov.terms, self.scored,
                                                   self.weight), ev.colours)
 

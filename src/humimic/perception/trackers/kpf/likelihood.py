@@ -119,12 +119,10 @@ class Likelihood:
         planes, got = cue_costs(maps, view, self.limb_cue, self.limb_bands, self.refs,
                                 self.has_ref, self.ell_skin, len(self.parts), cfg.edge_points,
                                 cfg.ridge_points, BAND_SHRINK)
-        observed = self.observed(planes, ellipses)
+        self.observed(planes, ellipses)
         cost = dict(zip(CUE_NAMES, planes, strict=True))
         colours = {p: got[:, j, :self.bands[p]] for j, p in self.colour_limbs}
         terms = self._terms(planes, cost, floors)
-        if observed is not None:
-            terms *= observed
         if ring is not None:   # our extension: the hands' skin surround (kpf/skin_ring.py)
             j = self.hand_js
             centre, axes, angle = ellipses
@@ -133,12 +131,10 @@ class Likelihood:
             terms[:, np.asarray(view.ellipsoid_idx)[j]] += ring_log_term(s, self.floor["skin"])
         return Evaluation(cost, terms, colours)
 
-    def observed(self, planes: np.ndarray, ellipses) -> np.ndarray | None:
+    def observed(self, planes: np.ndarray, ellipses) -> None:
         """A hook for a view that sees only part of the body (the foveal view,
         :class:`~humimic.perception.trackers.kpf.fovea.FovealView`): may rewrite the cost
-        ``planes`` in place and return ``(N, parts)`` factors of the parts' terms; None (here):
-        every part scored as eqs. 9-10 say."""
-        return None
+        ``planes (cues, N, parts)`` in place (here: nothing; eqs. 1-8 as they are)."""
 
     def sigmas(self, cost: dict[str, np.ndarray], floors: bool = False) -> dict[str, float]:
         """Eq. 9's ``sigma_c``: the spread of each cue's costs over the particles (mean over
