@@ -14,7 +14,12 @@ from humimic.perception.blobs.config import DEFAULT_COLOR_MODEL
 from humimic.perception.cues.color_models import ColorLUT, load_color_model
 from humimic.perception.trackers.kpf.config import KpfConfig
 from humimic.perception.trackers.kpf.cues import CueMaps, skin_response
-from humimic.perception.trackers.kpf.fovea import FovealView, disc_in_view, in_view_skin
+from humimic.perception.trackers.kpf.fovea import (
+    FovealLikelihood,
+    FovealView,
+    disc_in_view,
+    in_view_skin,
+)
 from humimic.perception.trackers.kpf.frame_cues import FrameCues
 from humimic.perception.trackers.kpf.likelihood import Likelihood
 from humimic.perception.trackers.kpf.tracker import kpf_body
@@ -72,7 +77,7 @@ def _hand_at_the_border():
     lut = ColorLUT(load_color_model(DEFAULT_COLOR_MODEL), 6)
     wide = FrameCues(painted_person(body, q0, T), lut, colour_gradients=True)
     cost_wide = Likelihood(body, INTRINSICS, CFG).evaluate(q, wide, T).cost["skin"]
-    return body, fi, T, q, FrameCues(img, lut, colour_gradients=True), cost_wide
+    return body, fi, T, q, FrameCues(img, lut, colour_gradients=True), cost_wide, wide
 
 
 @pytest.mark.parametrize("in_view", [False, True])
@@ -83,7 +88,7 @@ def test_a_hand_half_off_the_foveal_image_is_not_pulled_into_it(in_view):
     hand's term); with the off-image points read in the wide view (``skin_in_view``) the
     truth beats them all (by 0.05) and the 40 that put the hand wholly off the narrow image
     (by 1.13)."""
-    body, fi, T, q, maps, cost_wide = _hand_at_the_border()
+    body, fi, T, q, maps, cost_wide, _ = _hand_at_the_border()
     view = FovealView(body, fi, CFG, skin_in_view=in_view)
     view.wide_skin(cost_wide)
     hand = body.part_names.index("r_hand")
@@ -100,3 +105,25 @@ def test_a_hand_half_off_the_foveal_image_is_not_pulled_into_it(in_view):
         assert t[out].max() - t[0] < -0.4
     else:
         assert margin > 0.1
+
+
+def test_search_reads_the_wide_view_in_the_filter_not_in_the_decision():
+    """``skin_in_view: search``: the two-view likelihood's foveal hand term is the wide-read
+    one (:class:`FovealView` with ``skin_in_view``) in the filter's evaluations and eq. 8 over
+    all points in the fixed-sigma ones (``floors``: the branch decision, the refinement);
+    ``all``: the wide-read one in both."""
+    body, fi, T, q, maps, cost_wide, wide = _hand_at_the_border()
+    hand = body.part_names.index("r_hand")
+    want = {}
+    for read in (False, True):
+        v = FovealView(body, fi, CFG, skin_in_view=read)
+        v.wide_skin(cost_wide)
+        want[read] = v.evaluate(q, maps, T, floors=True).terms[:, hand]
+    assert not np.allclose(want[False], want[True])
+    for mode, floors, read in (("search", False, True), ("search", True, False),
+                               ("all", True, True), (None, False, False)):
+        two = FovealLikelihood(body, INTRINSICS, CFG, fi, ("r_hand",), skin_in_view=mode)
+        base = two.evaluate(q, wide, T, floors=floors).terms[:, hand]
+        two.look(maps, T)
+        got = two.evaluate(q, wide, T, floors=floors).terms[:, hand] - base
+        assert np.allclose(got, want[read]), (mode, floors)

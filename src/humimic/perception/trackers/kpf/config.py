@@ -92,15 +92,12 @@ class KpfFovea(Section):
     """Score in it only the parts wholly inside its image, this far from the border, at the
     last estimate (:func:`~humimic.perception.trackers.kpf.fovea.parts_in_view`); None: all
     ``parts`` every frame."""
-    skin_in_view: bool = False
-    """The hands' skin cue in it over its sample points inside the image only, the hand's
-    term weighted by their share (:func:`~humimic.perception.trackers.kpf.fovea.in_view_skin`);
-    False: eq. 8 over all points, off-image ones reading no skin."""
-    ridge_levels: bool = False
-    """Its ridge pyramid deepened by the focal lengths' ratio
-    (:func:`~humimic.perception.trackers.kpf.fovea.fovea_levels`: 5 levels for the 5.6x
-    foveal camera) so each limb is read at the level of its width in pixels; False: the wide
-    view's 3 levels, which clip the foveal arm's ridge level (the fovea of 29 Nov, i14-fovgaze)."""
+    skin_in_view: Literal["search", "all"] | None = None
+    """The hands' skin cue in it with its sample points off the narrow image read in the wide
+    view (:func:`~humimic.perception.trackers.kpf.fovea.in_view_skin`): ``search`` in the
+    filter's evaluations, not in the fixed-sigma ones of the branch decision and the
+    refinement; ``all`` in every evaluation; None: eq. 8 over all points, off-image ones
+    reading no skin (which pulled the resting hand into the narrow image)."""
 
 
 class KpfConfig(KpfDynamics):

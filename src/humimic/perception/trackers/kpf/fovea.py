@@ -33,21 +33,7 @@ import numpy as np
 
 from humimic import bodymodel as bm
 from humimic.perception.trackers.kpf.cues import _DISC
-from humimic.perception.trackers.kpf.frame_cues import LEVELS
 from humimic.perception.trackers.kpf.likelihood import Evaluation, Likelihood
-
-
-def fovea_levels(f_fovea: float, f_wide: float, levels: int = LEVELS) -> int:
-    """Ridge pyramid levels of the foveal view's cue maps: the wide view's ``levels`` plus
-    ``round(log2(f_fovea / f_wide))``. Schmidt's ridge cue reads each limb at the level where
-    its image width is nearest :data:`~humimic.perception.trackers.kpf.cues.RIDGE_WIDTH_PX`
-    (``ridge_level``, from the width in pixels), clipped to the pyramid: the wide eye's three
-    levels reach limbs ~16 px wide, the foveal camera (5.6x the focal length) shows the arm at
-    2 m 26-40 px wide, which the clip read at level 2, 1.6-2.5x wider than the filter: no
-    ridge at the true axis (cost 0.94 / 0.74 on the upper arm / forearm, seed 4 side, against
-    0.20 / 0.26 in the wide view), a lower cost off it. Two more levels give the same limb the
-    same width in pyramid pixels as in the wide view (cost 0.39 / 0.18)."""
-    return int(levels + max(0, round(float(np.log2(f_fovea / f_wide)))))
 
 
 def two_view_terms(terms_wide: np.ndarray, terms_fovea: np.ndarray, in_fovea: np.ndarray,
@@ -130,12 +116,15 @@ class FovealLikelihood(Likelihood):
     alone)."""
 
     def __init__(self, body, intrinsics, cfg, fovea_intrinsics, parts: tuple[str, ...],
-                 weight: float = 1.0, skin_in_view: bool = False):
+                 weight: float = 1.0, skin_in_view: str | None = None):
         super().__init__(body, intrinsics, cfg)
         unknown = sorted(set(parts) - set(self.parts))
         if unknown:
             raise ValueError(f"fovea parts {unknown} are not body parts; parts: {self.parts}")
-        self.fovea = FovealView(body, fovea_intrinsics, cfg, skin_in_view)
+        self.fovea = FovealView(body, fovea_intrinsics, cfg, skin_in_view is not None)
+        self.skin_in_view = skin_in_view
+        """``fovea.skin_in_view``: None, ``search`` (in the filter's evaluations, not in the
+        fixed-sigma ones, ``floors``, of the branch decision and the refinement) or ``all``."""
         self.in_fovea = np.array([p in parts for p in self.parts])
         self.weight = float(weight)
         self.view: tuple | None = None
@@ -162,7 +151,8 @@ class FovealLikelihood(Likelihood):
         ev = super().evaluate(q, maps, T_cam_base, floors=floors)
         if self.view is None:
             return ev
-        self.fovea.wide_skin(ev.cost["skin"])
+        read_wide = self.skin_in_view == "all" or (self.skin_in_view == "search" and not floors)
+        self.fovea.wide_skin(ev.cost["skin"] if read_wide else None)
         fov = self.fovea.evaluate(q, *self.view, floors=floors)
         self.fovea.wide_skin(None)
         return Evaluation(ev.cost, two_view_terms(ev.terms, fov.terms, self.scored,

@@ -25,19 +25,6 @@ from humimic.perception.trackers.kpf.cues import CueMaps, cue_maps
 MARGIN_PX = 16
 #: Regions start at multiples of this (pyramid level 2 aligned with the whole image's).
 ALIGN_PX = 8
-#: The pyramid's levels that :data:`MARGIN_PX` and :data:`ALIGN_PX` are for (``cue_maps``').
-LEVELS = 3
-
-
-def region_margins(levels: int) -> tuple[int, int, int]:
-    """``(margin, align, slack)`` px of a region's maps for a ``levels``-level ridge pyramid:
-    the top level's value depends on pixels up to ``3 * 2^(levels - 1)`` px away (blur 2,
-    pyrDown ``2 (2^(levels - 1) - 1)``, second derivative ``2^(levels - 1)``), plus 4 of
-    rounding (:data:`MARGIN_PX` at 3 levels); regions start at multiples of the top level's
-    pixel (at least :data:`ALIGN_PX`); a point's nearest top-level pixel lies up to ``slack``
-    beyond it (4 at 3 levels)."""
-    top = 2 ** (max(int(levels), 1) - 1)
-    return 3 * top + 4, max(ALIGN_PX, top), max(4, top)
 
 
 def sample_box(view: BodyView, ellipses=None) -> tuple[np.ndarray, np.ndarray]:
@@ -86,7 +73,6 @@ class FrameCues:
 
     def __init__(self, image: np.ndarray, skin_lut: ColorLUT, **kw):
         self.image, self.skin_lut, self.kw = image, skin_lut, kw
-        self.margin, self.align, self.slack = region_margins(kw.get("levels", LEVELS))
         self.maps: CueMaps | None = None
         self.region: tuple[int, int, int, int] | None = None
         """``(u0, v0, u1, v1)`` of :attr:`maps`."""
@@ -94,15 +80,15 @@ class FrameCues:
     def covering(self, lo: np.ndarray, hi: np.ndarray) -> CueMaps:
         """Maps valid for every sample point in the box ``lo``-``hi`` (pixels)."""
         h, w = self.image.shape[:2]
-        a, m, s = self.align, self.margin, self.slack
+        a = ALIGN_PX
         (lu, lv), (hu, hv) = lo.tolist(), hi.tolist()   # scalars: plain Python is faster
-        u0 = min(max(math.floor((lu - m) / a) * a, 0), max(w - a, 0) // a * a)
-        v0 = min(max(math.floor((lv - m) / a) * a, 0), max(h - a, 0) // a * a)
-        # + s: a point's nearest top-level pixel may lie up to half a pixel beyond it;
-        # the far edges rounded up to multiples of the alignment too: a little slack, so fewer
+        u0 = min(max(math.floor((lu - MARGIN_PX) / a) * a, 0), max(w - a, 0) // a * a)
+        v0 = min(max(math.floor((lv - MARGIN_PX) / a) * a, 0), max(h - a, 0) // a * a)
+        # + 4: a point's nearest level-2 pixel may lie up to half a pixel (2 px) beyond it
+        # the far edges rounded up to multiples of ALIGN_PX too: a little slack, so fewer
         # later evaluations reach outside and recompute the maps
-        u1 = min(max(-(-math.ceil(hu + m + s) // a) * a, u0 + a), w)
-        v1 = min(max(-(-math.ceil(hv + m + s) // a) * a, v0 + a), h)
+        u1 = min(max(-(-math.ceil(hu + MARGIN_PX + 4) // a) * a, u0 + a), w)
+        v1 = min(max(-(-math.ceil(hv + MARGIN_PX + 4) // a) * a, v0 + a), h)
         if self.region is not None:
             r = self.region
             if r[0] <= u0 and r[1] <= v0 and u1 <= r[2] and v1 <= r[3]:

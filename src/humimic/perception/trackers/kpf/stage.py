@@ -20,8 +20,8 @@ from humimic import bodymodel as bm
 from humimic.messages import PoseEstimate
 from humimic.perception.cues.auto_colors import look_alike_report
 from humimic.perception.trackers.common import pose_error_plot
-from humimic.perception.trackers.kpf.fovea import FovealLikelihood, fovea_levels
-from humimic.perception.trackers.kpf.frame_cues import LEVELS, FrameCues
+from humimic.perception.trackers.kpf.fovea import FovealLikelihood
+from humimic.perception.trackers.kpf.frame_cues import FrameCues
 from humimic.perception.trackers.kpf.scores import ENDPOINTS, KpfRecord, errors, kpf_metrics
 from humimic.perception.trackers.kpf.tracker import KpfTracker, kpf_body
 from humimic.perception.trackers.kpf.viz import log_frame, log_run
@@ -62,7 +62,7 @@ class KpfStage(Stage):
         t0, c0 = time.perf_counter(), time.thread_time()
         maps = FrameCues(frame.image, self.skin_lut,     # computed where the particles look
                          colour_gradients=self.cfg.colour_gradients)
-        fov = self._fovea(msg.value, frame.camera.intrinsics.fx)
+        fov = self._fovea(msg.value)
         if self.tracker is None:
             self.tracker = KpfTracker(self.body, frame.camera.intrinsics, self.cfg, self.rng,
                                       self.frame_rate, self._likelihood(frame, fov))
@@ -93,16 +93,13 @@ class KpfStage(Stage):
             log_frame(self.rlog, self.name, self.camera, t, self.body, frame, T_cam_base, res,
                       self.world.gt.T_world_frame("base"))
 
-    def _fovea(self, frames: dict, fx_wide: float) -> tuple | None:
-        """``(frame, maps, T_cam_base)`` of the ``fovea`` camera's frame, or None (the maps'
-        ridge pyramid deepened by the focal lengths' ratio: :func:`fovea_levels`)."""
+    def _fovea(self, frames: dict) -> tuple | None:
+        """``(frame, maps, T_cam_base)`` of the ``fovea`` camera's frame, or None."""
         f = None if self.cfg.fovea is None else frames.get(self.cfg.fovea.camera)
         if f is None:
             return None
-        levels = fovea_levels(f.camera.intrinsics.fx, fx_wide) \
-            if self.cfg.fovea.ridge_levels else LEVELS
-        return f, FrameCues(f.image, self.skin_lut, colour_gradients=self.cfg.colour_gradients,
-                            levels=levels), invert_transform(f.camera.T_base_cam)
+        return f, FrameCues(f.image, self.skin_lut, colour_gradients=self.cfg.colour_gradients), \
+            invert_transform(f.camera.T_base_cam)
 
     def _likelihood(self, frame, fov: tuple | None):
         """The tracker's likelihood: the default, or with the foveal view (``fovea``)."""
