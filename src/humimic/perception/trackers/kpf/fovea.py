@@ -25,7 +25,7 @@ double flip cost 1.0-3.0 nats in the foveal view (the wide eye: -0.00-0.33), the
 0.25 (side) / 0.33 (angular) nats (the wide eye 0.01). Tracked (``schmidt_table1_fovgaze``,
 with the flip-branch decision, (1000, 3), seeds 0-9): angular pointing 65 mm (Table 1's kpf
 198), side 51 (40); with the hand's skin points off the narrow image read in the wide view
-(``skin_in_view: search``, :class:`FovealView`; seeds 0-4) side 36, angular 61; see
+(``skin_in_view: search``, :class:`FovealView`; seeds 0-9) side 38, angular 74; see
 docs/schmidt_kpf_notes.md, "Round of 29 Nov, i14-fovgaze" and "Round of 29 Nov (2), i14-fside".
 """
 
