@@ -78,7 +78,8 @@ class KpfFovea(Section):
     197); with ``branch_threshold`` 1.0, ``branch_refine_polls`` 3 and
     ``branch_min_separation_mm`` 200 50.8 / 61.6, seeds 5-9 51.7 / 68.2 (Table 1's 38.9 / 199;
     the decision without the fovea, ungated: 70.8 / 195); with ``skin_in_view: search`` (the
-    scenario's) 35.6 / 60.6 (seeds 5-9 41.2 / 88.0: angular worse); frames per CPU second x0.52 at (150, 2), x0.72 at (1000, 3).
+    scenario's) 35.6 / 60.6 (seeds 5-9 41.2 / 88.0: angular worse); frames per CPU second
+    x0.52 at (150, 2), x0.72 at (1000, 3).
     Off: (150, 2) falls below its speed goal."""
 
     camera: Literal["L_foveal", "R_foveal"] = "L_foveal"
