@@ -82,9 +82,10 @@ class KpfFovea(Section):
     seeds 0-4, mean wrist error, mm, side / angular): alone 48.7 / 192 (Table 1's 41.7 /
     197); with ``branch_threshold`` 1.0, ``branch_refine_polls`` 3 and
     ``branch_min_separation_mm`` 200 50.8 / 61.6, seeds 5-9 51.7 / 68.2 (Table 1's 38.9 / 199;
-    the decision without the fovea, ungated: 70.8 / 195); frames per CPU second x0.52 at
-    (150, 2), x0.72 at (1000, 3). Off: side pointing gets worse and (150, 2) falls below its
-    speed goal."""
+    the decision without the fovea, ungated: 70.8 / 195); with ``skin_in_view: search`` (the
+    scenario's) 35.6 / 60.6 (seeds 5-9 41.2 / 88.0: angular worse); frames per CPU second
+    x0.52 at (150, 2), x0.72 at (1000, 3).
+    Off: (150, 2) falls below its speed goal."""
 
     camera: Literal["L_foveal", "R_foveal"] = "L_foveal"
     """The foveal camera (rendered: ``cameras.which: both``)."""
@@ -97,6 +98,12 @@ class KpfFovea(Section):
     """Score in it only the parts wholly inside its image, this far from the border, at the
     last estimate (:func:`~humimic.perception.trackers.kpf.fovea.parts_in_view`); None: all
     ``parts`` every frame."""
+    skin_in_view: Literal["search", "all"] | None = None
+    """The hands' skin cue in it with its sample points off the narrow image read in the wide
+    view (:func:`~humimic.perception.trackers.kpf.fovea.in_view_skin`): ``search`` in the
+    filter's evaluations, not in the fixed-sigma ones of the branch decision and the
+    refinement; ``all`` in every evaluation; None: eq. 8 over all points, off-image ones
+    reading no skin (which pulled the resting hand into the narrow image)."""
 
 
 class KpfConfig(KpfDynamics):

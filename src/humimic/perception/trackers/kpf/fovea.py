@@ -24,7 +24,9 @@ right_elbow right_wrist``, the eye on the true arm): in the hold, the truth's el
 double flip cost 1.0-3.0 nats in the foveal view (the wide eye: -0.00-0.33), the wrist flip
 0.25 (side) / 0.33 (angular) nats (the wide eye 0.01). Tracked (``schmidt_table1_fovgaze``,
 with the flip-branch decision, (1000, 3), seeds 0-9): angular pointing 65 mm (Table 1's kpf
-198), side 51 (40); see docs/schmidt_kpf_notes.md, "Round of 29 Nov, i14-fovgaze".
+198), side 51 (40); with the hand's skin points off the narrow image read in the wide view
+(``skin_in_view: search``, :class:`FovealView`; seeds 0-9) side 38, angular 74; see
+docs/schmidt_kpf_notes.md, "Round of 29 Nov, i14-fovgaze" and "Round of 29 Nov (2), i14-fside".
 """
 
 from __future__ import annotations
@@ -32,6 +34,7 @@ from __future__ import annotations
 import numpy as np
 
 from humimic import bodymodel as bm
+from humimic.perception.trackers.kpf.cues import _DISC
 from humimic.perception.trackers.kpf.likelihood import Evaluation, Likelihood
 
 
@@ -56,6 +59,58 @@ def parts_in_view(uv: np.ndarray, valid: np.ndarray, width: int, height: int,
     return np.asarray(valid, bool) & np.all(inside, axis=-1)
 
 
+def disc_in_view(centre: np.ndarray, axes: np.ndarray, angle: np.ndarray, width: int,
+                 height: int) -> np.ndarray:
+    """``(N, E)`` the share of the skin cue's sample points (:data:`~humimic.perception.
+    trackers.kpf.cues._DISC`, rounded to pixels as the cost pass does) of image ellipses
+    (centres ``(N, E, 2)``, semi-axes ``(N, E, 2)``, angles ``(N, E)``) inside a ``width x
+    height`` image."""
+    c, s = np.cos(angle)[..., None], np.sin(angle)[..., None]
+    x, y = _DISC[:, 0] * axes[..., :1], _DISC[:, 1] * axes[..., 1:]
+    u = np.rint(centre[..., :1] + c * x - s * y)
+    v = np.rint(centre[..., 1:] + s * x + c * y)
+    return np.mean((u >= 0) & (v >= 0) & (u < width) & (v < height), axis=-1)
+
+
+def in_view_skin(cost: np.ndarray, share: np.ndarray, cost_wide: np.ndarray) -> np.ndarray:
+    """Schmidt eq. 8 in the foveal view with its sample points off the narrow image read in
+    the wide one: the cost ``1 - f`` of a skin fraction ``f`` counted over all points
+    (off-image ones reading no skin), ``share`` of them inside, becomes ``1 - f - (1 -
+    share) (1 - c_w)`` with ``c_w`` (``cost_wide``) the same hand's cost in the wide view:
+    the points the narrow camera does not see count as skin as often as the wide camera
+    sees the hand's (a hand wholly off the narrow image costs its wide-view cost)."""
+    return cost - (1.0 - share) * (1.0 - cost_wide)
+
+
+class FovealView(Likelihood):
+    """:class:`Likelihood` of the foveal view, whose narrow image shows only part of the arm
+    (at rest the hanging hand half below it): with ``skin_in_view`` the hands' skin cue
+    reads its sample points off the image in the wide view (:func:`in_view_skin`; the wide
+    view's skin costs given by :meth:`wide_skin` before each evaluation). Counted over all
+    points (eq. 8 as in the wide view), the hand half off the image costs ~0.6 at the truth
+    and less wherever a pose lifts it into the image: the foveal view pulled the resting
+    hand 20-45 mm up (seed 4 side)."""
+
+    def __init__(self, body, intrinsics, cfg, skin_in_view: bool = False):
+        super().__init__(body, intrinsics, cfg)
+        self.skin_in_view = skin_in_view
+        self.skin_cols = np.asarray(body.layout.ellipsoid_idx, np.intp)[self.skin_js]
+        self.cost_wide: np.ndarray | None = None
+
+    def wide_skin(self, cost_wide: np.ndarray | None) -> None:
+        """The wide view's skin costs ``(N, parts)`` of the poses evaluated next."""
+        self.cost_wide = cost_wide
+
+    def observed(self, planes: np.ndarray, ellipses) -> None:
+        if not self.skin_in_view or not len(self.skin_js) or self.cost_wide is None:
+            return
+        centre, axes, angle = ellipses
+        j, cols = self.skin_js, self.skin_cols
+        share = disc_in_view(centre[:, j], axes[:, j], angle[:, j], self.intr.width,
+                             self.intr.height)
+        planes[3][:, cols] = in_view_skin(planes[3][:, cols], share, self.cost_wide[:, cols])
+
+
 class FovealLikelihood(Likelihood):
     """:class:`Likelihood` of the wide view (the tracker's camera) times the foveal view's
     factors of the ``parts`` (:func:`two_view_terms`); the foveal frame is given before each
@@ -63,12 +118,15 @@ class FovealLikelihood(Likelihood):
     alone)."""
 
     def __init__(self, body, intrinsics, cfg, fovea_intrinsics, parts: tuple[str, ...],
-                 weight: float = 1.0):
+                 weight: float = 1.0, skin_in_view: str | None = None):
         super().__init__(body, intrinsics, cfg)
         unknown = sorted(set(parts) - set(self.parts))
         if unknown:
             raise ValueError(f"fovea parts {unknown} are not body parts; parts: {self.parts}")
-        self.fovea = Likelihood(body, fovea_intrinsics, cfg)
+        self.fovea = FovealView(body, fovea_intrinsics, cfg, skin_in_view is not None)
+        self.skin_in_view = skin_in_view
+        """``fovea.skin_in_view``: None, ``search`` (in the filter's evaluations, not in the
+        fixed-sigma ones, ``floors``, of the branch decision and the refinement) or ``all``."""
         self.in_fovea = np.array([p in parts for p in self.parts])
         self.weight = float(weight)
         self.view: tuple | None = None
@@ -95,7 +153,10 @@ class FovealLikelihood(Likelihood):
         ev = super().evaluate(q, maps, T_cam_base, floors=floors)
         if self.view is None:
             return ev
+        read_wide = self.skin_in_view == "all" or (self.skin_in_view == "search" and not floors)
+        self.fovea.wide_skin(ev.cost["skin"] if read_wide else None)
         fov = self.fovea.evaluate(q, *self.view, floors=floors)
+        self.fovea.wide_skin(None)
         return Evaluation(ev.cost, two_view_terms(ev.terms, fov.terms, self.scored,
                                                   self.weight), ev.colours)
 

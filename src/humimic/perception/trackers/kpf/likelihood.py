@@ -119,6 +119,7 @@ class Likelihood:
         planes, got = cue_costs(maps, view, self.limb_cue, self.limb_bands, self.refs,
                                 self.has_ref, self.ell_skin, len(self.parts), cfg.edge_points,
                                 cfg.ridge_points, BAND_SHRINK)
+        self.observed(planes, ellipses)
         cost = dict(zip(CUE_NAMES, planes, strict=True))
         colours = {p: got[:, j, :self.bands[p]] for j, p in self.colour_limbs}
         terms = self._terms(planes, cost, floors)
@@ -129,6 +130,11 @@ class Likelihood:
             s = np.where(view.valid[:, view.ellipsoid_idx[j]], s, 0.0)
             terms[:, np.asarray(view.ellipsoid_idx)[j]] += ring_log_term(s, self.floor["skin"])
         return Evaluation(cost, terms, colours)
+
+    def observed(self, planes: np.ndarray, ellipses) -> None:
+        """A hook for a view that sees only part of the body (the foveal view,
+        :class:`~humimic.perception.trackers.kpf.fovea.FovealView`): may rewrite the cost
+        ``planes (cues, N, parts)`` in place (here: nothing; eqs. 1-8 as they are)."""
 
     def sigmas(self, cost: dict[str, np.ndarray], floors: bool = False) -> dict[str, float]:
         """Eq. 9's ``sigma_c``: the spread of each cue's costs over the particles (mean over
