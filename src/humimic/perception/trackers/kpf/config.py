@@ -88,6 +88,11 @@ class KpfFovea(Section):
     """The limbs scored in it."""
     weight: float = Field(1.0, gt=0.0, le=10.0)
     """Its factors' exponent (1: the two views' likelihoods multiplied)."""
+    use: Literal["all", "decision"] = "all"
+    """Which evaluations see it: ``all`` (the mean shift, the reweighting, the refinements
+    and the flip-branch decision); ``decision``: only the flip-branch decision's
+    (``branch_threshold``; :func:`~humimic.perception.trackers.kpf.fovea.decision_view`), the
+    rest the wide view alone."""
     in_view_margin_px: float | None = Field(None, ge=0.0, le=100.0)
     """Score in it only the parts wholly inside its image, this far from the border, at the
     last estimate (:func:`~humimic.perception.trackers.kpf.fovea.parts_in_view`); None: all

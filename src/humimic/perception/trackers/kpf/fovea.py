@@ -29,6 +29,8 @@ with the flip-branch decision, (1000, 3), seeds 0-9): angular pointing 65 mm (Ta
 
 from __future__ import annotations
 
+from contextlib import contextmanager, nullcontext
+
 import numpy as np
 
 from humimic import bodymodel as bm
@@ -63,8 +65,10 @@ class FovealLikelihood(Likelihood):
     alone)."""
 
     def __init__(self, body, intrinsics, cfg, fovea_intrinsics, parts: tuple[str, ...],
-                 weight: float = 1.0):
+                 weight: float = 1.0, use: str = "all"):
         super().__init__(body, intrinsics, cfg)
+        if use not in ("all", "decision"):
+            raise ValueError(f"fovea use {use!r}: 'all' or 'decision'")
         unknown = sorted(set(parts) - set(self.parts))
         if unknown:
             raise ValueError(f"fovea parts {unknown} are not body parts; parts: {self.parts}")
@@ -75,6 +79,24 @@ class FovealLikelihood(Likelihood):
         """(maps, T_cam_base) of the foveal frame, or None."""
         self.scored = self.in_fovea
         """(parts,) the parts scored in the foveal frame (:meth:`look`)."""
+        self.use = use
+        """``all``: every evaluation sees both views; ``decision``: only those inside
+        :meth:`deciding` (the flip-branch decision's), the others the wide view alone."""
+        self._deciding = False
+
+    @contextmanager
+    def deciding(self):
+        """The evaluations within see the foveal view also with ``use: decision``."""
+        before, self._deciding = self._deciding, True
+        try:
+            yield self
+        finally:
+            self._deciding = before
+
+    @property
+    def active(self) -> bool:
+        """Whether an evaluation now multiplies in the foveal view."""
+        return self.view is not None and (self.use == "all" or self._deciding)
 
     def look(self, maps, T_cam_base: np.ndarray | None, q_ref: np.ndarray | None = None,
              margin: float | None = None) -> None:
@@ -93,7 +115,7 @@ class FovealLikelihood(Likelihood):
     def evaluate(self, q: np.ndarray, maps, T_cam_base: np.ndarray,
                  floors: bool = False) -> Evaluation:
         ev = super().evaluate(q, maps, T_cam_base, floors=floors)
-        if self.view is None:
+        if not self.active:
             return ev
         fov = self.fovea.evaluate(q, *self.view, floors=floors)
         return Evaluation(ev.cost, two_view_terms(ev.terms, fov.terms, self.scored,
@@ -102,3 +124,9 @@ class FovealLikelihood(Likelihood):
     def share_references(self, references: dict[str, np.ndarray]) -> None:
         super().share_references(references)
         self.fovea.share_references(references)
+
+
+def decision_view(lik):
+    """The context in which the flip-branch decision evaluates ``lik``: with the foveal view
+    for a :class:`FovealLikelihood` (``fovea.use: decision`` too), as it is otherwise."""
+    return lik.deciding() if isinstance(lik, FovealLikelihood) else nullcontext()
