@@ -93,6 +93,8 @@ class KpfFovea(Section):
     and the flip-branch decision); ``decision``: only the flip-branch decision's
     (``branch_threshold``; :func:`~humimic.perception.trackers.kpf.fovea.decision_view`), the
     rest the wide view alone."""
+    decision_weight: float | None = Field(None, gt=0.0, le=10.0)
+    """The exponent in the flip-branch decision's evaluations; None: ``weight``."""
     in_view_margin_px: float | None = Field(None, ge=0.0, le=100.0)
     """Score in it only the parts wholly inside its image, this far from the border, at the
     last estimate (:func:`~humimic.perception.trackers.kpf.fovea.parts_in_view`); None: all

@@ -65,7 +65,7 @@ class FovealLikelihood(Likelihood):
     alone)."""
 
     def __init__(self, body, intrinsics, cfg, fovea_intrinsics, parts: tuple[str, ...],
-                 weight: float = 1.0, use: str = "all"):
+                 weight: float = 1.0, use: str = "all", decision_weight: float | None = None):
         super().__init__(body, intrinsics, cfg)
         if use not in ("all", "decision"):
             raise ValueError(f"fovea use {use!r}: 'all' or 'decision'")
@@ -75,6 +75,8 @@ class FovealLikelihood(Likelihood):
         self.fovea = Likelihood(body, fovea_intrinsics, cfg)
         self.in_fovea = np.array([p in parts for p in self.parts])
         self.weight = float(weight)
+        self.decision_weight = self.weight if decision_weight is None else float(decision_weight)
+        """The foveal factors' exponent in the flip-branch decision's evaluations."""
         self.view: tuple | None = None
         """(maps, T_cam_base) of the foveal frame, or None."""
         self.scored = self.in_fovea
@@ -118,8 +120,9 @@ class FovealLikelihood(Likelihood):
         if not self.active:
             return ev
         fov = self.fovea.evaluate(q, *self.view, floors=floors)
-        return Evaluation(ev.cost, two_view_terms(ev.terms, fov.terms, self.scored,
-                                                  self.weight), ev.colours)
+        w = self.decision_weight if self._deciding else self.weight
+        return Evaluation(ev.cost, two_view_terms(ev.terms, fov.terms, self.scored, w),
+                          ev.colours)
 
     def share_references(self, references: dict[str, np.ndarray]) -> None:
         super().share_references(references)

@@ -107,7 +107,8 @@ class KpfStage(Stage):
             return None
         c = self.cfg.fovea
         return FovealLikelihood(self.body, frame.camera.intrinsics, self.cfg,
-                                fov[0].camera.intrinsics, tuple(c.parts), c.weight, c.use)
+                                fov[0].camera.intrinsics, tuple(c.parts), c.weight, c.use,
+                                c.decision_weight)
 
     def metrics(self) -> dict:
         return {"trackers": {self.name: {
