@@ -17,6 +17,7 @@ from humimic.perception.trackers.kpf.fovea import (
     decision_view,
     parts_in_view,
     two_view_terms,
+    wrist_step,
 )
 from humimic.perception.trackers.kpf.frame_cues import FrameCues
 from humimic.perception.trackers.kpf.likelihood import Likelihood
@@ -268,3 +269,37 @@ def test_the_branch_decision_scores_with_the_fovea_under_decision_use():
     assert np.isfinite(r["all"]).any(), r
     assert np.allclose(r["decision"], r["all"], equal_nan=True), r
     assert not np.allclose(r[None], r["all"], equal_nan=True), r
+
+
+def test_wrist_step_is_the_chord_of_an_elbow_turn():
+    """Bending only the right elbow by ``a`` moves the right wrist on a circle of the
+    forearm's length about the elbow: the chord ``2 L sin(a / 2)``; the left wrist stays."""
+    body, q0 = kpf_body(), static_pose()
+    q1 = q0.copy()
+    q1[9] += 0.3                                             # R_EB
+    pose = body.forward(q0[None])
+    L = float(np.linalg.norm(pose.joint("r_wrist")[0] - pose.joint("r_elbow")[0]))
+    assert wrist_step(body, q1, q0, ("r",)) == pytest.approx(2 * L * np.sin(0.15), rel=1e-9)
+    assert wrist_step(body, q1, q0, ("l",)) == pytest.approx(0.0, abs=1e-12)
+
+
+def test_moving_use_adds_the_fovea_while_the_estimated_arm_moves():
+    """``use: moving``: the wide view alone while the foveal arm's wrist moved less than
+    ``moving_m`` between the last two estimates (or there is no earlier one), both views once
+    it moved more; the decision's evaluations always see both."""
+    body, q0, (mw, T), (mf, Tf), fi = views()
+    q_moved = q0.copy()
+    q_moved[9] += 0.3                                        # the right wrist moves ~8 cm
+    mov = FovealLikelihood(body, INTRINSICS, CFG, fi, ARM, use="moving", moving_m=0.02)
+    mov.adapt({p: c[0] for p, c in mov.evaluate(q0[None], mw, T).colours.items()})
+    both = FovealLikelihood(body, INTRINSICS, CFG, fi, ARM)
+    wide = Likelihood(body, INTRINSICS, CFG)
+    for lik in (both, wide):
+        lik.share_references(mov.references)
+    both.look(mf, Tf)
+    ll_w, ll_2 = wide.evaluate(q0[None], mw, T).log_lik, both.evaluate(q0[None], mw, T).log_lik
+    for q_prev, want in ((None, ll_w), (q0, ll_w), (q_moved, ll_2)):
+        mov.look(mf, Tf, q0, None, q_prev)
+        assert np.allclose(mov.evaluate(q0[None], mw, T).log_lik, want)
+        with decision_view(mov):
+            assert np.allclose(mov.evaluate(q0[None], mw, T).log_lik, ll_2)

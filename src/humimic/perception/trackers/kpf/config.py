@@ -88,11 +88,15 @@ class KpfFovea(Section):
     """The limbs scored in it."""
     weight: float = Field(1.0, gt=0.0, le=10.0)
     """Its factors' exponent (1: the two views' likelihoods multiplied)."""
-    use: Literal["all", "decision"] = "all"
+    use: Literal["all", "decision", "moving"] = "all"
     """Which evaluations see it: ``all`` (the mean shift, the reweighting, the refinements
     and the flip-branch decision); ``decision``: only the flip-branch decision's
     (``branch_threshold``; :func:`~humimic.perception.trackers.kpf.fovea.decision_view`), the
-    rest the wide view alone."""
+    rest the wide view alone; ``moving``: all while the estimate's arm moves (``moving_mm``),
+    else only the decision's."""
+    moving_mm: float = Field(20.0, gt=0.0, le=1000.0)
+    """``use: moving``: the wrist step (mm) between the last two estimates above which the
+    arm counts as moving."""
     decision_weight: float | None = Field(None, gt=0.0, le=10.0)
     """The exponent in the flip-branch decision's evaluations; None: ``weight``."""
     in_view_margin_px: float | None = Field(None, ge=0.0, le=100.0)

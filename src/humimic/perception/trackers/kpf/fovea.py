@@ -58,6 +58,14 @@ def parts_in_view(uv: np.ndarray, valid: np.ndarray, width: int, height: int,
     return np.asarray(valid, bool) & np.all(inside, axis=-1)
 
 
+def wrist_step(body, q: np.ndarray, q_prev: np.ndarray, prefixes: tuple[str, ...]) -> float:
+    """The largest distance (m) an arm's wrist (``prefixes``: ``r``, ``l``) moved between the
+    poses ``q_prev`` and ``q (14,)``: whether the estimated arm moves (``use: moving``)."""
+    pose = body.forward(np.stack([np.asarray(q_prev, float), np.asarray(q, float)]))
+    return max((float(np.linalg.norm(np.diff(pose.joint(f"{p}_wrist"), axis=0)))
+                for p in prefixes), default=0.0)
+
+
 class FovealLikelihood(Likelihood):
     """:class:`Likelihood` of the wide view (the tracker's camera) times the foveal view's
     factors of the ``parts`` (:func:`two_view_terms`); the foveal frame is given before each
@@ -65,10 +73,11 @@ class FovealLikelihood(Likelihood):
     alone)."""
 
     def __init__(self, body, intrinsics, cfg, fovea_intrinsics, parts: tuple[str, ...],
-                 weight: float = 1.0, use: str = "all", decision_weight: float | None = None):
+                 weight: float = 1.0, use: str = "all", decision_weight: float | None = None,
+                 moving_m: float = 0.02):
         super().__init__(body, intrinsics, cfg)
-        if use not in ("all", "decision"):
-            raise ValueError(f"fovea use {use!r}: 'all' or 'decision'")
+        if use not in ("all", "decision", "moving"):
+            raise ValueError(f"fovea use {use!r}: 'all', 'decision' or 'moving'")
         unknown = sorted(set(parts) - set(self.parts))
         if unknown:
             raise ValueError(f"fovea parts {unknown} are not body parts; parts: {self.parts}")
@@ -85,6 +94,10 @@ class FovealLikelihood(Likelihood):
         """``all``: every evaluation sees both views; ``decision``: only those inside
         :meth:`deciding` (the flip-branch decision's), the others the wide view alone."""
         self._deciding = False
+        self.moving_m = float(moving_m)
+        self.moving = False
+        """``use: moving``: whether the last estimate's arm moved (:meth:`look`)."""
+        self.sides = tuple(sorted({p[0] for p in parts}))
 
     @contextmanager
     def deciding(self):
@@ -98,14 +111,19 @@ class FovealLikelihood(Likelihood):
     @property
     def active(self) -> bool:
         """Whether an evaluation now multiplies in the foveal view."""
-        return self.view is not None and (self.use == "all" or self._deciding)
+        return self.view is not None and (self.use == "all" or self._deciding
+                                          or (self.use == "moving" and self.moving))
 
     def look(self, maps, T_cam_base: np.ndarray | None, q_ref: np.ndarray | None = None,
-             margin: float | None = None) -> None:
+             margin: float | None = None, q_prev: np.ndarray | None = None) -> None:
         """The foveal frame's cue maps and camera pose for the next evaluations; with
         ``margin`` (px) only those of the parts wholly inside the image (:func:`parts_in_view`)
-        at the pose ``q_ref (14,)`` (the last estimate) are scored."""
+        at the pose ``q_ref (14,)`` (the last estimate) are scored. ``use: moving``: every
+        evaluation sees it if a foveal arm's wrist moved more than ``moving_m`` from ``q_prev``
+        (the estimate before) to ``q_ref``, else only the decision's."""
         self.view = None if maps is None else (maps, T_cam_base)
+        self.moving = q_ref is not None and q_prev is not None and wrist_step(
+            self.body, q_ref, q_prev, self.sides) > self.moving_m
         self.scored = self.in_fovea
         if maps is not None and margin is not None and q_ref is not None:
             i = self.fovea.intr
