@@ -137,7 +137,7 @@ def child(path: str, config: tuple[int, int], name: str, repeats: int,
     for _ in range(repeats):
         lik = None if fov is None else FovealLikelihood(
             body, intr, cfg, data["fovea_intrinsics"], tuple(f.parts), f.weight, f.use,
-            f.decision_weight)
+            f.decision_weight, f.moving_mm / 1000.0)
         tr = KpfTracker(body, intr, cfg, np.random.default_rng(0), lik=lik)
         if lik is not None:
             lik.look(FrameCues(fov[0][0], lut, **kw), fov[0][1])
@@ -146,7 +146,8 @@ def child(path: str, config: tuple[int, int], name: str, repeats: int,
         for i, (img, T) in enumerate(frames[1:], 1):
             c0 = time.thread_time()
             if lik is not None:
-                lik.look(FrameCues(fov[i][0], lut, **kw), fov[i][1])
+                lik.look(FrameCues(fov[i][0], lut, **kw), fov[i][1], tr.mode, None,
+                         tr.mode_prev)
             tr.step(FrameCues(img, lut, **kw), T)
             cpu[-1].append(time.thread_time() - c0)
     n_f = len(frames) - 1

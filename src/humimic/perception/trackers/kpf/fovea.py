@@ -25,6 +25,11 @@ double flip cost 1.0-3.0 nats in the foveal view (the wide eye: -0.00-0.33), the
 0.25 (side) / 0.33 (angular) nats (the wide eye 0.01). Tracked (``schmidt_table1_fovgaze``,
 with the flip-branch decision, (1000, 3), seeds 0-9): angular pointing 65 mm (Table 1's kpf
 198), side 51 (40); see docs/schmidt_kpf_notes.md, "Round of 29 Nov, i14-fovgaze".
+
+Which evaluations multiply in the foveal view (``fovea.use``; 29 Nov, ``i14-fang``): ``all``;
+``decision``, only the flip-branch decision's (:func:`decision_view`; the search, i.e. mean
+shift, reweighting and refinement, on the wide view alone); ``moving``, the search's too while
+the estimated arm moves (:func:`wrist_step` above ``moving_m`` between the last two estimates).
 """
 
 from __future__ import annotations
@@ -122,7 +127,8 @@ class FovealLikelihood(Likelihood):
         evaluation sees it if a foveal arm's wrist moved more than ``moving_m`` from ``q_prev``
         (the estimate before) to ``q_ref``, else only the decision's."""
         self.view = None if maps is None else (maps, T_cam_base)
-        self.moving = q_ref is not None and q_prev is not None and wrist_step(
+        self.moving = self.use == "moving" and q_ref is not None and q_prev is not None and \
+            wrist_step(
             self.body, q_ref, q_prev, self.sides) > self.moving_m
         self.scored = self.in_fovea
         if maps is not None and margin is not None and q_ref is not None:
