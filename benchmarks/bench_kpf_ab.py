@@ -14,14 +14,15 @@ and the median of the per-round ratios.
 
     MUJOCO_GL=egl python benchmarks/bench_kpf_ab.py BASELINE_CHECKOUT/src src \\
         [--rounds R] [--config P,I] [--only NAME] [--frames N] [--repeats K]
-        [--gesture side|angle] [--fovea]
+        [--gesture side|angle] [--fovea] [--fovgaze [--set-a K=V] [--set-b K=V]]
 
 ``--fovea``: the frames of ``scenarios/schmidt_table1_fovgaze.yaml`` (the left eye's wide and
 foveal cameras, the eye on the true right elbow) and tree B's runs with the scenario's
 ``trackers.kpf.fovea`` (give the same tree twice to measure the fovea's cost).
 ``--fovgaze``: those frames, and both trees' runs with the scenario's whole ``kpf`` (its fovea
 and flip-branch decision), each with its own ``--set-a`` / ``--set-b`` scenario settings
-(e.g. the same tree twice, ``--set-b trackers.kpf.fovea.use=decision``).
+(e.g. the same tree twice, ``--set-b trackers.kpf.fovea.use=decision``; ``--set-b
+trackers.kpf.fovea=null``: the decision without the fovea).
 """
 
 from __future__ import annotations
@@ -121,7 +122,7 @@ def child(path: str, config: tuple[int, int], name: str, repeats: int,
     base = load_scenario(SCENARIOS_DIR / "schmidt_table1.yaml").trackers[name] \
         if fovgaze is None else load_scenario(SCENARIOS_DIR / "schmidt_table1_fovgaze.yaml",
                                               fovgaze).trackers["kpf"]
-    fovea = fovea or fovgaze is not None
+    fovea = fovea or (fovgaze is not None and base.fovea is not None)
     cfg = base.model_copy(update={"n_particles": n, "iterations": it})
     body = kpf_body()
     load_kernels(body, intr, cfg, frames[0][0], lut, frames[0][1], q0)
