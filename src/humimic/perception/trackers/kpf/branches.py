@@ -149,7 +149,7 @@ class FlipBranches:
     def step(self, tracker, mode: np.ndarray, maps, T_cam_base: np.ndarray) -> np.ndarray:
         """:meth:`_step` with the tracker's foveal view on (``fovea.use: decision``:
         :func:`~humimic.perception.trackers.kpf.fovea.decision_view`)."""
-        with decision_view(tracker.lik):
+        with decision_view(getattr(tracker, "lik", None)):
             return self._step(tracker, mode, maps, T_cam_base)
 
     def _step(self, tracker, mode: np.ndarray, maps, T_cam_base: np.ndarray) -> np.ndarray:
