@@ -14,11 +14,15 @@ and the median of the per-round ratios.
 
     MUJOCO_GL=egl python benchmarks/bench_kpf_ab.py BASELINE_CHECKOUT/src src \\
         [--rounds R] [--config P,I] [--only NAME] [--frames N] [--repeats K]
-        [--gesture side|angle] [--fovea]
+        [--gesture side|angle] [--fovea] [--fovgaze [--set-a K=V] [--set-b K=V]]
 
 ``--fovea``: the frames of ``scenarios/schmidt_table1_fovgaze.yaml`` (the left eye's wide and
 foveal cameras, the eye on the true right elbow) and tree B's runs with the scenario's
 ``trackers.kpf.fovea`` (give the same tree twice to measure the fovea's cost).
+``--fovgaze``: those frames, and both trees' runs with the scenario's whole ``kpf`` (its fovea
+and flip-branch decision), each with its own ``--set-a`` / ``--set-b`` scenario settings
+(e.g. the same tree twice, ``--set-b trackers.kpf.fovea.use=decision``; ``--set-b
+trackers.kpf.fovea=null``: the decision without the fovea).
 """
 
 from __future__ import annotations
@@ -98,8 +102,10 @@ def prepare_fovea(path: str, frames: int, gesture: str = "side") -> None:
 
 
 def child(path: str, config: tuple[int, int], name: str, repeats: int,
-          fovea: bool = False) -> None:
-    """Track the pickled frames ``repeats`` times; print the thread-CPU rates (JSON)."""
+          fovea: bool = False, fovgaze: list[str] | None = None) -> None:
+    """Track the pickled frames ``repeats`` times; print the thread-CPU rates (JSON).
+    ``fovgaze``: the ``--set``s of ``schmidt_table1_fovgaze.yaml`` whose ``kpf`` runs (with
+    its fovea)."""
     import cv2
 
     from humimic.paths import SCENARIOS_DIR
@@ -113,7 +119,10 @@ def child(path: str, config: tuple[int, int], name: str, repeats: int,
         data = pickle.load(f)
     frames, intr, q0, lut = data["frames"], data["intrinsics"], data["q0"], data["lut"]
     n, it = config
-    base = load_scenario(SCENARIOS_DIR / "schmidt_table1.yaml").trackers[name]
+    base = load_scenario(SCENARIOS_DIR / "schmidt_table1.yaml").trackers[name] \
+        if fovgaze is None else load_scenario(SCENARIOS_DIR / "schmidt_table1_fovgaze.yaml",
+                                              fovgaze).trackers["kpf"]
+    fovea = fovea or (fovgaze is not None and base.fovea is not None)
     cfg = base.model_copy(update={"n_particles": n, "iterations": it})
     body = kpf_body()
     load_kernels(body, intr, cfg, frames[0][0], lut, frames[0][1], q0)
@@ -122,12 +131,14 @@ def child(path: str, config: tuple[int, int], name: str, repeats: int,
     if fov is not None:
         from humimic.perception.trackers.kpf.fovea import FovealLikelihood
 
-        f = load_scenario(SCENARIOS_DIR / "schmidt_table1_fovgaze.yaml").trackers["kpf"].fovea
+        f = cfg.fovea if fovgaze is not None else load_scenario(
+            SCENARIOS_DIR / "schmidt_table1_fovgaze.yaml").trackers["kpf"].fovea
         cfg = cfg.model_copy(update={"fovea": f})
     cpu = []
     for _ in range(repeats):
         lik = None if fov is None else FovealLikelihood(
-            body, intr, cfg, data["fovea_intrinsics"], tuple(f.parts), f.weight)
+            body, intr, cfg, data["fovea_intrinsics"], tuple(f.parts), f.weight, f.use,
+            f.decision_weight, f.moving_mm / 1000.0)
         tr = KpfTracker(body, intr, cfg, np.random.default_rng(0), lik=lik)
         if lik is not None:
             lik.look(FrameCues(fov[0][0], lut, **kw), fov[0][1])
@@ -136,7 +147,8 @@ def child(path: str, config: tuple[int, int], name: str, repeats: int,
         for i, (img, T) in enumerate(frames[1:], 1):
             c0 = time.thread_time()
             if lik is not None:
-                lik.look(FrameCues(fov[i][0], lut, **kw), fov[i][1])
+                lik.look(FrameCues(fov[i][0], lut, **kw), fov[i][1], tr.mode, None,
+                         tr.mode_prev)
             tr.step(FrameCues(img, lut, **kw), T)
             cpu[-1].append(time.thread_time() - c0)
     n_f = len(frames) - 1
@@ -157,6 +169,12 @@ def main() -> None:
     p.add_argument("--fovea", action="store_true",
                    help="frames of schmidt_table1_fovgaze.yaml (the eye on the true elbow); "
                    "tree B's runs with its trackers.kpf.fovea, tree A's without")
+    p.add_argument("--fovgaze", action="store_true",
+                   help="frames as --fovea; both trees' runs with schmidt_table1_fovgaze.yaml's "
+                   "kpf (fovea and flip-branch decision) and their --set-a / --set-b")
+    p.add_argument("--set-a", action="append", default=[], metavar="KEY=VALUE")
+    p.add_argument("--set-b", action="append", default=[], metavar="KEY=VALUE")
+    p.add_argument("--fovgaze-child", nargs="*", help=argparse.SUPPRESS)
     p.add_argument("--fovea-child", action="store_true", help=argparse.SUPPRESS)
     p.add_argument("--prepare", help=argparse.SUPPRESS)
     p.add_argument("--child", help=argparse.SUPPRESS)
@@ -166,19 +184,23 @@ def main() -> None:
         return (prepare_fovea if args.fovea else prepare)(args.prepare, args.frames,
                                                          args.gesture)
     if args.child:
-        return child(args.child, config, args.only, args.repeats, args.fovea_child)
+        return child(args.child, config, args.only, args.repeats, args.fovea_child,
+                     args.fovgaze_child)
     if len(args.trees) != 2:
         p.error("give two source trees")
     me = [sys.executable, str(Path(__file__).resolve())]
     with tempfile.TemporaryDirectory() as tmp:
         data = str(Path(tmp) / "frames.pkl")
         subprocess.run(me + ["--prepare", data, "--frames", str(args.frames), "--gesture",
-                            args.gesture] + (["--fovea"] if args.fovea else []), check=True,
+                            args.gesture] + (["--fovea"] if args.fovea or args.fovgaze else []),
+                       check=True,
                        env=_env(args.trees[0]))
         hz = {s: {0: [], 1: []} for s in STATS}
         for r in range(args.rounds):
             for k in ((0, 1) if r % 2 == 0 else (1, 0)):
                 fov = ["--fovea-child"] if args.fovea and k == 1 else []
+                if args.fovgaze:
+                    fov = ["--fovgaze-child", *(args.set_a, args.set_b)[k]]
                 out = subprocess.run(me + ["--child", data, "--config", args.config, "--only",
                                            args.only, "--repeats", str(args.repeats)] + fov,
                                      check=True, env=_env(args.trees[k]), capture_output=True,

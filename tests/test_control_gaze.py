@@ -96,3 +96,33 @@ def test_oracle_noise_has_the_requested_spread():
     assert oracle_covariance((0.0, 0.0, 0.0)) is None
     np.testing.assert_allclose(np.diag(oracle_covariance((0.01, 0.1, 1.0))),
                                np.repeat([1e-4, 1e-2, 1.0], 3))
+
+
+def test_gaze_on_a_trackers_pose_takes_the_midpoint_with_a_second_target():
+    """``gaze.midpoint_with`` (the kpf's foveal view of the forearm): the gaze target from a
+    tracker's pose is the mean of the two joints; without it the target's joint; another
+    tracker's pose or one not tracking is ignored; it needs ``gaze.tracker``."""
+    from types import SimpleNamespace
+
+    from humimic.control.config import GazeConfig
+    from humimic.control.stage import MimicStage
+    from humimic.messages import PoseEstimate
+    from humimic.stamped import Stamped
+
+    joints = {"r_elbow": np.array([0.1, 0.2, 0.3]), "r_wrist": np.array([0.5, -0.2, 0.1])}
+    est = PoseEstimate("kpf", "kpf", np.zeros(14), tuple(f"q{i}" for i in range(14)),
+                       joints=joints)
+    for mid, want in ((None, joints["r_elbow"]), ("right_wrist", [0.3, 0.0, 0.2])):
+        g = GazeConfig(enabled=True, target="right_elbow", tracker="kpf", midpoint_with=mid)
+        stage = SimpleNamespace(cfg=SimpleNamespace(gaze=g), gaze_latest=None)
+        MimicStage._on_pose(stage, "poses", Stamped(0.5, est, 0.6))
+        t, target, t_ready = stage.gaze_latest
+        assert (t, t_ready) == (0.5, 0.6) and np.allclose(target.p_base, want)
+        for other in (PoseEstimate("gest", "gest", est.state, est.state_names, joints=joints),
+                      PoseEstimate("kpf", "kpf", est.state, est.state_names, joints=joints,
+                                   status="lost")):
+            stage.gaze_latest = None
+            MimicStage._on_pose(stage, "poses", Stamped(0.7, other, 0.8))
+            assert stage.gaze_latest is None
+    with pytest.raises(ValueError, match="tracker"):
+        GazeConfig(midpoint_with="right_wrist")

@@ -12,7 +12,13 @@ from humimic.perception.blobs.config import DEFAULT_COLOR_MODEL
 from humimic.perception.cues.color_models import ColorLUT, load_color_model
 from humimic.perception.trackers.kpf.config import KpfConfig
 from humimic.perception.trackers.kpf.flips import arm_flips
-from humimic.perception.trackers.kpf.fovea import FovealLikelihood, parts_in_view, two_view_terms
+from humimic.perception.trackers.kpf.fovea import (
+    FovealLikelihood,
+    decision_view,
+    parts_in_view,
+    two_view_terms,
+    wrist_step,
+)
 from humimic.perception.trackers.kpf.frame_cues import FrameCues
 from humimic.perception.trackers.kpf.likelihood import Likelihood
 from humimic.perception.trackers.kpf.scores import ENDPOINTS
@@ -213,3 +219,87 @@ def test_the_stage_tracks_with_both_views_and_the_eye_follows_it():
         assert np.linalg.norm(uv[0] - [i.cx, i.cy]) < 40.0, uv
     finally:
         world.close()
+
+
+def test_decision_use_adds_the_fovea_only_while_deciding():
+    """``fovea.use: decision``: the evaluations see the wide view alone, except inside
+    ``deciding()`` (the flip-branch decision's), where they are ``use: all``'s two views;
+    ``decision_view`` of a one-view likelihood changes nothing."""
+    body, q0, (mw, T), (mf, Tf), fi = views()
+    rng = np.random.default_rng(2)
+    q = np.repeat(q0[None], 5, axis=0)
+    q[:, 6:10] += rng.normal(0.0, 0.15, (5, 4))
+    dec = FovealLikelihood(body, INTRINSICS, CFG, fi, ARM, use="decision")
+    dec.adapt({p: c[0] for p, c in dec.evaluate(q0[None], mw, T).colours.items()})
+    both = FovealLikelihood(body, INTRINSICS, CFG, fi, ARM)
+    wide = Likelihood(body, INTRINSICS, CFG)
+    for lik in (both, wide):
+        lik.share_references(dec.references)
+    dec.look(mf, Tf)
+    both.look(mf, Tf)
+    ll_w, ll_2 = wide.evaluate(q, mw, T).log_lik, both.evaluate(q, mw, T).log_lik
+    assert not np.allclose(ll_w, ll_2)
+    assert np.allclose(dec.evaluate(q, mw, T).log_lik, ll_w)
+    with decision_view(dec):
+        assert np.allclose(dec.evaluate(q, mw, T).log_lik, ll_2)
+    assert np.allclose(dec.evaluate(q, mw, T).log_lik, ll_w)
+    with decision_view(wide):
+        assert np.allclose(wide.evaluate(q, mw, T).log_lik, ll_w)
+    with pytest.raises(ValueError, match="use"):
+        FovealLikelihood(body, INTRINSICS, CFG, fi, ARM, use="mean_shift")
+
+
+def test_the_branch_decision_scores_with_the_fovea_under_decision_use():
+    """The flip-branch decision's ratios with ``use: decision`` are those of ``use: all``
+    (both score the two views; refine_arms is deterministic) and not the wide view's."""
+    from humimic.perception.trackers.kpf.tracker import KpfTracker
+
+    body, q0, (mw, T), (mf, Tf), fi = views()
+    cfg = CFG.model_copy(update={"n_particles": 20, "branch_threshold": 1e9,
+                                 "branch_refine_polls": 1})
+    r = {}
+    for use in ("all", "decision", None):
+        lik = None if use is None else FovealLikelihood(body, INTRINSICS, cfg, fi, ARM, use=use)
+        tr = KpfTracker(body, INTRINSICS, cfg, np.random.default_rng(0), 7.5, lik)
+        tr.start(q0, mw, T)
+        if use is not None:
+            lik.look(mf, Tf)
+        tr.branches.step(tr, q0, mw, T)
+        r[use] = tr.branches.history[-1][0][0]      # the right arm's ratios
+    assert np.isfinite(r["all"]).any(), r
+    assert np.allclose(r["decision"], r["all"], equal_nan=True), r
+    assert not np.allclose(r[None], r["all"], equal_nan=True), r
+
+
+def test_wrist_step_is_the_chord_of_an_elbow_turn():
+    """Bending only the right elbow by ``a`` moves the right wrist on a circle of the
+    forearm's length about the elbow: the chord ``2 L sin(a / 2)``; the left wrist stays."""
+    body, q0 = kpf_body(), static_pose()
+    q1 = q0.copy()
+    q1[9] += 0.3                                             # R_EB
+    pose = body.forward(q0[None])
+    L = float(np.linalg.norm(pose.joint("r_wrist")[0] - pose.joint("r_elbow")[0]))
+    assert wrist_step(body, q1, q0, ("r",)) == pytest.approx(2 * L * np.sin(0.15), rel=1e-9)
+    assert wrist_step(body, q1, q0, ("l",)) == pytest.approx(0.0, abs=1e-12)
+
+
+def test_moving_use_adds_the_fovea_while_the_estimated_arm_moves():
+    """``use: moving``: the wide view alone while the foveal arm's wrist moved less than
+    ``moving_m`` between the last two estimates (or there is no earlier one), both views once
+    it moved more; the decision's evaluations always see both."""
+    body, q0, (mw, T), (mf, Tf), fi = views()
+    q_moved = q0.copy()
+    q_moved[9] += 0.3                                        # the right wrist moves ~8 cm
+    mov = FovealLikelihood(body, INTRINSICS, CFG, fi, ARM, use="moving", moving_m=0.02)
+    mov.adapt({p: c[0] for p, c in mov.evaluate(q0[None], mw, T).colours.items()})
+    both = FovealLikelihood(body, INTRINSICS, CFG, fi, ARM)
+    wide = Likelihood(body, INTRINSICS, CFG)
+    for lik in (both, wide):
+        lik.share_references(mov.references)
+    both.look(mf, Tf)
+    ll_w, ll_2 = wide.evaluate(q0[None], mw, T).log_lik, both.evaluate(q0[None], mw, T).log_lik
+    for q_prev, want in ((None, ll_w), (q0, ll_w), (q_moved, ll_2)):
+        mov.look(mf, Tf, q0, None, q_prev)
+        assert np.allclose(mov.evaluate(q0[None], mw, T).log_lik, want)
+        with decision_view(mov):
+            assert np.allclose(mov.evaluate(q0[None], mw, T).log_lik, ll_2)

@@ -165,11 +165,26 @@ class GazeConfig(Section):
     ``target`` (``right_hand`` -> the pose's ``r_hand``), while it reports ``tracking``,
     instead of the estimates (e.g. GEST on the foveal pair, its hand kept in the narrow
     view); the eyes hold while it does not track."""
+    midpoint_with: str | None = None
+    """With ``tracker``: look at the midpoint of the pose's ``target`` and this target (e.g.
+    ``right_elbow`` with ``right_wrist``: the forearm's middle, the kpf's foveal view of the
+    forearm and hand, ``trackers.<kpf>.fovea``); None: at ``target``."""
 
     @field_validator("target")
     @classmethod
     def _check_target(cls, value: str) -> str:
         return check_human_target(value)
+
+    @field_validator("midpoint_with")
+    @classmethod
+    def _check_midpoint(cls, value: str | None) -> str | None:
+        return None if value is None else check_human_target(value)
+
+    @model_validator(mode="after")
+    def _midpoint_needs_tracker(self) -> GazeConfig:
+        if self.midpoint_with is not None and self.tracker is None:
+            raise ValueError("gaze.midpoint_with needs gaze.tracker (a tracker's pose)")
+        return self
 
 
 class MimicConfig(Section):

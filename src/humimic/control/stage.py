@@ -180,11 +180,12 @@ class MimicStage(Stage):
     def _on_pose(self, topic: str, msg) -> None:
         """The gaze target from a tracker's pose (``gaze.tracker``) while it tracks."""
         g, est = self.cfg.gaze, msg.value
-        joint = POSE_JOINT.get(g.target, g.target)
-        if est.tracker == g.tracker and est.status == "tracking" and joint in est.joints:
+        joints = [POSE_JOINT.get(n, n) for n in (g.target, g.midpoint_with) if n is not None]
+        if est.tracker == g.tracker and est.status == "tracking" and all(
+                j in est.joints for j in joints):
             z = np.zeros(3)
-            self.gaze_latest = (msg.t, TargetEstimate(g.target, est.joints[joint], z, z),
-                                msg.t_ready)
+            p = np.mean([est.joints[j] for j in joints], axis=0)   # ``midpoint_with``
+            self.gaze_latest = (msg.t, TargetEstimate(g.target, p, z, z), msg.t_ready)
 
     def _on_measurements(self, topic: str, msg) -> None:
         for target, meas in msg.value.targets.items():

@@ -39,6 +39,7 @@ import numpy as np
 from humimic import bodymodel as bm
 from humimic.perception.trackers.kpf.depth import SIDES
 from humimic.perception.trackers.kpf.flips import FLIPS, arm_flips
+from humimic.perception.trackers.kpf.fovea import decision_view
 from humimic.perception.trackers.kpf.likelihood import Likelihood
 from humimic.perception.trackers.kpf.refine import refine_arms
 
@@ -146,6 +147,12 @@ class FlipBranches:
         return q, float(f(q[None])[0])
 
     def step(self, tracker, mode: np.ndarray, maps, T_cam_base: np.ndarray) -> np.ndarray:
+        """:meth:`_step` with the tracker's foveal view on (``fovea.use: decision``:
+        :func:`~humimic.perception.trackers.kpf.fovea.decision_view`)."""
+        with decision_view(getattr(tracker, "lik", None)):
+            return self._step(tracker, mode, maps, T_cam_base)
+
+    def _step(self, tracker, mode: np.ndarray, maps, T_cam_base: np.ndarray) -> np.ndarray:
         """Update the sums with this frame's ratios at ``mode (14,)``; switch an arm whose sum
         passed the threshold (the tracker's particles and last estimate too); the estimate.
         With ``branch_refine_polls`` the ratios are between the refined estimate's arm and its

@@ -94,6 +94,22 @@ class KpfFovea(Section):
     """The limbs scored in it."""
     weight: float = Field(1.0, gt=0.0, le=10.0)
     """Its factors' exponent (1: the two views' likelihoods multiplied)."""
+    use: Literal["all", "decision", "moving"] = "all"
+    """Which evaluations see it: ``all`` (the mean shift, the reweighting, the refinements
+    and the flip-branch decision); ``decision``: only the flip-branch decision's
+    (``branch_threshold``; :func:`~humimic.perception.trackers.kpf.fovea.decision_view`), the
+    rest the wide view alone; ``moving``: all while the estimate's arm moves (``moving_mm``),
+    else only the decision's. Measured (``schmidt_table1_fovgaze``, seeds 0-9, side /
+    angular mm; 29 Nov, ``i14-fang``): all 51.2 / 64.9, decision 39.6 / 100.0 (the wide search
+    loses the arm in the lowering, then its flips are out of the decision's reach), moving
+    36.5 / 79.5 (a wide-only hold drifts and the decision switches it wrongly); Table 1's
+    wide-only kpf 40.3 / 198."""
+    moving_mm: float = Field(20.0, gt=0.0, le=1000.0)
+    """``use: moving``: the wrist step (mm) between the last two estimates above which the
+    arm counts as moving (10: side 43.3, angular 76.0 on seeds 0-9, one side run lost)."""
+    decision_weight: float | None = Field(None, gt=0.0, le=10.0)
+    """The exponent in the flip-branch decision's evaluations; None: ``weight``. (``weight``
+    0.5 with ``decision_weight`` 1: angular 148 and 144 on seeds 0-1, worse than either.)"""
     in_view_margin_px: float | None = Field(None, ge=0.0, le=100.0)
     """Score in it only the parts wholly inside its image, this far from the border, at the
     last estimate (:func:`~humimic.perception.trackers.kpf.fovea.parts_in_view`); None: all

@@ -27,9 +27,16 @@ with the flip-branch decision, (1000, 3), seeds 0-9): angular pointing 65 mm (Ta
 198), side 51 (40); with the hand's skin points off the narrow image read in the wide view
 (``skin_in_view: search``, :class:`FovealView`; seeds 0-9) side 38, angular 74; see
 docs/schmidt_kpf_notes.md, "Round of 29 Nov, i14-fovgaze" and "Round of 29 Nov (2), i14-fside".
+
+Which evaluations multiply in the foveal view (``fovea.use``; 29 Nov, ``i14-fang``): ``all``;
+``decision``, only the flip-branch decision's (:func:`decision_view`; the search, i.e. mean
+shift, reweighting and refinement, on the wide view alone); ``moving``, the search's too while
+the estimated arm moves (:func:`wrist_step` above ``moving_m`` between the last two estimates).
 """
 
 from __future__ import annotations
+
+from contextlib import contextmanager, nullcontext
 
 import numpy as np
 
@@ -111,6 +118,14 @@ class FovealView(Likelihood):
         planes[3][:, cols] = in_view_skin(planes[3][:, cols], share, self.cost_wide[:, cols])
 
 
+def wrist_step(body, q: np.ndarray, q_prev: np.ndarray, prefixes: tuple[str, ...]) -> float:
+    """The largest distance (m) an arm's wrist (``prefixes``: ``r``, ``l``) moved between the
+    poses ``q_prev`` and ``q (14,)``: whether the estimated arm moves (``use: moving``)."""
+    pose = body.forward(np.stack([np.asarray(q_prev, float), np.asarray(q, float)]))
+    return max((float(np.linalg.norm(np.diff(pose.joint(f"{p}_wrist"), axis=0)))
+                for p in prefixes), default=0.0)
+
+
 class FovealLikelihood(Likelihood):
     """:class:`Likelihood` of the wide view (the tracker's camera) times the foveal view's
     factors of the ``parts`` (:func:`two_view_terms`); the foveal frame is given before each
@@ -118,8 +133,11 @@ class FovealLikelihood(Likelihood):
     alone)."""
 
     def __init__(self, body, intrinsics, cfg, fovea_intrinsics, parts: tuple[str, ...],
-                 weight: float = 1.0, skin_in_view: str | None = None):
+                 weight: float = 1.0, use: str = "all", decision_weight: float | None = None,
+                 moving_m: float = 0.02, skin_in_view: str | None = None):
         super().__init__(body, intrinsics, cfg)
+        if use not in ("all", "decision", "moving"):
+            raise ValueError(f"fovea use {use!r}: 'all', 'decision' or 'moving'")
         unknown = sorted(set(parts) - set(self.parts))
         if unknown:
             raise ValueError(f"fovea parts {unknown} are not body parts; parts: {self.parts}")
@@ -129,17 +147,47 @@ class FovealLikelihood(Likelihood):
         fixed-sigma ones, ``floors``, of the branch decision and the refinement) or ``all``."""
         self.in_fovea = np.array([p in parts for p in self.parts])
         self.weight = float(weight)
+        self.decision_weight = self.weight if decision_weight is None else float(decision_weight)
+        """The foveal factors' exponent in the flip-branch decision's evaluations."""
         self.view: tuple | None = None
         """(maps, T_cam_base) of the foveal frame, or None."""
         self.scored = self.in_fovea
         """(parts,) the parts scored in the foveal frame (:meth:`look`)."""
+        self.use = use
+        """``all``: every evaluation sees both views; ``decision``: only those inside
+        :meth:`deciding` (the flip-branch decision's), the others the wide view alone."""
+        self._deciding = False
+        self.moving_m = float(moving_m)
+        self.moving = False
+        """``use: moving``: whether the last estimate's arm moved (:meth:`look`)."""
+        self.sides = tuple(sorted({p[0] for p in parts}))
+
+    @contextmanager
+    def deciding(self):
+        """The evaluations within see the foveal view also with ``use: decision``."""
+        before, self._deciding = self._deciding, True
+        try:
+            yield self
+        finally:
+            self._deciding = before
+
+    @property
+    def active(self) -> bool:
+        """Whether an evaluation now multiplies in the foveal view."""
+        return self.view is not None and (self.use == "all" or self._deciding
+                                          or (self.use == "moving" and self.moving))
 
     def look(self, maps, T_cam_base: np.ndarray | None, q_ref: np.ndarray | None = None,
-             margin: float | None = None) -> None:
+             margin: float | None = None, q_prev: np.ndarray | None = None) -> None:
         """The foveal frame's cue maps and camera pose for the next evaluations; with
         ``margin`` (px) only those of the parts wholly inside the image (:func:`parts_in_view`)
-        at the pose ``q_ref (14,)`` (the last estimate) are scored."""
+        at the pose ``q_ref (14,)`` (the last estimate) are scored. ``use: moving``: every
+        evaluation sees it if a foveal arm's wrist moved more than ``moving_m`` from ``q_prev``
+        (the estimate before) to ``q_ref``, else only the decision's."""
         self.view = None if maps is None else (maps, T_cam_base)
+        self.moving = self.use == "moving" and q_ref is not None and q_prev is not None and \
+            wrist_step(
+            self.body, q_ref, q_prev, self.sides) > self.moving_m
         self.scored = self.in_fovea
         if maps is not None and margin is not None and q_ref is not None:
             i = self.fovea.intr
@@ -151,15 +199,22 @@ class FovealLikelihood(Likelihood):
     def evaluate(self, q: np.ndarray, maps, T_cam_base: np.ndarray,
                  floors: bool = False) -> Evaluation:
         ev = super().evaluate(q, maps, T_cam_base, floors=floors)
-        if self.view is None:
+        if not self.active:
             return ev
         read_wide = self.skin_in_view == "all" or (self.skin_in_view == "search" and not floors)
         self.fovea.wide_skin(ev.cost["skin"] if read_wide else None)
         fov = self.fovea.evaluate(q, *self.view, floors=floors)
         self.fovea.wide_skin(None)
-        return Evaluation(ev.cost, two_view_terms(ev.terms, fov.terms, self.scored,
-                                                  self.weight), ev.colours)
+        w = self.decision_weight if self._deciding else self.weight
+        return Evaluation(ev.cost, two_view_terms(ev.terms, fov.terms, self.scored, w),
+                          ev.colours)
 
     def share_references(self, references: dict[str, np.ndarray]) -> None:
         super().share_references(references)
         self.fovea.share_references(references)
+
+
+def decision_view(lik):
+    """The context in which the flip-branch decision evaluates ``lik``: with the foveal view
+    for a :class:`FovealLikelihood` (``fovea.use: decision`` too), as it is otherwise."""
+    return lik.deciding() if isinstance(lik, FovealLikelihood) else nullcontext()

@@ -70,7 +70,7 @@ class KpfStage(Stage):
             q_ref = self.tracker.mode if self.tracker.mode is not None else \
                 bm.truth_state(self.world, self.world.gt.index_of(t), "base")
             self.tracker.lik.look(*(fov[1:] if fov is not None else (None, None)), q_ref,
-                                  self.cfg.fovea.in_view_margin_px)
+                                  self.cfg.fovea.in_view_margin_px, self.tracker.mode_prev)
         if self.tracker.mode is None:
             self.tracker.start(bm.truth_state(self.world, self.world.gt.index_of(t), "base"),
                                maps, T_cam_base)
@@ -107,7 +107,8 @@ class KpfStage(Stage):
             return None
         c = self.cfg.fovea
         return FovealLikelihood(self.body, frame.camera.intrinsics, self.cfg,
-                                fov[0].camera.intrinsics, tuple(c.parts), c.weight, c.skin_in_view)
+                                fov[0].camera.intrinsics, tuple(c.parts), c.weight, c.use,
+                                c.decision_weight, c.moving_mm / 1000.0, c.skin_in_view)
 
     def metrics(self) -> dict:
         return {"trackers": {self.name: {
