@@ -185,9 +185,8 @@ class FovealLikelihood(Likelihood):
         evaluation sees it if a foveal arm's wrist moved more than ``moving_m`` from ``q_prev``
         (the estimate before) to ``q_ref``, else only the decision's."""
         self.view = None if maps is None else (maps, T_cam_base)
-        self.moving = self.use == "moving" and q_ref is not None and q_prev is not None and \
-            wrist_step(
-            self.body, q_ref, q_prev, self.sides) > self.moving_m
+        self.moving = (self.use == "moving" and q_ref is not None and q_prev is not None
+                       and wrist_step(self.body, q_ref, q_prev, self.sides) > self.moving_m)
         self.scored = self.in_fovea
         if maps is not None and margin is not None and q_ref is not None:
             i = self.fovea.intr
