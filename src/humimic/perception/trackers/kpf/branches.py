@@ -184,8 +184,12 @@ class FlipBranches:
             flips = arm_flips(self.body, base[None], side, c_ref)
             for k, kind in enumerate(FLIPS):
                 q = flips[kind][0]
-                if not (far[k] and np.all(np.isfinite(q)) and tracker.limits.inside(q[None])[0]):
+                if not (far[k] and np.all(np.isfinite(q))):
                     continue
+                if not tracker.limits.inside(q[None])[0]:
+                    if not self.cfg.branch_clamp_flips:
+                        continue
+                    q = tracker.limits.clamp(q)   # ``branch_clamp_flips``
                 best[side, k], ll = self._refined(tracker, q, side, f, T_cam_base)
                 r[a, k] = ll - ll0
         self.separations.append(sep)
