@@ -29,9 +29,10 @@ unrefined flips lose by 0.1-0.5 nats (the estimate sits on its branch's peak, it
 Two gates on what is scored (29 Nov, ``i14-branch``; numbers in their ``KpfConfig`` fields):
 ``branch_min_separation_mm`` leaves out flips whose wrist lies near the estimate's
 (:func:`wrist_separation`, :func:`gate_near_flips`: a near flip costs little if wrong, and its
-evidence is the weakest), ``branch_max_step_mm`` a moving arm (the estimate lags the image). ``branch_clamp_flips`` (29 Nov,
-``i14-fdec``) scores a flip outside the joint limits clamped into them instead of leaving it out
-(the truth can lie next to such a flip while the estimate is 300 mm off).
+evidence is the weakest), ``branch_max_step_mm`` a moving arm (the estimate lags the image).
+``branch_clamp_flips`` (29 Nov, ``i14-fdec``) scores a flip outside the joint limits clamped
+into them instead of leaving it out (the truth can lie next to such a flip while the estimate
+is 300 mm off).
 """
 
 from __future__ import annotations
