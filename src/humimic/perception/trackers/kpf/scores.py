@@ -74,9 +74,9 @@ def wrap(a: np.ndarray) -> np.ndarray:
 
 def errors(rec: KpfRecord, world, body: bm.BodyModel) -> dict[str, np.ndarray]:
     """Per-frame errors: ``wrist``, ``elbow``, ``left_wrist``, ``left_elbow`` (m), ``lateral``
-    and ``depth`` wrist components (m, across and along the camera ray through the true wrist), ``flip_free`` (m, the wrist's
-    to the nearest of the estimate's kinematic flips), ``angles`` (T, 8) arm-angle errors
-    (rad)."""
+    and ``depth`` wrist components (m, across and along the camera ray through the true
+    wrist), ``flip_free`` (m, the wrist's to the nearest of the estimate's kinematic flips),
+    ``angles`` (T, 8) arm-angle errors (rad)."""
     q_true, j_true = truth(world, body, np.asarray(rec.t))
     ends = np.stack(rec.ends)
     wi, ei = ENDPOINTS.index("r_wrist"), ENDPOINTS.index("r_elbow")
