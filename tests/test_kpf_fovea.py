@@ -230,14 +230,8 @@ def test_decision_use_adds_the_fovea_only_while_deciding():
     q = np.repeat(q0[None], 5, axis=0)
     q[:, 6:10] += rng.normal(0.0, 0.15, (5, 4))
     dec = FovealLikelihood(body, INTRINSICS, CFG, fi, ARM, use="decision")
-    dec.adapt({p: c[0] for p, c in dec.evaluate(q0[None], mw, T).colours.items()})
-    both = FovealLikelihood(body, INTRINSICS, CFG, fi, ARM)
-    wide = Likelihood(body, INTRINSICS, CFG)
-    for lik in (both, wide):
-        lik.share_references(dec.references)
+    wide, ll_w, ll_2 = _wide_and_both(dec, q, q0, mw, T, mf, Tf, fi)
     dec.look(mf, Tf)
-    both.look(mf, Tf)
-    ll_w, ll_2 = wide.evaluate(q, mw, T).log_lik, both.evaluate(q, mw, T).log_lik
     assert not np.allclose(ll_w, ll_2)
     assert np.allclose(dec.evaluate(q, mw, T).log_lik, ll_w)
     with decision_view(dec):
@@ -247,6 +241,19 @@ def test_decision_use_adds_the_fovea_only_while_deciding():
         assert np.allclose(wide.evaluate(q, mw, T).log_lik, ll_w)
     with pytest.raises(ValueError, match="use"):
         FovealLikelihood(body, INTRINSICS, CFG, fi, ARM, use="mean_shift")
+
+
+def _wide_and_both(lik, q, q0, mw, T, mf, Tf, fi):
+    """``lik``'s colours adapted at ``q0``; a wide-only and a ``use: all`` likelihood with the
+    same references; their log-likelihoods at ``q``: ``(wide, ll_wide, ll_both)``."""
+    body = lik.body
+    lik.adapt({p: c[0] for p, c in lik.evaluate(q0[None], mw, T).colours.items()})
+    both = FovealLikelihood(body, INTRINSICS, CFG, fi, ARM)
+    wide = Likelihood(body, INTRINSICS, CFG)
+    for other in (both, wide):
+        other.share_references(lik.references)
+    both.look(mf, Tf)
+    return wide, wide.evaluate(q, mw, T).log_lik, both.evaluate(q, mw, T).log_lik
 
 
 def test_the_branch_decision_scores_with_the_fovea_under_decision_use():
@@ -291,13 +298,7 @@ def test_moving_use_adds_the_fovea_while_the_estimated_arm_moves():
     q_moved = q0.copy()
     q_moved[9] += 0.3                                        # the right wrist moves ~8 cm
     mov = FovealLikelihood(body, INTRINSICS, CFG, fi, ARM, use="moving", moving_m=0.02)
-    mov.adapt({p: c[0] for p, c in mov.evaluate(q0[None], mw, T).colours.items()})
-    both = FovealLikelihood(body, INTRINSICS, CFG, fi, ARM)
-    wide = Likelihood(body, INTRINSICS, CFG)
-    for lik in (both, wide):
-        lik.share_references(mov.references)
-    both.look(mf, Tf)
-    ll_w, ll_2 = wide.evaluate(q0[None], mw, T).log_lik, both.evaluate(q0[None], mw, T).log_lik
+    _, ll_w, ll_2 = _wide_and_both(mov, q0[None], q0, mw, T, mf, Tf, fi)
     for q_prev, want in ((None, ll_w), (q0, ll_w), (q_moved, ll_2)):
         mov.look(mf, Tf, q0, None, q_prev)
         assert np.allclose(mov.evaluate(q0[None], mw, T).log_lik, want)

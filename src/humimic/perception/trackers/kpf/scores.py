@@ -9,6 +9,9 @@ z axis would count an off-axis wrist's depth error as lateral: at the wide eye's
 third of it). ``wrist_flip_free_mm``: the error to the nearest of the estimate and its
 kinematic flips (:mod:`~humimic.perception.trackers.kpf.flips`, the arm poses with the same
 joint images), the part of the error the monocular depth ambiguity does not explain.
+The wrist and elbow scores are the RIGHT arm's (Table 1's pointing arm); ``left_wrist_error_mm``,
+``left_elbow_error_mm`` and ``left_arm_rmse_deg`` the other arm's (a straight hanging arm the
+tracker bends shows there, not in the right arm's scores).
 ``lost_fraction``: frames with the wrist more than :data:`LOST_M` off. ``truth_margin_nats`` /
 ``estimate_above_truth_fraction`` (:func:`truth_margin_scores`): how the tracker's own
 likelihood ranks the true pose against its estimate, telling a biased likelihood (the
@@ -70,18 +73,21 @@ def wrap(a: np.ndarray) -> np.ndarray:
 
 
 def errors(rec: KpfRecord, world, body: bm.BodyModel) -> dict[str, np.ndarray]:
-    """Per-frame errors: ``wrist``, ``elbow`` (m), ``lateral`` and ``depth`` wrist components
-    (m, across and along the camera ray through the true wrist), ``flip_free`` (m, the wrist's
-    to the nearest of the estimate's kinematic flips), ``angles`` (T, 8) arm-angle errors
-    (rad)."""
+    """Per-frame errors: ``wrist``, ``elbow``, ``left_wrist``, ``left_elbow`` (m), ``lateral``
+    and ``depth`` wrist components (m, across and along the camera ray through the true
+    wrist), ``flip_free`` (m, the wrist's to the nearest of the estimate's kinematic flips),
+    ``angles`` (T, 8) arm-angle errors (rad)."""
     q_true, j_true = truth(world, body, np.asarray(rec.t))
     ends = np.stack(rec.ends)
     wi, ei = ENDPOINTS.index("r_wrist"), ENDPOINTS.index("r_elbow")
+    lw, le = ENDPOINTS.index("l_wrist"), ENDPOINTS.index("l_elbow")
     d = ends[:, wi] - j_true[:, wi]                                       # base frame
     depth, lateral = ray_split(d, j_true[:, wi], np.stack(rec.T_cam_base))
     c_base = camera_centres(np.stack(rec.T_cam_base))
     return {"wrist": np.linalg.norm(d, axis=1),
             "elbow": np.linalg.norm(ends[:, ei] - j_true[:, ei], axis=1),
+            "left_wrist": np.linalg.norm(ends[:, lw] - j_true[:, lw], axis=1),
+            "left_elbow": np.linalg.norm(ends[:, le] - j_true[:, le], axis=1),
             "lateral": lateral, "depth": depth,
             "flip_free": flip_free_error(body, np.stack(rec.q), q_true, "R", c_base),
             "angles": wrap(np.stack(rec.q)[:, ARM] - q_true[:, ARM])}
@@ -122,6 +128,9 @@ def kpf_metrics(rec: KpfRecord, world, body: bm.BodyModel, camera: str) -> dict:
         "elbow_error_mm": mm * float(e["elbow"].mean()),
         "joint_rmse_deg": float(np.degrees(np.sqrt(np.mean(e["angles"] ** 2)))),
         "right_arm_rmse_deg": float(np.degrees(np.sqrt(np.mean(e["angles"][:, :4] ** 2)))),
+        "left_wrist_error_mm": mm * float(e["left_wrist"].mean()),
+        "left_elbow_error_mm": mm * float(e["left_elbow"].mean()),
+        "left_arm_rmse_deg": float(np.degrees(np.sqrt(np.mean(e["angles"][:, 4:] ** 2)))),
         "iterations_mean": float(np.mean(rec.iterations)),
         **truth_margin_scores(np.asarray(rec.truth_margin, float)),
     }
