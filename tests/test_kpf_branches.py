@@ -294,3 +294,36 @@ def test_clipped_ratios_delay_the_switch_to_the_frame_the_capped_sum_predicts():
         assert (not np.array_equal(mode, before)) == (t == t_cap), t
         assert np.nanmax(np.abs(br.history[-1][0])) <= cap
     np.testing.assert_allclose(mode, flips[FLIPS[top]][i], atol=1e-12)
+
+
+def test_a_flip_outside_the_limits_is_scored_clamped():
+    """``branch_clamp_flips``: a flip that leaves the joint limits gets no ratio without it;
+    with it, the ratio of the flip clamped into the limits (without refinement: the
+    log-posterior's difference at the clamped pose, computed here), and a switch to it leaves
+    the estimate within the limits."""
+    body = kpf_body()
+    T = _camera()
+    c = np.linalg.inv(T)[:3, 3]
+    qs = _arm_poses(200, 9)
+    fl = arm_flips(body, qs, "R", c)
+    out = np.column_stack([np.all(np.isfinite(fl[k]), axis=1)
+                           & ~body.free_limits.inside(np.nan_to_num(fl[k])) for k in FLIPS])
+    i, k = map(int, np.argwhere(out)[0])
+    q = qs[i]
+    tr = _Tracker(body, q, q[None].repeat(5, 0), c, 0.5)
+
+    def lp(x):
+        return float(tr._log_post(np.atleast_2d(x), None, T)[0])
+
+    off = FlipBranches(body, None, KpfConfig(branch_threshold=50.0))
+    off.step(tr, q.copy(), None, T)
+    assert np.isnan(off.history[-1][0][0, k])
+    on = FlipBranches(body, None, KpfConfig(branch_threshold=50.0, branch_clamp_flips=True))
+    on.step(tr, q.copy(), None, T)
+    clamped = np.clip(fl[FLIPS[k]][i], body.free_limits.lower, body.free_limits.upper)
+    np.testing.assert_allclose(on.history[-1][0][0, k], lp(clamped) - lp(q), atol=1e-12)
+    if on.history[-1][0][0, k] > 0:                      # it switches with a low threshold
+        low = FlipBranches(body, None, KpfConfig(branch_threshold=1e-6,
+                                                 branch_clamp_flips=True))
+        low.step(tr, q.copy(), None, T)
+        assert body.free_limits.inside(tr.mode[None])[0]

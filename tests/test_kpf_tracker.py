@@ -204,7 +204,7 @@ def test_every_needed_option_exists_and_is_accepted_once_switched_on():
              "hand_radius_px": 10.0, "hand_min_area_px": 8.0, "refine_step": 0.2,
              "refine_depth_m": 0.02, "refine_feedback": False, "branch_forget": 0.5,
              "branch_refine_polls": 2, "branch_skin_ring": 1.5, "branch_min_separation_mm": 200.0,
-             "branch_max_step_mm": 20.0, "branch_max_ratio": 0.5,
+             "branch_max_step_mm": 20.0, "branch_max_ratio": 0.5, "branch_clamp_flips": True,
              "observed_walk_floor": 0.5,
              "observed_walk_groups": "motion", "particle_velocity_innovation": True,
              "particle_velocity_decay": 0.5, "keep_range_groups": "motion",

@@ -30,6 +30,9 @@ Two gates on what is scored (29 Nov, ``i14-branch``; numbers in their ``KpfConfi
 ``branch_min_separation_mm`` leaves out flips whose wrist lies near the estimate's
 (:func:`wrist_separation`, :func:`gate_near_flips`: a near flip costs little if wrong, and its
 evidence is the weakest), ``branch_max_step_mm`` a moving arm (the estimate lags the image).
+``branch_clamp_flips`` (29 Nov, ``i14-fdec``) scores a flip outside the joint limits clamped
+into them instead of leaving it out (the truth can lie next to such a flip while the estimate
+is 300 mm off).
 """
 
 from __future__ import annotations
@@ -184,8 +187,12 @@ class FlipBranches:
             flips = arm_flips(self.body, base[None], side, c_ref)
             for k, kind in enumerate(FLIPS):
                 q = flips[kind][0]
-                if not (far[k] and np.all(np.isfinite(q)) and tracker.limits.inside(q[None])[0]):
+                if not (far[k] and np.all(np.isfinite(q))):
                     continue
+                if not tracker.limits.inside(q[None])[0]:
+                    if not self.cfg.branch_clamp_flips:
+                        continue
+                    q = tracker.limits.clamp(q)   # ``branch_clamp_flips``
                 best[side, k], ll = self._refined(tracker, q, side, f, T_cam_base)
                 r[a, k] = ll - ll0
         self.separations.append(sep)

@@ -56,7 +56,8 @@ NEEDS: dict[str, tuple[str, ...]] = {
     "refine_depth_m": ("refine_polls",), "refine_feedback": ("refine_polls",),
     **{k: ("branch_threshold",) for k in ("branch_forget", "branch_refine_polls",
                                           "branch_skin_ring", "branch_min_separation_mm",
-                                          "branch_max_step_mm", "branch_max_ratio")},
+                                          "branch_max_step_mm", "branch_max_ratio",
+                                          "branch_clamp_flips")},
     **{k: ("observed_walk_px",) for k in ("observed_walk_floor", "observed_walk_groups")},
     **{k: ("particle_velocity",) for k in ("particle_velocity_innovation",
                                            "particle_velocity_decay")},
@@ -306,6 +307,14 @@ class KpfConfig(KpfDynamics):
     2.2, angular 209 ± 9 (the holds are decided late or not at all); with it, seeds 0-4, the
     narrow eye angular 184 -> 116 ± 11 but side 66 -> 74 ± 26, another person side 54 -> 71 ±
     40; (150, 2) ~2x the CPU per frame. Off."""
+    branch_clamp_flips: bool = False
+    """A flip of the estimate outside the joint limits is clamped into them (and refined with
+    ``branch_refine_polls``) and scored instead of left out (29 Nov, ``i14-fdec``: at the end of
+    the angular lowering the truth lies 20-45 mm from the estimate's double flip, which leaves
+    the limits, so the decision had no ratio to sum while the estimate was 240-340 mm off).
+    Measured (``schmidt_table1_fovgaze``, (1000, 3), seeds 0-9): angular 74 -> 62 ± 13 mm (seeds
+    5, 8, 9 107 / 136 / 103 -> 64 / 64 / 84; 1 and 4 worse by 2 and 12), side 38.4 (every seed
+    unchanged); set there. False: such flips are not scored, as before."""
     colour_gradients: bool = False
     """Our extension: the edge and ridge cues on the strongest colour channel's derivatives
     at each pixel instead of grey levels' (clothes as bright as the background keep their
