@@ -3,6 +3,7 @@ stderr and exits with status 2 - never a traceback."""
 
 from __future__ import annotations
 
+import difflib
 import subprocess
 import sys
 import textwrap
@@ -50,6 +51,12 @@ def _run(tmp_path, text: str, *extra: str, capsys) -> tuple[int, str]:
      ["human.motion.file", "file not found", "no_such_clip.bvh"]),
     (GOOD + "slam: {noise: {sigma_accel: -1}}\n",  # a number-or-'sensor' union
      ["slam.noise.sigma_accel: out of range", "> 0.0"]),
+    (GOOD + "mimic: {gaze: {target: rigt_hand}}\n",  # a name checked by a validator
+     ["s.yaml:6", "mimic.gaze.target", "'rigt_hand'", "did you mean 'right_hand'"]),
+    (GOOD + "cameras: {which: wide, eyes: left}\ntrackers:\n  h: {kind: hand2d, camera: L_wid}\n",
+     ["s.yaml:8: trackers.h.camera", "not rendered", "did you mean 'L_wide'"]),  # a build check
+    (GOOD + "trackers: {kpf: {kind: kpf}}\nmimic: {gaze: {enabled: true, tracker: kfp}}\n",
+     ["s.yaml:7: mimic.gaze.tracker", "no such tracker", "did you mean 'kpf'"]),
     ("name: t\nhuman: [1, 2]\n", ["human"]),
     ("name: [unclosed\n", ["not valid YAML"]),
 ])
@@ -64,6 +71,23 @@ def test_bad_scenario_exits_2_with_one_line(tmp_path, capsys, text, must_contain
 def test_bad_override_names_the_key(tmp_path, capsys):
     code, err = _run(tmp_path, GOOD, "--set", "human.distanse=2", capsys=capsys)
     assert code == 2 and "human.distanse" in err and "did you mean 'distance'" in err
+
+
+def test_a_build_check_names_the_option_that_set_the_key(tmp_path, capsys):
+    code, err = _run(tmp_path, GOOD + "cameras: {which: wide, eyes: left}\n", "--set",
+                     "trackers={h: {kind: hand2d, camera: R_wide}}", capsys=capsys)
+    assert code == 2 and "s.yaml (--set): trackers.h.camera" in err, err
+
+
+def test_unknown_name_suggests_what_difflib_finds_closest():
+    from humimic.errors import unknown_name
+    from humimic.world.names import HUMAN_TARGETS
+
+    for typo in ("rigt_hand", "LEFT_ELBOW", "pelvs", "zzz"):
+        message = str(unknown_name("human target", typo, HUMAN_TARGETS))
+        close = difflib.get_close_matches(typo.lower(), HUMAN_TARGETS, n=1, cutoff=0.5)
+        assert message.startswith(f"unknown human target {typo!r}; allowed: head, ")
+        assert message.endswith(f"; did you mean '{close[0]}'?" if close else "headcam")
 
 
 def test_missing_scenario_file(tmp_path, capsys):

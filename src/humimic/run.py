@@ -29,6 +29,8 @@ from humimic.pipeline.simulation import simulate
 from humimic.report import write_report
 from humimic.rngs import Rngs
 from humimic.scenario import Scenario, dump_scenario, load_scenario
+from humimic.scenario.errors import ScenarioError
+from humimic.scenario.load import placed
 from humimic.viz.blueprint import run_layout
 from humimic.viz.plots import MAX_POINTS, plot_trajectories
 from humimic.viz.rerun_columns import SERIES_CHUNK
@@ -222,6 +224,7 @@ def _parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
+    scenario = None
     try:
         scenario = load_scenario(args.scenario, args.overrides, seed=args.seed,
                                  duration=args.duration)
@@ -231,6 +234,11 @@ def main(argv: list[str] | None = None) -> int:
             dry_run(scenario)
             return 0
         metrics = run_one(scenario, args.out, args.rerun, progress=not args.quiet)
+    except ScenarioError as err:  # the world's and stages' checks name the scenario: the file
+        if scenario is not None:
+            err = placed(err, scenario.name, args.scenario, args.overrides, seed=args.seed,
+                         duration=args.duration)
+        return report_error(err)
     except InputError as err:
         return report_error(err)
     if not args.quiet:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from humimic.control.oracle import OracleStage
 from humimic.control.stage import MimicStage
+from humimic.errors import closest
 from humimic.pipeline.stage import Stage
 from humimic.scenario.errors import ScenarioError
 
@@ -26,12 +27,14 @@ def check_mimic(scenario) -> None:
                                 "joints", "relative, or add a tbp tracker")
         if cfg.tracker is not None and cfg.tracker not in getattr(scenario, "trackers", {}):
             raise ScenarioError(where, "mimic.tracker", "no such tracker in trackers:",
-                                cfg.tracker, ", ".join(angles) or None)
+                                cfg.tracker, ", ".join(angles) or None,
+                                closest(cfg.tracker, angles))
         return
     trackers = getattr(scenario, "trackers", None) or {}
     if cfg.gaze.enabled and cfg.gaze.tracker is not None and cfg.gaze.tracker not in trackers:
         raise ScenarioError(where, "mimic.gaze.tracker", "no such tracker in trackers:",
-                            cfg.gaze.tracker, ", ".join(trackers) or None)
+                            cfg.gaze.tracker, ", ".join(trackers) or None,
+                            closest(cfg.gaze.tracker, trackers))
     if cfg.perception == "tracked" and getattr(scenario, "filter", None) is None:
         raise ScenarioError(where, "mimic.perception",
                             "tracked perception needs the scenario's perception and filter "

@@ -19,10 +19,11 @@ Units: m, s, rad, Hz. Robot sites and human targets are the names in
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import Annotated, Literal
 
-from pydantic import Field, field_validator, model_validator
+from pydantic import AfterValidator, Field, field_validator, model_validator
 
+from humimic.errors import unknown_name
 from humimic.scenario.base import Section
 from humimic.world.names import HUMAN_TARGETS
 
@@ -49,9 +50,12 @@ DEFAULT_MAPS: dict[str, dict[str, str]] = {
 
 def check_human_target(name: str) -> str:
     if name not in HUMAN_TARGETS:
-        raise ValueError(f"unknown human target {name!r}; valid targets: "
-                         f"{', '.join(HUMAN_TARGETS)}")
+        raise unknown_name("human target", name, HUMAN_TARGETS)
     return name
+
+
+#: A human target's name, checked (an unknown one fails with the valid names).
+HumanTarget = Annotated[str, AfterValidator(check_human_target)]
 
 
 def check_robot_site(name: str) -> str:
@@ -59,8 +63,7 @@ def check_robot_site(name: str) -> str:
         raise ValueError(f"robot site {name!r} cannot be driven: it {UNDRIVABLE_SITES[name]}; "
                          f"drivable sites: {', '.join(DRIVABLE_SITES)}")
     if name not in DRIVABLE_SITES:
-        raise ValueError(f"unknown robot site {name!r}; drivable sites: "
-                         f"{', '.join(DRIVABLE_SITES)}")
+        raise unknown_name("robot site", name, DRIVABLE_SITES)
     return name
 
 
@@ -165,7 +168,7 @@ class GazeConfig(Section):
     ``target`` (``right_hand`` -> the pose's ``r_hand``), while it reports ``tracking``,
     instead of the estimates (e.g. GEST on the foveal pair, its hand kept in the narrow
     view); the eyes hold while it does not track."""
-    midpoint_with: str | None = None
+    midpoint_with: HumanTarget | None = None
     """With ``tracker``: look at the midpoint of the pose's ``target`` and this target (e.g.
     ``right_elbow`` with ``right_wrist``: the forearm's middle, the kpf's foveal view of the
     forearm and hand, ``trackers.<kpf>.fovea``); None: at ``target``."""
@@ -174,11 +177,6 @@ class GazeConfig(Section):
     @classmethod
     def _check_target(cls, value: str) -> str:
         return check_human_target(value)
-
-    @field_validator("midpoint_with")
-    @classmethod
-    def _check_midpoint(cls, value: str | None) -> str | None:
-        return None if value is None else check_human_target(value)
 
     @model_validator(mode="after")
     def _midpoint_needs_tracker(self) -> GazeConfig:
@@ -208,7 +206,7 @@ class MimicConfig(Section):
     over the person's (shoulder to palm; shoulder to elbow for an elbow site). ``fit`` may
     shrink it; ``mimicry.<site>.scale`` reports the one in use at the end."""
     fit: FitConfig = Field(default_factory=FitConfig)
-    relative_to: str | None = None
+    relative_to: HumanTarget | None = None
     """Human target whose motion is subtracted first (e.g. ``pelvis``): the mapped motion is
     then the part's motion relative to the body, not the whole body's travel."""
     start: float = Field(0.0, ge=0.0)
@@ -255,11 +253,6 @@ class MimicConfig(Section):
         if not 0.0 < value <= 5.0:
             raise ValueError(f"out of range; {allowed}")
         return float(value)
-
-    @field_validator("relative_to")
-    @classmethod
-    def _check_relative_to(cls, value: str | None) -> str | None:
-        return None if value is None else check_human_target(value)
 
     @model_validator(mode="after")
     def _fill_map(self) -> MimicConfig:

@@ -15,6 +15,7 @@ from typing import Annotated, Literal
 
 from pydantic import Field, field_validator, model_validator
 
+from humimic.errors import unknown_name
 from humimic.motion.avatar import JOINT_TYPES, SEGMENTS
 from humimic.motion.body_ik import HEAD_DRIVEN_JOINTS
 from humimic.scenario.base import Section, Vec3
@@ -155,7 +156,7 @@ class Keyframe(Section):
     def _joint_values(cls, joints: dict[str, float | Vec3]) -> dict[str, float | Vec3]:
         for name, value in joints.items():
             if name not in JOINT_TYPES:
-                raise ValueError(f"unknown joint {name!r}; joints are {', '.join(JOINT_TYPES)}")
+                raise unknown_name("joint", name, JOINT_TYPES)
             if JOINT_TYPES[name] == "ball" and not isinstance(value, tuple):
                 raise ValueError(f"{name} is a ball joint: give a rotation vector [rx, ry, rz]")
             if JOINT_TYPES[name] != "ball" and isinstance(value, tuple):
@@ -230,8 +231,7 @@ class BVHMotion(Section):
     def _segments(cls, joint_map: dict[str, str] | None) -> dict[str, str] | None:
         for seg in joint_map or {}:
             if seg not in SEGMENTS:
-                raise ValueError(f"unknown avatar segment {seg!r}; segments are "
-                                 f"{', '.join(SEGMENTS)}")
+                raise unknown_name("avatar segment", seg, SEGMENTS)
         return joint_map
 
 

@@ -9,7 +9,6 @@ when a close match exists, a did-you-mean. Example::
 
 from __future__ import annotations
 
-import difflib
 import re
 import types
 import typing
@@ -19,7 +18,7 @@ from typing import Any
 import yaml
 from pydantic import BaseModel, ValidationError
 
-from humimic.errors import InputError
+from humimic.errors import InputError, closest
 
 
 class ScenarioError(InputError):
@@ -39,6 +38,17 @@ class ScenarioError(InputError):
         if suggestion:
             parts.append(f"did you mean '{suggestion}'?")
         super().__init__("; ".join(parts))
+
+
+    @classmethod
+    def placed(cls, err: ScenarioError, file: str | Path, text: str,
+               overridden: dict[str, str]) -> ScenarioError:
+        """``err`` re-said for ``file`` (whose YAML is ``text``): at its key's line, or
+        naming the command-line option that set the key (``overridden``: key -> option)."""
+        option = command_line_source(err.key, overridden)
+        source = f"{file} ({option})" if option else file
+        line = None if option else yaml_line(text, err.key.split("."))
+        return cls(source, err.key, err.problem, err.value, err.allowed, err.suggestion, line)
 
 
 def _short(value: Any, limit: int = 60) -> str:
@@ -189,23 +199,17 @@ def from_validation_error(err: ValidationError, root: type[BaseModel], file: str
     if option:
         source, line = f"{file} ({option})", None
 
-    def suggest(word: str, options: list[str]) -> str | None:
-        """The closest of ``options`` to ``word``, ignoring case (``d_arm`` -> ``D_arm_deg``)."""
-        by_lower = {str(o).lower(): str(o) for o in options}
-        close = difflib.get_close_matches(str(word).lower(), list(by_lower), n=1, cutoff=0.5)
-        return by_lower[close[0]] if close else None
-
     if kind == "extra_forbidden":
         model = model_at(root, loc)
         options = sorted(model.model_fields) if model else []
         hint = RENAMED.get(str(loc[-1]))
         return ScenarioError(source, key, "unknown key", value, ", ".join(options) or None,
-                             hint if hint in options else suggest(loc[-1], options), line)
+                             hint if hint in options else closest(loc[-1], options), line)
     if kind == "literal_error":
         expected = ctx.get("expected", "")
         options = [o.strip().strip("'") for o in str(expected).replace(" or ", ",").split(",")]
         return ScenarioError(source, key, "not an allowed value", value, expected,
-                             suggest(value, options) if isinstance(value, str) else None, line)
+                             closest(value, options) if isinstance(value, str) else None, line)
     if kind in ("union_tag_invalid", "union_tag_not_found"):
         expected = ctx.get("expected_tags", "")
         options = [o.strip().strip("'") for o in str(expected).split(",")]
@@ -213,13 +217,14 @@ def from_validation_error(err: ValidationError, root: type[BaseModel], file: str
         key = f"{key}.kind" if key else "kind"
         problem = "unknown kind" if kind == "union_tag_invalid" else "missing 'kind'"
         return ScenarioError(source, key, problem, tag, expected,
-                             suggest(tag, options) if tag else None, line)
+                             closest(tag, options) if tag else None, line)
     if kind == "missing":
         return ScenarioError(source, key, "required key is missing", None, None, None, line)
     if kind in _BOUNDS:
         return ScenarioError(source, key, "out of range", value, _BOUNDS[kind].format(**ctx),
                              None, line)
     message = e["msg"].removeprefix("Value error, ")
-    if kind == "value_error" and isinstance(value, dict):  # a section's own check (a model
-        value = None                                         # validator) names its values
+    if kind == "value_error" and (isinstance(value, dict)  # a section's own check (a model
+                                  or repr(value) in message):  # validator) names its values
+        value = None
     return ScenarioError(source, key, message, value, None, None, line)

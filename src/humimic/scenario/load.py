@@ -98,22 +98,38 @@ def validate_scenario(data: dict, path: str | Path = "<scenario>", text: str = "
                       overrides: list[str] | None = None, **replace: Any) -> Scenario:
     """Validate a scenario given as a dict (see :func:`load_scenario`)."""
     path = Path(path)
-    overridden: dict[str, str] = {}
-    """Keys set on the command line -> the option that set them (for error messages)."""
     for item in overrides or []:
-        key, value = parse_override(item)
-        apply_override(data, key, value)
-        overridden[key] = "--set"
+        apply_override(data, *parse_override(item))
     for key, value in replace.items():
         if value is not None:
             data[key] = value
-            overridden[key] = f"--{key}"
+    overridden = command_line_keys(overrides, **replace)
     try:
         scenario = Scenario.model_validate(data)
     except ValidationError as err:
         raise from_validation_error(err, Scenario, path, text, overridden) from None
     resolve_paths(scenario, path.parent, path)
     return scenario
+
+
+def command_line_keys(overrides: list[str] | None = None, **replace: Any) -> dict[str, str]:
+    """Keys set on the command line -> the option that set them (``--set``, ``--seed``...)."""
+    keys = {parse_override(item)[0]: "--set" for item in overrides or []}
+    keys.update({key: f"--{key}" for key, value in replace.items() if value is not None})
+    return keys
+
+
+def placed(err: ScenarioError, name: str, path: str | Path, overrides: list[str] | None = None,
+           **replace: Any) -> ScenarioError:
+    """A check after loading names the scenario (``scenario 'wave'``); the same error placed
+    in the file ``path`` it was loaded from: at its key's line, or the option that set it."""
+    if err.file != f"scenario {name!r}":
+        return err
+    try:
+        text = Path(path).read_text(encoding="utf-8")
+    except (OSError, UnicodeError):
+        text = ""
+    return ScenarioError.placed(err, path, text, command_line_keys(overrides, **replace))
 
 
 def resolve_paths(model: BaseModel, base_dir: Path, file: Path, prefix: str = "") -> None:

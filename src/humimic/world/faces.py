@@ -15,13 +15,13 @@ on the crop, so the face covers the head's front from brow to chin whatever the 
 
 from __future__ import annotations
 
-import difflib
 from dataclasses import dataclass
 from functools import lru_cache
 
 import cv2
 import numpy as np
 
+from humimic.errors import unknown_name
 from humimic.paths import DATA_DIR
 
 FACES_DIR = DATA_DIR / "faces"
@@ -79,9 +79,7 @@ def resolve_identity(key: str | int) -> Identity:
     for ident in IDENTITIES:
         if ident.name == key:
             return ident
-    close = difflib.get_close_matches(str(key), IDENTITY_NAMES, n=1)
-    hint = f"; did you mean '{close[0]}'?" if close else ""
-    raise ValueError(f"unknown identity {key!r}; allowed: {', '.join(IDENTITY_NAMES)}{hint}")
+    raise unknown_name("identity", key, IDENTITY_NAMES)
 
 
 @lru_cache(maxsize=64)

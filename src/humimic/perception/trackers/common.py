@@ -22,6 +22,7 @@ from pathlib import Path
 import numpy as np
 import rerun as rr
 
+from humimic.errors import closest
 from humimic.messages import TRACK_STATES, Tracks2D
 from humimic.metrics.tracks2d import ImageTruth, project_truth, scores
 from humimic.perception.blobs.config import DEFAULT_COLOR_MODEL
@@ -93,7 +94,8 @@ def check_camera(scenario, world, name: str, camera: str | None) -> str:
     if camera not in world.eye_cameras:
         raise ScenarioError(f"scenario {scenario.name!r}", f"trackers.{name}.camera",
                             f"camera {camera!r} is not rendered by this scenario", camera,
-                            f"{', '.join(world.eye_cameras) or 'none'} (set cameras.which)")
+                            f"{', '.join(world.eye_cameras) or 'none'} (set cameras.which)",
+                            closest(camera, world.eye_cameras))
     return camera
 
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from humimic.errors import closest
 from humimic.perception.trackers.common import check_camera, skin_model_lut
 from humimic.perception.trackers.kpf.stage import KpfStage
 from humimic.scenario.errors import ScenarioError
@@ -14,7 +15,8 @@ def kpf_stage(name: str, cfg, scenario, world, rngs, rlog) -> list:
         if cfg.fovea.camera not in world.eye_cameras:
             raise ScenarioError(f"scenario {scenario.name!r}", f"trackers.{name}.fovea.camera",
                                 "camera is not rendered by this scenario", cfg.fovea.camera,
-                                f"{', '.join(world.eye_cameras)} (set cameras.which: both)")
+                                f"{', '.join(world.eye_cameras)} (set cameras.which: both)",
+                                closest(cfg.fovea.camera, world.eye_cameras))
         cams.append(cfg.fovea.camera)
     lut = skin_model_lut(scenario, world, cams, f"trackers.{name}")
     return [KpfStage(name, cfg, camera, world, lut, rngs[f"trackers.{name}"], rlog,
