@@ -16,7 +16,7 @@ from collections.abc import Callable
 import numpy as np
 
 from humimic.estimation.particles.resampling import resample_indices
-from humimic.estimation.particles.weights import weights
+from humimic.estimation.particles.weights import weights_columns
 from humimic.maths.jit import njit
 
 
@@ -341,7 +341,7 @@ def kpf_modes(particles: np.ndarray, log_lik_fn: Callable[[np.ndarray], np.ndarr
         return np.asarray(log_lik_fn(x), float).reshape(len(x), len(groups))
 
     lik = lik_of(particles)
-    W = np.stack([weights(lik[:, g]) for g in range(len(groups))], axis=1)
+    W = weights_columns(lik)
     prior = particles if prior is None else prior
     done = 0
     for i in range(iterations):
@@ -351,8 +351,7 @@ def kpf_modes(particles: np.ndarray, log_lik_fn: Callable[[np.ndarray], np.ndarr
         lik = lik_of(shifted)
         lw = (kernel_log_weights_groups(lik, shifted, prior, h, groups, stride, dtype)
               if reweight else lik)
-        for k in range(len(groups)):
-            W[:, k] = weights(lw[:, k])
+        W = weights_columns(lw)
         particles, done = shifted, i + 1
         moved = [np.linalg.norm((particles[int(np.argmax(W[:, k])), g] - best[k, g]) / h0[g])
                  for k, g in enumerate(groups)]
