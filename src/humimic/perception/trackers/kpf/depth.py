@@ -19,6 +19,7 @@ import numpy as np
 from humimic import bodymodel as bm
 from humimic.bodymodel.kinematics import elbow_rotation
 from humimic.maths.rotations import rotation_between
+from humimic.perception.trackers.kpf.depth_kernel import kept_range_rows
 
 #: Arm side -> (segment prefix, offset of its four DOFs in the state).
 SIDES = {"R": ("r", 6), "L": ("l", 10)}
@@ -116,8 +117,10 @@ def kept_ranges(body: bm.BodyModel, q: np.ndarray, q_ref: np.ndarray, rows: np.n
     """A copy of states ``q (N, 14)`` where, per arm, each of ``rows`` (bool ``(N,)``) is
     drawn with probability ``share`` (times ``gates[side]``, ``(N,)`` or ``(1,)``, if given:
     :mod:`~humimic.perception.trackers.kpf.depth_gate`) and its wrist put back at ``q_ref``'s
-    camera distance (:func:`keep_wrist_range`). (One forward kinematics of ``q`` and of
-    ``q_ref`` serves both arms: an arm's joints depend on the torso and its own DOFs only.)"""
+    camera distance (:func:`keep_wrist_range`, compiled:
+    :func:`~humimic.perception.trackers.kpf.depth_kernel.keep_range_rows`; one forward
+    kinematics of ``q`` and of ``q_ref`` serves both arms, whose joints depend on the torso and
+    their own DOFs only)."""
     q = np.array(q, float)
     picks = {}
     for side in SIDES:
@@ -126,16 +129,9 @@ def kept_ranges(body: bm.BodyModel, q: np.ndarray, q_ref: np.ndarray, rows: np.n
     if not any(len(pick) for pick in picks.values()):
         return q
     pose, pose_ref = body.forward(q), body.forward(np.asarray(q_ref, float))
+    c = np.linalg.inv(np.asarray(T_cam_ref, float))[:3, 3]
+    out = q.copy()
     for side, pick in picks.items():
         if len(pick):
-            q[pick] = keep_wrist_range(body, q[pick], q_ref[pick], side, T_cam_ref, clip,
-                                       (_rows(pose, pick), _rows(pose_ref, pick)))
-    return q
-
-
-def _rows(pose: bm.Pose, rows: np.ndarray) -> bm.Pose:
-    """The poses of ``rows`` (all of them as they are)."""
-    if len(rows) == len(pose.q) and np.array_equal(rows, np.arange(len(rows))):
-        return pose
-    return bm.Pose(pose.q[rows], pose.R[rows], pose.p[rows])
-
+            kept_range_rows(body, q, pose, pose_ref, pick, side, c, clip, out)
+    return out
