@@ -15,7 +15,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from humimic.estimation.particles.resampling import resample_indices
+from humimic.estimation.particles.resampling import indices_from_weights
 from humimic.estimation.particles.weights import weights_columns
 from humimic.maths.jit import njit
 
@@ -370,9 +370,12 @@ def partitioned_resample(particles: np.ndarray, W: np.ndarray, groups: list[np.n
 
 def partitioned_resample_indices(W: np.ndarray, groups: list[np.ndarray],
                                  rng: np.random.Generator) -> np.ndarray:
-    """``(N, G)`` :func:`partitioned_resample`'s ancestor index per particle and group."""
-    return np.stack([resample_indices(np.log(np.maximum(W[:, k], 1e-300)), rng)
-                     for k in range(len(groups))], axis=1)
+    """``(N, G)`` :func:`partitioned_resample`'s ancestor index per particle and group
+    (systematic, one uniform per group in the groups' order; the weights normalised in one
+    pass, :func:`~humimic.estimation.particles.weights.weights_columns`, as
+    :func:`~humimic.estimation.particles.resampling.resample_indices` would per group)."""
+    w = weights_columns(np.log(np.maximum(W[:, :len(groups)], 1e-300)))
+    return np.stack([indices_from_weights(w[:, k], rng) for k in range(len(groups))], axis=1)
 
 
 def partitioned_take(x: np.ndarray, idx: np.ndarray, groups: list[np.ndarray]) -> np.ndarray:
