@@ -35,11 +35,14 @@ def sq_distances(x: np.ndarray, s: np.ndarray, h: np.ndarray, dtype=np.float64,
 
 def _sq_scaled(a: np.ndarray, b: np.ndarray, dtype, clip: bool = True) -> np.ndarray:
     """``(..., M, N)`` ``||a_m - b_n||^2`` of centred, scaled points ``a (..., M, d)``,
-    ``b (..., N, d)`` (:func:`sq_distances`; leading axes batched)."""
+    ``b (..., N, d)`` (:func:`sq_distances`; leading axes batched; ``b is a``: their squared
+    norms computed once)."""
     d = a.shape[-1]
     A, B = np.empty(a.shape[:-1] + (d + 2,), dtype), np.empty(b.shape[:-1] + (d + 2,), dtype)
-    A[..., :d], A[..., d], A[..., d + 1] = a, 1.0, np.einsum("...j,...j->...", a, a)
-    B[..., :d], B[..., d], B[..., d + 1] = -2.0 * b, np.einsum("...j,...j->...", b, b), 1.0
+    a2 = np.einsum("...j,...j->...", a, a)
+    A[..., :d], A[..., d], A[..., d + 1] = a, 1.0, a2
+    B[..., :d], B[..., d] = -2.0 * b, a2 if b is a else np.einsum("...j,...j->...", b, b)
+    B[..., d + 1] = 1.0
     d2 = A @ np.swapaxes(B, -1, -2)
     return clip_negative(d2) if clip else d2
 
@@ -353,8 +356,8 @@ def kpf_modes(particles: np.ndarray, log_lik_fn: Callable[[np.ndarray], np.ndarr
               if reweight else lik)
         W = weights_columns(lw)
         particles, done = shifted, i + 1
-        moved = [np.linalg.norm((particles[int(np.argmax(W[:, k])), g] - best[k, g]) / h0[g])
-                 for k, g in enumerate(groups)]
+        step = (particles[np.argmax(W, axis=0), :] - best) / h0    # (G, d): each group's best
+        moved = [math.sqrt(np.dot(v, v)) for v in (step[k, g] for k, g in enumerate(groups))]
         if max(moved) < tol:
             break
     return particles, W, lik, done
