@@ -93,19 +93,18 @@ def reachable_range_change(body: bm.BodyModel, q: np.ndarray, side: str, delta: 
 
 
 def keep_wrist_range(body: bm.BodyModel, q: np.ndarray, q_ref: np.ndarray, side: str,
-                     T_cam_ref: np.ndarray, clip: bool = False, poses: tuple | None = None
-                     ) -> np.ndarray:
+                     T_cam_ref: np.ndarray, clip: bool = False) -> np.ndarray:
     """States ``(N, 14)``: arm ``side`` of ``q (N, 14)`` re-solved (:func:`wrist_depth_move`)
     so its wrist lies at the camera distance of ``q_ref``'s ``(N, 14)``, on its own camera
     ray (the wrist's image kept): a move across the ray at a given depth. Rows the move cannot
     reach (out of the arm's reach or the joint limits) are left unchanged; ``clip``: out of
     reach, moved to the reachable distance nearest to it
-    (:func:`reachable_range_change`, the outer reach only) instead. ``poses``: the forward
-    kinematics of ``q`` and ``q_ref``, if known."""
+    (:func:`reachable_range_change`, the outer reach only) instead. (The numpy reference of
+    :func:`kept_ranges`' compiled loop.)"""
     T_ref_cam = np.linalg.inv(np.asarray(T_cam_ref, float))
     c = T_ref_cam[:3, 3]
-    pose, pose_ref = (None, None) if poses is None else poses
-    delta = wrist_ranges(body, q_ref, side, c, pose_ref) - wrist_ranges(body, q, side, c, pose)
+    pose = body.forward(np.atleast_2d(np.asarray(q, float)))
+    delta = wrist_ranges(body, q_ref, side, c) - wrist_ranges(body, q, side, c, pose)
     if clip:
         delta = reachable_range_change(body, q, side, delta, c, pose=pose)
     return wrist_depth_move(body, q, side, delta, T_cam_ref, pose, T_ref_cam)
