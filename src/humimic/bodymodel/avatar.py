@@ -26,6 +26,7 @@ Torso pose: the chest body's frame (origin at the spine joint) in the reference 
 from __future__ import annotations
 
 import warnings
+from functools import cache
 
 import numpy as np
 from scipy.spatial.transform import Rotation
@@ -64,17 +65,38 @@ def ypr_from_matrix(R: np.ndarray) -> np.ndarray:
             R.shape[:-2] + (3,))
 
 
+#: :func:`rotations_from_matrices` skips scipy's validation of rotation matrices whose Gram
+#: matrix is the identity to within this (scipy's test: 1e-12 off the diagonal).
+ORTHONORMAL_TOL = 1e-13
+
+
+def rotations_from_matrices(R: np.ndarray) -> Rotation:
+    """``Rotation.from_matrix`` of matrices ``(N, 3, 3)``; rotations that are proper and
+    orthonormal to :data:`ORTHONORMAL_TOL` (products of rotations: to rounding) go without
+    scipy's validation (its determinant and Gram matrix cost ~7x the conversion), which
+    passes them unchanged; anything else (NaN, a reflection, a skewed matrix) gets it."""
+    g = np.einsum("nij,nkj->nik", R, R) - np.eye(3)
+    det = np.einsum("ni,ni->n", R[:, 0], np.cross(R[:, 1], R[:, 2]))
+    valid = bool(np.all(np.abs(g) <= ORTHONORMAL_TOL) and np.all(det > 0.0))
+    return Rotation.from_matrix(R, assume_valid=valid)
+
+
+@cache
+def _arm_limits(side: str) -> JointLimits:
+    """The default limits of arm ``side``'s shoulder DOFs (built once)."""
+    return JointLimits.default().subset(ARM_DOFS[side][:3])
+
+
 def shoulder_angles(R_torso_upper: np.ndarray, side: str,
                     limits: JointLimits | None = None) -> np.ndarray:
     """``(..., 3)`` SFE, SAA, HR (rad) of shoulder rotations ``(..., 3, 3)`` (module doc)."""
-    limits = limits or JointLimits.default()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)
-        e = Rotation.from_matrix(R_torso_upper.reshape(-1, 3, 3)).as_euler("YXZ")
+        e = rotations_from_matrices(R_torso_upper.reshape(-1, 3, 3)).as_euler("YXZ")
     signs = np.array([s for _, s in ARM_AXES[side][:3]])
     first = _wrap(e * signs)
     second = _wrap(np.stack([e[:, 0] + np.pi, np.pi - e[:, 1], e[:, 2] + np.pi], -1) * signs)
-    lim = limits.subset(ARM_DOFS[side][:3])
+    lim = _arm_limits(side) if limits is None else limits.subset(ARM_DOFS[side][:3])
 
     def excess(a):
         return np.sum(np.maximum(lim.lower - a, 0) + np.maximum(a - lim.upper, 0), axis=-1)

@@ -157,9 +157,10 @@ class BodyModel:
     def fixed_names(self) -> tuple[str, ...]:
         return tuple(DOF_NAMES[i] for i in self._fixed_idx)
 
-    @property
+    @cached_property
     def free_limits(self) -> JointLimits:
-        """Limits of the free DOFs, in state order."""
+        """Limits of the free DOFs, in state order (built once: a frozen, read-only
+        :class:`JointLimits`)."""
         return self.limits.subset(self.free)
 
     def with_free(self, names: tuple[str, ...]) -> BodyModel:

@@ -15,8 +15,8 @@ from collections.abc import Callable
 
 import numpy as np
 
-from humimic.estimation.particles.resampling import resample_indices
-from humimic.estimation.particles.weights import weights
+from humimic.estimation.particles.resampling import indices_from_weights
+from humimic.estimation.particles.weights import weights_columns
 from humimic.maths.jit import njit
 
 
@@ -35,11 +35,14 @@ def sq_distances(x: np.ndarray, s: np.ndarray, h: np.ndarray, dtype=np.float64,
 
 def _sq_scaled(a: np.ndarray, b: np.ndarray, dtype, clip: bool = True) -> np.ndarray:
     """``(..., M, N)`` ``||a_m - b_n||^2`` of centred, scaled points ``a (..., M, d)``,
-    ``b (..., N, d)`` (:func:`sq_distances`; leading axes batched)."""
+    ``b (..., N, d)`` (:func:`sq_distances`; leading axes batched; ``b is a``: their squared
+    norms computed once)."""
     d = a.shape[-1]
     A, B = np.empty(a.shape[:-1] + (d + 2,), dtype), np.empty(b.shape[:-1] + (d + 2,), dtype)
-    A[..., :d], A[..., d], A[..., d + 1] = a, 1.0, np.einsum("...j,...j->...", a, a)
-    B[..., :d], B[..., d], B[..., d + 1] = -2.0 * b, np.einsum("...j,...j->...", b, b), 1.0
+    a2 = np.einsum("...j,...j->...", a, a)
+    A[..., :d], A[..., d], A[..., d + 1] = a, 1.0, a2
+    B[..., :d], B[..., d] = -2.0 * b, a2 if b is a else np.einsum("...j,...j->...", b, b)
+    B[..., d + 1] = 1.0
     d2 = A @ np.swapaxes(B, -1, -2)
     return clip_negative(d2) if clip else d2
 
@@ -341,7 +344,7 @@ def kpf_modes(particles: np.ndarray, log_lik_fn: Callable[[np.ndarray], np.ndarr
         return np.asarray(log_lik_fn(x), float).reshape(len(x), len(groups))
 
     lik = lik_of(particles)
-    W = np.stack([weights(lik[:, g]) for g in range(len(groups))], axis=1)
+    W = weights_columns(lik)
     prior = particles if prior is None else prior
     done = 0
     for i in range(iterations):
@@ -351,11 +354,10 @@ def kpf_modes(particles: np.ndarray, log_lik_fn: Callable[[np.ndarray], np.ndarr
         lik = lik_of(shifted)
         lw = (kernel_log_weights_groups(lik, shifted, prior, h, groups, stride, dtype)
               if reweight else lik)
-        for k in range(len(groups)):
-            W[:, k] = weights(lw[:, k])
+        W = weights_columns(lw)
         particles, done = shifted, i + 1
-        moved = [np.linalg.norm((particles[int(np.argmax(W[:, k])), g] - best[k, g]) / h0[g])
-                 for k, g in enumerate(groups)]
+        step = (particles[np.argmax(W, axis=0), :] - best) / h0    # (G, d): each group's best
+        moved = [math.sqrt(np.dot(v, v)) for v in (step[k, g] for k, g in enumerate(groups))]
         if max(moved) < tol:
             break
     return particles, W, lik, done
@@ -371,9 +373,12 @@ def partitioned_resample(particles: np.ndarray, W: np.ndarray, groups: list[np.n
 
 def partitioned_resample_indices(W: np.ndarray, groups: list[np.ndarray],
                                  rng: np.random.Generator) -> np.ndarray:
-    """``(N, G)`` :func:`partitioned_resample`'s ancestor index per particle and group."""
-    return np.stack([resample_indices(np.log(np.maximum(W[:, k], 1e-300)), rng)
-                     for k in range(len(groups))], axis=1)
+    """``(N, G)`` :func:`partitioned_resample`'s ancestor index per particle and group
+    (systematic, one uniform per group in the groups' order; the weights normalised in one
+    pass, :func:`~humimic.estimation.particles.weights.weights_columns`, as
+    :func:`~humimic.estimation.particles.resampling.resample_indices` would per group)."""
+    w = weights_columns(np.log(np.maximum(W[:, :len(groups)], 1e-300)))
+    return np.stack([indices_from_weights(w[:, k], rng) for k in range(len(groups))], axis=1)
 
 
 def partitioned_take(x: np.ndarray, idx: np.ndarray, groups: list[np.ndarray]) -> np.ndarray:

@@ -53,6 +53,21 @@ def weights(log_weights: np.ndarray) -> np.ndarray:
     return np.exp(n.log_weights)
 
 
+def weights_columns(log_weights: np.ndarray) -> np.ndarray:
+    """:func:`weights` of each column of ``log_weights (N, G)``, ``(N, G)``, in one pass (the
+    same operations on each column, the sums over contiguous rows: equal to the per-column
+    calls bit for bit); a column holding NaN, or with no finite total, uniform as there."""
+    T = np.ascontiguousarray(np.asarray(log_weights, np.float64).T)       # (G, N)
+    m = T.max(axis=1, keepdims=True, initial=-np.inf)
+    with np.errstate(invalid="ignore", over="ignore"):
+        total = m + np.log(np.exp(T - m).sum(axis=1, keepdims=True))
+        out = np.exp(T - total)
+    bad = ~np.isfinite(total[:, 0]) | np.isnan(T).any(axis=1)
+    if bad.any():
+        out[bad] = np.exp(uniform_log_weights(T.shape[1]))
+    return np.ascontiguousarray(out.T)
+
+
 def effective_sample_size(log_weights: np.ndarray) -> float:
     """Kish's effective sample size ``1 / sum(w_i^2)`` of the normalised weights (1..N)."""
     return ess_of_weights(weights(log_weights))

@@ -19,24 +19,29 @@ import numpy as np
 from humimic import bodymodel as bm
 from humimic.bodymodel.kinematics import elbow_rotation
 from humimic.maths.rotations import rotation_between
+from humimic.perception.trackers.kpf.depth_kernel import kept_range_rows
 
 #: Arm side -> (segment prefix, offset of its four DOFs in the state).
 SIDES = {"R": ("r", 6), "L": ("l", 10)}
 
 
 def wrist_depth_move(body: bm.BodyModel, q: np.ndarray, side: str, delta: np.ndarray,
-                     T_cam_ref: np.ndarray) -> np.ndarray:
+                     T_cam_ref: np.ndarray, pose: bm.Pose | None = None,
+                     T_ref_cam: np.ndarray | None = None) -> np.ndarray:
     """States ``(N, 14)`` with arm ``side`` (``R`` or ``L``) of ``q (N, 14)`` re-solved for its
     wrist moved by ``delta (N,)`` m along the ray from the camera (``T_cam_ref``: reference-
     frame points -> camera) through it. Where the new wrist is out of the arm's reach, or
-    the solution out of the joint limits, the particle is left unchanged."""
+    the solution out of the joint limits, the particle is left unchanged. ``pose``: ``q``'s
+    forward kinematics (or any pose with the same torso and arm ``side``), ``T_ref_cam``
+    ``T_cam_ref``'s inverse, if the caller has them."""
     q = np.asarray(q, float)
     prefix, j = SIDES[side]
     sk = body.skeleton
     lu, lf = sk.upper_arm, sk.forearm
-    pose = body.forward(q)
+    pose = body.forward(q) if pose is None else pose
     S, W = pose.joint(f"{prefix}_shoulder"), pose.joint(f"{prefix}_wrist")
-    T_ref_cam = np.linalg.inv(np.asarray(T_cam_ref, float))
+    if T_ref_cam is None:
+        T_ref_cam = np.linalg.inv(np.asarray(T_cam_ref, float))
     ray = W - T_ref_cam[:3, 3]
     ray /= np.linalg.norm(ray, axis=1, keepdims=True)
     d_new = W + np.asarray(delta, float)[:, None] * ray - S            # shoulder -> new wrist
@@ -55,24 +60,28 @@ def wrist_depth_move(body: bm.BodyModel, q: np.ndarray, side: str, delta: np.nda
     return np.where(ok[:, None], out, q)
 
 
-def wrist_ranges(body: bm.BodyModel, q: np.ndarray, side: str, c_ref: np.ndarray
-                 ) -> np.ndarray:
+def wrist_ranges(body: bm.BodyModel, q: np.ndarray, side: str, c_ref: np.ndarray,
+                 pose: bm.Pose | None = None) -> np.ndarray:
     """``(N,)`` the distance (m) of arm ``side``'s wrist of states ``q (N, 14)`` from the camera
-    centre ``c_ref (3,)`` (reference frame)."""
+    centre ``c_ref (3,)`` (reference frame); ``pose``: ``q``'s forward kinematics, if known."""
     prefix, _ = SIDES[side]
-    W = body.forward(np.atleast_2d(np.asarray(q, float))).joint(f"{prefix}_wrist")
+    if pose is None:
+        pose = body.forward(np.atleast_2d(np.asarray(q, float)))
+    W = pose.joint(f"{prefix}_wrist")
     return np.linalg.norm(W - np.asarray(c_ref, float), axis=1)
 
 
 def reachable_range_change(body: bm.BodyModel, q: np.ndarray, side: str, delta: np.ndarray,
-                           c_ref: np.ndarray, margin: float = 1e-3) -> np.ndarray:
+                           c_ref: np.ndarray, margin: float = 1e-3,
+                           pose: bm.Pose | None = None) -> np.ndarray:
     """``delta (N,)`` (m, range changes of arm ``side``'s wrist along its camera ray from the
     camera centre ``c_ref``) clipped to the arm's reach: the wrist ``W + t u`` stays within
     ``(1 - margin)`` times the upper arm plus forearm of the shoulder ``S`` (the roots of
     ``|W - S + t u|^2 = R^2``; a wrist beyond it is brought to the nearest reachable point);
-    0 where the ray misses that sphere."""
+    0 where the ray misses that sphere. ``pose``: ``q``'s forward kinematics, if known."""
     prefix, _ = SIDES[side]
-    pose = body.forward(np.atleast_2d(np.asarray(q, float)))
+    if pose is None:
+        pose = body.forward(np.atleast_2d(np.asarray(q, float)))
     S, W = pose.joint(f"{prefix}_shoulder"), pose.joint(f"{prefix}_wrist")
     u = W - np.asarray(c_ref, float)
     u /= np.linalg.norm(u, axis=1, keepdims=True)
@@ -90,12 +99,15 @@ def keep_wrist_range(body: bm.BodyModel, q: np.ndarray, q_ref: np.ndarray, side:
     ray (the wrist's image kept): a move across the ray at a given depth. Rows the move cannot
     reach (out of the arm's reach or the joint limits) are left unchanged; ``clip``: out of
     reach, moved to the reachable distance nearest to it
-    (:func:`reachable_range_change`, the outer reach only) instead."""
-    c = np.linalg.inv(np.asarray(T_cam_ref, float))[:3, 3]
-    delta = wrist_ranges(body, q_ref, side, c) - wrist_ranges(body, q, side, c)
+    (:func:`reachable_range_change`, the outer reach only) instead. (The numpy reference of
+    :func:`kept_ranges`' compiled loop.)"""
+    T_ref_cam = np.linalg.inv(np.asarray(T_cam_ref, float))
+    c = T_ref_cam[:3, 3]
+    pose = body.forward(np.atleast_2d(np.asarray(q, float)))
+    delta = wrist_ranges(body, q_ref, side, c) - wrist_ranges(body, q, side, c, pose)
     if clip:
-        delta = reachable_range_change(body, q, side, delta, c)
-    return wrist_depth_move(body, q, side, delta, T_cam_ref)
+        delta = reachable_range_change(body, q, side, delta, c, pose=pose)
+    return wrist_depth_move(body, q, side, delta, T_cam_ref, pose, T_ref_cam)
 
 
 def kept_ranges(body: bm.BodyModel, q: np.ndarray, q_ref: np.ndarray, rows: np.ndarray,
@@ -104,11 +116,21 @@ def kept_ranges(body: bm.BodyModel, q: np.ndarray, q_ref: np.ndarray, rows: np.n
     """A copy of states ``q (N, 14)`` where, per arm, each of ``rows`` (bool ``(N,)``) is
     drawn with probability ``share`` (times ``gates[side]``, ``(N,)`` or ``(1,)``, if given:
     :mod:`~humimic.perception.trackers.kpf.depth_gate`) and its wrist put back at ``q_ref``'s
-    camera distance (:func:`keep_wrist_range`)."""
+    camera distance (:func:`keep_wrist_range`, compiled:
+    :func:`~humimic.perception.trackers.kpf.depth_kernel.keep_range_rows`; one forward
+    kinematics of ``q`` and of ``q_ref`` serves both arms, whose joints depend on the torso and
+    their own DOFs only)."""
     q = np.array(q, float)
+    picks = {}
     for side in SIDES:
         p = share if gates is None else share * gates[side]
-        pick = np.flatnonzero(rows & (rng.random(len(q)) < p))
+        picks[side] = np.flatnonzero(rows & (rng.random(len(q)) < p))
+    if not any(len(pick) for pick in picks.values()):
+        return q
+    pose, pose_ref = body.forward(q), body.forward(np.asarray(q_ref, float))
+    c = np.linalg.inv(np.asarray(T_cam_ref, float))[:3, 3]
+    out = q.copy()
+    for side, pick in picks.items():
         if len(pick):
-            q[pick] = keep_wrist_range(body, q[pick], q_ref[pick], side, T_cam_ref, clip)
-    return q
+            kept_range_rows(body, q, pose, pose_ref, pick, side, c, clip, out)
+    return out
