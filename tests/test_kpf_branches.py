@@ -327,3 +327,54 @@ def test_a_flip_outside_the_limits_is_scored_clamped():
                                                  branch_clamp_flips=True))
         low.step(tr, q.copy(), None, T)
         assert body.free_limits.inside(tr.mode[None])[0]
+
+
+def test_predicted_candidates_are_the_flips_of_the_advanced_estimate():
+    """``branch_predicted``: with the last estimate ``q - v`` and this frame's ``q``, the
+    decision also scores the flips of ``q + v`` (the linear motion model's prediction). With a
+    log-posterior peaked at the predicted pose's flip (no refinement), the ratio is that flip's
+    log-posterior minus the better of ``q``'s and ``q + v``'s (computed here); the switch takes
+    an arm whose elbow and wrist project to the PREDICTED pose's pixels, not ``q``'s. Off, the
+    ratio is that of ``q``'s own flip (smaller)."""
+    body = kpf_body()
+    intr = Intrinsics(320, 240, 260.0, 260.0, 159.5, 119.5)
+    T = _camera()
+    c = np.linalg.inv(T)[:3, 3]
+    qs = _arm_poses(200, 9)
+    v = np.zeros(14)
+    v[6:10] = [0.12, -0.1, 0.1, 0.15]                  # rad per frame, the right arm
+    pred = qs + v                                      # the prediction, computed here
+    lim = body.free_limits
+    fq, fp = arm_flips(body, qs, "R", c)["both"], arm_flips(body, pred, "R", c)["both"]
+    ok = (lim.inside(pred) & lim.inside(np.nan_to_num(fq)) & lim.inside(np.nan_to_num(fp))
+          & np.all(np.isfinite(fq), 1) & np.all(np.isfinite(fp), 1))
+    i = int(np.argmax(ok))
+    assert ok[i]
+    q, target = qs[i], fp[i]
+    w_target = body.forward(target[None]).joint("r_wrist")[0]
+    tr = _Tracker(body, q - v, (q - v)[None].repeat(5, 0), c, 0.5)
+
+    def log_post(x, maps, T_, floors=False):
+        return -2.0 * np.linalg.norm(body.forward(np.atleast_2d(x)).joint("r_wrist")
+                                     - w_target, axis=1)
+    tr._log_post = log_post
+
+    def lp(x):
+        return float(log_post(x[None], None, T)[0])
+    k = FLIPS.index("both")
+    off = FlipBranches(body, None, KpfConfig(branch_threshold=50.0))
+    off.step(tr, q.copy(), None, T)
+    np.testing.assert_allclose(off.history[-1][0][0, k], lp(fq[i]) - lp(q), atol=1e-12)
+    cfg = KpfConfig(branch_threshold=50.0, branch_predicted=True)
+    on = FlipBranches(body, None, cfg)
+    on.step(tr, q.copy(), None, T)
+    want = lp(fp[i]) - max(lp(q), lp(pred[i]))
+    np.testing.assert_allclose(on.history[-1][0][0, k], want, atol=1e-12)
+    assert want > off.history[-1][0][0, k]
+    low = FlipBranches(body, None, cfg.model_copy(update={"branch_threshold": 1e-6}))
+    out = low.step(tr, q.copy(), None, T)
+    a, b, e = body.forward(pred[i][None]), body.forward(out[None]), body.forward(q[None])
+    for j in ("r_elbow", "r_wrist"):
+        px = intr.project(b.to(T).joint(j))
+        np.testing.assert_allclose(px, intr.project(a.to(T).joint(j)), atol=1e-6)
+        assert np.linalg.norm(px - intr.project(e.to(T).joint(j))) > 1.0   # not q's pixels
