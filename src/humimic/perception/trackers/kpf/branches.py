@@ -32,9 +32,7 @@ Two gates on what is scored (29 Nov, ``i14-branch``; numbers in their ``KpfConfi
 evidence is the weakest), ``branch_max_step_mm`` a moving arm (the estimate lags the image).
 ``branch_clamp_flips`` (29 Nov, ``i14-fdec``) scores a flip outside the joint limits clamped
 into them instead of leaving it out (the truth can lie next to such a flip while the estimate
-is 300 mm off). ``branch_predicted`` (29 Nov, ``i14-fpred``) also scores the flips of the
-motion-predicted estimate (:func:`predicted_pose`: in a fast rise the estimate, and so its
-flips, lag the arm by 100-200 mm).
+is 300 mm off).
 """
 
 from __future__ import annotations
@@ -117,18 +115,6 @@ def flip_arm(body: bm.BodyModel, q: np.ndarray, side: str, kind: str, c_ref: np.
     return out
 
 
-def predicted_pose(mode: np.ndarray, mode_prev: np.ndarray, limits: bm.JointLimits,
-                   torso: bool) -> np.ndarray:
-    """``(14,)`` the estimate ``mode`` advanced by the linear motion model's velocity from it
-    and the last estimate ``mode_prev`` (Schmidt sec. 5.2, the tracker's
-    :func:`~humimic.perception.trackers.kpf.tracker.motion_velocity`, ``torso`` as
-    ``torso_velocity``), clamped into ``limits``: where the arm will be if it keeps moving
-    (``branch_predicted``)."""
-    from humimic.perception.trackers.kpf.tracker import motion_velocity  # (tracker imports us)
-    q = np.asarray(mode, float)
-    return limits.clamp(q + motion_velocity(q, mode_prev, torso))
-
-
 class FlipBranches:
     """The branch decision of a :class:`~humimic.perception.trackers.kpf.tracker.KpfTracker`
     (``branch_threshold``); ``history`` per frame ``(r, S)``, each ``(arms, kinds)``."""
@@ -177,9 +163,7 @@ class FlipBranches:
         ``branch_min_separation_mm`` only the flips of the (unrefined) estimate whose wrist lies
         that far from its own are refined and scored; an arm without one is skipped, and with
         ``branch_max_step_mm`` an arm whose estimated wrist moved farther since the last
-        estimate. With ``branch_predicted`` the motion-predicted estimate (:func:`predicted_pose`)
-        is refined too, the better of the two is the ratios' reference, and each kind's ratio is
-        that of the best of both poses' flips."""
+        estimate."""
         c_ref = np.linalg.inv(np.asarray(T_cam_base, float))[:3, 3]
 
         def f(q):
@@ -189,10 +173,6 @@ class FlipBranches:
         mm, ms = self.cfg.branch_min_separation_mm, self.cfg.branch_max_step_mm
         moved = np.full(len(SIDES), np.nan)
         best = {}
-        bases = [mode]
-        if self.cfg.branch_predicted:
-            pred = predicted_pose(mode, tracker.mode, tracker.limits, self.cfg.torso_velocity)
-            bases += [] if np.array_equal(pred, mode) else [pred]
         for a, side in enumerate(SIDES):
             raw = arm_flips(self.body, mode[None], side, c_ref)
             sep[a] = wrist_separation(self.body, mode, np.stack([raw[k][0] for k in FLIPS]), side)
@@ -203,23 +183,18 @@ class FlipBranches:
             moved[a] = wrist_separation(self.body, tracker.mode, mode[None], side)[0]
             if not far.any() or (ms is not None and not moved[a] <= ms / 1000.0):
                 continue
-            # the (refined) estimate, and with ``branch_predicted`` its motion prediction: the
-            # better is the branch's score, each one's flips the candidates
-            refined = [self._refined(tracker, b, side, f, T_cam_base) for b in bases]
-            ll0 = max(ll for _, ll in refined)
-            for base, _ in refined:
-                flips = arm_flips(self.body, base[None], side, c_ref)
-                for k, kind in enumerate(FLIPS):
-                    q = flips[kind][0]
-                    if not (far[k] and np.all(np.isfinite(q))):
+            base, ll0 = self._refined(tracker, mode, side, f, T_cam_base)
+            flips = arm_flips(self.body, base[None], side, c_ref)
+            for k, kind in enumerate(FLIPS):
+                q = flips[kind][0]
+                if not (far[k] and np.all(np.isfinite(q))):
+                    continue
+                if not tracker.limits.inside(q[None])[0]:
+                    if not self.cfg.branch_clamp_flips:
                         continue
-                    if not tracker.limits.inside(q[None])[0]:
-                        if not self.cfg.branch_clamp_flips:
-                            continue
-                        q = tracker.limits.clamp(q)   # ``branch_clamp_flips``
-                    q, ll = self._refined(tracker, q, side, f, T_cam_base)
-                    if not ll - ll0 <= r[a, k]:     # the best candidate of kind k (NaN: none)
-                        best[side, k], r[a, k] = q, ll - ll0
+                    q = tracker.limits.clamp(q)   # ``branch_clamp_flips``
+                best[side, k], ll = self._refined(tracker, q, side, f, T_cam_base)
+                r[a, k] = ll - ll0
         self.separations.append(sep)
         self.steps.append(moved)
         r = clip_ratios(r, self.cfg.branch_max_ratio)

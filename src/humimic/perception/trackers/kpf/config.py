@@ -57,7 +57,7 @@ NEEDS: dict[str, tuple[str, ...]] = {
     **{k: ("branch_threshold",) for k in ("branch_forget", "branch_refine_polls",
                                           "branch_skin_ring", "branch_min_separation_mm",
                                           "branch_max_step_mm", "branch_max_ratio",
-                                          "branch_clamp_flips", "branch_predicted")},
+                                          "branch_clamp_flips")},
     **{k: ("observed_walk_px",) for k in ("observed_walk_floor", "observed_walk_groups")},
     **{k: ("particle_velocity",) for k in ("particle_velocity_innovation",
                                            "particle_velocity_decay")},
@@ -315,12 +315,6 @@ class KpfConfig(KpfDynamics):
     Measured (``schmidt_table1_fovgaze``, (1000, 3), seeds 0-9): angular 74 -> 62 ± 13 mm (seeds
     5, 8, 9 107 / 136 / 103 -> 64 / 64 / 84; 1 and 4 worse by 2 and 12), side 38.4 (every seed
     unchanged); set there. False: such flips are not scored, as before."""
-    branch_predicted: bool = False
-    """The decision also scores the flips of the motion-predicted estimate (the estimate
-    advanced by the linear motion model's velocity, ``branches.predicted_pose``), refined like
-    the others, against the better of the refined estimate and the refined prediction (29 Nov,
-    ``i14-fpred``: in the angular rise the estimate's flips lag the arm by 200 mm, so the
-    switch came 2-3 frames late). False: only the estimate's flips, as before."""
     colour_gradients: bool = False
     """Our extension: the edge and ridge cues on the strongest colour channel's derivatives
     at each pixel instead of grey levels' (clothes as bright as the background keep their
