@@ -145,10 +145,12 @@ class IKConfig(Section):
 
 
 class ServoConfig(Section):
-    feedforward: Literal["none", "velocity", "dynamics"] = "dynamics"
+    feedforward: Literal["none", "velocity", "inertia", "dynamics"] = "dynamics"
     """What the position servos get besides the IK's joint targets: nothing, the joint
-    velocities (cancels the servo's damping lag), or velocities plus M(q) qdd (inverse
-    dynamics, cancels the inertial lag)."""
+    velocities (cancels the servo's damping lag), velocities plus M(q) qdd (``inertia``:
+    cancels the inertial lag), or velocities plus the inverse dynamics M(q) qdd + c(q, qdot)
+    (``dynamics``: also the Coriolis and centrifugal forces, which the trunk and neck would
+    otherwise take from a waving arm: the head nods; :mod:`humimic.control.servo`)."""
 
 
 class GazeConfig(Section):
