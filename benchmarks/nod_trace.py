@@ -94,7 +94,7 @@ def main() -> None:
                     "joints": mm.get("joints"),
                     "head_raw_filt_mm": [(m.get("tracking", {}).get("head") or {}).get(k)
                                          for k in ("raw_rmse_mm", "filtered_rmse_mm")]}
-    if a.npz:
+    if a.npz and "tr" in got:
         np.savez(a.npz, **got["tr"])
     print(json.dumps(s, indent=1))
 

@@ -133,7 +133,8 @@ class IKConfig(Section):
     """Posture cost of the torso joints (per rad). The IK may turn the torso for reach while the
     neck turns back (the head task), but the physical trunk and neck servos do not cancel
     exactly in transients: at 0.2 an arm straining at its limits moved the eyes 12 mm, at 1.0
-    under 5 mm."""
+    under 5 mm. A jerky arm on its limit band still turns the waist: 20 kept the head within
+    0.041 deg instead of 0.124 at 2.2 m, at some cost in reach (``docs/ude_control_notes.md``)."""
     limit_margin: float = Field(0.03, gt=0.0, le=0.3)
     """Distance (rad) the IK keeps from every joint limit."""
     max_joint_speed: float = Field(5.0, gt=0.0, le=50.0)

@@ -16,7 +16,8 @@ Gravity is compensated by the model (``gravcomp``); ``servo.feedforward`` choose
   ``qfrc_bias - qfrc_gravcomp`` at the current state). ``c`` matters most on the joints that
   do not move: a waving arm's centrifugal reaction on the trunk and neck servos (kp 4000 and
   300 Nm/rad) nodded the head by 0.32 deg while the arm mimicked a jerky estimate; with ``c``
-  fed forward 0.04 deg (``docs/performance_notes.md``, "The head nods with the arm");
+  fed forward 0.04 deg on the same joint references (``docs/ude_control_notes.md``, "The
+  head nods with the arm");
 * ``inertia``: ``tau_ff = M(q) qdd_d`` only (the inertial lag; what ``dynamics`` was before).
 """
 
