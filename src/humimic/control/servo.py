@@ -58,8 +58,8 @@ class Servo:
     def inverse_dynamics(self, qdd_d: np.ndarray, velocity_terms: bool = True) -> np.ndarray:
         """``M(q) qdd_d + c(q, qdot)`` at the scene's current state (robot joints): the
         inverse dynamics without gravity (``gravcomp``); ``c`` (Coriolis and centrifugal)
-        only with ``velocity_terms``. From the last step's ``qM`` and ``qfrc_bias`` (half a
-        physics step old, like everything the servo reads)."""
+        only with ``velocity_terms``. From the last physics step's ``qM`` and ``qfrc_bias``
+        (computed at its start: 1/840 s old)."""
         d = self.data
         self._qacc[self.dofs] = qdd_d
         mujoco.mj_mulM(self.model, d, self._tau, self._qacc)
