@@ -169,6 +169,13 @@ class KpfDynamics(Section):
     into the other. With ``flip_share`` 0.1 as well: angular seeds 0-1 205 / 205 (main 192 / 226),
     side seeds 1, 6 136 / 82 (main 89 / 190). Off: worse than the ungated option on the long runs
     and than main on angular pointing."""
+    keep_range_straight_deg: float | None = Field(None, ge=0.0, le=180.0)
+    """Our extension, with ``keep_range_share``: for a propagated particle whose elbow is flexed
+    less than this (deg), a kept range whose re-solve bends the elbow further is not applied
+    (:func:`~humimic.perception.trackers.kpf.depth.unbent`; the particle left where the
+    propagation put it). Near the straight limit the re-solve can only bend the arm (the wrist
+    moved along its ray towards the shoulder; the other way is out of reach), so it drifts a
+    straight arm bent. None: every re-solve applied."""
     min_random: float = Field(0.2, ge=0.0, le=1.0)
     """Smallest share of randomly propagated particles."""
 
