@@ -170,12 +170,15 @@ class KpfDynamics(Section):
     side seeds 1, 6 136 / 82 (main 89 / 190). Off: worse than the ungated option on the long runs
     and than main on angular pointing."""
     keep_range_straight_deg: float | None = Field(None, ge=0.0, le=180.0)
-    """Our extension, with ``keep_range_share``: for a propagated particle whose elbow is flexed
-    less than this (deg), a kept range whose re-solve bends the elbow further is not applied
-    (:func:`~humimic.perception.trackers.kpf.depth.unbent`; the particle left where the
-    propagation put it). Near the straight limit the re-solve can only bend the arm (the wrist
-    moved along its ray towards the shoulder; the other way is out of reach), so it drifts a
-    straight arm bent. None: every re-solve applied."""
+    """Our extension, with ``keep_range_share``: no kept range for a propagated particle whose
+    arm's elbow is flexed less than this (deg) (:func:`~humimic.perception.trackers.kpf.depth.
+    nearly_straight`; the particle left where the propagation put it). Near the straight limit
+    the re-solve can only bend the arm (the wrist moved along its ray towards the shoulder; the
+    other way is out of reach), so every frame it bent a straight hanging arm a little more,
+    and the motion model's velocity carried the bend on (docs/schmidt_kpf_notes.md, "Round of
+    29 Nov (4)"). Skipped both ways: dropping only the bending re-solves made the rule
+    one-sided the other way, a ratchet that straightened a bent arm once it came under the
+    threshold. None: every drawn particle's range kept."""
     min_random: float = Field(0.2, ge=0.0, le=1.0)
     """Smallest share of randomly propagated particles."""
 

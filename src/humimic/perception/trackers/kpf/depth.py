@@ -98,16 +98,6 @@ def keep_wrist_range(body: bm.BodyModel, q: np.ndarray, q_ref: np.ndarray, side:
     return wrist_depth_move(body, q, side, delta, T_cam_ref)
 
 
-def unbent(q: np.ndarray, q_new: np.ndarray, side: str, straight: float) -> np.ndarray:
-    """``q_new (N, 14)``, except where arm ``side``'s elbow flexion in ``q (N, 14)`` is below
-    ``straight`` (rad) and ``q_new`` bends it further: there ``q``'s row. Near the straight
-    limit a wrist moved along its ray can only come nearer the shoulder (out of reach the
-    other way), so the re-solve only ever bends such an arm."""
-    eb = SIDES[side][1] + 3
-    keep = (q_new[:, eb] <= q[:, eb]) | (q[:, eb] >= straight)
-    return np.where(keep[:, None], q_new, q)
-
-
 def kept_ranges(body: bm.BodyModel, q: np.ndarray, q_ref: np.ndarray, rows: np.ndarray,
                 share: float, T_cam_ref: np.ndarray, clip: bool, rng: np.random.Generator,
                 gates: dict[str, np.ndarray] | None = None,
@@ -115,13 +105,24 @@ def kept_ranges(body: bm.BodyModel, q: np.ndarray, q_ref: np.ndarray, rows: np.n
     """A copy of states ``q (N, 14)`` where, per arm, each of ``rows`` (bool ``(N,)``) is
     drawn with probability ``share`` (times ``gates[side]``, ``(N,)`` or ``(1,)``, if given:
     :mod:`~humimic.perception.trackers.kpf.depth_gate`) and its wrist put back at ``q_ref``'s
-    camera distance (:func:`keep_wrist_range`); ``straight`` (rad, optional): a re-solve that
-    bends an elbow flexed less than that further is not applied (:func:`unbent`)."""
+    camera distance (:func:`keep_wrist_range`); ``straight`` (rad, optional): rows whose arm
+    is nearly straight (:func:`nearly_straight`) are left alone, drawn or not."""
     q = np.array(q, float)
     for side in SIDES:
         p = share if gates is None else share * gates[side]
-        pick = np.flatnonzero(rows & (rng.random(len(q)) < p))
+        drawn = rows & (rng.random(len(q)) < p)
+        if straight is not None:
+            drawn &= ~nearly_straight(q, side, straight)
+        pick = np.flatnonzero(drawn)
         if len(pick):
-            new = keep_wrist_range(body, q[pick], q_ref[pick], side, T_cam_ref, clip)
-            q[pick] = new if straight is None else unbent(q[pick], new, side, straight)
+            q[pick] = keep_wrist_range(body, q[pick], q_ref[pick], side, T_cam_ref, clip)
     return q
+
+
+def nearly_straight(q: np.ndarray, side: str, straight: float) -> np.ndarray:
+    """``(N,)`` whether arm ``side``'s elbow flexion in states ``q (N, 14)`` is below
+    ``straight`` (rad). Near the straight limit the kept range (:func:`keep_wrist_range`) is
+    one-sided: the arm is at (nearly) full reach, so a wrist moved along its ray can come
+    nearer the shoulder (the elbow bends) but not farther (out of reach, clipped to where it
+    is): applied there, it only ever bends the arm."""
+    return np.asarray(q, float)[:, SIDES[side][1] + 3] < straight
