@@ -209,7 +209,7 @@ def test_every_needed_option_exists_and_is_accepted_once_switched_on():
              "observed_walk_groups": "motion", "particle_velocity_innovation": True,
              "particle_velocity_decay": 0.5, "keep_range_groups": "motion",
              "keep_range_target": "motion", "keep_range_clip": False,
-             "keep_range_gate_deg": (10.0, 40.0)}
+             "keep_range_gate_deg": (10.0, 40.0), "keep_range_straight_deg": 20.0}
     switch_on = {"split_arms": {"split_arms": True, "partitioned": True},
                  "twist_range_deg": {"twist_range_deg": (-90.0, 70.0)},
                  "torso_prior_m": {"torso_prior_m": 0.03},

@@ -133,7 +133,8 @@ class IKConfig(Section):
     """Posture cost of the torso joints (per rad). The IK may turn the torso for reach while the
     neck turns back (the head task), but the physical trunk and neck servos do not cancel
     exactly in transients: at 0.2 an arm straining at its limits moved the eyes 12 mm, at 1.0
-    under 5 mm."""
+    under 5 mm. A jerky arm on its limit band still turns the waist: 20 kept the head within
+    0.041 deg instead of 0.124 at 2.2 m, at some cost in reach (``docs/ude_control_notes.md``)."""
     limit_margin: float = Field(0.03, gt=0.0, le=0.3)
     """Distance (rad) the IK keeps from every joint limit."""
     max_joint_speed: float = Field(5.0, gt=0.0, le=50.0)
@@ -145,10 +146,12 @@ class IKConfig(Section):
 
 
 class ServoConfig(Section):
-    feedforward: Literal["none", "velocity", "dynamics"] = "dynamics"
+    feedforward: Literal["none", "velocity", "inertia", "dynamics"] = "dynamics"
     """What the position servos get besides the IK's joint targets: nothing, the joint
-    velocities (cancels the servo's damping lag), or velocities plus M(q) qdd (inverse
-    dynamics, cancels the inertial lag)."""
+    velocities (cancels the servo's damping lag), velocities plus M(q) qdd (``inertia``:
+    cancels the inertial lag), or velocities plus the inverse dynamics M(q) qdd + c(q, qdot)
+    (``dynamics``: also the Coriolis and centrifugal forces, which the trunk and neck would
+    otherwise take from a waving arm: the head nods; :mod:`humimic.control.servo`)."""
 
 
 class GazeConfig(Section):

@@ -7,10 +7,18 @@ about ``(kv + b) / kp`` behind a moving target (tens of ms on the shoulders). Ch
     ctrl = q_d + ((kv + b) qdot_d + tau_ff) / kp
 
 turns the servo into ``f = kp (q_d - q) + kv (qdot_d - qdot) + b (qdot_d - qdot) - b qdot_d
-+ ...``, i.e. a PD about the moving reference plus the feed-forward torque ``tau_ff`` (with
-``tau_ff = M(q) qdd_d`` the inertial lag goes too - the "control schemes based on inverse
-dynamics" the paper's Cartesian accelerations make possible). Gravity is compensated by the
-model (``gravcomp``).
++ ...``, i.e. a PD about the moving reference plus the feed-forward torque ``tau_ff`` - the
+"control schemes based on inverse dynamics" the paper's Cartesian accelerations make possible.
+Gravity is compensated by the model (``gravcomp``); ``servo.feedforward`` chooses ``tau_ff``:
+
+* ``dynamics``: the rigid-body inverse dynamics without gravity,
+  ``tau_ff = M(q) qdd_d + c(q, qdot)`` (``c``: the Coriolis and centrifugal forces, MuJoCo's
+  ``qfrc_bias - qfrc_gravcomp`` at the current state). ``c`` matters most on the joints that
+  do not move: a waving arm's centrifugal reaction on the trunk and neck servos (kp 4000 and
+  300 Nm/rad) nodded the head by 0.32 deg while the arm mimicked a jerky estimate; with ``c``
+  fed forward 0.04 deg on the same joint references (``docs/ude_control_notes.md``, "The
+  head nods with the arm");
+* ``inertia``: ``tau_ff = M(q) qdd_d`` only (the inertial lag; what ``dynamics`` was before).
 """
 
 from __future__ import annotations
@@ -47,11 +55,18 @@ class Servo:
         self._qacc = np.zeros(model.nv)
         self._tau = np.zeros(model.nv)
 
-    def inverse_dynamics(self, qdd_d: np.ndarray) -> np.ndarray:
-        """``M(q) qdd_d`` at the scene's current configuration (robot joints)."""
+    def inverse_dynamics(self, qdd_d: np.ndarray, velocity_terms: bool = True) -> np.ndarray:
+        """``M(q) qdd_d + c(q, qdot)`` at the scene's current state (robot joints): the
+        inverse dynamics without gravity (``gravcomp``); ``c`` (Coriolis and centrifugal)
+        only with ``velocity_terms``. From the last physics step's ``qM`` and ``qfrc_bias``
+        (computed at its start: 1/840 s old)."""
+        d = self.data
         self._qacc[self.dofs] = qdd_d
-        mujoco.mj_mulM(self.model, self.data, self._tau, self._qacc)
-        return self._tau[self.dofs]
+        mujoco.mj_mulM(self.model, d, self._tau, self._qacc)
+        tau = self._tau[self.dofs]
+        if velocity_terms:
+            tau += d.qfrc_bias[self.dofs] - d.qfrc_gravcomp[self.dofs]
+        return tau
 
     def command(self, q_d: np.ndarray, qdot_d: np.ndarray, qdd_d: np.ndarray) -> np.ndarray:
         g = self.gains
@@ -60,6 +75,7 @@ class Servo:
         elif self.feedforward == "velocity":
             ctrl = servo_command(q_d, qdot_d, 0.0, g.kp, g.kv, g.b)
         else:
-            ctrl = servo_command(q_d, qdot_d, self.inverse_dynamics(qdd_d), g.kp, g.kv, g.b)
+            tau = self.inverse_dynamics(qdd_d, velocity_terms=self.feedforward == "dynamics")
+            ctrl = servo_command(q_d, qdot_d, tau, g.kp, g.kv, g.b)
         self.data.ctrl[self.actuators] = ctrl
         return ctrl

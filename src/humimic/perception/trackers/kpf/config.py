@@ -62,7 +62,7 @@ NEEDS: dict[str, tuple[str, ...]] = {
     **{k: ("particle_velocity",) for k in ("particle_velocity_innovation",
                                            "particle_velocity_decay")},
     **{f"keep_range_{k}": ("keep_range_share",) for k in ("groups", "target", "clip",
-                                                          "gate_deg")},
+                                                          "gate_deg", "straight_deg")},
 }
 """Our options that act only with another on: option -> the options that switch it on."""
 

@@ -169,6 +169,21 @@ class KpfDynamics(Section):
     into the other. With ``flip_share`` 0.1 as well: angular seeds 0-1 205 / 205 (main 192 / 226),
     side seeds 1, 6 136 / 82 (main 89 / 190). Off: worse than the ungated option on the long runs
     and than main on angular pointing."""
+    keep_range_straight_deg: float | None = Field(None, ge=0.0, le=180.0)
+    """Our extension, with ``keep_range_share``: no kept range for a propagated particle whose
+    arm's elbow is flexed less than this (deg) (:func:`~humimic.perception.trackers.kpf.depth.
+    nearly_straight`; the particle left where the propagation put it). Near the straight limit
+    the re-solve can only bend the arm (the wrist moved along its ray towards the shoulder; the
+    other way is out of reach), so every frame it bent a straight hanging arm a little more,
+    and the motion model's velocity carried the bend on (docs/schmidt_kpf_notes.md, "Round of
+    29 Nov (4)"). Skipped both ways: dropping only the bending re-solves made the rule
+    one-sided the other way, a ratchet that straightened a bent arm once it came under the
+    threshold. Measured (Table 1's ``kpf``, (1000, 3), seeds 0-7, mean wrist error, mm, None ->
+    20): the idle straight left arm's wrist 108 -> 18, right wrist side 38.4 -> 36.9, angular
+    198 -> 204 (worse on 6 of 8); a static person's arms 108 -> 16; ``schmidt_side`` (seeds
+    1-4) 60 -> 55. 10 deg does not hold the left arm (up to 204 mm): the threshold has to cover
+    the walk's reach from the limit. 20 in Table 1's ``kpf`` and ``schmidt_side``. None:
+    every drawn particle's range kept."""
     min_random: float = Field(0.2, ge=0.0, le=1.0)
     """Smallest share of randomly propagated particles."""
 

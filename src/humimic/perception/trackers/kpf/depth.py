@@ -112,19 +112,24 @@ def keep_wrist_range(body: bm.BodyModel, q: np.ndarray, q_ref: np.ndarray, side:
 
 def kept_ranges(body: bm.BodyModel, q: np.ndarray, q_ref: np.ndarray, rows: np.ndarray,
                 share: float, T_cam_ref: np.ndarray, clip: bool, rng: np.random.Generator,
-                gates: dict[str, np.ndarray] | None = None) -> np.ndarray:
+                gates: dict[str, np.ndarray] | None = None,
+                straight: float | None = None) -> np.ndarray:
     """A copy of states ``q (N, 14)`` where, per arm, each of ``rows`` (bool ``(N,)``) is
     drawn with probability ``share`` (times ``gates[side]``, ``(N,)`` or ``(1,)``, if given:
     :mod:`~humimic.perception.trackers.kpf.depth_gate`) and its wrist put back at ``q_ref``'s
     camera distance (:func:`keep_wrist_range`, compiled:
     :func:`~humimic.perception.trackers.kpf.depth_kernel.keep_range_rows`; one forward
     kinematics of ``q`` and of ``q_ref`` serves both arms, whose joints depend on the torso and
-    their own DOFs only)."""
+    their own DOFs only); ``straight`` (rad, optional): rows whose arm is nearly straight
+    (:func:`nearly_straight`) are left alone, drawn or not."""
     q = np.array(q, float)
     picks = {}
     for side in SIDES:
         p = share if gates is None else share * gates[side]
-        picks[side] = np.flatnonzero(rows & (rng.random(len(q)) < p))
+        drawn = rows & (rng.random(len(q)) < p)
+        if straight is not None:
+            drawn &= ~nearly_straight(q, side, straight)
+        picks[side] = np.flatnonzero(drawn)
     if not any(len(pick) for pick in picks.values()):
         return q
     pose, pose_ref = body.forward(q), body.forward(np.asarray(q_ref, float))
@@ -134,3 +139,12 @@ def kept_ranges(body: bm.BodyModel, q: np.ndarray, q_ref: np.ndarray, rows: np.n
         if len(pick):
             kept_range_rows(body, q, pose, pose_ref, pick, side, c, clip, out)
     return out
+
+
+def nearly_straight(q: np.ndarray, side: str, straight: float) -> np.ndarray:
+    """``(N,)`` whether arm ``side``'s elbow flexion in states ``q (N, 14)`` is below
+    ``straight`` (rad). Near the straight limit the kept range (:func:`keep_wrist_range`) is
+    one-sided: the arm is at (nearly) full reach, so a wrist moved along its ray can come
+    nearer the shoulder (the elbow bends) but not farther (out of reach, clipped to where it
+    is): applied there, it only ever bends the arm."""
+    return np.asarray(q, float)[:, SIDES[side][1] + 3] < straight

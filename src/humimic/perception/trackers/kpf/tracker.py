@@ -345,8 +345,10 @@ class KpfTracker:
         rows = {"random": ~moved, "motion": moved, "both": np.ones(len(pred), bool)}[
             c.keep_range_groups]
         gates = keep_range_gates(self.body, c, pred, T_cam_base)
+        straight = None if c.keep_range_straight_deg is None else np.radians(
+            c.keep_range_straight_deg)
         return kept_ranges(self.body, pred, target, rows, c.keep_range_share, T_cam_base,
-                           c.keep_range_clip, self.rng, gates)
+                           c.keep_range_clip, self.rng, gates, straight)
 
     def _depth_moves(self, pred: np.ndarray, T_cam_base: np.ndarray, share: float
                      ) -> np.ndarray:
