@@ -6,7 +6,10 @@ completion order), so the driver can show progress and write results while other
 * ``local``: ``joblib.Parallel(n_jobs=jobs, backend="loky")``, one run per task. ``jobs=1``
   runs in this process (no worker start-up; handy for debugging).
 * ``ray``: one Ray task per run (``num_cpus=1``) on a local Ray instance started for the sweep
-  (``jobs`` CPUs), or on the cluster at ``address`` / ``$RAY_ADDRESS``. On a multi-node cluster
+  (``jobs`` CPUs), or on the cluster at ``address`` / ``$RAY_ADDRESS``. A local instance's
+  workers run at normal priority: Ray nices its workers to 15, so any other busy process on
+  the machine starved them (four 0.3 s runs took 260 s beside a busy pytest worker on 2 cores;
+  a worker's pure-Python loop ran 4x slower). On a multi-node cluster
   the output directory should be on a shared file system (each run writes its own outputs
   where it executes; the driver still receives and records every run's metrics).
 """
@@ -71,6 +74,7 @@ def ray_map(fn: Callable, args: list[tuple], jobs: int, address: str | None = No
                                   "logging_level": "WARNING"}
         if address is None:
             kwargs["num_cpus"] = jobs
+            kwargs["_system_config"] = {"worker_niceness": 0}  # see the module's docstring
         try:
             ray.init(address=address, **kwargs)
         except ConnectionError as exc:
