@@ -7,7 +7,7 @@ value) and of the servo's tracking error (``q_robot - q_ik``), the eyes' base ro
 arm's joint accelerations (the reaction the trunk and neck servos must resist).
 
     PYTHONPATH=src python benchmarks/nod_trace.py scenarios/mimic_tracked_wave.yaml \
-        --seed 42 --set human.distance=2.2 --out /tmp/nod --npz /tmp/nod/trace.npz
+        --seed 42 --set human.distance=2.2 --out runs/nod --npz runs/nod/trace.npz
 """
 
 from __future__ import annotations

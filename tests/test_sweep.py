@@ -146,11 +146,10 @@ def test_a_local_ray_instance_runs_its_workers_at_normal_priority():
     pytest.importorskip("ray", reason="ray is not installed (pip install 'humimic[cluster]')")
     from humimic.sweep.backends import ray_map
 
-    assert list(ray_map(_niceness, [()], jobs=1)) == [os.nice(0)]
+    def niceness() -> int:  # local, so Ray's pickler sends it by value (the worker cannot
+        return os.nice(0)   # import this test module)
 
-
-def _niceness() -> int:
-    return os.nice(0)
+    assert list(ray_map(niceness, [()], jobs=1)) == [os.nice(0)]
 
 
 def test_ray_backend_without_ray_exits_2_with_install_hint(tmp_path, monkeypatch, capsys):
