@@ -92,28 +92,12 @@ def kernel_log_weights_groups(log_lik: np.ndarray, shifted: np.ndarray, prior: n
     Wpq = np.zeros((len(S[0]), 2), dtype)
     Wpq[:len(ref_p), 0], Wpq[len(ref_p):, 1] = 1.0 / len(ref_p), 1.0 / len(ref_q)
     pq = (k2 @ Wpq).astype(float)                                      # (G, N, 2)
-    scale = _kernel_scales(h, groups)
+    scale = np.array([epanechnikov(0.0, len(g)) / np.prod(h[g]) for g in groups])
     p, q = pq[..., 0].T * scale, pq[..., 1].T * scale                  # (N, G)
     if stride > 1:
         q = q * (1.0 - 1.0 / n) + scale / n
     with np.errstate(divide="ignore"):
         return log_lik + np.log(p) - np.log(q)
-
-
-def _kernel_scales(h: np.ndarray, groups: list[np.ndarray]) -> np.ndarray:
-    """``(G,)`` each group's kernel constant ``K_h(0)``: eq. 12's ``K(0)`` over the product of
-    its bandwidths (kept for the last few ``h``: the same few every frame)."""
-    key = (h.tobytes(), tuple(g.tobytes() for g in groups))
-    got = _SCALES.get(key)
-    if got is None:
-        if len(_SCALES) > 32:
-            _SCALES.clear()
-        got = _SCALES[key] = np.array([epanechnikov(0.0, len(g)) / np.prod(h[g])
-                                       for g in groups])
-    return got
-
-
-_SCALES: dict[tuple, np.ndarray] = {}
 
 
 def dominant_modes(particles: np.ndarray, W: np.ndarray, h: np.ndarray, window: np.ndarray,
