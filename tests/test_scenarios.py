@@ -30,13 +30,14 @@ def test_scenario_validates(name):
 def smoke_duration(scenario) -> float:
     """Simulated seconds a scenario needs before each of its stages scores something: the
     detection phase, a few frames to settle a blob, the filter's settle time and a margin;
-    mimicry's start and enough servo ticks. Never longer than the scenario."""
+    mimicry's start (if within the run) and enough servo ticks. Never longer than the
+    scenario."""
     need = 0.5
     if scenario.perception is not None:
         need = max(need, scenario.perception.detection.period + 0.3
                    + (FILTER_SETTLE_S + 0.4 if scenario.filter is not None else 0.0))
-    if scenario.mimic is not None:
-        need = max(need, scenario.mimic.start + 0.3)
+    if scenario.mimic is not None and scenario.mimic.start < scenario.duration:
+        need = max(need, scenario.mimic.start + 0.3)   # (a later start: the eyes' gaze alone)
     return min(need, scenario.duration)
 
 
