@@ -89,7 +89,13 @@ class KpfFovea(Section):
     Off: (150, 2) falls below its speed goal."""
 
     camera: Literal["L_foveal", "R_foveal"] = "L_foveal"
-    """The foveal camera (rendered: ``cameras.which: both``)."""
+    """The foveal camera (rendered: ``cameras.which: both``; ``R_foveal``: ``cameras.eyes:
+    stereo``)."""
+    cameras: list[Literal["L_foveal", "R_foveal"]] | None = Field(None, min_length=1,
+                                                                   max_length=2)
+    """Several foveal cameras, each a conditionally independent view (e.g. ``[L_foveal,
+    R_foveal]``: the two eyes' narrow pair, stereo; ``scenarios/schmidt_table1_stereo.yaml``);
+    None: ``[camera]``. Not with ``camera``."""
     parts: list[Literal[FOVEA_PARTS]] = Field(
         default_factory=lambda: ["r_upper_arm", "r_forearm", "r_hand"], min_length=1)
     """The limbs scored in it."""
@@ -121,6 +127,20 @@ class KpfFovea(Section):
     filter's evaluations, not in the fixed-sigma ones of the branch decision and the
     refinement; ``all`` in every evaluation; None: eq. 8 over all points, off-image ones
     reading no skin (which pulled the resting hand into the narrow image)."""
+
+    @model_validator(mode="after")
+    def _check_cameras(self) -> KpfFovea:
+        if self.cameras is not None:
+            if "camera" in self.model_fields_set:
+                raise ValueError("set fovea.camera or fovea.cameras, not both")
+            if len(set(self.cameras)) != len(self.cameras):
+                raise ValueError(f"fovea.cameras {self.cameras} names a camera twice")
+        return self
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        """The foveal cameras: ``cameras``, or ``(camera,)``."""
+        return tuple(self.cameras) if self.cameras is not None else (self.camera,)
 
 
 class KpfConfig(KpfDynamics):
