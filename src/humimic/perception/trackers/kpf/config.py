@@ -98,7 +98,7 @@ class KpfFovea(Section):
     None: ``[camera]``. Not with ``camera``. Measured (29 Nov, ``i14-stereo``, (1000, 3), mean
     wrist error, angular / side, mm, seeds 0-9): ``L_foveal`` 73.2 / 40.5, ``R_foveal`` 74.5 /
     43.3, both 67.5 / 57.5; both with ``weight`` 1.5 and ``keep_range_straight_deg`` 20
-    59.4 / 56.1 (seeds 10-19: 60.3 / see docs/schmidt_kpf_notes.md)."""
+    59.4 / 56.1 (seeds 10-19: 60.3 / 50.5, ``L_foveal`` 77.6 / 34.5)."""
     parts: list[Literal[FOVEA_PARTS]] = Field(
         default_factory=lambda: ["r_upper_arm", "r_forearm", "r_hand"], min_length=1)
     """The limbs scored in it."""

@@ -38,7 +38,9 @@ Both eyes' foveal cameras (``fovea.cameras: [L_foveal, R_foveal]``, ``cameras.ey
 independent factor, ``+ w_f sum_v sum_{l in fovea} T_v(l)``. The left eye's two cameras are
 coaxial (a flip mirrored in depth along the eye's ray images alike in both); the right eye,
 70 mm away, sees the flips 250-470 mm apart in depth ~3-6 px apart at 2 m (f = 753 px):
-stereo breaks the ties the coaxial views leave (``scenarios/schmidt_table1_stereo.yaml``).
+stereo breaks the ties the coaxial views leave (``scenarios/schmidt_table1_stereo.yaml``,
+weight 1.5: angular pointing 60 mm on seeds 10-19 against the left eye's 78, but side 50.5
+against 34.5; docs/schmidt_kpf_notes.md, "Round of 29 Nov (5), i14-stereo").
 """
 
 from __future__ import annotations
