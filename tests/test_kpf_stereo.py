@@ -149,6 +149,8 @@ def test_fovea_cameras_config():
     assert KpfFovea(cameras=["L_foveal", "R_foveal"]).names == ("L_foveal", "R_foveal")
     with pytest.raises(ValueError, match="not both"):
         KpfFovea(camera="R_foveal", cameras=["L_foveal"])
+    both = KpfFovea(cameras=["L_foveal", "R_foveal"])
+    assert KpfFovea(**both.model_dump()) == both           # a run's resolved scenario reloads
     with pytest.raises(ValueError, match="twice"):
         KpfFovea(cameras=["R_foveal", "R_foveal"])
 

@@ -88,9 +88,9 @@ class KpfFovea(Section):
     x0.52 at (150, 2), x0.72 at (1000, 3).
     Off: (150, 2) falls below its speed goal."""
 
-    camera: Literal["L_foveal", "R_foveal"] = "L_foveal"
+    camera: Literal["L_foveal", "R_foveal"] | None = None
     """The foveal camera (rendered: ``cameras.which: both``; ``R_foveal``: ``cameras.eyes:
-    stereo``)."""
+    stereo``); None: ``L_foveal`` unless ``cameras`` is given."""
     cameras: list[Literal["L_foveal", "R_foveal"]] | None = Field(None, min_length=1,
                                                                    max_length=2)
     """Several foveal cameras, each a conditionally independent view (e.g. ``[L_foveal,
@@ -134,7 +134,7 @@ class KpfFovea(Section):
     @model_validator(mode="after")
     def _check_cameras(self) -> KpfFovea:
         if self.cameras is not None:
-            if "camera" in self.model_fields_set:
+            if self.camera is not None:
                 raise ValueError("set fovea.camera or fovea.cameras, not both")
             if len(set(self.cameras)) != len(self.cameras):
                 raise ValueError(f"fovea.cameras {self.cameras} names a camera twice")
@@ -142,8 +142,8 @@ class KpfFovea(Section):
 
     @property
     def names(self) -> tuple[str, ...]:
-        """The foveal cameras: ``cameras``, or ``(camera,)``."""
-        return tuple(self.cameras) if self.cameras is not None else (self.camera,)
+        """The foveal cameras: ``cameras``, or ``(camera,)`` (``L_foveal`` if None)."""
+        return tuple(self.cameras) if self.cameras is not None else (self.camera or "L_foveal",)
 
 
 class KpfConfig(KpfDynamics):
