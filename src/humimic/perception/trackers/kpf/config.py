@@ -88,8 +88,17 @@ class KpfFovea(Section):
     x0.52 at (150, 2), x0.72 at (1000, 3).
     Off: (150, 2) falls below its speed goal."""
 
-    camera: Literal["L_foveal", "R_foveal"] = "L_foveal"
-    """The foveal camera (rendered: ``cameras.which: both``)."""
+    camera: Literal["L_foveal", "R_foveal"] | None = None
+    """The foveal camera (rendered: ``cameras.which: both``; ``R_foveal``: ``cameras.eyes:
+    stereo``); None: ``L_foveal`` unless ``cameras`` is given."""
+    cameras: list[Literal["L_foveal", "R_foveal"]] | None = Field(None, min_length=1,
+                                                                   max_length=2)
+    """Several foveal cameras, each a conditionally independent view (e.g. ``[L_foveal,
+    R_foveal]``: the two eyes' narrow pair, stereo; ``scenarios/schmidt_table1_stereo.yaml``);
+    None: ``[camera]``. Not with ``camera``. Measured (29 Nov, ``i14-stereo``, (1000, 3), mean
+    wrist error, angular / side, mm, seeds 0-9): ``L_foveal`` 73.2 / 40.5, ``R_foveal`` 74.5 /
+    43.3, both 67.5 / 57.5; both with ``weight`` 1.5 and ``keep_range_straight_deg`` 20
+    59.4 / 56.1 (seeds 10-19: 60.3 / 50.5, ``L_foveal`` 77.6 / 34.5)."""
     parts: list[Literal[FOVEA_PARTS]] = Field(
         default_factory=lambda: ["r_upper_arm", "r_forearm", "r_hand"], min_length=1)
     """The limbs scored in it."""
@@ -121,6 +130,20 @@ class KpfFovea(Section):
     filter's evaluations, not in the fixed-sigma ones of the branch decision and the
     refinement; ``all`` in every evaluation; None: eq. 8 over all points, off-image ones
     reading no skin (which pulled the resting hand into the narrow image)."""
+
+    @model_validator(mode="after")
+    def _check_cameras(self) -> KpfFovea:
+        if self.cameras is not None:
+            if self.camera is not None:
+                raise ValueError("set fovea.camera or fovea.cameras, not both")
+            if len(set(self.cameras)) != len(self.cameras):
+                raise ValueError(f"fovea.cameras {self.cameras} names a camera twice")
+        return self
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        """The foveal cameras: ``cameras``, or ``(camera,)`` (``L_foveal`` if None)."""
+        return tuple(self.cameras) if self.cameras is not None else (self.camera or "L_foveal",)
 
 
 class KpfConfig(KpfDynamics):

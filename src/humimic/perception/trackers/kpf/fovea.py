@@ -32,6 +32,15 @@ Which evaluations multiply in the foveal view (``fovea.use``; 29 Nov, ``i14-fang
 ``decision``, only the flip-branch decision's (:func:`decision_view`; the search, i.e. mean
 shift, reweighting and refinement, on the wide view alone); ``moving``, the search's too while
 the estimated arm moves (:func:`wrist_step` above ``moving_m`` between the last two estimates).
+
+Both eyes' foveal cameras (``fovea.cameras: [L_foveal, R_foveal]``, ``cameras.eyes: stereo``;
+29 Nov, ``i14-stereo``): each narrow view, with its own camera pose, is one more conditionally
+independent factor, ``+ w_f sum_v sum_{l in fovea} T_v(l)``. The left eye's two cameras are
+coaxial (a flip mirrored in depth along the eye's ray images alike in both); the right eye,
+70 mm away, sees the flips 250-470 mm apart in depth ~3-6 px apart at 2 m (f = 753 px):
+stereo breaks the ties the coaxial views leave (``scenarios/schmidt_table1_stereo.yaml``,
+weight 1.5: angular pointing 60 mm on seeds 10-19 against the left eye's 78, but side 50.5
+against 34.5; docs/schmidt_kpf_notes.md, "Round of 29 Nov (5), i14-stereo").
 """
 
 from __future__ import annotations
@@ -127,10 +136,12 @@ def wrist_step(body, q: np.ndarray, q_prev: np.ndarray, prefixes: tuple[str, ...
 
 
 class FovealLikelihood(Likelihood):
-    """:class:`Likelihood` of the wide view (the tracker's camera) times the foveal view's
-    factors of the ``parts`` (:func:`two_view_terms`); the foveal frame is given before each
-    tracker step by :meth:`look` (until then, and after ``look(None, None)``, the wide view
-    alone)."""
+    """:class:`Likelihood` of the wide view (the tracker's camera) times the foveal views'
+    factors of the ``parts`` (:func:`two_view_terms`, once per view: conditionally independent
+    views multiply). ``fovea_intrinsics`` is one narrow camera's intrinsics or a sequence of
+    them (e.g. both eyes' foveal cameras: stereo); the foveal frames are
+    given before each tracker step by :meth:`look_views` (:meth:`look` for the first camera;
+    until then, and after ``look(None, None)``, the wide view alone)."""
 
     def __init__(self, body, intrinsics, cfg, fovea_intrinsics, parts: tuple[str, ...],
                  weight: float = 1.0, use: str = "all", decision_weight: float | None = None,
@@ -141,7 +152,10 @@ class FovealLikelihood(Likelihood):
         unknown = sorted(set(parts) - set(self.parts))
         if unknown:
             raise ValueError(f"fovea parts {unknown} are not body parts; parts: {self.parts}")
-        self.fovea = FovealView(body, fovea_intrinsics, cfg, skin_in_view is not None)
+        intrs = (fovea_intrinsics if isinstance(fovea_intrinsics, (list, tuple))
+                 else [fovea_intrinsics])
+        self.foveas = [FovealView(body, i, cfg, skin_in_view is not None) for i in intrs]
+        """One :class:`FovealView` per foveal camera."""
         self.skin_in_view = skin_in_view
         """``fovea.skin_in_view``: None, ``search`` (in the filter's evaluations, not in the
         fixed-sigma ones, ``floors``, of the branch decision and the refinement) or ``all``."""
@@ -149,18 +163,28 @@ class FovealLikelihood(Likelihood):
         self.weight = float(weight)
         self.decision_weight = self.weight if decision_weight is None else float(decision_weight)
         """The foveal factors' exponent in the flip-branch decision's evaluations."""
-        self.view: tuple | None = None
-        """(maps, T_cam_base) of the foveal frame, or None."""
-        self.scored = self.in_fovea
-        """(parts,) the parts scored in the foveal frame (:meth:`look`)."""
+        self.views: list[tuple | None] = [None] * len(self.foveas)
+        """Per foveal camera (maps, T_cam_base) of its frame, or None."""
+        self.scored_views = [self.in_fovea] * len(self.foveas)
+        """Per foveal camera (parts,) the parts scored in its frame (:meth:`look_views`)."""
         self.use = use
         """``all``: every evaluation sees both views; ``decision``: only those inside
         :meth:`deciding` (the flip-branch decision's), the others the wide view alone."""
         self._deciding = False
         self.moving_m = float(moving_m)
         self.moving = False
-        """``use: moving``: whether the last estimate's arm moved (:meth:`look`)."""
+        """``use: moving``: whether the last estimate's arm moved (:meth:`look_views`)."""
         self.sides = tuple(sorted({p[0] for p in parts}))
+
+    @property
+    def view(self) -> tuple | None:
+        """The first foveal camera's (maps, T_cam_base) present, or None (none is)."""
+        return next((v for v in self.views if v is not None), None)
+
+    @property
+    def scored(self) -> np.ndarray:
+        """(parts,) the parts scored in any foveal frame."""
+        return np.any(self.scored_views, axis=0)
 
     @contextmanager
     def deciding(self):
@@ -179,21 +203,34 @@ class FovealLikelihood(Likelihood):
 
     def look(self, maps, T_cam_base: np.ndarray | None, q_ref: np.ndarray | None = None,
              margin: float | None = None, q_prev: np.ndarray | None = None) -> None:
-        """The foveal frame's cue maps and camera pose for the next evaluations; with
-        ``margin`` (px) only those of the parts wholly inside the image (:func:`parts_in_view`)
-        at the pose ``q_ref (14,)`` (the last estimate) are scored. ``use: moving``: every
-        evaluation sees it if a foveal arm's wrist moved more than ``moving_m`` from ``q_prev``
-        (the estimate before) to ``q_ref``, else only the decision's."""
-        self.view = None if maps is None else (maps, T_cam_base)
+        """:meth:`look_views` with the first foveal camera's frame ``(maps, T_cam_base)``
+        (None: none) and no frame of the others."""
+        first = None if maps is None else (maps, T_cam_base)
+        self.look_views([first] + [None] * (len(self.foveas) - 1), q_ref, margin, q_prev)
+
+    def look_views(self, views, q_ref: np.ndarray | None = None, margin: float | None = None,
+                   q_prev: np.ndarray | None = None) -> None:
+        """The foveal frames' cue maps and camera poses for the next evaluations, ``views``
+        one ``(maps, T_cam_base)`` or None per foveal camera; with ``margin`` (px) only those
+        of the parts wholly inside each image (:func:`parts_in_view`) at the pose ``q_ref
+        (14,)`` (the last estimate) are scored in it. ``use: moving``: every evaluation sees
+        them if a foveal arm's wrist moved more than ``moving_m`` from ``q_prev`` (the
+        estimate before) to ``q_ref``, else only the decision's."""
+        if len(views) != len(self.foveas):
+            raise ValueError(f"{len(views)} foveal views for {len(self.foveas)} cameras")
+        self.views = list(views)
         self.moving = (self.use == "moving" and q_ref is not None and q_prev is not None
                        and wrist_step(self.body, q_ref, q_prev, self.sides) > self.moving_m)
-        self.scored = self.in_fovea
-        if maps is not None and margin is not None and q_ref is not None:
-            i = self.fovea.intr
-            view = bm.project(self.body, self.body.forward(np.asarray(q_ref)[None]), i,
-                              T_cam_base)
-            self.scored = self.in_fovea & parts_in_view(
-                view.outline.uv[0], view.outline.valid[0], i.width, i.height, margin)
+        self.scored_views = [self.in_fovea] * len(self.foveas)
+        if margin is None or q_ref is None:
+            return
+        pose = self.body.forward(np.asarray(q_ref)[None])
+        for k, (fov, v) in enumerate(zip(self.foveas, self.views, strict=True)):
+            if v is not None:
+                i = fov.intr
+                out = bm.project(self.body, pose, i, v[1]).outline
+                self.scored_views[k] = self.in_fovea & parts_in_view(
+                    out.uv[0], out.valid[0], i.width, i.height, margin)
 
     def evaluate(self, q: np.ndarray, maps, T_cam_base: np.ndarray,
                  floors: bool = False) -> Evaluation:
@@ -201,16 +238,20 @@ class FovealLikelihood(Likelihood):
         if not self.active:
             return ev
         read_wide = self.skin_in_view == "all" or (self.skin_in_view == "search" and not floors)
-        self.fovea.wide_skin(ev.cost["skin"] if read_wide else None)
-        fov = self.fovea.evaluate(q, *self.view, floors=floors)
-        self.fovea.wide_skin(None)
         w = self.decision_weight if self._deciding else self.weight
-        return Evaluation(ev.cost, two_view_terms(ev.terms, fov.terms, self.scored, w),
-                          ev.colours)
+        terms = ev.terms
+        for fov, v, scored in zip(self.foveas, self.views, self.scored_views, strict=True):
+            if v is None:
+                continue
+            fov.wide_skin(ev.cost["skin"] if read_wide else None)
+            terms = two_view_terms(terms, fov.evaluate(q, *v, floors=floors).terms, scored, w)
+            fov.wide_skin(None)
+        return Evaluation(ev.cost, terms, ev.colours)
 
     def share_references(self, references: dict[str, np.ndarray]) -> None:
         super().share_references(references)
-        self.fovea.share_references(references)
+        for fov in self.foveas:
+            fov.share_references(references)
 
 
 def decision_view(lik):

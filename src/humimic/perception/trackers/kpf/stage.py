@@ -69,8 +69,8 @@ class KpfStage(Stage):
         if isinstance(self.tracker.lik, FovealLikelihood):
             q_ref = self.tracker.mode if self.tracker.mode is not None else \
                 bm.truth_state(self.world, self.world.gt.index_of(t), "base")
-            self.tracker.lik.look(*(fov[1:] if fov is not None else (None, None)), q_ref,
-                                  self.cfg.fovea.in_view_margin_px, self.tracker.mode_prev)
+            self.tracker.lik.look_views([None if f is None else f[1:] for f in fov], q_ref,
+                                        self.cfg.fovea.in_view_margin_px, self.tracker.mode_prev)
         if self.tracker.mode is None:
             self.tracker.start(bm.truth_state(self.world, self.world.gt.index_of(t), "base"),
                                maps, T_cam_base)
@@ -93,22 +93,26 @@ class KpfStage(Stage):
             log_frame(self.rlog, self.name, self.camera, t, self.body, frame, T_cam_base, res,
                       self.world.gt.T_world_frame("base"))
 
-    def _fovea(self, frames: dict) -> tuple | None:
-        """``(frame, maps, T_cam_base)`` of the ``fovea`` camera's frame, or None."""
-        f = None if self.cfg.fovea is None else frames.get(self.cfg.fovea.camera)
-        if f is None:
-            return None
-        return f, FrameCues(f.image, self.skin_lut, colour_gradients=self.cfg.colour_gradients), \
-            invert_transform(f.camera.T_base_cam)
+    def _fovea(self, frames: dict) -> list:
+        """Per ``fovea`` camera ``(frame, maps, T_cam_base)`` of its frame, or None (no frame);
+        empty without ``fovea``."""
+        out = []
+        for name in () if self.cfg.fovea is None else self.cfg.fovea.names:
+            f = frames.get(name)
+            out.append(None if f is None else (
+                f, FrameCues(f.image, self.skin_lut, colour_gradients=self.cfg.colour_gradients),
+                invert_transform(f.camera.T_base_cam)))
+        return out
 
-    def _likelihood(self, frame, fov: tuple | None):
-        """The tracker's likelihood: the default, or with the foveal view (``fovea``)."""
-        if self.cfg.fovea is None or fov is None:
+    def _likelihood(self, frame, fov: list):
+        """The tracker's likelihood: the default, or with the foveal views (``fovea``; all
+        their frames there at the first frame)."""
+        if self.cfg.fovea is None or not fov or any(f is None for f in fov):
             return None
         c = self.cfg.fovea
         return FovealLikelihood(self.body, frame.camera.intrinsics, self.cfg,
-                                fov[0].camera.intrinsics, tuple(c.parts), c.weight, c.use,
-                                c.decision_weight, c.moving_mm / 1000.0, c.skin_in_view)
+                                [f[0].camera.intrinsics for f in fov], tuple(c.parts), c.weight,
+                                c.use, c.decision_weight, c.moving_mm / 1000.0, c.skin_in_view)
 
     def metrics(self) -> dict:
         return {"trackers": {self.name: {
