@@ -4,6 +4,8 @@ limb colours) at a static pose, the right arm raised to the side."""
 
 from __future__ import annotations
 
+from contextlib import contextmanager
+
 import numpy as np
 
 from humimic import bodymodel as bm
@@ -78,3 +80,33 @@ def propagated_wrist_ranges(monkeypatch, cfg) -> tuple[np.ndarray, float]:
     tr.start(q0, FrameCues(img, lut), T)
     tr.step(FrameCues(img, lut), T)
     return np.linalg.norm(body.forward(seen[-1]).to(T).joint("r_wrist"), axis=1), r0
+
+
+@contextmanager
+def scenario_kpf(name: str, duration: float = 1.0, seed: int = 0):
+    """Yields ``(world, kpf_stage)`` after simulating the scenario ``name`` (a file in
+    ``scenarios/``) for ``duration`` s at (150, 2) with no rerun output; the world is closed
+    after the block."""
+    from humimic import select_gl_backend
+
+    select_gl_backend()
+    from humimic.paths import SCENARIOS_DIR
+    from humimic.pipeline.build import build_stages
+    from humimic.pipeline.simulation import simulate
+    from humimic.rngs import Rngs
+    from humimic.scenario import load_scenario
+    from humimic.viz.rerun_log import RerunLog
+    from humimic.world.world import World
+
+    sc = load_scenario(SCENARIOS_DIR / name,
+                       ["trackers.kpf.n_particles=150", "trackers.kpf.iterations=2"], seed=seed,
+                       duration=duration)
+    rngs = Rngs(seed)
+    world = World(sc, rngs)
+    try:
+        rlog = RerunLog(world.scene, "off", None, "t")
+        stages = build_stages(sc, world, rngs, rlog)
+        simulate(world, stages, rlog, progress=False)
+        yield world, next(s for s in stages if getattr(s, "name", "") == "kpf")
+    finally:
+        world.close()

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from _kpf_synth import INTRINSICS, camera, painted_person, static_pose
+from _kpf_synth import INTRINSICS, camera, painted_person, scenario_kpf, static_pose
 
 from humimic.control.stage import POSE_JOINT
 from humimic.perception.blobs.config import DEFAULT_COLOR_MODEL
@@ -191,34 +191,12 @@ def test_the_stage_tracks_with_both_views_and_the_eye_follows_it():
     with a foveal frame, and the gaze (on the kpf's elbow estimate) has turned the eye: the
     true elbow projects near the foveal image's centre (measured 2026-11-29 at t = 0.93 s,
     13.3 px: the person's arm hangs still, the estimate within a few cm)."""
-    from humimic import select_gl_backend
-
-    select_gl_backend()
-    from humimic.paths import SCENARIOS_DIR
-    from humimic.pipeline.build import build_stages
-    from humimic.pipeline.simulation import simulate
-    from humimic.rngs import Rngs
-    from humimic.scenario import load_scenario
-    from humimic.viz.rerun_log import RerunLog
-    from humimic.world.world import World
-
-    sc = load_scenario(SCENARIOS_DIR / "schmidt_table1_fovgaze.yaml",
-                       ["trackers.kpf.n_particles=150", "trackers.kpf.iterations=2"], seed=0,
-                       duration=1.0)
-    rngs = Rngs(0)
-    world = World(sc, rngs)
-    try:
-        rlog = RerunLog(world.scene, "off", None, "t")
-        stages = build_stages(sc, world, rngs, rlog)
-        simulate(world, stages, rlog, progress=False)
-        kpf = next(s for s in stages if getattr(s, "name", "") == "kpf")
+    with scenario_kpf("schmidt_table1_fovgaze.yaml") as (world, kpf):
         assert isinstance(kpf.tracker.lik, FovealLikelihood) and kpf.tracker.lik.view
         model = world.eye_rig.camera_model("L_foveal")
         uv = model.project_world(world.gt.p_world("right_elbow")[world.gt.index_of(0.93)][None])
         i = model.intrinsics
         assert np.linalg.norm(uv[0] - [i.cx, i.cy]) < 40.0, uv
-    finally:
-        world.close()
 
 
 def test_decision_use_adds_the_fovea_only_while_deciding():

@@ -7,7 +7,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 import pytest
-from _kpf_synth import INTRINSICS, PALETTE, camera, painted_person, static_pose
+from _kpf_synth import INTRINSICS, PALETTE, camera, painted_person, scenario_kpf, static_pose
 
 import humimic.bodymodel as bm
 from humimic.perception.blobs.config import DEFAULT_COLOR_MODEL
@@ -208,27 +208,7 @@ def test_the_stereo_scenario_tracks_with_both_eyes_verged_on_the_arm():
     views with frames, and the gaze (on the kpf's elbow estimate) has verged both eyes: the
     true elbow projects near each foveal image's centre (measured 2026-11-29 at t = 0.93 s:
     10.6 px in both)."""
-    from humimic import select_gl_backend
-
-    select_gl_backend()
-    from humimic.paths import SCENARIOS_DIR
-    from humimic.pipeline.build import build_stages
-    from humimic.pipeline.simulation import simulate
-    from humimic.rngs import Rngs
-    from humimic.scenario import load_scenario
-    from humimic.viz.rerun_log import RerunLog
-    from humimic.world.world import World
-
-    sc = load_scenario(SCENARIOS_DIR / "schmidt_table1_stereo.yaml",
-                       ["trackers.kpf.n_particles=150", "trackers.kpf.iterations=2"], seed=0,
-                       duration=1.0)
-    rngs = Rngs(0)
-    world = World(sc, rngs)
-    try:
-        rlog = RerunLog(world.scene, "off", None, "t")
-        stages = build_stages(sc, world, rngs, rlog)
-        simulate(world, stages, rlog, progress=False)
-        kpf = next(s for s in stages if getattr(s, "name", "") == "kpf")
+    with scenario_kpf("schmidt_table1_stereo.yaml") as (world, kpf):
         lik = kpf.tracker.lik
         assert isinstance(lik, FovealLikelihood) and len(lik.foveas) == 2
         assert all(v is not None for v in lik.views)
@@ -238,5 +218,3 @@ def test_the_stereo_scenario_tracks_with_both_eyes_verged_on_the_arm():
             i = model.intrinsics
             off = np.linalg.norm(model.project_world(p)[0] - [i.cx, i.cy])
             assert off < 30.0, (cam, off)
-    finally:
-        world.close()
