@@ -241,3 +241,14 @@ def test_report_error_prints_one_line_and_returns_2(capsys):
 
     assert report_error(ValueError("a\n  b\tc ")) == 2
     assert capsys.readouterr().err == "error: a b c\n"
+
+
+def test_a_misspelt_sweep_key_gets_a_did_you_mean(tmp_path, capsys):
+    from humimic.sweep.__main__ import main as sweep_main
+
+    path = tmp_path / "sweep.yaml"
+    path.write_text(f"scenario: {SCENARIOS_DIR / 'wave.yaml'}\nSeedz: 3\n")
+    assert sweep_main([str(path), "--out", str(tmp_path / "out"), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1
+    assert "sweep.yaml:2: Seedz: unknown key" in err and "did you mean 'seeds'?" in err, err

@@ -19,7 +19,6 @@ errors naming the sweep file, its line and the dotted key (:class:`ScenarioError
 
 from __future__ import annotations
 
-import difflib
 import re
 from dataclasses import dataclass
 from pathlib import Path
@@ -27,6 +26,7 @@ from typing import Annotated, Any
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
+from humimic.errors import closest
 from humimic.scenario.errors import ScenarioError, from_validation_error, yaml_line
 from humimic.scenario.load import read_yaml_mapping
 
@@ -159,9 +159,8 @@ def _sweep_error(err: ValidationError, path: Path, text: str) -> ScenarioError:
     out = from_validation_error(err, SweepConfig, path, text)
     if e["type"] == "extra_forbidden" and len(loc) == 1:
         names = sorted(f.alias or n for n, f in SweepConfig.model_fields.items())
-        close = difflib.get_close_matches(loc[0], names, n=1, cutoff=0.5)
         return ScenarioError(path, loc[0], "unknown key", out.value, ", ".join(names),
-                             close[0] if close else None, out.line)
+                             closest(loc[0], names), out.line)
     if loc and loc[0] == "seeds":
         return ScenarioError(path, "seeds", "must be a number of seeds (>= 1, giving seeds "
                              "0..n-1) or a list of distinct seeds >= 0", e.get("input"),
